@@ -1,0 +1,329 @@
+//! Command-line interface: `scenes`, `techniques`, `export`, `render`.
+
+use crate::frame::{self, FrameRecord, HeadlessFrame};
+use crate::gpu::GpuContext;
+use crate::renderer::{LightingModel, RenderSettings, Shading};
+use crate::scene::{self, Camera, Light, LightType, Scene};
+use crate::technique::{self, FAMILIES, ParamKind, TechniqueChoice};
+use anyhow::{Context, Result, anyhow, bail};
+use clap::{Args, Parser, Subcommand};
+use glam::Vec3;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Parser)]
+#[command(name = "shadowlab", version, about = "Real-time shadow rendering lab: every classic shadow technique, measured against a ray-traced ground truth")]
+pub struct Cli {
+    /// Also write log messages (warnings, errors such as a malformed scene) to this file.
+    #[arg(long, global = true, value_name = "FILE")]
+    pub log_file: Option<PathBuf>,
+    /// More log output (-v info, -vv debug).
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    pub verbose: u8,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// List the built-in scenes with their camera and light presets.
+    Scenes,
+    /// List technique families, presets and every parameter (default, min, max, doc).
+    Techniques,
+    /// Write a scene as glTF 2.0 (world space, KHR_lights_punctual, camera, shadow flags in extras).
+    Export(ExportArgs),
+    /// Render one frame headless: DIR/image.png, DIR/visibility-N.png, DIR/frame.json.
+    Render(RenderArgs),
+}
+
+#[derive(Args)]
+pub struct ExportArgs {
+    /// Built-in scene name or a scene file (.obj, .gltf, .glb, .toml).
+    #[arg(long, default_value = "room")]
+    pub scene: String,
+    /// Output .gltf path (a .bin buffer is written beside it).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Scene, camera and light selection shared by the frame commands.
+#[derive(Args, Clone, Debug)]
+pub struct ViewArgs {
+    /// Built-in scene name or a scene file (.obj, .gltf, .glb, .toml).
+    #[arg(long, default_value = "room")]
+    pub scene: String,
+    /// Camera preset of the scene.
+    #[arg(long)]
+    pub camera: Option<String>,
+    /// Camera position x,y,z (overrides the preset's).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub eye: Option<Vec3>,
+    /// Camera target x,y,z.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub target: Option<Vec3>,
+    /// Camera up vector x,y,z.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub up: Option<Vec3>,
+    /// Vertical field of view in degrees.
+    #[arg(long)]
+    pub fov: Option<f32>,
+    /// Near plane distance.
+    #[arg(long)]
+    pub near: Option<f32>,
+    /// Far plane distance.
+    #[arg(long)]
+    pub far: Option<f32>,
+    /// Light preset of the scene (e.g. point, spot, sun).
+    #[arg(long)]
+    pub light: Option<String>,
+    /// Replace the lights by one light of this type.
+    #[arg(long, value_parser = ["point", "spot", "directional"])]
+    pub light_type: Option<String>,
+    /// Position of that light x,y,z (point, spot).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub light_pos: Option<Vec3>,
+    /// Direction of that light x,y,z (spot, directional).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub light_dir: Option<Vec3>,
+    /// Frame size WxH.
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Graphics backend (vulkan, gl, metal, dx12); default: WGPU_BACKEND or all.
+    #[arg(long)]
+    pub backend: Option<String>,
+    /// Shading mode.
+    #[arg(long, value_enum, default_value = "pixel")]
+    pub shading: Shading,
+    /// Specular model.
+    #[arg(long, value_enum, default_value = "blinn-phong")]
+    pub lighting: LightingModel,
+    /// Draw back faces too (disable back-face culling).
+    #[arg(long)]
+    pub no_cull: bool,
+    /// Background colour r,g,b (linear, 0-1).
+    #[arg(long, value_parser = parse_vec3)]
+    pub background: Option<Vec3>,
+    /// Do not draw the light icons.
+    #[arg(long)]
+    pub no_icons: bool,
+}
+
+#[derive(Args)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub view: ViewArgs,
+    /// Technique id: family or family:preset (see `shadowlab techniques`).
+    #[arg(long, default_value = "none")]
+    pub technique: String,
+    /// Set a technique parameter, key=value (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Output directory.
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+}
+
+pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected x,y,z numbers, got '{s}'"))?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(*x, *y, *z)),
+        _ => Err(format!("expected three finite numbers x,y,z, got '{s}'")),
+    }
+}
+
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WxH, got '{s}'"))?;
+    let w: u32 = w.parse().map_err(|_| format!("bad width in '{s}'"))?;
+    let h: u32 = h.parse().map_err(|_| format!("bad height in '{s}'"))?;
+    if w == 0 || h == 0 {
+        return Err(format!("frame size must be at least 1x1, got '{s}'"));
+    }
+    Ok((w, h))
+}
+
+impl ViewArgs {
+    /// Loads the scene and resolves the camera and lights.
+    pub fn resolve(&self) -> Result<(Scene, Camera, Vec<Light>)> {
+        let scene = scene::load(&self.scene)?;
+        let mut camera = match &self.camera {
+            Some(p) => scene.camera_preset(p)?,
+            None => scene.camera,
+        };
+        camera.eye = self.eye.unwrap_or(camera.eye);
+        camera.target = self.target.unwrap_or(camera.target);
+        camera.up = self.up.unwrap_or(camera.up);
+        camera.fov_y_deg = self.fov.unwrap_or(camera.fov_y_deg);
+        camera.near = self.near.unwrap_or(camera.near);
+        camera.far = self.far.unwrap_or(camera.far);
+        camera.validate()?;
+        let mut lights = match &self.light {
+            Some(p) => scene.light_preset(p)?,
+            None => scene.lights.clone(),
+        };
+        if let Some(t) = &self.light_type {
+            let kind: LightType = t.parse()?;
+            let need_pos = || self.light_pos.ok_or_else(|| anyhow!("--light-type {t} needs --light-pos"));
+            let need_dir = || self.light_dir.ok_or_else(|| anyhow!("--light-type {t} needs --light-dir"));
+            let light = match kind {
+                LightType::Point => Light::point(need_pos()?, 1.0),
+                LightType::Spot => {
+                    let p = need_pos()?;
+                    Light::spot(p, p + need_dir()?, 1.0, 22.0, 32.0)
+                }
+                LightType::Directional => Light::directional(need_dir()?, 1.0),
+            };
+            lights = vec![light];
+        } else if self.light_pos.is_some() || self.light_dir.is_some() {
+            bail!("--light-pos/--light-dir need --light-type");
+        }
+        for l in &lights {
+            l.validate()?;
+        }
+        if lights.len() > crate::renderer::MAX_LIGHTS {
+            bail!("{} lights; at most {} are supported", lights.len(), crate::renderer::MAX_LIGHTS);
+        }
+        Ok((scene, camera, lights))
+    }
+
+    pub fn settings(&self) -> RenderSettings {
+        RenderSettings {
+            shading: self.shading,
+            lighting: self.lighting,
+            cull_back_faces: !self.no_cull,
+            background: self.background,
+            show_light_icons: !self.no_icons,
+        }
+    }
+}
+
+/// Resolves a technique id and applies `--set` values.
+pub fn technique_choice(id: &str, set: &[String]) -> Result<TechniqueChoice> {
+    let mut c = technique::resolve(id)?;
+    technique::apply_settings(&mut c.params, set)?;
+    Ok(c)
+}
+
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Scenes => scenes(),
+        Command::Techniques => {
+            print!("{}", techniques_text());
+            Ok(())
+        }
+        Command::Export(a) => {
+            let s = scene::load(&a.scene)?;
+            scene::gltf_io::export(&s, &a.out)?;
+            println!("wrote {} ({} objects, {} triangles, {} lights)", a.out.display(), s.objects.len(), s.triangle_count(), s.lights.len());
+            Ok(())
+        }
+        Command::Render(a) => render(a),
+    }
+}
+
+fn scenes() -> Result<()> {
+    println!("{:<10} {:>10}  description", "scene", "triangles");
+    for (name, desc) in scene::builtin::NAMES.iter().zip(scene::builtin::DESCRIPTIONS) {
+        let s = scene::builtin::by_name(name)?.expect("built-in scene");
+        println!("{:<10} {:>10}  {}", name, s.triangle_count(), desc);
+        let cams: Vec<&str> = s.camera_presets.iter().map(|c| c.0.as_str()).collect();
+        let lights: Vec<String> = s
+            .light_presets
+            .iter()
+            .map(|(n, l)| format!("{n} ({})", l.iter().map(|l| format!("{:?}", l.kind).to_lowercase()).collect::<Vec<_>>().join("+")))
+            .collect();
+        println!("{:<22}cameras: {}", "", cams.join(", "));
+        println!("{:<22}lights:  {}", "", lights.join(", "));
+    }
+    Ok(())
+}
+
+/// The text of `shadowlab techniques`.
+pub fn techniques_text() -> String {
+    let mut out = String::new();
+    for f in FAMILIES {
+        out += &format!("{}: {}\n", f.id, f.summary);
+        out += "  presets:\n";
+        for p in f.presets {
+            let vals: Vec<String> = p.values.iter().map(|(k, v)| format!("{k}={v}")).collect();
+            out += &format!(
+                "    {}:{:<14} {}{}\n",
+                f.id,
+                p.name,
+                p.summary,
+                if vals.is_empty() { String::new() } else { format!(" [{}]", vals.join(" ")) }
+            );
+        }
+        if f.params.is_empty() {
+            out += "  parameters: none\n";
+        } else {
+            out += "  parameters:\n";
+            for s in f.params {
+                let range = match s.kind {
+                    ParamKind::Choice(o) => format!("one of {}", o.join("|")),
+                    ParamKind::Bool => "true|false".into(),
+                    _ => format!("{} .. {} step {}", s.format(s.min), s.format(s.max), s.format(s.step)),
+                };
+                out += &format!("    {:<20} default {:<10} {:<28} {}\n", s.name, s.format(s.default), range, s.doc);
+            }
+        }
+    }
+    out
+}
+
+fn render(a: RenderArgs) -> Result<()> {
+    let t0 = Instant::now();
+    let (scene, camera, lights) = a.view.resolve()?;
+    let choice = technique_choice(&a.technique, &a.set)?;
+    let t_scene = t0.elapsed();
+    let gpu = GpuContext::new(a.view.backend.as_deref())?;
+    let t_gpu = t0.elapsed() - t_scene;
+    let (w, h) = a.view.size;
+    let choices = vec![choice; lights.len().max(1)];
+    let setup = Instant::now();
+    let mut hf = HeadlessFrame::new(&gpu, &scene, &choices, w, h)?;
+    let t_setup = setup.elapsed();
+    let settings = a.view.settings();
+    let timings = hf.render(&gpu, &scene, &camera, &lights, &settings)?;
+    let rb = Instant::now();
+    let images = frame::read_back(&gpu, &hf.frame, lights.len())?;
+    frame::write_images(&a.out, &images)?;
+    let t_write = rb.elapsed();
+    let record = FrameRecord {
+        scene: &scene,
+        scene_gpu: &hf.scene_gpu,
+        camera: &camera,
+        lights: &lights,
+        techniques: hf.techniques.iter().map(|t| &t.choice).collect(),
+        settings: &settings,
+        frame: &hf.frame,
+        timings: &timings,
+        adapter: gpu.adapter_summary(),
+        extra_timings: serde_json::json!({
+            "scene_load": t_scene.as_secs_f64() * 1e3,
+            "gpu_init": t_gpu.as_secs_f64() * 1e3,
+            "scene_upload_and_pipelines": t_setup.as_secs_f64() * 1e3,
+            "readback_and_write": t_write.as_secs_f64() * 1e3,
+        }),
+    };
+    let json = frame::frame_json(&record);
+    let path = a.out.join("frame.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&json)?).with_context(|| format!("writing {}", path.display()))?;
+    println!(
+        "{}: {} on {} at {}x{}, frame {:.1} ms (prepass {:.1}, masks {:.1}, lighting {:.1}) -> {}",
+        scene.name,
+        hf.techniques[0].choice.id(),
+        gpu.adapter_summary(),
+        w,
+        h,
+        timings.total_ms,
+        timings.prepass_ms,
+        timings.masks_ms,
+        timings.lighting_ms,
+        a.out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,173 @@
+//! Rendering one frame headless and writing it out: `image.png`,
+//! `visibility-N.png` (16-bit grey, 65535 = fully lit, background 65535) and
+//! `frame.json` (everything needed to reproduce the frame's rays).
+
+use crate::gpu::GpuContext;
+use crate::renderer::{FrameResources, FrameTimings, RenderSettings, Renderer, SceneGpu, TechniqueInstance};
+use crate::scene::{Camera, Light, Scene};
+use crate::technique::TechniqueChoice;
+use anyhow::{Context, Result};
+use serde_json::json;
+use std::path::Path;
+
+/// A frame read back from the GPU.
+pub struct FrameImages {
+    pub width: u32,
+    pub height: u32,
+    /// sRGB RGBA8.
+    pub color: Vec<u8>,
+    /// Per light, one visibility value per pixel (row-major, top row first).
+    pub masks: Vec<Vec<f32>>,
+    /// Per pixel: true where geometry was drawn.
+    pub coverage: Vec<bool>,
+}
+
+/// Reads the colour image, the masks of `light_count` lights and the
+/// G-buffer coverage back from the GPU.
+pub fn read_back(gpu: &GpuContext, frame: &FrameResources, light_count: usize) -> Result<FrameImages> {
+    let color = gpu.read_texture(&frame.color, 0, 4)?;
+    let masks = (0..light_count)
+        .map(|i| {
+            let raw = gpu.read_texture(&frame.masks, i as u32, 2)?;
+            Ok(bytemuck::cast_slice::<u8, half::f16>(&raw).iter().map(|h| h.to_f32()).collect())
+        })
+        .collect::<Result<Vec<Vec<f32>>>>()?;
+    let pos = gpu.read_texture(&frame.gbuffer_position, 0, 16)?;
+    let coverage = bytemuck::cast_slice::<u8, [f32; 4]>(&pos).iter().map(|p| p[3] > 0.5).collect();
+    Ok(FrameImages {
+        width: frame.width,
+        height: frame.height,
+        color,
+        masks,
+        coverage,
+    })
+}
+
+/// Converts a mask to 16-bit grey: 65535 = fully lit; background pixels 65535.
+pub fn mask_to_u16(mask: &[f32], coverage: &[bool]) -> Vec<u16> {
+    mask.iter()
+        .zip(coverage)
+        .map(|(&v, &c)| if c { (v.clamp(0.0, 1.0) * 65535.0).round() as u16 } else { 65535 })
+        .collect()
+}
+
+/// Writes `image.png` and `visibility-N.png` into `dir`.
+pub fn write_images(dir: &Path, img: &FrameImages) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    image::save_buffer(dir.join("image.png"), &img.color, img.width, img.height, image::ExtendedColorType::Rgba8)?;
+    for (i, m) in img.masks.iter().enumerate() {
+        let grey = image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(img.width, img.height, mask_to_u16(m, &img.coverage))
+            .expect("mask size matches frame");
+        grey.save(dir.join(format!("visibility-{i}.png")))?;
+    }
+    Ok(())
+}
+
+/// Column-major 4×4 matrix as a JSON array of 16 numbers.
+fn mat_json(m: glam::Mat4) -> serde_json::Value {
+    json!(m.to_cols_array())
+}
+
+/// Everything `frame.json` records about a rendered frame.
+pub struct FrameRecord<'a> {
+    pub scene: &'a Scene,
+    pub scene_gpu: &'a SceneGpu,
+    pub camera: &'a Camera,
+    pub lights: &'a [Light],
+    pub techniques: Vec<&'a TechniqueChoice>,
+    pub settings: &'a RenderSettings,
+    pub frame: &'a FrameResources,
+    pub timings: &'a FrameTimings,
+    pub adapter: String,
+    pub extra_timings: serde_json::Value,
+}
+
+pub fn frame_json(r: &FrameRecord) -> serde_json::Value {
+    let u = &r.frame.uniform;
+    json!({
+        "scene": r.scene.name,
+        "scene_source": r.scene.source,
+        "adapter": r.adapter,
+        "size": {"width": r.frame.width, "height": r.frame.height},
+        "techniques": r.techniques.iter().enumerate().map(|(i, t)| json!({
+            "light": i,
+            "id": t.id(),
+            "family": t.family.id,
+            "preset": t.preset,
+            "parameters": t.params.to_json(),
+        })).collect::<Vec<_>>(),
+        "render_settings": r.settings,
+        "camera": {
+            "eye": r.camera.eye.to_array(),
+            "target": r.camera.target.to_array(),
+            "up": r.camera.up.to_array(),
+            "fov_y_deg": r.camera.fov_y_deg,
+            "near": r.camera.near,
+            "far": r.camera.far,
+            "aspect": r.frame.width as f32 / r.frame.height as f32,
+        },
+        "matrices": {
+            "layout": "column-major, 16 numbers per matrix; clip = projection · view · world",
+            "view": mat_json(u.view),
+            "projection": mat_json(u.proj),
+            "view_projection": mat_json(u.view_proj),
+        },
+        "conventions": {
+            "pixel_centre": "pixel (x, y) covers [x, x+1) × [y, y+1); its centre is (x + 0.5, y + 0.5)",
+            "y_axis": "pixel y grows downwards; NDC y grows upwards",
+            "ndc_from_pixel": "ndc_x = 2 (x + 0.5) / width − 1, ndc_y = 1 − 2 (y + 0.5) / height",
+            "depth_range": "NDC z in [0, 1] (0 = near plane), right-handed view space looking down −z",
+            "visibility_png": "16-bit grey, 65535 = fully lit, background pixels 65535",
+        },
+        "lights": r.lights,
+        "triangles": {
+            "drawn": r.scene_gpu.triangle_count,
+            "casters": r.scene_gpu.caster_triangle_count,
+        },
+        "timings_ms": {
+            "prepass": r.timings.prepass_ms,
+            "visibility_masks": r.timings.masks_ms,
+            "lighting": r.timings.lighting_ms,
+            "frame": r.timings.total_ms,
+            "other": r.extra_timings,
+        },
+    })
+}
+
+/// A complete headless frame: GPU, renderer, scene upload, per-light
+/// technique instances.
+pub struct HeadlessFrame {
+    pub renderer: Renderer,
+    pub scene_gpu: SceneGpu,
+    pub frame: FrameResources,
+    pub techniques: Vec<TechniqueInstance>,
+}
+
+impl HeadlessFrame {
+    pub fn new(gpu: &GpuContext, scene: &Scene, choices: &[TechniqueChoice], width: u32, height: u32) -> Result<HeadlessFrame> {
+        gpu.checked("creating the renderer", || Self::create(gpu, scene, choices, width, height))
+    }
+
+    fn create(gpu: &GpuContext, scene: &Scene, choices: &[TechniqueChoice], width: u32, height: u32) -> Result<HeadlessFrame> {
+        let renderer = Renderer::new(gpu);
+        let scene_gpu = renderer.upload_scene(gpu, scene)?;
+        let frame = renderer.create_frame(gpu, width, height)?;
+        let techniques = choices
+            .iter()
+            .map(|c| TechniqueInstance::new(gpu, c.clone()))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(HeadlessFrame {
+            renderer,
+            scene_gpu,
+            frame,
+            techniques,
+        })
+    }
+
+    pub fn render(&mut self, gpu: &GpuContext, scene: &Scene, camera: &Camera, lights: &[Light], settings: &RenderSettings) -> Result<FrameTimings> {
+        gpu.checked("rendering", || {
+            self.renderer
+                .render(gpu, scene, &self.scene_gpu, &mut self.frame, camera, lights, &mut self.techniques, settings)
+        })
+    }
+}

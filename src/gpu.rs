@@ -1,0 +1,230 @@
+//! GPU context: adapter selection (`--backend`, `WGPU_BACKEND`, real GPUs
+//! before the CPU adapter), device creation with the optional features the
+//! techniques use, and texture readback.
+
+use anyhow::{Result, bail};
+
+/// Raised when no adapter exists; the CLI maps it to exit code 2.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "no graphics adapter found for backend(s) {backends}. Without a GPU, install Mesa's CPU \
+     Vulkan driver (lavapipe): `sudo apt-get install mesa-vulkan-drivers` on Debian/Ubuntu; with a \
+     GPU, install its Vulkan driver (e.g. `mesa-vulkan-drivers` for AMD/Intel, the NVIDIA \
+     driver's Vulkan ICD), or choose another backend with --backend vulkan|gl|metal|dx12"
+)]
+pub struct NoAdapter {
+    pub backends: String,
+}
+
+pub struct GpuContext {
+    pub instance: wgpu::Instance,
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    /// Timestamp queries inside encoders are available.
+    pub timestamps: bool,
+    /// Pipeline-statistics queries are available.
+    pub pipeline_statistics: bool,
+    /// `unclipped_depth` (depth clamp) is available.
+    pub depth_clamp: bool,
+}
+
+/// Parses a backend name as accepted by `--backend`.
+pub fn parse_backend(name: &str) -> Result<wgpu::Backends> {
+    Ok(match name.to_ascii_lowercase().as_str() {
+        "vulkan" | "vk" => wgpu::Backends::VULKAN,
+        "gl" | "gles" | "opengl" => wgpu::Backends::GL,
+        "metal" | "mtl" => wgpu::Backends::METAL,
+        "dx12" | "d3d12" => wgpu::Backends::DX12,
+        "all" | "auto" => wgpu::Backends::all(),
+        _ => bail!("unknown backend '{name}' (valid: vulkan, gl, metal, dx12, auto)"),
+    })
+}
+
+fn rank(t: wgpu::DeviceType) -> u32 {
+    match t {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    }
+}
+
+impl GpuContext {
+    /// Creates a headless context. `backend` (from `--backend`) wins over the
+    /// `WGPU_BACKEND` environment variable; among adapters a real GPU is
+    /// preferred, then the CPU adapter (lavapipe).
+    pub fn new(backend: Option<&str>) -> Result<GpuContext> {
+        let explicit = match backend {
+            Some(b) => Some(parse_backend(b)?),
+            None => wgpu::Backends::from_env(),
+        };
+        let make = |backends| {
+            wgpu::Instance::new(wgpu::InstanceDescriptor {
+                backends,
+                ..wgpu::InstanceDescriptor::new_without_display_handle().with_env()
+            })
+        };
+        match explicit {
+            Some(b) => Self::with_instance(make(b), b, None),
+            // Vulkan/Metal/DX12 first; OpenGL only when none of them has an
+            // adapter (probing GL prints EGL noise on headless machines).
+            None => Self::with_instance(make(wgpu::Backends::PRIMARY), wgpu::Backends::PRIMARY, None)
+                .or_else(|e| match e.downcast_ref::<NoAdapter>() {
+                    Some(_) => Self::with_instance(make(wgpu::Backends::GL), wgpu::Backends::all(), None),
+                    None => Err(e),
+                }),
+        }
+    }
+
+    /// Runs `f` inside validation and out-of-memory error scopes and turns
+    /// a captured wgpu error into an `Err` naming `what`.
+    pub fn checked<T>(&self, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let r = f();
+        let v = pollster::block_on(validation.pop());
+        let o = pollster::block_on(oom.pop());
+        if let Some(e) = v.or(o) {
+            bail!("{what}: {e}");
+        }
+        r
+    }
+
+    /// Creates the context on `instance`, with an adapter that can present to
+    /// `surface` when one is given (the viewer).
+    pub fn with_instance(
+        instance: wgpu::Instance,
+        backends: wgpu::Backends,
+        surface: Option<&wgpu::Surface>,
+    ) -> Result<GpuContext> {
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
+        if let Some(s) = surface {
+            adapters.retain(|a| a.is_surface_supported(s));
+        }
+        adapters.sort_by_key(|a| rank(a.get_info().device_type));
+        let Some(adapter) = adapters.into_iter().next() else {
+            return Err(NoAdapter {
+                backends: format!("{backends:?}"),
+            }
+            .into());
+        };
+        let info = adapter.get_info();
+        let wanted = wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
+            | wgpu::Features::PIPELINE_STATISTICS_QUERY
+            | wgpu::Features::DEPTH_CLIP_CONTROL;
+        let features = adapter.features() & wanted;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("shadowlab"),
+            required_features: features,
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))?;
+        device.on_uncaptured_error(std::sync::Arc::new(|e: wgpu::Error| {
+            log::error!("wgpu: {e}");
+        }));
+        log::info!(
+            "adapter: {} ({:?}, {:?}, driver {} {})",
+            info.name,
+            info.device_type,
+            info.backend,
+            info.driver,
+            info.driver_info
+        );
+        Ok(GpuContext {
+            timestamps: features.contains(
+                wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+            ),
+            pipeline_statistics: features.contains(wgpu::Features::PIPELINE_STATISTICS_QUERY),
+            depth_clamp: features.contains(wgpu::Features::DEPTH_CLIP_CONTROL),
+            instance,
+            adapter,
+            device,
+            queue,
+            info,
+        })
+    }
+
+    /// One-line description of the adapter for logs and frame.json.
+    pub fn adapter_summary(&self) -> String {
+        format!(
+            "{} ({:?}, {:?})",
+            self.info.name, self.info.device_type, self.info.backend
+        )
+    }
+
+    /// Largest 2D texture side the device allows.
+    pub fn max_texture_size(&self) -> u32 {
+        self.device.limits().max_texture_dimension_2d
+    }
+
+    /// Copies one layer of a 2D texture into memory, rows tightly packed.
+    pub fn read_texture(
+        &self,
+        texture: &wgpu::Texture,
+        layer: u32,
+        bytes_per_pixel: u32,
+    ) -> Result<Vec<u8>> {
+        let (w, h) = (texture.width(), texture.height());
+        let unpadded = w * bytes_per_pixel;
+        let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+            * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: (padded * h) as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        enc.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: 0,
+                    z: layer,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded),
+                    rows_per_image: Some(h),
+                },
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+        self.queue.submit([enc.finish()]);
+        let slice = buffer.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device.poll(wgpu::PollType::wait_indefinitely())?;
+        rx.recv()??;
+        let data = slice.get_mapped_range()?;
+        let mut out = Vec::with_capacity((unpadded * h) as usize);
+        for row in data.chunks(padded as usize) {
+            out.extend_from_slice(&row[..unpadded as usize]);
+        }
+        drop(data);
+        buffer.unmap();
+        Ok(out)
+    }
+
+    /// Waits until all submitted work has finished.
+    pub fn wait_idle(&self) -> Result<()> {
+        self.device.poll(wgpu::PollType::wait_indefinitely())?;
+        Ok(())
+    }
+}

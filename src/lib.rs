@@ -1,0 +1,12 @@
+//! shadowlab: a real-time shadow rendering lab. Every shadow technique
+//! writes a per-light screen-space visibility mask; the lighting pass
+//! composes `ambient + visibility × (diffuse + specular)`; a CPU ray tracer
+//! writes the same mask from the same G-buffer, so each technique can be
+//! measured against ground truth pixel by pixel.
+
+pub mod cli;
+pub mod frame;
+pub mod gpu;
+pub mod renderer;
+pub mod scene;
+pub mod technique;

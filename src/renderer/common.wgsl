@@ -1,0 +1,91 @@
+// Shared declarations: the per-frame uniform (group 0) and the object table
+// (group 1). Technique shaders are compiled with this file prepended.
+
+const MAX_LIGHTS: u32 = 4u;
+const LIGHT_POINT: u32 = 0u;
+const LIGHT_SPOT: u32 = 1u;
+const LIGHT_DIRECTIONAL: u32 = 2u;
+
+struct LightGpu {
+    // xyz world position, w light type (0 point, 1 spot, 2 directional)
+    position: vec4f,
+    // xyz direction the light travels, w range (0 = no falloff)
+    direction: vec4f,
+    // rgb colour × intensity, w cos(inner cone)
+    color: vec4f,
+    // x cos(outer cone), y area radius or width, z area height,
+    // w area shape (0 none, 1 sphere, 2 rectangle)
+    cone: vec4f,
+};
+
+struct Frame {
+    view_proj: mat4x4f,
+    inv_view_proj: mat4x4f,
+    view: mat4x4f,
+    proj: mat4x4f,
+    camera_pos: vec4f,
+    ambient: vec4f,
+    // width, height, 1/width, 1/height
+    size: vec4f,
+    // x shading (0 flat, 1 Gouraud, 2 per-pixel), y model (0 Phong, 1 Blinn-Phong),
+    // z light count, w unused
+    settings: vec4u,
+    lights: array<LightGpu, 4>,
+};
+
+struct ObjectGpu {
+    model: mat4x4f,
+    normal_matrix: mat4x4f,
+    // x material, y casts shadow, z receives shadow, w shadow plane
+    info: vec4u,
+};
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(1) @binding(0) var<storage, read> objects: array<ObjectGpu>;
+
+struct VertexIn {
+    @location(0) position: vec3f,
+    @location(1) normal: vec3f,
+    @location(2) uv: vec2f,
+    @location(3) tangent: vec4f,
+    @builtin(instance_index) object: u32,
+};
+
+// Clip-space position; every pass that depth-tests against the prepass uses
+// this one function with an @invariant output so depths match exactly.
+fn clip_position(object: u32, p: vec3f) -> vec4f {
+    return frame.view_proj * (objects[object].model * vec4f(p, 1.0));
+}
+
+// Direction to the light (unit) and the radiance reaching `pos`
+// (colour × intensity × range window × spot cone), for light `i`.
+struct LightSample {
+    to_light: vec3f,
+    radiance: vec3f,
+};
+
+fn sample_light(i: u32, pos: vec3f) -> LightSample {
+    let l = frame.lights[i];
+    var s: LightSample;
+    let kind = u32(l.position.w);
+    if kind == LIGHT_DIRECTIONAL {
+        s.to_light = -normalize(l.direction.xyz);
+        s.radiance = l.color.rgb;
+        return s;
+    }
+    let d = l.position.xyz - pos;
+    let dist = length(d);
+    s.to_light = d / max(dist, 1e-6);
+    var att = 1.0;
+    let range = l.direction.w;
+    if range > 0.0 {
+        let x = clamp(1.0 - pow(dist / range, 4.0), 0.0, 1.0);
+        att = x * x;
+    }
+    if kind == LIGHT_SPOT {
+        let c = dot(-s.to_light, normalize(l.direction.xyz));
+        att *= smoothstep(l.cone.x, l.color.w, c);
+    }
+    s.radiance = l.color.rgb * att;
+    return s;
+}

@@ -1,0 +1,424 @@
+//! glTF 2.0 import (meshes, base colour, textures, KHR_lights_punctual,
+//! cameras, `extras.shadowlab` flags) and export of a resolved scene in
+//! world space.
+
+use super::{Camera, Light, LightType, Material, Mesh, Object, Scene, Texture, frame_scene_defaults};
+use anyhow::{Context, Result, anyhow, bail};
+use glam::{Mat4, Quat, Vec2, Vec3};
+use serde_json::{Value, json};
+use std::path::Path;
+
+/// Per-node flags stored under `extras.shadowlab`.
+#[derive(serde::Deserialize, serde::Serialize, Debug, Default)]
+struct ShadowFlags {
+    casts_shadow: Option<bool>,
+    receives_shadow: Option<bool>,
+    shadow_plane: Option<bool>,
+}
+
+/// Phong parameters stored under a material's `extras.shadowlab`.
+#[derive(serde::Deserialize, serde::Serialize, Debug)]
+struct PhongExtras {
+    ka: [f32; 3],
+    kd: [f32; 3],
+    ks: [f32; 3],
+    shininess: f32,
+    uv_scale: f32,
+    procedural: Option<super::Procedural>,
+}
+
+fn extras_field<T: serde::de::DeserializeOwned>(extras: &gltf::json::Extras, what: &str) -> Result<Option<T>> {
+    let Some(raw) = extras else { return Ok(None) };
+    let v: Value = serde_json::from_str(raw.get())?;
+    match v.get("shadowlab") {
+        Some(s) => Ok(Some(
+            serde_json::from_value(s.clone()).with_context(|| format!("{what}: extras.shadowlab"))?,
+        )),
+        None => Ok(None),
+    }
+}
+
+fn to_rgba(img: &gltf::image::Data) -> Result<image::RgbaImage> {
+    use gltf::image::Format::*;
+    let px = &img.pixels;
+    let rgba: Vec<u8> = match img.format {
+        R8G8B8A8 => px.clone(),
+        R8G8B8 => px.chunks_exact(3).flat_map(|c| [c[0], c[1], c[2], 255]).collect(),
+        R8G8 => px.chunks_exact(2).flat_map(|c| [c[0], c[0], c[0], c[1]]).collect(),
+        R8 => px.iter().flat_map(|&c| [c, c, c, 255]).collect(),
+        f => bail!("unsupported texture format {f:?}"),
+    };
+    image::RgbaImage::from_raw(img.width, img.height, rgba).ok_or_else(|| anyhow!("bad image size"))
+}
+
+/// Loads a `.gltf` or `.glb` file. Node transforms are baked into each
+/// object's transform; lights come from KHR_lights_punctual, the camera from
+/// the first camera node.
+pub fn load_scene(path: &Path) -> Result<Scene> {
+    let file = path.display().to_string();
+    let (doc, buffers, images) = gltf::import(path).map_err(|e| anyhow!("{file}: {e}"))?;
+    let mut scene = Scene::new(path.file_stem().and_then(|s| s.to_str()).unwrap_or("gltf"));
+    scene.source = file.clone();
+    let mut tex_map = std::collections::HashMap::new();
+    let mut texture = |scene: &mut Scene, t: gltf::Texture, srgb: bool| -> Option<usize> {
+        let idx = t.source().index();
+        if let Some(&i) = tex_map.get(&(idx, srgb)) {
+            return Some(i);
+        }
+        match images.get(idx).map(to_rgba) {
+            Some(Ok(image)) => {
+                scene.textures.push(Texture {
+                    name: t.source().name().unwrap_or("texture").into(),
+                    image,
+                    srgb,
+                    source: None,
+                });
+                tex_map.insert((idx, srgb), scene.textures.len() - 1);
+                Some(scene.textures.len() - 1)
+            }
+            _ => {
+                log::warn!("{file}: image {idx} unusable; using the flat material colour");
+                None
+            }
+        }
+    };
+    for m in doc.materials() {
+        let pbr = m.pbr_metallic_roughness();
+        let bc = Vec3::from_slice(&pbr.base_color_factor()[..3]);
+        let mut mat = match extras_field::<PhongExtras>(m.extras(), "material")? {
+            Some(p) => Material {
+                ka: p.ka.into(),
+                kd: p.kd.into(),
+                ks: p.ks.into(),
+                shininess: p.shininess,
+                uv_scale: p.uv_scale,
+                procedural: p.procedural,
+                ..Material::default()
+            },
+            None => {
+                // Phong from metallic-roughness: n = 2/r² − 2.
+                let r = pbr.roughness_factor().max(0.05);
+                Material {
+                    ks: Vec3::splat(0.04 + 0.5 * pbr.metallic_factor()),
+                    shininess: (2.0 / (r * r) - 2.0).clamp(1.0, 1000.0),
+                    ..Material::color("", bc)
+                }
+            }
+        };
+        mat.name = m.name().unwrap_or("material").into();
+        mat.alpha = pbr.base_color_factor()[3];
+        mat.diffuse_texture = pbr.base_color_texture().and_then(|t| texture(&mut scene, t.texture(), true));
+        mat.normal_map = m.normal_texture().and_then(|t| texture(&mut scene, t.texture(), false));
+        scene.add_material(mat);
+    }
+    let default_mat = scene.add_material(Material::default());
+    let mut mesh_ids = std::collections::HashMap::new();
+    let mut camera = None;
+    let gscene = doc
+        .default_scene()
+        .or_else(|| doc.scenes().next())
+        .ok_or_else(|| anyhow!("{file}: no scene"))?;
+    // Breadth-first in document order, so objects keep the node order.
+    let mut queue: std::collections::VecDeque<(gltf::Node, Mat4)> =
+        gscene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    while let Some((node, parent)) = queue.pop_front() {
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        let name = node.name().unwrap_or("node").to_string();
+        for c in node.children() {
+            queue.push_back((c, world));
+        }
+        let (_, rot, pos) = world.to_scale_rotation_translation();
+        let forward = (rot * Vec3::NEG_Z).normalize();
+        if let Some(l) = node.light() {
+            use gltf::khr_lights_punctual::Kind;
+            let mut light = match l.kind() {
+                Kind::Directional => Light::directional(forward, l.intensity()),
+                Kind::Point => Light::point(pos, l.intensity()),
+                Kind::Spot {
+                    inner_cone_angle,
+                    outer_cone_angle,
+                } => Light::spot(
+                    pos,
+                    pos + forward,
+                    l.intensity(),
+                    inner_cone_angle.to_degrees(),
+                    outer_cone_angle.to_degrees(),
+                ),
+            };
+            light.color = l.color().into();
+            light.range = l.range().unwrap_or(0.0);
+            if let Some(area) = extras_field::<super::LightArea>(l.extras(), "light")? {
+                light.area = Some(area);
+            }
+            scene.lights.push(light);
+        }
+        if let (Some(c), None) = (node.camera(), camera) {
+            if let gltf::camera::Projection::Perspective(p) = c.projection() {
+                camera = Some(Camera {
+                    eye: pos,
+                    target: pos + forward,
+                    up: rot * Vec3::Y,
+                    fov_y_deg: p.yfov().to_degrees(),
+                    near: p.znear(),
+                    far: p.zfar().unwrap_or(p.znear() * 1e4),
+                });
+            }
+        }
+        let Some(gmesh) = node.mesh() else { continue };
+        let flags: ShadowFlags = extras_field(node.extras(), &format!("{file}: node '{name}'"))?.unwrap_or_default();
+        for (pi, prim) in gmesh.primitives().enumerate() {
+            if prim.mode() != gltf::mesh::Mode::Triangles {
+                log::warn!("{file}: mesh '{}' primitive {pi} is not triangles; skipped", gmesh.name().unwrap_or(""));
+                continue;
+            }
+            let key = (gmesh.index(), pi);
+            let mesh_id = match mesh_ids.get(&key) {
+                Some(&id) => id,
+                None => {
+                    let reader = prim.reader(|b| Some(&buffers[b.index()]));
+                    let positions: Vec<Vec3> = reader
+                        .read_positions()
+                        .ok_or_else(|| anyhow!("{file}: mesh '{}' has no POSITION", gmesh.name().unwrap_or("")))?
+                        .map(Vec3::from)
+                        .collect();
+                    let indices: Vec<u32> = match reader.read_indices() {
+                        Some(i) => i.into_u32().collect(),
+                        None => (0..positions.len() as u32).collect(),
+                    };
+                    let mesh = Mesh {
+                        name: gmesh.name().unwrap_or(&name).to_string(),
+                        normals: reader.read_normals().map(|n| n.map(Vec3::from).collect()).unwrap_or_default(),
+                        uvs: reader
+                            .read_tex_coords(0)
+                            .map(|t| t.into_f32().map(Vec2::from).collect())
+                            .unwrap_or_default(),
+                        positions,
+                        tangents: vec![],
+                        indices,
+                    };
+                    let id = scene.add_mesh(mesh);
+                    mesh_ids.insert(key, id);
+                    id
+                }
+            };
+            let mat = prim.material().index().unwrap_or(default_mat);
+            let mut obj = Object::from_name(&name, mesh_id, mat, world);
+            obj.casts_shadow = flags.casts_shadow.unwrap_or(obj.casts_shadow);
+            obj.receives_shadow = flags.receives_shadow.unwrap_or(obj.receives_shadow);
+            obj.shadow_plane = flags.shadow_plane.unwrap_or(obj.shadow_plane);
+            scene.objects.push(obj);
+        }
+    }
+    if scene.objects.is_empty() {
+        bail!("{file}: no triangle meshes");
+    }
+    let had_lights = !scene.lights.is_empty();
+    frame_scene_defaults(&mut scene);
+    if let Some(c) = camera {
+        scene.camera = c;
+    }
+    if !had_lights {
+        log::warn!("{file}: no KHR_lights_punctual light; placed a default point light");
+    }
+    Ok(scene)
+}
+
+/// Rotation taking −Z to `dir` (glTF lights and cameras look down −Z).
+fn rotation_towards(dir: Vec3, up: Vec3) -> Quat {
+    let view = Mat4::look_to_rh(Vec3::ZERO, dir, up);
+    let (_, r, _) = view.inverse().to_scale_rotation_translation();
+    r.normalize()
+}
+
+fn safe_up(dir: Vec3) -> Vec3 {
+    if dir.normalize().dot(Vec3::Y).abs() > 0.99 { Vec3::Z } else { Vec3::Y }
+}
+
+/// Binary buffer under construction; every view is 4-byte aligned.
+struct BinWriter {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl BinWriter {
+    fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        let mut v = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
+        if let Some(t) = target {
+            v["target"] = json!(t);
+        }
+        self.bin.extend_from_slice(bytes);
+        self.views.push(v);
+        self.views.len() - 1
+    }
+    fn accessor(&mut self, bytes: &[u8], count: usize, ty: &str, comp: u32, target: u32, minmax: Option<(Vec3, Vec3)>) -> usize {
+        let view = self.view(bytes, Some(target));
+        let mut a = json!({"bufferView": view, "componentType": comp, "count": count, "type": ty});
+        if let Some((mn, mx)) = minmax {
+            a["min"] = json!(mn.to_array());
+            a["max"] = json!(mx.to_array());
+        }
+        self.accessors.push(a);
+        self.accessors.len() - 1
+    }
+}
+
+/// Writes the scene as `.gltf` JSON plus a `.bin` buffer beside it: vertices
+/// in world space (identity node transforms), Phong parameters and shadow
+/// flags in `extras.shadowlab`, lights via KHR_lights_punctual and the
+/// camera as a perspective camera node.
+pub fn export(scene: &Scene, out: &Path) -> Result<()> {
+    let bin_name = format!(
+        "{}.bin",
+        out.file_stem().and_then(|s| s.to_str()).ok_or_else(|| anyhow!("bad output name"))?
+    );
+    let mut w = BinWriter {
+        bin: vec![],
+        views: vec![],
+        accessors: vec![],
+    };
+    const FLOAT: u32 = 5126;
+    const UINT: u32 = 5125;
+    const ARRAY: u32 = 34962;
+    const ELEMENTS: u32 = 34963;
+    let mut images = vec![];
+    let mut textures = vec![];
+    for t in &scene.textures {
+        let mut png = std::io::Cursor::new(Vec::new());
+        t.image.write_to(&mut png, image::ImageFormat::Png)?;
+        let view = w.view(png.get_ref(), None);
+        images.push(json!({"bufferView": view, "mimeType": "image/png", "name": t.name}));
+        textures.push(json!({"source": images.len() - 1, "sampler": 0}));
+    }
+    let materials: Vec<Value> = scene
+        .materials
+        .iter()
+        .map(|m| {
+            let r = (2.0 / (m.shininess + 2.0)).sqrt();
+            let mut pbr = json!({
+                "baseColorFactor": [m.kd.x.clamp(0.0, 1.0), m.kd.y.clamp(0.0, 1.0), m.kd.z.clamp(0.0, 1.0), m.alpha.clamp(0.0, 1.0)],
+                "metallicFactor": 0.0,
+                "roughnessFactor": r.clamp(0.0, 1.0),
+            });
+            if let Some(t) = m.diffuse_texture {
+                pbr["baseColorTexture"] = json!({"index": t});
+            }
+            let mut v = json!({
+                "name": m.name,
+                "pbrMetallicRoughness": pbr,
+                "extras": {"shadowlab": PhongExtras {
+                    ka: m.ka.into(), kd: m.kd.into(), ks: m.ks.into(),
+                    shininess: m.shininess, uv_scale: m.uv_scale, procedural: m.procedural,
+                }},
+            });
+            if let Some(t) = m.normal_map {
+                v["normalTexture"] = json!({"index": t});
+            }
+            v
+        })
+        .collect();
+    let mut meshes = vec![];
+    let mut nodes = vec![];
+    for o in &scene.objects {
+        let m = &scene.meshes[o.mesh];
+        let nm = o.transform.inverse().transpose();
+        let pos: Vec<Vec3> = m.positions.iter().map(|&p| o.transform.transform_point3(p)).collect();
+        let nrm: Vec<Vec3> = m
+            .normals
+            .iter()
+            .map(|&n| nm.transform_vector3(n).try_normalize().unwrap_or(Vec3::Y))
+            .collect();
+        let b = super::Aabb::from_points(pos.iter().copied());
+        let pa = w.accessor(bytemuck::cast_slice(&pos), pos.len(), "VEC3", FLOAT, ARRAY, Some((b.min, b.max)));
+        let na = w.accessor(bytemuck::cast_slice(&nrm), nrm.len(), "VEC3", FLOAT, ARRAY, None);
+        let ta = w.accessor(bytemuck::cast_slice(&m.uvs), m.uvs.len(), "VEC2", FLOAT, ARRAY, None);
+        let ia = w.accessor(bytemuck::cast_slice(&m.indices), m.indices.len(), "SCALAR", UINT, ELEMENTS, None);
+        meshes.push(json!({
+            "name": m.name,
+            "primitives": [{
+                "attributes": {"POSITION": pa, "NORMAL": na, "TEXCOORD_0": ta},
+                "indices": ia,
+                "material": o.material,
+                "mode": 4,
+            }],
+        }));
+        nodes.push(json!({
+            "name": o.name,
+            "mesh": meshes.len() - 1,
+            "extras": {"shadowlab": ShadowFlags {
+                casts_shadow: Some(o.casts_shadow),
+                receives_shadow: Some(o.receives_shadow),
+                shadow_plane: Some(o.shadow_plane),
+            }},
+        }));
+    }
+    let mut lights = vec![];
+    for (i, l) in scene.lights.iter().enumerate() {
+        let mut lj = json!({
+            "name": format!("light{i}"),
+            "type": match l.kind { LightType::Point => "point", LightType::Spot => "spot", LightType::Directional => "directional" },
+            "color": l.color.to_array(),
+            "intensity": l.intensity,
+        });
+        if l.range > 0.0 && l.kind != LightType::Directional {
+            lj["range"] = json!(l.range);
+        }
+        if l.kind == LightType::Spot {
+            lj["spot"] = json!({
+                "innerConeAngle": l.inner_cone_deg.to_radians(),
+                "outerConeAngle": l.outer_cone_deg.to_radians(),
+            });
+        }
+        if let Some(a) = l.area {
+            lj["extras"] = json!({"shadowlab": a});
+        }
+        lights.push(lj);
+        let rot = rotation_towards(l.direction, safe_up(l.direction));
+        nodes.push(json!({
+            "name": format!("Light{i}"),
+            "translation": l.position.to_array(),
+            "rotation": rot.to_array(),
+            "extensions": {"KHR_lights_punctual": {"light": i}},
+        }));
+    }
+    let c = &scene.camera;
+    let (_, crot, _) = c.view().inverse().to_scale_rotation_translation();
+    nodes.push(json!({
+        "name": "Camera",
+        "translation": c.eye.to_array(),
+        "rotation": crot.normalize().to_array(),
+        "camera": 0,
+    }));
+    let mut doc = json!({
+        "asset": {"version": "2.0", "generator": concat!("shadowlab ", env!("CARGO_PKG_VERSION"))},
+        "scene": 0,
+        "scenes": [{"name": scene.name, "nodes": (0..nodes.len()).collect::<Vec<_>>()}],
+        "nodes": nodes,
+        "meshes": meshes,
+        "materials": materials,
+        "cameras": [{"type": "perspective", "perspective": {
+            "yfov": c.fov_y_deg.to_radians(), "znear": c.near, "zfar": c.far}}],
+        "accessors": w.accessors,
+        "bufferViews": w.views,
+        "buffers": [{"uri": bin_name, "byteLength": w.bin.len()}],
+    });
+    if !images.is_empty() {
+        doc["images"] = json!(images);
+        doc["textures"] = json!(textures);
+        doc["samplers"] = json!([{"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}]);
+    }
+    if !lights.is_empty() {
+        doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+        doc["extensions"] = json!({"KHR_lights_punctual": {"lights": lights}});
+    }
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
+    std::fs::write(out, serde_json::to_string_pretty(&doc)?).with_context(|| format!("writing {}", out.display()))?;
+    let bin_path = out.with_file_name(&bin_name);
+    std::fs::write(&bin_path, &w.bin).with_context(|| format!("writing {}", bin_path.display()))?;
+    Ok(())
+}

@@ -1,0 +1,157 @@
+//! Shadow techniques. Each family lives in its own folder, implements
+//! [`ShadowTechnique`] and is listed once in [`FAMILIES`]; a technique
+//! writes, for one light, a screen-space visibility mask (the fraction of the
+//! light that reaches the surface seen in each pixel) that the lighting pass
+//! composes as `ambient + visibility × (diffuse + specular)`.
+
+pub mod none;
+pub mod params;
+
+use crate::gpu::GpuContext;
+use crate::renderer::{FrameResources, SceneGpu};
+use crate::scene::{Light, Scene};
+use anyhow::{Result, anyhow};
+pub use params::{ParamKind, ParamSpec, ParamValues};
+
+/// Everything a technique may read while writing one light's mask.
+pub struct MaskContext<'a> {
+    pub gpu: &'a GpuContext,
+    pub scene: &'a Scene,
+    pub scene_gpu: &'a SceneGpu,
+    pub frame: &'a FrameResources,
+    pub light_index: usize,
+    pub light: &'a Light,
+    pub params: &'a ParamValues,
+    /// The mask layer to write (format [`crate::renderer::MASK_FORMAT`]).
+    pub target: &'a wgpu::TextureView,
+}
+
+/// One shadow technique instance, owned per light.
+pub trait ShadowTechnique: Send {
+    /// Records (or performs) the work that writes the light's visibility mask
+    /// into `ctx.target`. Every pixel of the target must be written.
+    fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()>;
+
+    /// Technique-specific counters of the last frame (name, value).
+    fn counters(&self) -> Vec<(&'static str, f64)> {
+        vec![]
+    }
+}
+
+/// A named set of parameter values of a family.
+pub struct Preset {
+    pub name: &'static str,
+    pub summary: &'static str,
+    pub values: &'static [(&'static str, &'static str)],
+}
+
+/// A technique family: its parameter table, presets and constructor.
+pub struct Family {
+    pub id: &'static str,
+    pub summary: &'static str,
+    pub params: &'static [ParamSpec],
+    /// The first preset is the family's default (`family` = `family:<first>`).
+    pub presets: &'static [Preset],
+    pub create: fn(&GpuContext) -> Result<Box<dyn ShadowTechnique>>,
+}
+
+/// The registry: every technique family.
+pub static FAMILIES: &[&Family] = &[&none::FAMILY];
+
+/// A resolved technique id: family, preset name and parameter values.
+#[derive(Clone)]
+pub struct TechniqueChoice {
+    pub family: &'static Family,
+    pub preset: &'static str,
+    pub params: ParamValues,
+}
+
+impl TechniqueChoice {
+    /// `family:preset` as written on the command line.
+    pub fn id(&self) -> String {
+        format!("{}:{}", self.family.id, self.preset)
+    }
+}
+
+fn all_ids() -> String {
+    FAMILIES
+        .iter()
+        .flat_map(|f| f.presets.iter().map(move |p| format!("{}:{}", f.id, p.name)))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Resolves `family` or `family:preset` to a family and its preset values.
+pub fn resolve(id: &str) -> Result<TechniqueChoice> {
+    let (fid, pid) = id.split_once(':').map_or((id, None), |(f, p)| (f, Some(p)));
+    let family = FAMILIES
+        .iter()
+        .find(|f| f.id == fid)
+        .ok_or_else(|| anyhow!("unknown technique '{id}' (valid: {})", all_ids()))?;
+    let preset = match pid {
+        None => &family.presets[0],
+        Some(p) => family.presets.iter().find(|x| x.name == p).ok_or_else(|| {
+            anyhow!(
+                "technique family '{fid}' has no preset '{p}' (valid: {})",
+                family.presets.iter().map(|x| format!("{fid}:{}", x.name)).collect::<Vec<_>>().join(", ")
+            )
+        })?,
+    };
+    let mut params = ParamValues::defaults(family.params);
+    for (k, v) in preset.values {
+        params.set(k, v)?;
+    }
+    Ok(TechniqueChoice {
+        family,
+        preset: preset.name,
+        params,
+    })
+}
+
+/// Parses `key=value` settings and applies them to `params`.
+pub fn apply_settings(params: &mut ParamValues, settings: &[String]) -> Result<()> {
+    for s in settings {
+        let (k, v) = s
+            .split_once('=')
+            .ok_or_else(|| anyhow!("--set expects key=value, got '{s}'"))?;
+        params.set(k.trim(), v.trim())?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resolve_accepts_family_and_preset_ids() {
+        let c = resolve("none").unwrap();
+        assert_eq!(c.id(), "none:default");
+        assert_eq!(resolve("none:default").unwrap().family.id, "none");
+        let e = resolve("bogus").err().unwrap().to_string();
+        assert!(e.contains("none:default"), "{e}");
+        let e = resolve("none:bogus").err().unwrap().to_string();
+        assert!(e.contains("valid: none:default"), "{e}");
+    }
+
+    #[test]
+    fn every_preset_is_valid_for_its_table() {
+        for f in FAMILIES {
+            assert!(!f.presets.is_empty(), "{} has no preset", f.id);
+            for p in f.presets {
+                resolve(&format!("{}:{}", f.id, p.name)).unwrap();
+            }
+            for s in f.params {
+                assert!(s.min <= s.default && s.default <= s.max, "{}.{}", f.id, s.name);
+                assert!(!s.doc.is_empty());
+            }
+        }
+    }
+
+    #[test]
+    fn settings_must_be_key_value() {
+        let mut p = ParamValues::defaults(none::FAMILY.params);
+        assert!(apply_settings(&mut p, &["x".into()]).is_err());
+        assert!(apply_settings(&mut p, &["x=1".into()]).unwrap_err().to_string().contains("unknown parameter"));
+    }
+}

@@ -1,0 +1,27 @@
+//! `none`: every surface fully lit. It still goes through the whole mask
+//! path (a clear of the mask layer to 1), so its cost is the baseline that
+//! the other techniques' frame times are divided by.
+
+use super::{Family, MaskContext, Preset, ShadowTechnique};
+use anyhow::Result;
+
+pub static FAMILY: Family = Family {
+    id: "none",
+    summary: "no shadows: the visibility mask is 1 everywhere",
+    params: &[],
+    presets: &[Preset {
+        name: "default",
+        summary: "all lit",
+        values: &[],
+    }],
+    create: |_| Ok(Box::new(NoShadows)),
+};
+
+pub struct NoShadows;
+
+impl ShadowTechnique for NoShadows {
+    fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        crate::renderer::clear_mask(encoder, ctx.target, 1.0);
+        Ok(())
+    }
+}
