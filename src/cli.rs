@@ -12,7 +12,11 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 #[derive(Parser)]
-#[command(name = "shadowlab", version, about = "Real-time shadow rendering lab: every classic shadow technique, measured against a ray-traced ground truth")]
+#[command(
+    name = "shadowlab",
+    version,
+    about = "Real-time shadow rendering lab: every classic shadow technique, measured against a ray-traced ground truth"
+)]
 pub struct Cli {
     /// Also write log messages (warnings, errors such as a malformed scene) to this file.
     #[arg(long, global = true, value_name = "FILE")]
@@ -33,7 +37,7 @@ pub enum Command {
     /// Write a scene as glTF 2.0 (world space, KHR_lights_punctual, camera, shadow flags in extras).
     Export(ExportArgs),
     /// Render one frame headless: DIR/image.png, DIR/visibility-N.png, DIR/frame.json.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
 }
 
 #[derive(Args)]
@@ -121,6 +125,10 @@ pub struct RenderArgs {
     /// Output directory.
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
+    /// Render this many frames (the first compiles shaders) and report the
+    /// median frame time; the last frame is written.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    pub frames: u32,
 }
 
 pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
@@ -136,7 +144,9 @@ pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
 }
 
 pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WxH, got '{s}'"))?;
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WxH, got '{s}'"))?;
     let w: u32 = w.parse().map_err(|_| format!("bad width in '{s}'"))?;
     let h: u32 = h.parse().map_err(|_| format!("bad height in '{s}'"))?;
     if w == 0 || h == 0 {
@@ -166,8 +176,14 @@ impl ViewArgs {
         };
         if let Some(t) = &self.light_type {
             let kind: LightType = t.parse()?;
-            let need_pos = || self.light_pos.ok_or_else(|| anyhow!("--light-type {t} needs --light-pos"));
-            let need_dir = || self.light_dir.ok_or_else(|| anyhow!("--light-type {t} needs --light-dir"));
+            let need_pos = || {
+                self.light_pos
+                    .ok_or_else(|| anyhow!("--light-type {t} needs --light-pos"))
+            };
+            let need_dir = || {
+                self.light_dir
+                    .ok_or_else(|| anyhow!("--light-type {t} needs --light-dir"))
+            };
             let light = match kind {
                 LightType::Point => Light::point(need_pos()?, 1.0),
                 LightType::Spot => {
@@ -184,7 +200,11 @@ impl ViewArgs {
             l.validate()?;
         }
         if lights.len() > crate::renderer::MAX_LIGHTS {
-            bail!("{} lights; at most {} are supported", lights.len(), crate::renderer::MAX_LIGHTS);
+            bail!(
+                "{} lights; at most {} are supported",
+                lights.len(),
+                crate::renderer::MAX_LIGHTS
+            );
         }
         Ok((scene, camera, lights))
     }
@@ -217,23 +237,40 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Export(a) => {
             let s = scene::load(&a.scene)?;
             scene::gltf_io::export(&s, &a.out)?;
-            println!("wrote {} ({} objects, {} triangles, {} lights)", a.out.display(), s.objects.len(), s.triangle_count(), s.lights.len());
+            println!(
+                "wrote {} ({} objects, {} triangles, {} lights)",
+                a.out.display(),
+                s.objects.len(),
+                s.triangle_count(),
+                s.lights.len()
+            );
             Ok(())
         }
-        Command::Render(a) => render(a),
+        Command::Render(a) => render(*a),
     }
 }
 
 fn scenes() -> Result<()> {
     println!("{:<10} {:>10}  description", "scene", "triangles");
-    for (name, desc) in scene::builtin::NAMES.iter().zip(scene::builtin::DESCRIPTIONS) {
+    for (name, desc) in scene::builtin::NAMES
+        .iter()
+        .zip(scene::builtin::DESCRIPTIONS)
+    {
         let s = scene::builtin::by_name(name)?.expect("built-in scene");
         println!("{:<10} {:>10}  {}", name, s.triangle_count(), desc);
         let cams: Vec<&str> = s.camera_presets.iter().map(|c| c.0.as_str()).collect();
         let lights: Vec<String> = s
             .light_presets
             .iter()
-            .map(|(n, l)| format!("{n} ({})", l.iter().map(|l| format!("{:?}", l.kind).to_lowercase()).collect::<Vec<_>>().join("+")))
+            .map(|(n, l)| {
+                format!(
+                    "{n} ({})",
+                    l.iter()
+                        .map(|l| format!("{:?}", l.kind).to_lowercase())
+                        .collect::<Vec<_>>()
+                        .join("+")
+                )
+            })
             .collect();
         println!("{:<22}cameras: {}", "", cams.join(", "));
         println!("{:<22}lights:  {}", "", lights.join(", "));
@@ -254,7 +291,11 @@ pub fn techniques_text() -> String {
                 f.id,
                 p.name,
                 p.summary,
-                if vals.is_empty() { String::new() } else { format!(" [{}]", vals.join(" ")) }
+                if vals.is_empty() {
+                    String::new()
+                } else {
+                    format!(" [{}]", vals.join(" "))
+                }
             );
         }
         if f.params.is_empty() {
@@ -265,9 +306,20 @@ pub fn techniques_text() -> String {
                 let range = match s.kind {
                     ParamKind::Choice(o) => format!("one of {}", o.join("|")),
                     ParamKind::Bool => "true|false".into(),
-                    _ => format!("{} .. {} step {}", s.format(s.min), s.format(s.max), s.format(s.step)),
+                    _ => format!(
+                        "{} .. {} step {}",
+                        s.format(s.min),
+                        s.format(s.max),
+                        s.format(s.step)
+                    ),
                 };
-                out += &format!("    {:<20} default {:<10} {:<28} {}\n", s.name, s.format(s.default), range, s.doc);
+                out += &format!(
+                    "    {:<20} default {:<10} {:<28} {}\n",
+                    s.name,
+                    s.format(s.default),
+                    range,
+                    s.doc
+                );
             }
         }
     }
@@ -287,7 +339,13 @@ fn render(a: RenderArgs) -> Result<()> {
     let mut hf = HeadlessFrame::new(&gpu, &scene, &choices, w, h)?;
     let t_setup = setup.elapsed();
     let settings = a.view.settings();
-    let timings = hf.render(&gpu, &scene, &camera, &lights, &settings)?;
+    let mut all = vec![];
+    for _ in 0..a.frames {
+        all.push(hf.render(&gpu, &scene, &camera, &lights, &settings)?);
+    }
+    let first_ms = all[0].total_ms;
+    all.sort_by(|x, y| x.total_ms.total_cmp(&y.total_ms));
+    let timings = all[all.len() / 2].clone();
     let rb = Instant::now();
     let images = frame::read_back(&gpu, &hf.frame, lights.len())?;
     frame::write_images(&a.out, &images)?;
@@ -307,18 +365,23 @@ fn render(a: RenderArgs) -> Result<()> {
             "gpu_init": t_gpu.as_secs_f64() * 1e3,
             "scene_upload_and_pipelines": t_setup.as_secs_f64() * 1e3,
             "readback_and_write": t_write.as_secs_f64() * 1e3,
+            "first_frame": first_ms,
+            "frames_rendered": a.frames,
         }),
     };
     let json = frame::frame_json(&record);
     let path = a.out.join("frame.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&json)?).with_context(|| format!("writing {}", path.display()))?;
+    std::fs::write(&path, serde_json::to_string_pretty(&json)?)
+        .with_context(|| format!("writing {}", path.display()))?;
     println!(
-        "{}: {} on {} at {}x{}, frame {:.1} ms (prepass {:.1}, masks {:.1}, lighting {:.1}) -> {}",
+        "{}: {} on {} at {}x{}, {} frame(s), first {:.1} ms, median {:.1} ms (prepass {:.1}, masks {:.1}, lighting {:.1}) -> {}",
         scene.name,
         hf.techniques[0].choice.id(),
         gpu.adapter_summary(),
         w,
         h,
+        a.frames,
+        first_ms,
         timings.total_ms,
         timings.prepass_ms,
         timings.masks_ms,

@@ -3,7 +3,9 @@
 //! `frame.json` (everything needed to reproduce the frame's rays).
 
 use crate::gpu::GpuContext;
-use crate::renderer::{FrameResources, FrameTimings, RenderSettings, Renderer, SceneGpu, TechniqueInstance};
+use crate::renderer::{
+    FrameResources, FrameTimings, RenderSettings, Renderer, SceneGpu, TechniqueInstance,
+};
 use crate::scene::{Camera, Light, Scene};
 use crate::technique::TechniqueChoice;
 use anyhow::{Context, Result};
@@ -24,16 +26,26 @@ pub struct FrameImages {
 
 /// Reads the colour image, the masks of `light_count` lights and the
 /// G-buffer coverage back from the GPU.
-pub fn read_back(gpu: &GpuContext, frame: &FrameResources, light_count: usize) -> Result<FrameImages> {
+pub fn read_back(
+    gpu: &GpuContext,
+    frame: &FrameResources,
+    light_count: usize,
+) -> Result<FrameImages> {
     let color = gpu.read_texture(&frame.color, 0, 4)?;
     let masks = (0..light_count)
         .map(|i| {
             let raw = gpu.read_texture(&frame.masks, i as u32, 2)?;
-            Ok(bytemuck::cast_slice::<u8, half::f16>(&raw).iter().map(|h| h.to_f32()).collect())
+            Ok(bytemuck::cast_slice::<u8, half::f16>(&raw)
+                .iter()
+                .map(|h| h.to_f32())
+                .collect())
         })
         .collect::<Result<Vec<Vec<f32>>>>()?;
     let pos = gpu.read_texture(&frame.gbuffer_position, 0, 16)?;
-    let coverage = bytemuck::cast_slice::<u8, [f32; 4]>(&pos).iter().map(|p| p[3] > 0.5).collect();
+    let coverage = bytemuck::cast_slice::<u8, [f32; 4]>(&pos)
+        .iter()
+        .map(|p| p[3] > 0.5)
+        .collect();
     Ok(FrameImages {
         width: frame.width,
         height: frame.height,
@@ -47,17 +59,33 @@ pub fn read_back(gpu: &GpuContext, frame: &FrameResources, light_count: usize) -
 pub fn mask_to_u16(mask: &[f32], coverage: &[bool]) -> Vec<u16> {
     mask.iter()
         .zip(coverage)
-        .map(|(&v, &c)| if c { (v.clamp(0.0, 1.0) * 65535.0).round() as u16 } else { 65535 })
+        .map(|(&v, &c)| {
+            if c {
+                (v.clamp(0.0, 1.0) * 65535.0).round() as u16
+            } else {
+                65535
+            }
+        })
         .collect()
 }
 
 /// Writes `image.png` and `visibility-N.png` into `dir`.
 pub fn write_images(dir: &Path, img: &FrameImages) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    image::save_buffer(dir.join("image.png"), &img.color, img.width, img.height, image::ExtendedColorType::Rgba8)?;
+    image::save_buffer(
+        dir.join("image.png"),
+        &img.color,
+        img.width,
+        img.height,
+        image::ExtendedColorType::Rgba8,
+    )?;
     for (i, m) in img.masks.iter().enumerate() {
-        let grey = image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(img.width, img.height, mask_to_u16(m, &img.coverage))
-            .expect("mask size matches frame");
+        let grey = image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(
+            img.width,
+            img.height,
+            mask_to_u16(m, &img.coverage),
+        )
+        .expect("mask size matches frame");
         grey.save(dir.join(format!("visibility-{i}.png")))?;
     }
     Ok(())
@@ -144,11 +172,25 @@ pub struct HeadlessFrame {
 }
 
 impl HeadlessFrame {
-    pub fn new(gpu: &GpuContext, scene: &Scene, choices: &[TechniqueChoice], width: u32, height: u32) -> Result<HeadlessFrame> {
-        gpu.checked("creating the renderer", || Self::create(gpu, scene, choices, width, height))
+    pub fn new(
+        gpu: &GpuContext,
+        scene: &Scene,
+        choices: &[TechniqueChoice],
+        width: u32,
+        height: u32,
+    ) -> Result<HeadlessFrame> {
+        gpu.checked("creating the renderer", || {
+            Self::create(gpu, scene, choices, width, height)
+        })
     }
 
-    fn create(gpu: &GpuContext, scene: &Scene, choices: &[TechniqueChoice], width: u32, height: u32) -> Result<HeadlessFrame> {
+    fn create(
+        gpu: &GpuContext,
+        scene: &Scene,
+        choices: &[TechniqueChoice],
+        width: u32,
+        height: u32,
+    ) -> Result<HeadlessFrame> {
         let renderer = Renderer::new(gpu);
         let scene_gpu = renderer.upload_scene(gpu, scene)?;
         let frame = renderer.create_frame(gpu, width, height)?;
@@ -164,10 +206,25 @@ impl HeadlessFrame {
         })
     }
 
-    pub fn render(&mut self, gpu: &GpuContext, scene: &Scene, camera: &Camera, lights: &[Light], settings: &RenderSettings) -> Result<FrameTimings> {
+    pub fn render(
+        &mut self,
+        gpu: &GpuContext,
+        scene: &Scene,
+        camera: &Camera,
+        lights: &[Light],
+        settings: &RenderSettings,
+    ) -> Result<FrameTimings> {
         gpu.checked("rendering", || {
-            self.renderer
-                .render(gpu, scene, &self.scene_gpu, &mut self.frame, camera, lights, &mut self.techniques, settings)
+            self.renderer.render(
+                gpu,
+                scene,
+                &self.scene_gpu,
+                &mut self.frame,
+                camera,
+                lights,
+                &mut self.techniques,
+                settings,
+            )
         })
     }
 }

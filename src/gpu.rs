@@ -71,11 +71,17 @@ impl GpuContext {
             Some(b) => Self::with_instance(make(b), b, None),
             // Vulkan/Metal/DX12 first; OpenGL only when none of them has an
             // adapter (probing GL prints EGL noise on headless machines).
-            None => Self::with_instance(make(wgpu::Backends::PRIMARY), wgpu::Backends::PRIMARY, None)
-                .or_else(|e| match e.downcast_ref::<NoAdapter>() {
-                    Some(_) => Self::with_instance(make(wgpu::Backends::GL), wgpu::Backends::all(), None),
-                    None => Err(e),
-                }),
+            None => {
+                Self::with_instance(make(wgpu::Backends::PRIMARY), wgpu::Backends::PRIMARY, None)
+                    .or_else(|e| match e.downcast_ref::<NoAdapter>() {
+                        Some(_) => Self::with_instance(
+                            make(wgpu::Backends::GL),
+                            wgpu::Backends::all(),
+                            None,
+                        ),
+                        None => Err(e),
+                    })
+            }
         }
     }
 
@@ -117,12 +123,13 @@ impl GpuContext {
             | wgpu::Features::PIPELINE_STATISTICS_QUERY
             | wgpu::Features::DEPTH_CLIP_CONTROL;
         let features = adapter.features() & wanted;
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("shadowlab"),
-            required_features: features,
-            required_limits: adapter.limits(),
-            ..Default::default()
-        }))?;
+        let (device, queue) =
+            pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+                label: Some("shadowlab"),
+                required_features: features,
+                required_limits: adapter.limits(),
+                ..Default::default()
+            }))?;
         device.on_uncaptured_error(std::sync::Arc::new(|e: wgpu::Error| {
             log::error!("wgpu: {e}");
         }));

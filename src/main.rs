@@ -37,9 +37,12 @@ fn main() -> ExitCode {
         },
         None => None,
     };
-    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(format!("{level},wgpu_core=error,wgpu_hal=error,naga=warn")))
-        .target(env_logger::Target::Pipe(Box::new(Tee(file))))
-        .init();
+    env_logger::Builder::from_env(
+        env_logger::Env::default()
+            .default_filter_or(format!("{level},wgpu_core=error,wgpu_hal=error,naga=warn")),
+    )
+    .target(env_logger::Target::Pipe(Box::new(Tee(file))))
+    .init();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

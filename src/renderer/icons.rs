@@ -43,7 +43,15 @@ fn arrow() -> Mesh {
     let mut m = Mesh::default();
     let shaft = shapes::cylinder(0.06, 0.7, 12);
     m.append(&shaft, Mat4::from_rotation_x(std::f32::consts::PI));
-    let head = shapes::lathe("head", &[Vec2::new(0.0, 0.0), Vec2::new(0.16, 0.0), Vec2::new(0.0, 0.3)], 16);
+    let head = shapes::lathe(
+        "head",
+        &[
+            Vec2::new(0.0, 0.0),
+            Vec2::new(0.16, 0.0),
+            Vec2::new(0.0, 0.3),
+        ],
+        16,
+    );
     m.append(&head, Mat4::from_translation(Vec3::new(0.0, -1.0, 0.0)));
     m
 }
@@ -78,7 +86,11 @@ impl LightIcons {
     pub fn new(device: &wgpu::Device, frame_layout: &wgpu::BindGroupLayout) -> LightIcons {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("icon"),
-            entries: &[super::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, true)],
+            entries: &[super::uniform_entry(
+                0,
+                wgpu::ShaderStages::VERTEX_FRAGMENT,
+                true,
+            )],
         });
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("icon uniforms"),
@@ -153,7 +165,11 @@ impl LightIcons {
     /// Model matrix of a light's icon: at the light (directional lights:
     /// outside the scene bounds, up-light), −y turned to the light direction.
     pub fn icon_transform(light: &Light, bounds: &Aabb) -> Mat4 {
-        let radius = if bounds.is_empty() { 1.0 } else { bounds.size().length() * 0.5 };
+        let radius = if bounds.is_empty() {
+            1.0
+        } else {
+            bounds.size().length() * 0.5
+        };
         let scale = (radius * 0.08).max(1e-3);
         let pos = match light.kind {
             LightType::Directional => {
@@ -165,16 +181,26 @@ impl LightIcons {
         Mat4::from_scale_rotation_translation(Vec3::splat(scale), rot, pos)
     }
 
-    pub fn draw(&self, gpu: &GpuContext, pass: &mut wgpu::RenderPass, frame: &wgpu::BindGroup, lights: &[Light], bounds: &Aabb) {
+    pub fn draw(
+        &self,
+        gpu: &GpuContext,
+        pass: &mut wgpu::RenderPass,
+        frame: &wgpu::BindGroup,
+        lights: &[Light],
+        bounds: &Aabb,
+    ) {
         let data: Vec<IconUniform> = lights
             .iter()
             .map(|l| IconUniform {
                 model: Self::icon_transform(l, bounds),
-                color: (l.color.normalize_or(Vec3::ONE) * 1.2).min(Vec3::ONE).extend(1.0),
+                color: (l.color.normalize_or(Vec3::ONE) * 1.2)
+                    .min(Vec3::ONE)
+                    .extend(1.0),
                 _pad: [Vec4::ZERO; 11],
             })
             .collect();
-        gpu.queue.write_buffer(&self.uniforms, 0, bytemuck::cast_slice(&data));
+        gpu.queue
+            .write_buffer(&self.uniforms, 0, bytemuck::cast_slice(&data));
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, frame, &[]);
         for (i, l) in lights.iter().enumerate() {
@@ -183,7 +209,11 @@ impl LightIcons {
                 LightType::Directional => 1,
                 LightType::Spot => 2,
             }];
-            pass.set_bind_group(2, &self.bind_group, &[(i * std::mem::size_of::<IconUniform>()) as u32]);
+            pass.set_bind_group(
+                2,
+                &self.bind_group,
+                &[(i * std::mem::size_of::<IconUniform>()) as u32],
+            );
             pass.set_vertex_buffer(0, mesh.vertices.slice(..));
             pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..mesh.count, 0, 0..1);

@@ -188,7 +188,11 @@ impl SceneGpu {
         pass.set_vertex_buffer(0, self.vertex_buffer.slice(..));
         pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
         for d in self.draws.iter().filter(|d| !d.shadow_plane && filter(d)) {
-            pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex, d.object..d.object + 1);
+            pass.draw_indexed(
+                d.first_index..d.first_index + d.index_count,
+                d.base_vertex,
+                d.object..d.object + 1,
+            );
         }
     }
 }
@@ -251,7 +255,11 @@ pub struct Renderer {
     sampler: wgpu::Sampler,
 }
 
-fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages, dynamic: bool) -> wgpu::BindGroupLayoutEntry {
+fn uniform_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    dynamic: bool,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,
@@ -264,7 +272,11 @@ fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages, dynamic: bool) ->
     }
 }
 
-fn texture_entry(binding: u32, dim: wgpu::TextureViewDimension, filterable: bool) -> wgpu::BindGroupLayoutEntry {
+fn texture_entry(
+    binding: u32,
+    dim: wgpu::TextureViewDimension,
+    filterable: bool,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::FRAGMENT,
@@ -312,7 +324,15 @@ pub fn clear_mask(encoder: &mut wgpu::CommandEncoder, target: &wgpu::TextureView
     });
 }
 
-fn texture_2d(device: &wgpu::Device, label: &str, w: u32, h: u32, layers: u32, format: wgpu::TextureFormat, usage: wgpu::TextureUsages) -> wgpu::Texture {
+fn texture_2d(
+    device: &wgpu::Device,
+    label: &str,
+    w: u32,
+    h: u32,
+    layers: u32,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
     device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
@@ -415,7 +435,10 @@ impl Renderer {
                     module: &module,
                     entry_point: Some("fs_gbuffer"),
                     compilation_options: Default::default(),
-                    targets: &[Some(GBUFFER_POSITION_FORMAT.into()), Some(GBUFFER_NORMAL_FORMAT.into())],
+                    targets: &[
+                        Some(GBUFFER_POSITION_FORMAT.into()),
+                        Some(GBUFFER_NORMAL_FORMAT.into()),
+                    ],
                 }),
                 multiview_mask: None,
                 cache: None,
@@ -535,8 +558,16 @@ impl Renderer {
             })
         };
         let storage_ro = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
-        let vertex_buffer = init("vertices", bytemuck::cast_slice(&vertices), wgpu::BufferUsages::VERTEX | storage_ro);
-        let index_buffer = init("indices", bytemuck::cast_slice(&indices), wgpu::BufferUsages::INDEX | storage_ro);
+        let vertex_buffer = init(
+            "vertices",
+            bytemuck::cast_slice(&vertices),
+            wgpu::BufferUsages::VERTEX | storage_ro,
+        );
+        let index_buffer = init(
+            "indices",
+            bytemuck::cast_slice(&indices),
+            wgpu::BufferUsages::INDEX | storage_ro,
+        );
         let object_buffer = init("objects", bytemuck::cast_slice(&objects), storage_ro);
         let object_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("objects"),
@@ -546,8 +577,11 @@ impl Renderer {
                 resource: object_buffer.as_entire_binding(),
             }],
         });
-        let gpu_textures: Vec<wgpu::TextureView> =
-            scene.textures.iter().map(|t| textures::upload(gpu, t)).collect();
+        let gpu_textures: Vec<wgpu::TextureView> = scene
+            .textures
+            .iter()
+            .map(|t| textures::upload(gpu, t))
+            .collect();
         let white = textures::solid(gpu, [255, 255, 255, 255], true);
         let flat_normal = textures::solid(gpu, [128, 128, 255, 255], false);
         let material_bind_groups = scene
@@ -561,10 +595,21 @@ impl Renderer {
                     kd: m.kd.extend(m.diffuse_texture.is_some() as u32 as f32),
                     ks: m.ks.extend(m.shininess.max(1.0)),
                     proc_a: p.map_or(Vec3::ZERO, |p| p.color_a).extend(proc_kind),
-                    proc_b: p.map_or(Vec3::ZERO, |p| p.color_b).extend(p.map_or(1.0, |p| p.scale)),
-                    flags: Vec4::new(m.normal_map.is_some() as u32 as f32, p.map_or(0.0, |p| p.octaves as f32), 0.0, 0.0),
+                    proc_b: p
+                        .map_or(Vec3::ZERO, |p| p.color_b)
+                        .extend(p.map_or(1.0, |p| p.scale)),
+                    flags: Vec4::new(
+                        m.normal_map.is_some() as u32 as f32,
+                        p.map_or(0.0, |p| p.octaves as f32),
+                        0.0,
+                        0.0,
+                    ),
                 };
-                let buf = init("material", bytemuck::bytes_of(&data), wgpu::BufferUsages::UNIFORM);
+                let buf = init(
+                    "material",
+                    bytemuck::bytes_of(&data),
+                    wgpu::BufferUsages::UNIFORM,
+                );
                 let diffuse = m.diffuse_texture.map_or(&white, |t| &gpu_textures[t]);
                 let normal = m.normal_map.map_or(&flat_normal, |t| &gpu_textures[t]);
                 device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -606,22 +651,53 @@ impl Renderer {
 
     /// Creates the targets for a `width × height` frame. Errors on a zero
     /// or over-limit size.
-    pub fn create_frame(&self, gpu: &GpuContext, width: u32, height: u32) -> Result<FrameResources> {
+    pub fn create_frame(
+        &self,
+        gpu: &GpuContext,
+        width: u32,
+        height: u32,
+    ) -> Result<FrameResources> {
         let max = gpu.max_texture_size();
         if width == 0 || height == 0 || width > max || height > max {
-            bail!("frame size {width}x{height} is outside 1..={max} (the device's largest texture)");
+            bail!(
+                "frame size {width}x{height} is outside 1..={max} (the device's largest texture)"
+            );
         }
         let device = &gpu.device;
         use wgpu::TextureUsages as U;
-        let depth = texture_2d(device, "depth", width, height, 1, DEPTH_FORMAT, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING);
+        let depth = texture_2d(
+            device,
+            "depth",
+            width,
+            height,
+            1,
+            DEPTH_FORMAT,
+            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
+        );
         let depth_view = depth.create_view(&Default::default());
         let depth_sample_view = depth.create_view(&wgpu::TextureViewDescriptor {
             aspect: wgpu::TextureAspect::DepthOnly,
             ..Default::default()
         });
         let gusage = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
-        let gbuffer_position = texture_2d(device, "gbuffer position", width, height, 1, GBUFFER_POSITION_FORMAT, gusage);
-        let gbuffer_normal = texture_2d(device, "gbuffer normal", width, height, 1, GBUFFER_NORMAL_FORMAT, gusage);
+        let gbuffer_position = texture_2d(
+            device,
+            "gbuffer position",
+            width,
+            height,
+            1,
+            GBUFFER_POSITION_FORMAT,
+            gusage,
+        );
+        let gbuffer_normal = texture_2d(
+            device,
+            "gbuffer normal",
+            width,
+            height,
+            1,
+            GBUFFER_NORMAL_FORMAT,
+            gusage,
+        );
         let masks = texture_2d(
             device,
             "visibility masks",
@@ -653,7 +729,15 @@ impl Renderer {
                 resource: wgpu::BindingResource::TextureView(&mask_array_view),
             }],
         });
-        let color = texture_2d(device, "color", width, height, 1, COLOR_FORMAT, U::RENDER_ATTACHMENT | U::COPY_SRC | U::TEXTURE_BINDING);
+        let color = texture_2d(
+            device,
+            "color",
+            width,
+            height,
+            1,
+            COLOR_FORMAT,
+            U::RENDER_ATTACHMENT | U::COPY_SRC | U::TEXTURE_BINDING,
+        );
         let color_view = color.create_view(&Default::default());
         let frame_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame uniform"),
@@ -705,7 +789,10 @@ impl Renderer {
         settings: &RenderSettings,
     ) -> Result<FrameTimings> {
         if lights.len() > MAX_LIGHTS {
-            bail!("{} lights given; at most {MAX_LIGHTS} are supported", lights.len());
+            bail!(
+                "{} lights given; at most {MAX_LIGHTS} are supported",
+                lights.len()
+            );
         }
         if techniques.len() < lights.len() {
             bail!("one technique instance per light is needed");
@@ -716,7 +803,8 @@ impl Renderer {
         }
         let t0 = Instant::now();
         frame.uniform = frame_uniform(scene, camera, lights, settings, frame.width, frame.height);
-        gpu.queue.write_buffer(&frame.frame_buffer, 0, bytemuck::bytes_of(&frame.uniform));
+        gpu.queue
+            .write_buffer(&frame.frame_buffer, 0, bytemuck::bytes_of(&frame.uniform));
         let cull = settings.cull_back_faces as usize;
 
         let mut enc = gpu.device.create_command_encoder(&Default::default());
@@ -724,8 +812,14 @@ impl Renderer {
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("prepass"),
                 color_attachments: &[
-                    Some(color_attachment(&frame.gbuffer_position_view, wgpu::Color::TRANSPARENT)),
-                    Some(color_attachment(&frame.gbuffer_normal_view, wgpu::Color::TRANSPARENT)),
+                    Some(color_attachment(
+                        &frame.gbuffer_position_view,
+                        wgpu::Color::TRANSPARENT,
+                    )),
+                    Some(color_attachment(
+                        &frame.gbuffer_normal_view,
+                        wgpu::Color::TRANSPARENT,
+                    )),
                 ],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &frame.depth_view,
@@ -804,10 +898,20 @@ impl Renderer {
                     pass.set_bind_group(2, &scene_gpu.material_bind_groups[d.material], &[]);
                     bound = d.material;
                 }
-                pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex, d.object..d.object + 1);
+                pass.draw_indexed(
+                    d.first_index..d.first_index + d.index_count,
+                    d.base_vertex,
+                    d.object..d.object + 1,
+                );
             }
             if settings.show_light_icons {
-                self.icons.draw(gpu, &mut pass, &frame.frame_bind_group, lights, &scene_gpu.bounds);
+                self.icons.draw(
+                    gpu,
+                    &mut pass,
+                    &frame.frame_bind_group,
+                    lights,
+                    &scene_gpu.bounds,
+                );
             }
         }
         gpu.queue.submit([enc.finish()]);
@@ -823,7 +927,10 @@ impl Renderer {
     }
 }
 
-fn color_attachment(view: &wgpu::TextureView, clear: wgpu::Color) -> wgpu::RenderPassColorAttachment<'_> {
+fn color_attachment(
+    view: &wgpu::TextureView,
+    clear: wgpu::Color,
+) -> wgpu::RenderPassColorAttachment<'_> {
     wgpu::RenderPassColorAttachment {
         view,
         depth_slice: None,
@@ -836,7 +943,14 @@ fn color_attachment(view: &wgpu::TextureView, clear: wgpu::Color) -> wgpu::Rende
 }
 
 /// The frame uniform for a camera and lights at a frame size.
-pub fn frame_uniform(scene: &Scene, camera: &Camera, lights: &[Light], settings: &RenderSettings, width: u32, height: u32) -> FrameUniform {
+pub fn frame_uniform(
+    scene: &Scene,
+    camera: &Camera,
+    lights: &[Light],
+    settings: &RenderSettings,
+    width: u32,
+    height: u32,
+) -> FrameUniform {
     let view = camera.view();
     let proj = camera.projection(width as f32 / height as f32);
     let view_proj = proj * view;
@@ -851,7 +965,12 @@ pub fn frame_uniform(scene: &Scene, camera: &Camera, lights: &[Light], settings:
         proj,
         camera_pos: camera.eye.extend(1.0),
         ambient: scene.ambient.extend(0.0),
-        size: Vec4::new(width as f32, height as f32, 1.0 / width as f32, 1.0 / height as f32),
+        size: Vec4::new(
+            width as f32,
+            height as f32,
+            1.0 / width as f32,
+            1.0 / height as f32,
+        ),
         settings: [
             settings.shading as u32,
             settings.lighting as u32,

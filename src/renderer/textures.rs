@@ -12,7 +12,10 @@ pub fn upload(gpu: &GpuContext, t: &Texture) -> wgpu::TextureView {
         let next = image::imageops::resize(last, w, h, image::imageops::FilterType::Triangle);
         levels.push(next);
     }
-    let data: Vec<u8> = levels.iter().flat_map(|l| l.as_raw().iter().copied()).collect();
+    let data: Vec<u8> = levels
+        .iter()
+        .flat_map(|l| l.as_raw().iter().copied())
+        .collect();
     let format = if t.srgb {
         wgpu::TextureFormat::Rgba8UnormSrgb
     } else {

@@ -69,10 +69,19 @@ fn checker_floor(scene: &mut Scene) -> usize {
 }
 
 /// Light presets `point`, `spot`, `sun` aimed at `focus`.
-fn standard_lights(point: Vec3, spot: Vec3, focus: Vec3, sun_dir: Vec3, intensity: f32) -> Vec<(String, Vec<Light>)> {
+fn standard_lights(
+    point: Vec3,
+    spot: Vec3,
+    focus: Vec3,
+    sun_dir: Vec3,
+    intensity: f32,
+) -> Vec<(String, Vec<Light>)> {
     vec![
         ("point".into(), vec![Light::point(point, intensity)]),
-        ("spot".into(), vec![Light::spot(spot, focus, intensity, 22.0, 32.0)]),
+        (
+            "spot".into(),
+            vec![Light::spot(spot, focus, intensity, 22.0, 32.0)],
+        ),
         ("sun".into(), vec![Light::directional(sun_dir, intensity)]),
     ]
 }
@@ -94,7 +103,11 @@ fn bricks(size: u32) -> (image::RgbaImage, image::GrayImage) {
     let height = image::GrayImage::from_fn(size, size, |x, y| {
         let row = y / bh;
         let xs = x + if row % 2 == 1 { bw / 2 } else { 0 };
-        image::Luma([if xs % bw < mortar || y % bh < mortar { 0 } else { 255 }])
+        image::Luma([if xs % bw < mortar || y % bh < mortar {
+            0
+        } else {
+            255
+        }])
     });
     (colour, height)
 }
@@ -106,25 +119,38 @@ fn tiles(size: u32) -> (image::RgbaImage, image::GrayImage) {
     let h = |x: u32, y: u32| -> u8 {
         let (tx, ty) = (x % tile, y % tile);
         let d = tx.min(ty).min(tile - 1 - tx).min(tile - 1 - ty);
-        if d < grout { 0 } else { (((d - grout) * 64).min(255)) as u8 }
+        if d < grout {
+            0
+        } else {
+            (((d - grout) * 64).min(255)) as u8
+        }
     };
     let colour = image::RgbaImage::from_fn(size, size, |x, y| {
         if h(x, y) == 0 {
             image::Rgba([90, 90, 95, 255])
-        } else if (x / tile + y / tile) % 2 == 0 {
+        } else if (x / tile + y / tile).is_multiple_of(2) {
             image::Rgba([205, 200, 185, 255])
         } else {
             image::Rgba([120, 140, 165, 255])
         }
     });
-    (colour, image::GrayImage::from_fn(size, size, |x, y| image::Luma([h(x, y)])))
+    (
+        colour,
+        image::GrayImage::from_fn(size, size, |x, y| image::Luma([h(x, y)])),
+    )
 }
 
 /// Tangent-space normal map from a height map by central differences
 /// (bump mapping, SEEDS §1): `n = normalize(−s·∂h/∂x, −s·∂h/∂y, 1)`.
 pub fn normal_map_from_height(h: &image::GrayImage, strength: f32) -> image::RgbaImage {
     let (w, ht) = h.dimensions();
-    let at = |x: i64, y: i64| h.get_pixel(x.rem_euclid(w as i64) as u32, y.rem_euclid(ht as i64) as u32)[0] as f32 / 255.0;
+    let at = |x: i64, y: i64| {
+        h.get_pixel(
+            x.rem_euclid(w as i64) as u32,
+            y.rem_euclid(ht as i64) as u32,
+        )[0] as f32
+            / 255.0
+    };
     image::RgbaImage::from_fn(w, ht, |x, y| {
         let (x, y) = (x as i64, y as i64);
         let dx = (at(x + 1, y) - at(x - 1, y)) * 0.5;
@@ -136,7 +162,11 @@ pub fn normal_map_from_height(h: &image::GrayImage, strength: f32) -> image::Rgb
     })
 }
 
-fn add_textures(scene: &mut Scene, name: &str, (colour, height): (image::RgbaImage, image::GrayImage)) -> (usize, usize) {
+fn add_textures(
+    scene: &mut Scene,
+    name: &str,
+    (colour, height): (image::RgbaImage, image::GrayImage),
+) -> (usize, usize) {
     scene.textures.push(Texture {
         name: format!("{name}_color"),
         image: colour,
@@ -178,8 +208,14 @@ pub fn room() -> Scene {
     let wall = plane(10.0, 5.0, 4);
     let up = |m: Mat4| m * Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2);
     walls.append(&wall, up(t(0.0, 2.5, -5.0)));
-    walls.append(&wall, up(t(-5.0, 2.5, 0.0) * Mat4::from_rotation_y(std::f32::consts::FRAC_PI_2)));
-    walls.append(&wall, up(t(5.0, 2.5, 0.0) * Mat4::from_rotation_y(-std::f32::consts::FRAC_PI_2)));
+    walls.append(
+        &wall,
+        up(t(-5.0, 2.5, 0.0) * Mat4::from_rotation_y(std::f32::consts::FRAC_PI_2)),
+    );
+    walls.append(
+        &wall,
+        up(t(5.0, 2.5, 0.0) * Mat4::from_rotation_y(-std::f32::consts::FRAC_PI_2)),
+    );
     let walls = s.add_mesh(walls);
     s.add_object("WallsNS", walls, wall_mat, Mat4::IDENTITY);
 
@@ -198,7 +234,12 @@ pub fn room() -> Scene {
         shininess: 16.0,
         ..Material::color("wood", Vec3::new(0.55, 0.33, 0.18))
     });
-    s.add_object("Chair", chair, wood, t(-1.5, 0.0, -1.0) * Mat4::from_rotation_y(0.4));
+    s.add_object(
+        "Chair",
+        chair,
+        wood,
+        t(-1.5, 0.0, -1.0) * Mat4::from_rotation_y(0.4),
+    );
 
     let vase_profile: Vec<Vec2> = [
         (0.0, 0.0),
@@ -242,9 +283,18 @@ pub fn room() -> Scene {
     s.add_object("SphereB", ball, turb, t(-0.2, 2.2, 1.0));
 
     s.camera_presets = vec![
-        ("default".into(), Camera::new(Vec3::new(0.0, 4.0, 11.0), Vec3::new(0.0, 1.2, 0.0))),
-        ("top".into(), Camera::new(Vec3::new(0.5, 12.0, 4.0), Vec3::new(0.0, 0.0, 0.0))),
-        ("low".into(), Camera::new(Vec3::new(3.5, 0.6, 4.0), Vec3::new(-1.0, 0.8, -1.0))),
+        (
+            "default".into(),
+            Camera::new(Vec3::new(0.0, 4.0, 11.0), Vec3::new(0.0, 1.2, 0.0)),
+        ),
+        (
+            "top".into(),
+            Camera::new(Vec3::new(0.5, 12.0, 4.0), Vec3::new(0.0, 0.0, 0.0)),
+        ),
+        (
+            "low".into(),
+            Camera::new(Vec3::new(3.5, 0.6, 4.0), Vec3::new(-1.0, 0.8, -1.0)),
+        ),
     ];
     s.light_presets = standard_lights(
         Vec3::new(0.5, 4.5, 1.5),
@@ -274,15 +324,24 @@ pub fn bunny() -> Result<Scene> {
     });
     let floor = s.add_mesh(plane(8.0, 8.0, 8));
     s.add_object("Floor", floor, floor_mat, Mat4::IDENTITY);
-    let bunny = s.add_mesh(load_asset_obj("bunny", include_str!("../../assets/bunny.obj"))?);
+    let bunny = s.add_mesh(load_asset_obj(
+        "bunny",
+        include_str!("../../assets/bunny.obj"),
+    )?);
     let fur = s.add_material(Material {
         shininess: 24.0,
         ..Material::color("bunny", Vec3::new(0.85, 0.8, 0.7))
     });
     s.add_object("Bunny", bunny, fur, Mat4::from_scale(Vec3::splat(0.22)));
     s.camera_presets = vec![
-        ("default".into(), Camera::new(Vec3::new(2.5, 2.6, 5.0), Vec3::new(0.0, 0.9, 0.0))),
-        ("side".into(), Camera::new(Vec3::new(5.5, 1.2, 0.2), Vec3::new(0.0, 0.9, 0.0))),
+        (
+            "default".into(),
+            Camera::new(Vec3::new(2.5, 2.6, 5.0), Vec3::new(0.0, 0.9, 0.0)),
+        ),
+        (
+            "side".into(),
+            Camera::new(Vec3::new(5.5, 1.2, 0.2), Vec3::new(0.0, 0.9, 0.0)),
+        ),
     ];
     s.light_presets = standard_lights(
         Vec3::new(-1.5, 4.0, 2.0),
@@ -317,8 +376,14 @@ pub fn floating() -> Scene {
         t(1.2, 1.2, 0.3) * Mat4::from_quat(Quat::from_rotation_x(0.6)),
     );
     s.camera_presets = vec![
-        ("default".into(), Camera::new(Vec3::new(0.0, 4.0, 7.5), Vec3::new(0.0, 0.8, 0.0))),
-        ("top".into(), Camera::new(Vec3::new(0.0, 9.0, 0.5), Vec3::ZERO)),
+        (
+            "default".into(),
+            Camera::new(Vec3::new(0.0, 4.0, 7.5), Vec3::new(0.0, 0.8, 0.0)),
+        ),
+        (
+            "top".into(),
+            Camera::new(Vec3::new(0.0, 9.0, 0.5), Vec3::ZERO),
+        ),
     ];
     s.light_presets = standard_lights(
         Vec3::new(0.5, 5.0, 1.0),
@@ -347,7 +412,10 @@ pub fn curved() -> Scene {
         0.35 * (x * 0.9).sin() * (z * 0.7).cos()
     }));
     s.add_object("Ground", ground, sand, t(0.0, -0.4, 0.0));
-    let pipe = s.add_mesh(shapes::half_pipe(1.6, 5.0, 48, 12));
+    let mut pipe = shapes::half_pipe(1.6, 5.0, 48, 12);
+    pipe.normals = super::smooth_normals(&pipe.positions, &pipe.indices);
+    pipe.make_double_sided();
+    let pipe = s.add_mesh(pipe);
     let concrete = s.add_material(Material::color("concrete", Vec3::splat(0.7)));
     let mut pipe_obj = super::Object::from_name("HalfPipe", pipe, concrete, t(2.5, -0.3, -0.5));
     pipe_obj.casts_shadow = true;
@@ -357,12 +425,23 @@ pub fn curved() -> Scene {
     s.add_object("Ball", ball, blue, t(2.5, 1.0, 0.0));
     let ring = s.add_mesh(torus(0.6, 0.18, 48, 16));
     let green = s.add_material(Material::color("green", Vec3::new(0.25, 0.7, 0.3)));
-    s.add_object("Ring", ring, green, t(-2.0, 1.3, 0.5) * Mat4::from_rotation_z(0.5));
+    s.add_object(
+        "Ring",
+        ring,
+        green,
+        t(-2.0, 1.3, 0.5) * Mat4::from_rotation_z(0.5),
+    );
     let box_mesh = s.add_mesh(cuboid(Vec3::new(0.8, 1.6, 0.8)));
     s.add_object("Pillar", box_mesh, blue, t(-0.5, 0.5, -2.0));
     s.camera_presets = vec![
-        ("default".into(), Camera::new(Vec3::new(-1.0, 5.0, 8.5), Vec3::new(0.5, 0.0, -0.5))),
-        ("pipe".into(), Camera::new(Vec3::new(2.5, 3.5, 5.0), Vec3::new(2.5, 0.3, -0.5))),
+        (
+            "default".into(),
+            Camera::new(Vec3::new(-1.0, 5.0, 8.5), Vec3::new(0.5, 0.0, -0.5)),
+        ),
+        (
+            "pipe".into(),
+            Camera::new(Vec3::new(2.5, 3.5, 5.0), Vec3::new(2.5, 0.3, -0.5)),
+        ),
     ];
     s.light_presets = standard_lights(
         Vec3::new(0.0, 5.0, 1.5),
@@ -395,8 +474,14 @@ pub fn teapot() -> Result<Scene> {
         Mat4::from_scale(Vec3::splat(0.12)) * t(0.0, -min_y, 0.0),
     );
     s.camera_presets = vec![
-        ("default".into(), Camera::new(Vec3::new(2.5, 3.0, 5.0), Vec3::new(0.0, 0.8, 0.0))),
-        ("top".into(), Camera::new(Vec3::new(0.2, 6.0, 1.0), Vec3::new(0.0, 0.5, 0.0))),
+        (
+            "default".into(),
+            Camera::new(Vec3::new(2.5, 3.0, 5.0), Vec3::new(0.0, 0.8, 0.0)),
+        ),
+        (
+            "top".into(),
+            Camera::new(Vec3::new(0.2, 6.0, 1.0), Vec3::new(0.0, 0.5, 0.0)),
+        ),
     ];
     s.light_presets = standard_lights(
         Vec3::new(-2.0, 4.0, 1.0),
@@ -441,7 +526,10 @@ pub fn columns() -> Scene {
     let roof = s.add_mesh(cuboid(Vec3::new(4.6, 0.4, 17.0)));
     s.add_object("Roof", roof, stone, t(0.0, 4.2, 0.0));
     s.camera_presets = vec![
-        ("default".into(), Camera::new(Vec3::new(9.0, 5.0, 12.0), Vec3::new(0.0, 1.5, 0.0))),
+        (
+            "default".into(),
+            Camera::new(Vec3::new(9.0, 5.0, 12.0), Vec3::new(0.0, 1.5, 0.0)),
+        ),
         (
             "in-shadow".into(),
             Camera::new(Vec3::new(0.0, 1.7, 6.0), Vec3::new(0.3, 1.2, -4.0)),
@@ -486,25 +574,37 @@ pub fn city() -> Scene {
             ..Default::default()
         };
         for j in 0..n {
-            let (x, z) = ((i as f32 - n as f32 / 2.0 + 0.5) * pitch, (j as f32 - n as f32 / 2.0 + 0.5) * pitch);
+            let (x, z) = (
+                (i as f32 - n as f32 / 2.0 + 0.5) * pitch,
+                (j as f32 - n as f32 / 2.0 + 0.5) * pitch,
+            );
             let r = ((x * x + z * z).sqrt() / 40.0).min(1.0);
             let h = 1.0 + rnd() * (10.0 * (1.0 - r) + 2.0);
             let w = 1.0 + rnd() * 0.5;
             let d = 1.0 + rnd() * 0.5;
-            row.append(&unit, t(x, h * 0.5, z) * Mat4::from_scale(Vec3::new(w, h, d)));
+            row.append(
+                &unit,
+                t(x, h * 0.5, z) * Mat4::from_scale(Vec3::new(w, h, d)),
+            );
         }
         let m = s.add_mesh(row);
         s.add_object(&format!("Buildings{i}"), m, facade, Mat4::IDENTITY);
     }
     s.camera_presets = vec![
-        ("default".into(), Camera {
-            far: 300.0,
-            ..Camera::new(Vec3::new(30.0, 28.0, 48.0), Vec3::new(0.0, 0.0, 0.0))
-        }),
-        ("street".into(), Camera {
-            far: 300.0,
-            ..Camera::new(Vec3::new(1.0, 1.7, 30.0), Vec3::new(0.0, 3.0, 0.0))
-        }),
+        (
+            "default".into(),
+            Camera {
+                far: 300.0,
+                ..Camera::new(Vec3::new(30.0, 28.0, 48.0), Vec3::new(0.0, 0.0, 0.0))
+            },
+        ),
+        (
+            "street".into(),
+            Camera {
+                far: 300.0,
+                ..Camera::new(Vec3::new(1.0, 1.7, 30.0), Vec3::new(0.0, 3.0, 0.0))
+            },
+        ),
     ];
     s.light_presets = standard_lights(
         Vec3::new(0.0, 30.0, 0.0),
@@ -545,7 +645,11 @@ mod tests {
         let s = by_name("room").unwrap().unwrap();
         let walls = s.objects.iter().find(|o| o.name == "WallsNS").unwrap();
         assert!(!walls.casts_shadow && walls.receives_shadow && !walls.shadow_plane);
-        let sp = s.objects.iter().find(|o| o.name == "ShadowPlaneFloor").unwrap();
+        let sp = s
+            .objects
+            .iter()
+            .find(|o| o.name == "ShadowPlaneFloor")
+            .unwrap();
         assert!(sp.shadow_plane && !sp.casts_shadow);
         let chair = s.objects.iter().find(|o| o.name == "Chair").unwrap();
         assert!(chair.casts_shadow);

@@ -2,7 +2,9 @@
 //! cameras, `extras.shadowlab` flags) and export of a resolved scene in
 //! world space.
 
-use super::{Camera, Light, LightType, Material, Mesh, Object, Scene, Texture, frame_scene_defaults};
+use super::{
+    Camera, Light, LightType, Material, Mesh, Object, Scene, Texture, frame_scene_defaults,
+};
 use anyhow::{Context, Result, anyhow, bail};
 use glam::{Mat4, Quat, Vec2, Vec3};
 use serde_json::{Value, json};
@@ -27,12 +29,16 @@ struct PhongExtras {
     procedural: Option<super::Procedural>,
 }
 
-fn extras_field<T: serde::de::DeserializeOwned>(extras: &gltf::json::Extras, what: &str) -> Result<Option<T>> {
+fn extras_field<T: serde::de::DeserializeOwned>(
+    extras: &gltf::json::Extras,
+    what: &str,
+) -> Result<Option<T>> {
     let Some(raw) = extras else { return Ok(None) };
     let v: Value = serde_json::from_str(raw.get())?;
     match v.get("shadowlab") {
         Some(s) => Ok(Some(
-            serde_json::from_value(s.clone()).with_context(|| format!("{what}: extras.shadowlab"))?,
+            serde_json::from_value(s.clone())
+                .with_context(|| format!("{what}: extras.shadowlab"))?,
         )),
         None => Ok(None),
     }
@@ -43,8 +49,14 @@ fn to_rgba(img: &gltf::image::Data) -> Result<image::RgbaImage> {
     let px = &img.pixels;
     let rgba: Vec<u8> = match img.format {
         R8G8B8A8 => px.clone(),
-        R8G8B8 => px.chunks_exact(3).flat_map(|c| [c[0], c[1], c[2], 255]).collect(),
-        R8G8 => px.chunks_exact(2).flat_map(|c| [c[0], c[0], c[0], c[1]]).collect(),
+        R8G8B8 => px
+            .chunks_exact(3)
+            .flat_map(|c| [c[0], c[1], c[2], 255])
+            .collect(),
+        R8G8 => px
+            .chunks_exact(2)
+            .flat_map(|c| [c[0], c[0], c[0], c[1]])
+            .collect(),
         R8 => px.iter().flat_map(|&c| [c, c, c, 255]).collect(),
         f => bail!("unsupported texture format {f:?}"),
     };
@@ -107,8 +119,12 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
         };
         mat.name = m.name().unwrap_or("material").into();
         mat.alpha = pbr.base_color_factor()[3];
-        mat.diffuse_texture = pbr.base_color_texture().and_then(|t| texture(&mut scene, t.texture(), true));
-        mat.normal_map = m.normal_texture().and_then(|t| texture(&mut scene, t.texture(), false));
+        mat.diffuse_texture = pbr
+            .base_color_texture()
+            .and_then(|t| texture(&mut scene, t.texture(), true));
+        mat.normal_map = m
+            .normal_texture()
+            .and_then(|t| texture(&mut scene, t.texture(), false));
         scene.add_material(mat);
     }
     let default_mat = scene.add_material(Material::default());
@@ -152,23 +168,27 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
             }
             scene.lights.push(light);
         }
-        if let (Some(c), None) = (node.camera(), camera) {
-            if let gltf::camera::Projection::Perspective(p) = c.projection() {
-                camera = Some(Camera {
-                    eye: pos,
-                    target: pos + forward,
-                    up: rot * Vec3::Y,
-                    fov_y_deg: p.yfov().to_degrees(),
-                    near: p.znear(),
-                    far: p.zfar().unwrap_or(p.znear() * 1e4),
-                });
-            }
+        if let (Some(c), None) = (node.camera(), camera)
+            && let gltf::camera::Projection::Perspective(p) = c.projection()
+        {
+            camera = Some(Camera {
+                eye: pos,
+                target: pos + forward,
+                up: rot * Vec3::Y,
+                fov_y_deg: p.yfov().to_degrees(),
+                near: p.znear(),
+                far: p.zfar().unwrap_or(p.znear() * 1e4),
+            });
         }
         let Some(gmesh) = node.mesh() else { continue };
-        let flags: ShadowFlags = extras_field(node.extras(), &format!("{file}: node '{name}'"))?.unwrap_or_default();
+        let flags: ShadowFlags =
+            extras_field(node.extras(), &format!("{file}: node '{name}'"))?.unwrap_or_default();
         for (pi, prim) in gmesh.primitives().enumerate() {
             if prim.mode() != gltf::mesh::Mode::Triangles {
-                log::warn!("{file}: mesh '{}' primitive {pi} is not triangles; skipped", gmesh.name().unwrap_or(""));
+                log::warn!(
+                    "{file}: mesh '{}' primitive {pi} is not triangles; skipped",
+                    gmesh.name().unwrap_or("")
+                );
                 continue;
             }
             let key = (gmesh.index(), pi);
@@ -178,7 +198,12 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
                     let reader = prim.reader(|b| Some(&buffers[b.index()]));
                     let positions: Vec<Vec3> = reader
                         .read_positions()
-                        .ok_or_else(|| anyhow!("{file}: mesh '{}' has no POSITION", gmesh.name().unwrap_or("")))?
+                        .ok_or_else(|| {
+                            anyhow!(
+                                "{file}: mesh '{}' has no POSITION",
+                                gmesh.name().unwrap_or("")
+                            )
+                        })?
                         .map(Vec3::from)
                         .collect();
                     let indices: Vec<u32> = match reader.read_indices() {
@@ -187,7 +212,10 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
                     };
                     let mesh = Mesh {
                         name: gmesh.name().unwrap_or(&name).to_string(),
-                        normals: reader.read_normals().map(|n| n.map(Vec3::from).collect()).unwrap_or_default(),
+                        normals: reader
+                            .read_normals()
+                            .map(|n| n.map(Vec3::from).collect())
+                            .unwrap_or_default(),
                         uvs: reader
                             .read_tex_coords(0)
                             .map(|t| t.into_f32().map(Vec2::from).collect())
@@ -231,7 +259,11 @@ fn rotation_towards(dir: Vec3, up: Vec3) -> Quat {
 }
 
 fn safe_up(dir: Vec3) -> Vec3 {
-    if dir.normalize().dot(Vec3::Y).abs() > 0.99 { Vec3::Z } else { Vec3::Y }
+    if dir.normalize().dot(Vec3::Y).abs() > 0.99 {
+        Vec3::Z
+    } else {
+        Vec3::Y
+    }
 }
 
 /// Binary buffer under construction; every view is 4-byte aligned.
@@ -243,7 +275,7 @@ struct BinWriter {
 
 impl BinWriter {
     fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut v = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
@@ -254,7 +286,15 @@ impl BinWriter {
         self.views.push(v);
         self.views.len() - 1
     }
-    fn accessor(&mut self, bytes: &[u8], count: usize, ty: &str, comp: u32, target: u32, minmax: Option<(Vec3, Vec3)>) -> usize {
+    fn accessor(
+        &mut self,
+        bytes: &[u8],
+        count: usize,
+        ty: &str,
+        comp: u32,
+        target: u32,
+        minmax: Option<(Vec3, Vec3)>,
+    ) -> usize {
         let view = self.view(bytes, Some(target));
         let mut a = json!({"bufferView": view, "componentType": comp, "count": count, "type": ty});
         if let Some((mn, mx)) = minmax {
@@ -273,7 +313,9 @@ impl BinWriter {
 pub fn export(scene: &Scene, out: &Path) -> Result<()> {
     let bin_name = format!(
         "{}.bin",
-        out.file_stem().and_then(|s| s.to_str()).ok_or_else(|| anyhow!("bad output name"))?
+        out.file_stem()
+            .and_then(|s| s.to_str())
+            .ok_or_else(|| anyhow!("bad output name"))?
     );
     let mut w = BinWriter {
         bin: vec![],
@@ -325,17 +367,49 @@ pub fn export(scene: &Scene, out: &Path) -> Result<()> {
     for o in &scene.objects {
         let m = &scene.meshes[o.mesh];
         let nm = o.transform.inverse().transpose();
-        let pos: Vec<Vec3> = m.positions.iter().map(|&p| o.transform.transform_point3(p)).collect();
+        let pos: Vec<Vec3> = m
+            .positions
+            .iter()
+            .map(|&p| o.transform.transform_point3(p))
+            .collect();
         let nrm: Vec<Vec3> = m
             .normals
             .iter()
             .map(|&n| nm.transform_vector3(n).try_normalize().unwrap_or(Vec3::Y))
             .collect();
         let b = super::Aabb::from_points(pos.iter().copied());
-        let pa = w.accessor(bytemuck::cast_slice(&pos), pos.len(), "VEC3", FLOAT, ARRAY, Some((b.min, b.max)));
-        let na = w.accessor(bytemuck::cast_slice(&nrm), nrm.len(), "VEC3", FLOAT, ARRAY, None);
-        let ta = w.accessor(bytemuck::cast_slice(&m.uvs), m.uvs.len(), "VEC2", FLOAT, ARRAY, None);
-        let ia = w.accessor(bytemuck::cast_slice(&m.indices), m.indices.len(), "SCALAR", UINT, ELEMENTS, None);
+        let pa = w.accessor(
+            bytemuck::cast_slice(&pos),
+            pos.len(),
+            "VEC3",
+            FLOAT,
+            ARRAY,
+            Some((b.min, b.max)),
+        );
+        let na = w.accessor(
+            bytemuck::cast_slice(&nrm),
+            nrm.len(),
+            "VEC3",
+            FLOAT,
+            ARRAY,
+            None,
+        );
+        let ta = w.accessor(
+            bytemuck::cast_slice(&m.uvs),
+            m.uvs.len(),
+            "VEC2",
+            FLOAT,
+            ARRAY,
+            None,
+        );
+        let ia = w.accessor(
+            bytemuck::cast_slice(&m.indices),
+            m.indices.len(),
+            "SCALAR",
+            UINT,
+            ELEMENTS,
+            None,
+        );
         meshes.push(json!({
             "name": m.name,
             "primitives": [{
@@ -408,7 +482,8 @@ pub fn export(scene: &Scene, out: &Path) -> Result<()> {
     if !images.is_empty() {
         doc["images"] = json!(images);
         doc["textures"] = json!(textures);
-        doc["samplers"] = json!([{"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}]);
+        doc["samplers"] =
+            json!([{"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}]);
     }
     if !lights.is_empty() {
         doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);
@@ -417,7 +492,8 @@ pub fn export(scene: &Scene, out: &Path) -> Result<()> {
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)?;
     }
-    std::fs::write(out, serde_json::to_string_pretty(&doc)?).with_context(|| format!("writing {}", out.display()))?;
+    std::fs::write(out, serde_json::to_string_pretty(&doc)?)
+        .with_context(|| format!("writing {}", out.display()))?;
     let bin_path = out.with_file_name(&bin_name);
     std::fs::write(&bin_path, &w.bin).with_context(|| format!("writing {}", bin_path.display()))?;
     Ok(())

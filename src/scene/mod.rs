@@ -64,7 +64,7 @@ impl Mesh {
                 self.positions[i]
             );
         }
-        if self.indices.len() % 3 != 0 {
+        if !self.indices.len().is_multiple_of(3) {
             bail!(
                 "mesh '{}': index count {} is not a multiple of 3",
                 self.name,
@@ -97,8 +97,7 @@ impl Mesh {
             .collect();
         let degenerate = before - kept.len() / 3;
         self.indices = kept;
-        if self.normals.len() != self.positions.len()
-            || self.normals.iter().any(|n| !n.is_finite())
+        if self.normals.len() != self.positions.len() || self.normals.iter().any(|n| !n.is_finite())
         {
             self.normals = smooth_normals(&self.positions, &self.indices);
         }
@@ -130,23 +129,48 @@ impl Mesh {
         *self = out;
     }
 
+    /// Adds a copy of every triangle with the opposite winding and normal,
+    /// so that a thin open surface is visible and lit from both sides.
+    pub fn make_double_sided(&mut self) {
+        let n = self.positions.len() as u32;
+        self.positions.extend_from_within(..);
+        let flipped: Vec<Vec3> = self.normals.iter().map(|&v| -v).collect();
+        self.normals.extend(flipped);
+        self.uvs.extend_from_within(..);
+        let back: Vec<u32> = self
+            .indices
+            .chunks_exact(3)
+            .flat_map(|t| [t[0] + n, t[2] + n, t[1] + n])
+            .collect();
+        self.indices.extend(back);
+    }
+
     pub fn bounds(&self) -> Aabb {
         Aabb::from_points(self.positions.iter().copied())
     }
 }
 
-/// Area-weighted vertex normals.
+/// Area-weighted vertex normals, accumulated over vertices welded by
+/// position so that seams (duplicated vertices) shade smoothly.
 pub fn smooth_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
-    let mut n = vec![Vec3::ZERO; positions.len()];
+    let mut weld: std::collections::HashMap<[u32; 3], usize> = Default::default();
+    let slot: Vec<usize> = positions
+        .iter()
+        .map(|p| {
+            let next = weld.len();
+            *weld.entry(p.to_array().map(f32::to_bits)).or_insert(next)
+        })
+        .collect();
+    let mut n = vec![Vec3::ZERO; weld.len()];
     for t in indices.chunks_exact(3) {
         let (a, b, c) = (t[0] as usize, t[1] as usize, t[2] as usize);
         let fnrm = (positions[b] - positions[a]).cross(positions[c] - positions[a]);
-        n[a] += fnrm;
-        n[b] += fnrm;
-        n[c] += fnrm;
+        for v in [a, b, c] {
+            n[slot[v]] += fnrm;
+        }
     }
-    n.iter()
-        .map(|v| v.try_normalize().unwrap_or(Vec3::Y))
+    slot.iter()
+        .map(|&s| n[s].try_normalize().unwrap_or(Vec3::Y))
         .collect()
 }
 
@@ -177,7 +201,11 @@ pub fn compute_tangents(p: &[Vec3], n: &[Vec3], uv: &[Vec2], indices: &[u32]) ->
             let t = (tan[i] - nn * nn.dot(tan[i]))
                 .try_normalize()
                 .unwrap_or_else(|| nn.any_orthonormal_vector());
-            let w = if nn.cross(t).dot(bit[i]) < 0.0 { -1.0 } else { 1.0 };
+            let w = if nn.cross(t).dot(bit[i]) < 0.0 {
+                -1.0
+            } else {
+                1.0
+            };
             t.extend(w)
         })
         .collect()
@@ -504,7 +532,10 @@ impl Camera {
             bail!("camera up vector is parallel to the view direction");
         }
         if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {
-            bail!("camera fov must be in (0, 180) degrees, got {}", self.fov_y_deg);
+            bail!(
+                "camera fov must be in (0, 180) degrees, got {}",
+                self.fov_y_deg
+            );
         }
         if !(self.near > 0.0 && self.far > self.near) {
             bail!(
@@ -564,7 +595,8 @@ impl Scene {
         self.materials.len() - 1
     }
     pub fn add_object(&mut self, name: &str, mesh: usize, material: usize, t: Mat4) -> usize {
-        self.objects.push(Object::from_name(name, mesh, material, t));
+        self.objects
+            .push(Object::from_name(name, mesh, material, t));
         self.objects.len() - 1
     }
 
@@ -597,7 +629,8 @@ impl Scene {
             self.camera_presets.push(("default".into(), self.camera));
         }
         if self.light_presets.is_empty() {
-            self.light_presets.push(("default".into(), self.lights.clone()));
+            self.light_presets
+                .push(("default".into(), self.lights.clone()));
         }
         Ok(())
     }
@@ -738,6 +771,8 @@ pub fn frame_scene_defaults(scene: &mut Scene) {
         ..Camera::new(eye, c)
     };
     if scene.lights.is_empty() {
-        scene.lights.push(Light::point(c + Vec3::new(-0.5, 1.5, 0.7) * r, 1.0));
+        scene
+            .lights
+            .push(Light::point(c + Vec3::new(-0.5, 1.5, 0.7) * r, 1.0));
     }
 }

@@ -30,7 +30,11 @@ fn parse_floats(words: &[&str], min: usize, max: usize) -> Option<Vec<f32>> {
 /// (`v`, `v/vt`, `v//vn`, `v/vt/vn`) that reference existing records.
 pub fn check_obj(file: &str, text: &str) -> Result<ObjInfo> {
     let (mut nv, mut nt, mut nn) = (0i64, 0i64, 0i64);
-    let total = |k: &str| text.lines().filter(|l| l.split_whitespace().next() == Some(k)).count() as i64;
+    let total = |k: &str| {
+        text.lines()
+            .filter(|l| l.split_whitespace().next() == Some(k))
+            .count() as i64
+    };
     let (tv, tt, tn) = (total("v"), total("vt"), total("vn"));
     let mut info = ObjInfo::default();
     let mut object = String::from("unnamed");
@@ -45,15 +49,18 @@ pub fn check_obj(file: &str, text: &str) -> Result<ObjInfo> {
         };
         match key {
             "v" => {
-                parse_floats(args, 3, 7).ok_or_else(|| err("vertex needs 3 finite numbers".into()))?;
+                parse_floats(args, 3, 7)
+                    .ok_or_else(|| err("vertex needs 3 finite numbers".into()))?;
                 nv += 1;
             }
             "vt" => {
-                parse_floats(args, 1, 3).ok_or_else(|| err("texture coordinate needs 1-3 finite numbers".into()))?;
+                parse_floats(args, 1, 3)
+                    .ok_or_else(|| err("texture coordinate needs 1-3 finite numbers".into()))?;
                 nt += 1;
             }
             "vn" => {
-                parse_floats(args, 3, 3).ok_or_else(|| err("normal needs 3 finite numbers".into()))?;
+                parse_floats(args, 3, 3)
+                    .ok_or_else(|| err("normal needs 3 finite numbers".into()))?;
                 nn += 1;
             }
             "f" => {
@@ -76,8 +83,16 @@ pub fn check_obj(file: &str, text: &str) -> Result<ObjInfo> {
                             continue;
                         }
                         let i: i64 = p.parse().map_err(|_| err(format!("bad index '{p}'")))?;
-                        let (so_far, all, what) = [(nv, tv, "vertex"), (nt, tt, "texture coordinate"), (nn, tn, "normal")][k];
-                        let ok = if i > 0 { i <= all } else { i < 0 && -i <= so_far };
+                        let (so_far, all, what) = [
+                            (nv, tv, "vertex"),
+                            (nt, tt, "texture coordinate"),
+                            (nn, tn, "normal"),
+                        ][k];
+                        let ok = if i > 0 {
+                            i <= all
+                        } else {
+                            i < 0 && -i <= so_far
+                        };
                         if !ok {
                             return Err(err(format!("{what} index {i} out of range")));
                         }
@@ -103,7 +118,12 @@ pub fn check_obj(file: &str, text: &str) -> Result<ObjInfo> {
 pub fn check_mtl(file: &str, text: &str) -> Result<()> {
     for (ln, line) in text.lines().enumerate() {
         let err = |msg: &str| anyhow!("{file}:{}: {msg}: '{}'", ln + 1, line.trim());
-        let words: Vec<&str> = line.split('#').next().unwrap_or("").split_whitespace().collect();
+        let words: Vec<&str> = line
+            .split('#')
+            .next()
+            .unwrap_or("")
+            .split_whitespace()
+            .collect();
         let Some((&key, args)) = words.split_first() else {
             continue;
         };
@@ -137,12 +157,20 @@ const LOAD_OPTIONS: tobj::LoadOptions = tobj::LoadOptions {
 };
 
 fn to_mesh(name: &str, m: &tobj::Mesh) -> Mesh {
-    let v3 = |v: &[f32]| v.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect::<Vec<_>>();
+    let v3 = |v: &[f32]| {
+        v.chunks_exact(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect::<Vec<_>>()
+    };
     Mesh {
         name: name.into(),
         positions: v3(&m.positions),
         normals: v3(&m.normals),
-        uvs: m.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], c[1])).collect(),
+        uvs: m
+            .texcoords
+            .chunks_exact(2)
+            .map(|c| Vec2::new(c[0], c[1]))
+            .collect(),
         tangents: vec![],
         indices: m.indices.clone(),
     }
@@ -179,7 +207,10 @@ fn load_texture(dir: &Path, file: &str, srgb: bool, scene: &mut Scene) -> Option
             Some(scene.textures.len() - 1)
         }
         Err(e) => {
-            log::warn!("texture {}: {e}; using the flat material colour", path.display());
+            log::warn!(
+                "texture {}: {e}; using the flat material colour",
+                path.display()
+            );
             None
         }
     }
@@ -196,8 +227,14 @@ fn to_material(dir: &Path, m: &tobj::Material, scene: &mut Scene) -> Material {
         ks: v(m.specular, base.ks),
         shininess: m.shininess.unwrap_or(base.shininess).clamp(0.0, 1000.0),
         alpha: m.dissolve.unwrap_or(1.0),
-        diffuse_texture: m.diffuse_texture.as_deref().and_then(|f| load_texture(dir, f, true, scene)),
-        normal_map: m.normal_texture.as_deref().and_then(|f| load_texture(dir, f, false, scene)),
+        diffuse_texture: m
+            .diffuse_texture
+            .as_deref()
+            .and_then(|f| load_texture(dir, f, true, scene)),
+        normal_map: m
+            .normal_texture
+            .as_deref()
+            .and_then(|f| load_texture(dir, f, false, scene)),
         procedural: None,
         uv_scale: 1.0,
     }
@@ -211,16 +248,18 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {file}"))?;
     let info = check_obj(&file, &text)?;
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-    let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &LOAD_OPTIONS, |p| {
-        let mtl_path = dir.join(p);
-        let mtl_text = std::fs::read_to_string(&mtl_path).map_err(|_| tobj::LoadError::OpenFileFailed)?;
-        if let Err(e) = check_mtl(&mtl_path.display().to_string(), &mtl_text) {
-            log::error!("{e}");
-            return Err(tobj::LoadError::MaterialParseError);
-        }
-        tobj::load_mtl_buf(&mut mtl_text.as_bytes())
-    })
-    .map_err(|e| anyhow!("{file}: {e}"))?;
+    let (models, materials) =
+        tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &LOAD_OPTIONS, |p| {
+            let mtl_path = dir.join(p);
+            let mtl_text =
+                std::fs::read_to_string(&mtl_path).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+            if let Err(e) = check_mtl(&mtl_path.display().to_string(), &mtl_text) {
+                log::error!("{e}");
+                return Err(tobj::LoadError::MaterialParseError);
+            }
+            tobj::load_mtl_buf(&mut mtl_text.as_bytes())
+        })
+        .map_err(|e| anyhow!("{file}: {e}"))?;
     let mut scene = Scene::new(path.file_stem().and_then(|s| s.to_str()).unwrap_or("obj"));
     scene.source = file.clone();
     let materials = match materials {
@@ -264,7 +303,9 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
             .and_then(|id| mat_index.get(&id).copied())
             .unwrap_or(default_mat);
         let mesh_id = scene.add_mesh(mesh);
-        scene.objects.push(Object::from_name(&model.name, mesh_id, mat, Mat4::IDENTITY));
+        scene
+            .objects
+            .push(Object::from_name(&model.name, mesh_id, mat, Mat4::IDENTITY));
     }
     if scene.objects.is_empty() {
         bail!("{file}: no faces");
@@ -288,23 +329,42 @@ mod tests {
 
     #[test]
     fn malformed_lines_name_file_and_line() {
-        let e = check_obj("bad.obj", "v 0 0 0\nv 1 0 nan_x\n").unwrap_err().to_string();
+        let e = check_obj("bad.obj", "v 0 0 0\nv 1 0 nan_x\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("bad.obj:2:"), "{e}");
-        let e = check_obj("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").unwrap_err().to_string();
-        assert!(e.contains("bad.obj:4:") && e.contains("vertex index 4"), "{e}");
-        let e = check_obj("bad.obj", "v 0 0 0\nf 1 1\n").unwrap_err().to_string();
+        let e = check_obj("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("bad.obj:4:") && e.contains("vertex index 4"),
+            "{e}"
+        );
+        let e = check_obj("bad.obj", "v 0 0 0\nf 1 1\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains(":2:"), "{e}");
-        let e = check_obj("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2 3\n").unwrap_err().to_string();
+        let e = check_obj("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2 3\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("mixes"), "{e}");
-        let e = check_mtl("m.mtl", "newmtl a\nKd 1 0\n").unwrap_err().to_string();
+        let e = check_mtl("m.mtl", "newmtl a\nKd 1 0\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("m.mtl:2:"), "{e}");
-        let e = check_mtl("m.mtl", "newmtl a\nNs 5000\n").unwrap_err().to_string();
+        let e = check_mtl("m.mtl", "newmtl a\nNs 5000\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("0-1000"), "{e}");
     }
 
     #[test]
     fn smoothing_off_is_recorded_per_object() {
-        let info = check_obj("s.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\no A\ns off\nf 1 2 3\no B\ns 1\nf 1 2 3\n").unwrap();
+        let info = check_obj(
+            "s.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\no A\ns off\nf 1 2 3\no B\ns 1\nf 1 2 3\n",
+        )
+        .unwrap();
         assert_eq!(info.flat_objects, vec!["A".to_string()]);
     }
 }

@@ -110,7 +110,11 @@ pub fn load(path: &Path) -> Result<Scene> {
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {file}"))?;
     let f: SceneFile = toml::from_str(&text).map_err(|e| anyhow!("{file}: {e}"))?;
     let dir = path.parent().unwrap_or(Path::new("."));
-    let mut scene = Scene::new(f.name.as_deref().unwrap_or_else(|| path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene")));
+    let mut scene = Scene::new(
+        f.name
+            .as_deref()
+            .unwrap_or_else(|| path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene")),
+    );
     scene.source = file.clone();
     if let Some(b) = f.background {
         scene.background = b.into();
@@ -135,7 +139,11 @@ pub fn load(path: &Path) -> Result<Scene> {
         match (&m.path, &m.shape) {
             (Some(p), None) => {
                 let sub = super::load_file(&dir.join(p)).with_context(|| ctx("loading model"))?;
-                let (mesh_off, mat_off, tex_off) = (scene.meshes.len(), scene.materials.len(), scene.textures.len());
+                let (mesh_off, mat_off, tex_off) = (
+                    scene.meshes.len(),
+                    scene.materials.len(),
+                    scene.textures.len(),
+                );
                 scene.textures.extend(sub.textures);
                 scene.meshes.extend(sub.meshes);
                 for mut mat in sub.materials {
@@ -151,7 +159,8 @@ pub fn load(path: &Path) -> Result<Scene> {
                 }
             }
             (None, Some(shape)) => {
-                let mesh = shape_mesh(shape, m.size.as_deref().unwrap_or(&[])).with_context(|| ctx("shape"))?;
+                let mesh = shape_mesh(shape, m.size.as_deref().unwrap_or(&[]))
+                    .with_context(|| ctx("shape"))?;
                 let mesh = scene.add_mesh(mesh);
                 let colour = m.color.map(Vec3::from).unwrap_or(Vec3::splat(0.8));
                 let mat = scene.add_material(Material::color(shape, colour));
@@ -173,7 +182,8 @@ pub fn load(path: &Path) -> Result<Scene> {
     }
     for (i, l) in f.light.iter().enumerate() {
         let need = |v: Option<[f32; 3]>, what: &str| {
-            v.map(Vec3::from).ok_or_else(|| anyhow!("{file}: light[{i}]: {:?} light needs `{what}`", l.kind))
+            v.map(Vec3::from)
+                .ok_or_else(|| anyhow!("{file}: light[{i}]: {:?} light needs `{what}`", l.kind))
         };
         let mut light = match l.kind {
             LightType::Point => Light::point(need(l.position, "position")?, 1.0),
@@ -190,11 +200,16 @@ pub fn load(path: &Path) -> Result<Scene> {
         light.outer_cone_deg = l.outer_cone_deg.unwrap_or(light.outer_cone_deg);
         light.area = match (l.area_radius, l.area_size) {
             (Some(r), None) => Some(LightArea::Sphere { radius: r }),
-            (None, Some([w, h])) => Some(LightArea::Rect { width: w, height: h }),
+            (None, Some([w, h])) => Some(LightArea::Rect {
+                width: w,
+                height: h,
+            }),
             (None, None) => None,
             _ => bail!("{file}: light[{i}]: give `area_radius` or `area_size`, not both"),
         };
-        light.validate().with_context(|| format!("{file}: light[{i}]"))?;
+        light
+            .validate()
+            .with_context(|| format!("{file}: light[{i}]"))?;
         scene.lights.push(light);
     }
     let had_lights = !scene.lights.is_empty();

@@ -76,7 +76,11 @@ impl TechniqueChoice {
 fn all_ids() -> String {
     FAMILIES
         .iter()
-        .flat_map(|f| f.presets.iter().map(move |p| format!("{}:{}", f.id, p.name)))
+        .flat_map(|f| {
+            f.presets
+                .iter()
+                .map(move |p| format!("{}:{}", f.id, p.name))
+        })
         .collect::<Vec<_>>()
         .join(", ")
 }
@@ -93,7 +97,12 @@ pub fn resolve(id: &str) -> Result<TechniqueChoice> {
         Some(p) => family.presets.iter().find(|x| x.name == p).ok_or_else(|| {
             anyhow!(
                 "technique family '{fid}' has no preset '{p}' (valid: {})",
-                family.presets.iter().map(|x| format!("{fid}:{}", x.name)).collect::<Vec<_>>().join(", ")
+                family
+                    .presets
+                    .iter()
+                    .map(|x| format!("{fid}:{}", x.name))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             )
         })?,
     };
@@ -142,7 +151,12 @@ mod tests {
                 resolve(&format!("{}:{}", f.id, p.name)).unwrap();
             }
             for s in f.params {
-                assert!(s.min <= s.default && s.default <= s.max, "{}.{}", f.id, s.name);
+                assert!(
+                    s.min <= s.default && s.default <= s.max,
+                    "{}.{}",
+                    f.id,
+                    s.name
+                );
                 assert!(!s.doc.is_empty());
             }
         }
@@ -152,6 +166,11 @@ mod tests {
     fn settings_must_be_key_value() {
         let mut p = ParamValues::defaults(none::FAMILY.params);
         assert!(apply_settings(&mut p, &["x".into()]).is_err());
-        assert!(apply_settings(&mut p, &["x=1".into()]).unwrap_err().to_string().contains("unknown parameter"));
+        assert!(
+            apply_settings(&mut p, &["x=1".into()])
+                .unwrap_err()
+                .to_string()
+                .contains("unknown parameter")
+        );
     }
 }

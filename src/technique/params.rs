@@ -29,11 +29,40 @@ pub struct ParamSpec {
 }
 
 impl ParamSpec {
-    pub const fn float(name: &'static str, default: f64, min: f64, max: f64, step: f64, doc: &'static str) -> Self {
-        ParamSpec { name, kind: ParamKind::Float, default, min, max, step, doc }
+    pub const fn float(
+        name: &'static str,
+        default: f64,
+        min: f64,
+        max: f64,
+        step: f64,
+        doc: &'static str,
+    ) -> Self {
+        ParamSpec {
+            name,
+            kind: ParamKind::Float,
+            default,
+            min,
+            max,
+            step,
+            doc,
+        }
     }
-    pub const fn int(name: &'static str, default: i64, min: i64, max: i64, doc: &'static str) -> Self {
-        ParamSpec { name, kind: ParamKind::Int, default: default as f64, min: min as f64, max: max as f64, step: 1.0, doc }
+    pub const fn int(
+        name: &'static str,
+        default: i64,
+        min: i64,
+        max: i64,
+        doc: &'static str,
+    ) -> Self {
+        ParamSpec {
+            name,
+            kind: ParamKind::Int,
+            default: default as f64,
+            min: min as f64,
+            max: max as f64,
+            step: 1.0,
+            doc,
+        }
     }
     pub const fn boolean(name: &'static str, default: bool, doc: &'static str) -> Self {
         ParamSpec {
@@ -46,7 +75,12 @@ impl ParamSpec {
             doc,
         }
     }
-    pub const fn choice(name: &'static str, options: &'static [&'static str], default: usize, doc: &'static str) -> Self {
+    pub const fn choice(
+        name: &'static str,
+        options: &'static [&'static str],
+        default: usize,
+        doc: &'static str,
+    ) -> Self {
         ParamSpec {
             name,
             kind: ParamKind::Choice(options),
@@ -65,22 +99,29 @@ impl ParamSpec {
             ParamKind::Bool => match text {
                 "true" | "on" | "1" | "yes" => 1.0,
                 "false" | "off" | "0" | "no" => 0.0,
-                _ => bail!("parameter '{}' is a boolean: use true or false, not '{text}'", self.name),
+                _ => bail!(
+                    "parameter '{}' is a boolean: use true or false, not '{text}'",
+                    self.name
+                ),
             },
             ParamKind::Choice(opts) => match opts.iter().position(|o| *o == text) {
                 Some(i) => i as f64,
-                None => bail!("parameter '{}' must be one of {}, not '{text}'", self.name, opts.join(", ")),
+                None => bail!(
+                    "parameter '{}' must be one of {}, not '{text}'",
+                    self.name,
+                    opts.join(", ")
+                ),
             },
             ParamKind::Int => {
-                let v: i64 = text
-                    .parse()
-                    .map_err(|_| anyhow::anyhow!("parameter '{}' needs an integer, not '{text}'", self.name))?;
+                let v: i64 = text.parse().map_err(|_| {
+                    anyhow::anyhow!("parameter '{}' needs an integer, not '{text}'", self.name)
+                })?;
                 v as f64
             }
             ParamKind::Float => {
-                let v: f64 = text
-                    .parse()
-                    .map_err(|_| anyhow::anyhow!("parameter '{}' needs a number, not '{text}'", self.name))?;
+                let v: f64 = text.parse().map_err(|_| {
+                    anyhow::anyhow!("parameter '{}' needs a number, not '{text}'", self.name)
+                })?;
                 if !v.is_finite() {
                     bail!("parameter '{}' must be finite", self.name);
                 }
@@ -88,7 +129,12 @@ impl ParamSpec {
             }
         };
         if v < self.min || v > self.max {
-            bail!("parameter '{}' = {text} is out of range [{}, {}]", self.name, self.min, self.max);
+            bail!(
+                "parameter '{}' = {text} is out of range [{}, {}]",
+                self.name,
+                self.min,
+                self.max
+            );
         }
         Ok(v)
     }
@@ -120,13 +166,20 @@ impl ParamValues {
     }
 
     fn index(&self, name: &str) -> Result<usize> {
-        self.specs.iter().position(|s| s.name == name).ok_or_else(|| {
-            let valid: Vec<&str> = self.specs.iter().map(|s| s.name).collect();
-            anyhow::anyhow!(
-                "unknown parameter '{name}' (valid: {})",
-                if valid.is_empty() { "none".to_string() } else { valid.join(", ") }
-            )
-        })
+        self.specs
+            .iter()
+            .position(|s| s.name == name)
+            .ok_or_else(|| {
+                let valid: Vec<&str> = self.specs.iter().map(|s| s.name).collect();
+                anyhow::anyhow!(
+                    "unknown parameter '{name}' (valid: {})",
+                    if valid.is_empty() {
+                        "none".to_string()
+                    } else {
+                        valid.join(", ")
+                    }
+                )
+            })
     }
 
     /// Sets `name` from text, with range and type checks.
@@ -144,7 +197,9 @@ impl ParamValues {
     }
 
     pub fn get(&self, name: &str) -> f64 {
-        self.index(name).map(|i| self.values[i]).unwrap_or_else(|e| panic!("{e}"))
+        self.index(name)
+            .map(|i| self.values[i])
+            .unwrap_or_else(|e| panic!("{e}"))
     }
     pub fn get_f32(&self, name: &str) -> f32 {
         self.get(name) as f32
@@ -192,7 +247,12 @@ mod tests {
         let mut p = ParamValues::defaults(SPECS);
         p.set("bias", "0.25").unwrap();
         assert_eq!(p.get("bias"), 0.25);
-        assert!(p.set("bias", "2").unwrap_err().to_string().contains("out of range [0, 1]"));
+        assert!(
+            p.set("bias", "2")
+                .unwrap_err()
+                .to_string()
+                .contains("out of range [0, 1]")
+        );
         assert!(p.set("bias", "NaN").is_err());
         assert!(p.set("size", "1.5").is_err());
         p.set("stencil", "false").unwrap();

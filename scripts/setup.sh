@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Installs the system packages shadowlab needs on Debian/Ubuntu: a Vulkan
+# driver (Mesa's lavapipe runs everywhere, GPU or not) and, for the tests,
+# Node.js (the Khronos glTF validator) and Xvfb (the viewer test).
+# Usage: scripts/setup.sh [--test]
+set -euo pipefail
+
+need=()
+have_pkg() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
+have_pkg mesa-vulkan-drivers || need+=(mesa-vulkan-drivers)
+have_pkg libvulkan1 || need+=(libvulkan1)
+if [[ "${1:-}" == "--test" ]]; then
+  command -v node >/dev/null || need+=(nodejs)
+  command -v npm >/dev/null || need+=(npm)
+  have_pkg xvfb || need+=(xvfb)
+fi
+
+if ((${#need[@]})); then
+  echo "setup: installing ${need[*]}"
+  SUDO=""
+  [[ $(id -u) -ne 0 ]] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${need[@]}" >/dev/null
+fi
+
+if [[ "${1:-}" == "--test" ]]; then
+  cd "$(dirname "$0")/.."
+  npm ci --prefix tools --no-audit --no-fund --silent
+fi

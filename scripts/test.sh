@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Set-up and the whole test suite: installs the Vulkan driver, Node.js and
+# Xvfb if needed, the glTF validator into tools/, then runs every test.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh --test
+cargo test --locked "$@"

@@ -1,0 +1,349 @@
+//! Loader conventions, glTF export round trip and validation, and clear
+//! errors (exit code 2, file and line) on bad input.
+
+mod common;
+use common::*;
+use shadowlab::scene::{self, builtin};
+use std::path::Path;
+
+const ROOM_OBJ: &str = "\
+mtllib room.mtl
+v -5 0 -5\nv 5 0 -5\nv 5 0 5\nv -5 0 5
+v -5 0 -5\nv 5 0 -5\nv 5 5 -5\nv -5 5 -5
+v 0 1 0\nv 1 1 0\nv 0 2 0\nv 0 1 1
+vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1
+vn 0 1 0
+o Floor
+usemtl floor
+f 1/1/1 4/4/1 3/3/1 2/2/1
+o WallsNS
+usemtl wall
+f 5/1 6/2 7/3 8/4
+o ShadowPlaneFloor
+f 1 4 3
+o Pyramid
+s off
+f 9 10 11\nf 9 11 12\nf 9 12 10\nf 10 12 11
+";
+
+const ROOM_MTL: &str = "\
+newmtl floor
+Ka 0.1 0.1 0.1
+Kd 0.8 0.7 0.6
+Ks 0.2 0.2 0.2
+Ns 50
+d 1
+map_Kd missing.png
+newmtl wall
+Kd 0.5 0.5 0.9
+";
+
+fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn obj_naming_conventions_and_materials() {
+    let dir = tmpdir("obj");
+    let obj = write(&dir, "room.obj", ROOM_OBJ);
+    write(&dir, "room.mtl", ROOM_MTL);
+    let s = scene::load(obj.to_str().unwrap()).unwrap();
+    let find = |n: &str| {
+        s.objects
+            .iter()
+            .find(|o| o.name == n)
+            .unwrap_or_else(|| panic!("{n}"))
+    };
+    assert!(find("Floor").casts_shadow);
+    assert!(!find("WallsNS").casts_shadow && !find("WallsNS").shadow_plane);
+    assert!(find("ShadowPlaneFloor").shadow_plane && !find("ShadowPlaneFloor").casts_shadow);
+    let floor_mat = &s.materials[find("Floor").material];
+    assert_eq!(floor_mat.kd, glam::Vec3::new(0.8, 0.7, 0.6));
+    assert_eq!(floor_mat.shininess, 50.0);
+    // The missing texture falls back to the flat colour.
+    assert!(floor_mat.diffuse_texture.is_none());
+    // The quad was triangulated; `s off` made the pyramid flat (unwelded).
+    assert_eq!(s.meshes[find("Floor").mesh].triangle_count(), 2);
+    let pyr = &s.meshes[find("Pyramid").mesh];
+    assert_eq!(pyr.positions.len(), 12);
+    // Shadow planes are not drawn.
+    assert_eq!(s.triangle_count(), 2 + 2 + 4);
+}
+
+#[test]
+fn missing_texture_warns_and_renders() {
+    let dir = tmpdir("missing-tex");
+    let obj = write(&dir, "room.obj", ROOM_OBJ);
+    write(&dir, "room.mtl", ROOM_MTL);
+    let out = dir.join("out");
+    let o = shadowlab(&[
+        "render",
+        "--scene",
+        obj.to_str().unwrap(),
+        "--size",
+        "64x36",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("missing.png"), "{}", stderr(&o));
+    assert!(out.join("image.png").exists());
+}
+
+#[test]
+fn toml_scene_places_models_and_flags() {
+    let dir = tmpdir("toml");
+    write(&dir, "room.obj", ROOM_OBJ);
+    write(&dir, "room.mtl", ROOM_MTL);
+    let toml = write(
+        &dir,
+        "s.toml",
+        r#"
+name = "t"
+[[model]]
+path = "room.obj"
+translate = [1.0, 0.0, 0.0]
+[[model]]
+shape = "sphere"
+size = [0.5]
+name = "BallNS"
+translate = [0.0, 2.0, 0.0]
+receives_shadow = false
+[[light]]
+type = "spot"
+position = [0.0, 5.0, 0.0]
+direction = [0.0, -1.0, 0.0]
+inner_cone_deg = 20.0
+outer_cone_deg = 30.0
+[camera]
+eye = [0.0, 3.0, 8.0]
+target = [0.0, 0.0, 0.0]
+fov = 45.0
+"#,
+    );
+    let s = scene::load(toml.to_str().unwrap()).unwrap();
+    assert_eq!(s.name, "t");
+    let ball = s.objects.iter().find(|o| o.name == "BallNS").unwrap();
+    assert!(!ball.casts_shadow && !ball.receives_shadow);
+    let floor = s.objects.iter().find(|o| o.name == "Floor").unwrap();
+    assert_eq!(floor.transform.w_axis.x, 1.0);
+    assert_eq!(s.lights.len(), 1);
+    assert_eq!(s.camera.fov_y_deg, 45.0);
+}
+
+#[test]
+fn malformed_files_fail_with_file_line_and_exit_2() {
+    let dir = tmpdir("bad");
+    let cases = [
+        (
+            "bad.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n",
+            "bad.obj:4:",
+        ),
+        (
+            "nan.obj",
+            "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n",
+            "nan.obj:2:",
+        ),
+        ("bad.toml", "name = \"x\"\n[[model]]\nshape = 3\n", "line 3"),
+        (
+            "typo.toml",
+            "[[model]]\nshape = \"box\"\ncolour = [1,0,0]\n",
+            "unknown field `colour`",
+        ),
+        (
+            "bad.gltf",
+            "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [ {\"mesh\": 5} ]",
+            "bad.gltf",
+        ),
+    ];
+    for (name, text, expect) in cases {
+        let p = write(&dir, name, text);
+        let o = shadowlab(&[
+            "render",
+            "--scene",
+            p.to_str().unwrap(),
+            "--size",
+            "32x32",
+            "--out",
+            dir.join("o").to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{name}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains(expect),
+            "{name}: expected '{expect}' in: {}",
+            stderr(&o)
+        );
+        assert!(!stderr(&o).contains("panicked"), "{name}");
+    }
+    let p = write(
+        &dir,
+        "badmtl.obj",
+        "mtllib badmtl.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    );
+    write(&dir, "badmtl.mtl", "newmtl a\nKd 1 x 0\n");
+    let o = shadowlab(&[
+        "render",
+        "--scene",
+        p.to_str().unwrap(),
+        "--out",
+        dir.join("o").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("badmtl.mtl:2:"), "{}", stderr(&o));
+}
+
+#[test]
+fn degenerate_triangles_are_skipped_and_counted() {
+    let dir = tmpdir("degenerate");
+    let p = write(
+        &dir,
+        "d.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\n",
+    );
+    let s = scene::load(p.to_str().unwrap()).unwrap();
+    assert_eq!(s.triangle_count(), 1);
+    let o = shadowlab(&[
+        "render",
+        "--scene",
+        p.to_str().unwrap(),
+        "--size",
+        "32x32",
+        "--out",
+        dir.join("o").to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    assert!(
+        stderr(&o).contains("skipped 1 degenerate triangle"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn bad_cli_values_list_the_valid_ones() {
+    let checks: [(&[&str], &str); 7] = [
+        (&["render", "--technique", "nope"], "none:default"),
+        (
+            &["render", "--technique", "none:nope"],
+            "valid: none:default",
+        ),
+        (&["render", "--set", "bias=1"], "unknown parameter 'bias'"),
+        (&["render", "--scene", "nowhere"], "room, bunny, floating"),
+        (&["render", "--camera", "nope"], "valid: default, top, low"),
+        (&["render", "--light", "nope"], "valid: point, spot, sun"),
+        (&["render", "--size", "0x10"], "at least 1x1"),
+    ];
+    for (args, expect) in checks {
+        let o = shadowlab(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(
+            stderr(&o).contains(expect),
+            "{args:?}: expected '{expect}' in {}",
+            stderr(&o)
+        );
+    }
+}
+
+/// Triangles of the drawn objects in world space, each as sorted vertex
+/// tuples rounded to 1e-4 (order-independent comparison).
+fn triangle_set(s: &scene::Scene) -> Vec<[[i64; 3]; 3]> {
+    let q = |v: glam::Vec3| {
+        [
+            (v.x * 1e4).round() as i64,
+            (v.y * 1e4).round() as i64,
+            (v.z * 1e4).round() as i64,
+        ]
+    };
+    let mut t: Vec<[[i64; 3]; 3]> = s
+        .world_triangles(|_| true)
+        .into_iter()
+        .map(|t| {
+            let mut v = t.map(q);
+            v.sort();
+            v
+        })
+        .collect();
+    t.sort();
+    t
+}
+
+#[test]
+fn export_round_trip_keeps_triangles_flags_lights_and_camera() {
+    let dir = tmpdir("export");
+    for name in builtin::NAMES.iter().filter(|n| **n != "city") {
+        let s = builtin::by_name(name).unwrap().unwrap();
+        let path = dir.join(format!("{name}.gltf"));
+        scene::gltf_io::export(&s, &path).unwrap();
+        let back = scene::load(path.to_str().unwrap()).unwrap();
+        assert_eq!(triangle_set(&s), triangle_set(&back), "{name}");
+        let flags = |s: &scene::Scene| {
+            s.objects
+                .iter()
+                .map(|o| {
+                    (
+                        o.name.clone(),
+                        o.casts_shadow,
+                        o.receives_shadow,
+                        o.shadow_plane,
+                    )
+                })
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(flags(&s), flags(&back), "{name}");
+        assert_eq!(s.lights.len(), back.lights.len());
+        for (a, b) in s.lights.iter().zip(&back.lights) {
+            assert_eq!(a.kind, b.kind);
+            assert!(
+                (a.direction - b.direction).length() < 1e-4,
+                "{name}: {a:?} {b:?}"
+            );
+            if a.kind != shadowlab::scene::LightType::Directional {
+                assert!((a.position - b.position).length() < 1e-4);
+            }
+        }
+        assert!((s.camera.eye - back.camera.eye).length() < 1e-4);
+        let dir_a = (s.camera.target - s.camera.eye).normalize();
+        let dir_b = (back.camera.target - back.camera.eye).normalize();
+        assert!((dir_a - dir_b).length() < 1e-4, "{name}");
+        assert_eq!(
+            s.materials.iter().map(|m| m.kd).collect::<Vec<_>>(),
+            back.materials[..s.materials.len()]
+                .iter()
+                .map(|m| m.kd)
+                .collect::<Vec<_>>()
+        );
+    }
+}
+
+/// Runs the Khronos glTF validator (npm package `gltf-validator`, installed
+/// into tools/ by the test script) on every built-in scene's export.
+#[test]
+fn khronos_validator_finds_no_errors_in_exports() {
+    let tools = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools");
+    assert!(
+        tools.join("node_modules/gltf-validator").exists(),
+        "gltf-validator is not installed: run `npm ci --prefix tools` (scripts/test.sh does)"
+    );
+    let dir = tmpdir("validator");
+    for name in builtin::NAMES {
+        let path = dir.join(format!("{name}.gltf"));
+        let o = shadowlab(&["export", "--scene", name, "--out", path.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v = std::process::Command::new("node")
+            .arg(tools.join("validate-gltf.mjs"))
+            .arg(&path)
+            .output()
+            .expect("node");
+        let report = String::from_utf8_lossy(&v.stdout);
+        assert!(
+            v.status.success(),
+            "{name}: {report} {}",
+            String::from_utf8_lossy(&v.stderr)
+        );
+        let j: serde_json::Value = serde_json::from_str(report.trim()).unwrap();
+        assert_eq!(j["errors"], 0, "{name}: {report}");
+    }
+}

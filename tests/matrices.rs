@@ -1,0 +1,57 @@
+//! Camera and light matrices against hand-derived values (wgpu: right-handed
+//! view space, NDC depth in [0, 1]).
+
+use glam::{Vec3, Vec4};
+use shadowlab::scene::{Camera, Light};
+
+#[test]
+fn perspective_maps_near_to_0_and_far_to_1() {
+    let cam = Camera {
+        fov_y_deg: 90.0,
+        near: 1.0,
+        far: 10.0,
+        ..Camera::new(Vec3::ZERO, Vec3::NEG_Z)
+    };
+    let p = cam.projection(1.0);
+    // Hand-derived: x' = x·cot(45°) = x, z_ndc = (far/(near−far)·z + near·far/(near−far)) / −z.
+    let near = p * Vec4::new(0.0, 0.0, -1.0, 1.0);
+    let far = p * Vec4::new(0.0, 0.0, -10.0, 1.0);
+    assert!((near.z / near.w).abs() < 1e-6);
+    assert!((far.z / far.w - 1.0).abs() < 1e-6);
+    // A point at 45° up on the near plane lands on the top edge.
+    let top = p * Vec4::new(0.0, 1.0, -1.0, 1.0);
+    assert!((top.y / top.w - 1.0).abs() < 1e-6);
+    // z = −5.5 (midway): (10/(−9)·(−5.5) − 10/9)/5.5 = (55/9 − 10/9)/5.5 = 5/5.5.
+    let mid = p * Vec4::new(0.0, 0.0, -5.5, 1.0);
+    assert!((mid.z / mid.w - 5.0 / 5.5).abs() < 1e-6);
+}
+
+#[test]
+fn view_matrix_puts_the_target_on_negative_z() {
+    let cam = Camera::new(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO);
+    let v = cam.view();
+    let t = v.transform_point3(Vec3::ZERO);
+    assert!((t - Vec3::new(0.0, 0.0, -5.0)).length() < 1e-6);
+    let up = v.transform_point3(Vec3::new(0.0, 1.0, 0.0));
+    assert!((up - Vec3::new(0.0, 1.0, -5.0)).length() < 1e-6);
+}
+
+#[test]
+fn homogeneous_light_positions() {
+    assert_eq!(
+        Light::point(Vec3::new(1.0, 2.0, 3.0), 1.0).homogeneous(),
+        Vec4::new(1.0, 2.0, 3.0, 1.0)
+    );
+    let d = Light::directional(Vec3::new(0.0, -2.0, 0.0), 1.0);
+    assert_eq!(d.homogeneous(), Vec4::new(0.0, 1.0, 0.0, 0.0));
+}
+
+#[test]
+fn bad_cameras_are_rejected() {
+    let mut c = Camera::new(Vec3::ZERO, Vec3::ZERO);
+    assert!(c.validate().is_err());
+    c = Camera::new(Vec3::new(0.0, 1.0, 0.0), Vec3::ZERO);
+    assert!(c.validate().unwrap_err().to_string().contains("parallel"));
+    c = Camera::new(Vec3::new(f32::NAN, 0.0, 1.0), Vec3::ZERO);
+    assert!(c.validate().is_err());
+}
