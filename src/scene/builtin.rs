@@ -417,7 +417,7 @@ pub fn curved() -> Scene {
     pipe.make_double_sided();
     let pipe = s.add_mesh(pipe);
     let concrete = s.add_material(Material::color("concrete", Vec3::splat(0.7)));
-    let mut pipe_obj = super::Object::from_name("HalfPipe", pipe, concrete, t(2.5, -0.3, -0.5));
+    let mut pipe_obj = super::Object::from_name("HalfPipe", pipe, concrete, t(2.5, 0.05, -0.5));
     pipe_obj.casts_shadow = true;
     s.objects.push(pipe_obj);
     let ball = s.add_mesh(sphere(0.5, 40, 20));
