@@ -2,6 +2,7 @@
 
 use crate::frame::{self, FrameRecord, HeadlessFrame};
 use crate::gpu::GpuContext;
+use crate::measure;
 use crate::renderer::{LightingModel, RenderSettings, Shading};
 use crate::scene::{self, Camera, Light, LightType, Scene};
 use crate::technique::{self, FAMILIES, ParamKind, TechniqueChoice};
@@ -38,6 +39,45 @@ pub enum Command {
     Export(ExportArgs),
     /// Render one frame headless: DIR/image.png, DIR/visibility-N.png, DIR/frame.json.
     Render(Box<RenderArgs>),
+    /// Measure techniques against the ray-traced reference on one frame:
+    /// mismatch, visibility error, FLIP, heatmaps (DIR/quality.{md,csv,json}).
+    Compare(Box<CompareArgs>),
+    /// Time techniques on one frame: median/p5/p95 per pass, ratio to `none`
+    /// (DIR/bench.{md,csv,json}).
+    Bench(Box<BenchArgs>),
+}
+
+#[derive(Args)]
+pub struct CompareArgs {
+    #[command(flatten)]
+    pub view: ViewArgs,
+    /// Comma-separated technique ids (optionally `id[key=value,...]`), or `all`.
+    #[arg(long, default_value = "none")]
+    pub techniques: String,
+    /// The reference technique.
+    #[arg(long, default_value = "raytraced")]
+    pub reference: String,
+    /// Output directory.
+    #[arg(long, default_value = "out/compare")]
+    pub out: PathBuf,
+}
+
+#[derive(Args)]
+pub struct BenchArgs {
+    #[command(flatten)]
+    pub view: ViewArgs,
+    /// Comma-separated technique ids (optionally `id[key=value,...]`), or `all`; `none` is always measured.
+    #[arg(long, default_value = "none")]
+    pub techniques: String,
+    /// Measured frames per technique.
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..))]
+    pub frames: u32,
+    /// Warm-up frames per technique (not measured).
+    #[arg(long, default_value_t = 3)]
+    pub warmup: u32,
+    /// Output directory.
+    #[arg(long, default_value = "out/bench")]
+    pub out: PathBuf,
 }
 
 #[derive(Args)]
@@ -216,6 +256,7 @@ impl ViewArgs {
             cull_back_faces: !self.no_cull,
             background: self.background,
             show_light_icons: !self.no_icons,
+            gpu_timing: false,
         }
     }
 }
@@ -247,6 +288,8 @@ pub fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Render(a) => render(*a),
+        Command::Compare(a) => compare(*a),
+        Command::Bench(a) => bench(*a),
     }
 }
 
@@ -324,6 +367,78 @@ pub fn techniques_text() -> String {
         }
     }
     out
+}
+
+fn compare(a: CompareArgs) -> Result<()> {
+    let (scene, camera, lights) = a.view.resolve()?;
+    let techniques = measure::parse_technique_list(&a.techniques)?;
+    let reference = measure::parse_technique_list(&a.reference)?;
+    let [reference] = reference.as_slice() else {
+        bail!("--reference takes one technique, got '{}'", a.reference);
+    };
+    let gpu = GpuContext::new(a.view.backend.as_deref())?;
+    let rows = measure::compare::run(
+        &gpu,
+        &scene,
+        &camera,
+        &lights,
+        a.view.size,
+        &techniques,
+        reference,
+        &a.out,
+    )?;
+    println!(
+        "{:<36} {:>5} {:>9} {:>9} {:>9} {:>8} {:>8}",
+        "technique", "light", "false-sh%", "false-lit%", "total%", "MAE", "FLIP"
+    );
+    for r in &rows {
+        println!(
+            "{:<36} {:>5} {:>9.3} {:>9.3} {:>9.3} {:>8.4} {:>8.4}",
+            r.technique,
+            r.light,
+            r.mask.all.false_shadow_pct,
+            r.mask.all.false_lit_pct,
+            r.mask.all.total_pct,
+            r.mask.mean_abs_error,
+            r.flip.mean
+        );
+    }
+    println!("wrote {}", a.out.join("quality.md").display());
+    Ok(())
+}
+
+fn bench(a: BenchArgs) -> Result<()> {
+    let (scene, camera, lights) = a.view.resolve()?;
+    let techniques = measure::parse_technique_list(&a.techniques)?;
+    let gpu = GpuContext::new(a.view.backend.as_deref())?;
+    let rows = measure::bench::run(
+        &gpu,
+        &scene,
+        &camera,
+        &lights,
+        a.view.size,
+        &techniques,
+        a.warmup,
+        a.frames,
+        &a.out,
+    )?;
+    println!(
+        "{:<36} {:>10} {:>10} {:>10} {:>8}",
+        "technique", "frame ms", "GPU ms", "masks ms", "x none"
+    );
+    for r in &rows {
+        println!(
+            "{:<36} {:>10.2} {:>10} {:>10.2} {:>8.2}",
+            r.technique,
+            r.frame_ms.median,
+            r.gpu_frame_ms
+                .map_or("-".into(), |s| format!("{:.2}", s.median)),
+            r.masks_ms.median,
+            r.ratio_to_none
+        );
+    }
+    println!("wrote {}", a.out.join("bench.md").display());
+    Ok(())
 }
 
 fn render(a: RenderArgs) -> Result<()> {

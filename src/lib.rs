@@ -7,6 +7,7 @@
 pub mod cli;
 pub mod frame;
 pub mod gpu;
+pub mod measure;
 pub mod renderer;
 pub mod scene;
 pub mod technique;

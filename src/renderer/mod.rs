@@ -61,6 +61,9 @@ pub struct RenderSettings {
     /// Linear RGB; `None` takes the scene's.
     pub background: Option<Vec3>,
     pub show_light_icons: bool,
+    /// Measure each pass with GPU timestamp queries (when the adapter has them).
+    #[serde(default)]
+    pub gpu_timing: bool,
 }
 
 impl Default for RenderSettings {
@@ -71,6 +74,7 @@ impl Default for RenderSettings {
             cull_back_faces: true,
             background: None,
             show_light_icons: true,
+            gpu_timing: false,
         }
     }
 }
@@ -241,6 +245,69 @@ pub struct FrameTimings {
     pub masks_ms: f64,
     pub lighting_ms: f64,
     pub total_ms: f64,
+    /// GPU time per pass from timestamp queries, when measured.
+    pub gpu: Option<GpuPassTimes>,
+}
+
+/// GPU time of each pass, milliseconds (timestamp queries).
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct GpuPassTimes {
+    pub prepass_ms: f64,
+    pub masks_ms: f64,
+    pub lighting_ms: f64,
+    pub total_ms: f64,
+}
+
+/// Four timestamps per frame: start, after the prepass, after the masks,
+/// after lighting.
+struct GpuTimer {
+    queries: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    readback: wgpu::Buffer,
+}
+
+impl GpuTimer {
+    fn new(device: &wgpu::Device) -> GpuTimer {
+        GpuTimer {
+            queries: device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("pass timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 4,
+            }),
+            resolve: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamp resolve"),
+                size: 32,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            readback: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamp readback"),
+                size: 32,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            }),
+        }
+    }
+
+    fn read(&self, gpu: &GpuContext) -> Result<GpuPassTimes> {
+        let slice = self.readback.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        gpu.wait_idle()?;
+        rx.recv()??;
+        let t: Vec<u64> = bytemuck::cast_slice::<u8, u64>(&slice.get_mapped_range()?).to_vec();
+        self.readback.unmap();
+        let period = gpu.queue.get_timestamp_period() as f64 * 1e-6;
+        let d = |a: usize, b: usize| t[b].saturating_sub(t[a]) as f64 * period;
+        Ok(GpuPassTimes {
+            prepass_ms: d(0, 1),
+            masks_ms: d(1, 2),
+            lighting_ms: d(2, 3),
+            total_ms: d(0, 3),
+        })
+    }
 }
 
 /// Pipelines and layouts; created once per device.
@@ -253,6 +320,7 @@ pub struct Renderer {
     lit_pipelines: [wgpu::RenderPipeline; 2],
     icons: icons::LightIcons,
     sampler: wgpu::Sampler,
+    timer: Option<GpuTimer>,
 }
 
 fn uniform_entry(
@@ -495,6 +563,7 @@ impl Renderer {
             material_layout,
             mask_layout,
             sampler,
+            timer: gpu.timestamps.then(|| GpuTimer::new(device)),
         }
     }
 
@@ -806,8 +875,15 @@ impl Renderer {
         gpu.queue
             .write_buffer(&frame.frame_buffer, 0, bytemuck::bytes_of(&frame.uniform));
         let cull = settings.cull_back_faces as usize;
+        let timer = self.timer.as_ref().filter(|_| settings.gpu_timing);
+        let stamp = |enc: &mut wgpu::CommandEncoder, i: u32| {
+            if let Some(t) = timer {
+                enc.write_timestamp(&t.queries, i);
+            }
+        };
 
         let mut enc = gpu.device.create_command_encoder(&Default::default());
+        stamp(&mut enc, 0);
         {
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("prepass"),
@@ -839,6 +915,7 @@ impl Renderer {
             pass.set_bind_group(1, &scene_gpu.object_bind_group, &[]);
             scene_gpu.draw_objects(&mut pass, |_| true);
         }
+        stamp(&mut enc, 1);
         gpu.queue.submit([enc.finish()]);
         gpu.wait_idle()?;
         let t1 = Instant::now();
@@ -858,6 +935,7 @@ impl Renderer {
             };
             inst.technique.render_mask(&ctx, &mut enc)?;
         }
+        stamp(&mut enc, 2);
         gpu.queue.submit([enc.finish()]);
         gpu.wait_idle()?;
         let t2 = Instant::now();
@@ -914,17 +992,56 @@ impl Renderer {
                 );
             }
         }
+        stamp(&mut enc, 3);
+        if let Some(t) = timer {
+            enc.resolve_query_set(&t.queries, 0..4, &t.resolve, 0);
+            enc.copy_buffer_to_buffer(&t.resolve, 0, &t.readback, 0, 32);
+        }
         gpu.queue.submit([enc.finish()]);
         gpu.wait_idle()?;
         let t3 = Instant::now();
+        let gpu_times = match timer {
+            Some(t) => Some(t.read(gpu)?),
+            None => None,
+        };
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         Ok(FrameTimings {
             prepass_ms: ms(t0, t1),
             masks_ms: ms(t1, t2),
             lighting_ms: ms(t2, t3),
             total_ms: ms(t0, t3),
+            gpu: gpu_times,
         })
     }
+}
+
+/// Uploads a CPU-computed visibility mask (row-major, top row first) into
+/// layer `layer` of the frame's masks.
+pub fn write_mask(gpu: &GpuContext, frame: &FrameResources, layer: usize, mask: &[f32]) {
+    let data: Vec<half::f16> = mask.iter().map(|&v| half::f16::from_f32(v)).collect();
+    gpu.queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: &frame.masks,
+            mip_level: 0,
+            origin: wgpu::Origin3d {
+                x: 0,
+                y: 0,
+                z: layer as u32,
+            },
+            aspect: wgpu::TextureAspect::All,
+        },
+        bytemuck::cast_slice(&data),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(frame.width * 2),
+            rows_per_image: Some(frame.height),
+        },
+        wgpu::Extent3d {
+            width: frame.width,
+            height: frame.height,
+            depth_or_array_layers: 1,
+        },
+    );
 }
 
 fn color_attachment(

@@ -253,7 +253,7 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
 
 /// Rotation taking −Z to `dir` (glTF lights and cameras look down −Z).
 fn rotation_towards(dir: Vec3, up: Vec3) -> Quat {
-    let view = Mat4::look_to_rh(Vec3::ZERO, dir, up);
+    let view = glam::camera::rh::view::look_to_mat4(Vec3::ZERO, dir, up);
     let (_, r, _) = view.inverse().to_scale_rotation_translation();
     r.normalize()
 }

@@ -514,12 +514,17 @@ impl Camera {
     }
     /// Right-handed look-at view matrix.
     pub fn view(&self) -> Mat4 {
-        Mat4::look_at_rh(self.eye, self.target, self.up)
+        glam::camera::rh::view::look_at_mat4(self.eye, self.target, self.up)
     }
     /// Perspective projection onto wgpu's [0,1] depth range:
     /// `z_ndc = far/(near−far) · z_view/(−z_view) + near·far/(near−far)/(−z_view)`.
     pub fn projection(&self, aspect: f32) -> Mat4 {
-        Mat4::perspective_rh(self.fov_y_deg.to_radians(), aspect, self.near, self.far)
+        glam::camera::rh::proj::directx::perspective(
+            self.fov_y_deg.to_radians(),
+            aspect,
+            self.near,
+            self.far,
+        )
     }
     pub fn validate(&self) -> Result<()> {
         if !(self.eye.is_finite() && self.target.is_finite() && self.up.is_finite()) {

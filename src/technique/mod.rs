@@ -6,6 +6,7 @@
 
 pub mod none;
 pub mod params;
+pub mod raytraced;
 
 use crate::gpu::GpuContext;
 use crate::renderer::{FrameResources, SceneGpu};
@@ -36,6 +37,12 @@ pub trait ShadowTechnique: Send {
     fn counters(&self) -> Vec<(&'static str, f64)> {
         vec![]
     }
+
+    /// Bytes of shadow-specific resources this instance holds (maps,
+    /// volumes, acceleration structures).
+    fn resource_bytes(&self) -> u64 {
+        0
+    }
 }
 
 /// A named set of parameter values of a family.
@@ -56,7 +63,7 @@ pub struct Family {
 }
 
 /// The registry: every technique family.
-pub static FAMILIES: &[&Family] = &[&none::FAMILY];
+pub static FAMILIES: &[&Family] = &[&none::FAMILY, &raytraced::FAMILY];
 
 /// A resolved technique id: family, preset name and parameter values.
 #[derive(Clone)]

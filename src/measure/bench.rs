@@ -1,0 +1,241 @@
+//! `shadowlab bench`: frame and pass timings per technique on one frame:
+//! warm-up frames, then N measured frames; median, p5, p95; GPU timestamps
+//! per pass where the adapter has them, CPU wall time always (each stage
+//! waits for the GPU, so CPU-side technique work is included); each
+//! technique's frame time as a ratio to `none` measured in the same run.
+
+use super::choice_label;
+use crate::frame::HeadlessFrame;
+use crate::gpu::GpuContext;
+use crate::renderer::{FrameTimings, RenderSettings};
+use crate::scene::{Camera, Light, Scene};
+use crate::technique::{self, TechniqueChoice};
+use anyhow::{Context, Result};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Median and 5th/95th percentiles, milliseconds.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Stat {
+    pub median: f64,
+    pub p5: f64,
+    pub p95: f64,
+}
+
+impl Stat {
+    pub fn of(mut v: Vec<f64>) -> Stat {
+        if v.is_empty() {
+            return Stat::default();
+        }
+        v.sort_by(|a, b| a.total_cmp(b));
+        let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+        Stat {
+            median: q(0.5),
+            p5: q(0.05),
+            p95: q(0.95),
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchRow {
+    pub technique: String,
+    /// Wall time of the whole frame (CPU, waiting for the GPU at each stage).
+    pub frame_ms: Stat,
+    /// Wall time of the visibility-mask stage (includes CPU-side technique work).
+    pub masks_ms: Stat,
+    pub gpu_frame_ms: Option<Stat>,
+    pub gpu_prepass_ms: Option<Stat>,
+    pub gpu_masks_ms: Option<Stat>,
+    pub gpu_lighting_ms: Option<Stat>,
+    /// Median frame time divided by `none`'s median frame time.
+    pub ratio_to_none: f64,
+    pub triangles_drawn: usize,
+    pub caster_triangles: usize,
+    pub shadow_resource_bytes: u64,
+    pub counters: Vec<(String, f64)>,
+}
+
+/// Benchmarks `techniques` (with `none` added first when missing).
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    gpu: &GpuContext,
+    scene: &Scene,
+    camera: &Camera,
+    lights: &[Light],
+    size: (u32, u32),
+    techniques: &[TechniqueChoice],
+    warmup: u32,
+    frames: u32,
+    out: &Path,
+) -> Result<Vec<BenchRow>> {
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let mut list: Vec<TechniqueChoice> = techniques.to_vec();
+    if !list.iter().any(|c| c.family.id == "none") {
+        list.insert(0, technique::resolve("none")?);
+    }
+    let settings = RenderSettings {
+        show_light_icons: false,
+        gpu_timing: true,
+        ..Default::default()
+    };
+    let bar = indicatif::ProgressBar::new((list.len() as u32 * (warmup + frames)) as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{msg:>28} [{bar:30}] {pos}/{len} frames, {elapsed}",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    let mut rows = vec![];
+    for choice in &list {
+        let label = choice_label(choice);
+        bar.set_message(label.clone());
+        let mut hf = HeadlessFrame::new(
+            gpu,
+            scene,
+            &vec![choice.clone(); lights.len().max(1)],
+            size.0,
+            size.1,
+        )?;
+        let mut timings: Vec<FrameTimings> = vec![];
+        for i in 0..warmup + frames {
+            let t = hf.render(gpu, scene, camera, lights, &settings)?;
+            if i >= warmup {
+                timings.push(t);
+            }
+            bar.inc(1);
+        }
+        let gpu_stat = |f: fn(&crate::renderer::GpuPassTimes) -> f64| {
+            let v: Option<Vec<f64>> = timings.iter().map(|t| t.gpu.as_ref().map(f)).collect();
+            v.map(Stat::of)
+        };
+        let mut counters = vec![];
+        for t in &hf.techniques {
+            for (k, v) in t.technique.counters() {
+                counters.push((k.to_string(), v));
+            }
+        }
+        rows.push(BenchRow {
+            technique: label,
+            frame_ms: Stat::of(timings.iter().map(|t| t.total_ms).collect()),
+            masks_ms: Stat::of(timings.iter().map(|t| t.masks_ms).collect()),
+            gpu_frame_ms: gpu_stat(|g| g.total_ms),
+            gpu_prepass_ms: gpu_stat(|g| g.prepass_ms),
+            gpu_masks_ms: gpu_stat(|g| g.masks_ms),
+            gpu_lighting_ms: gpu_stat(|g| g.lighting_ms),
+            ratio_to_none: 0.0,
+            triangles_drawn: hf.scene_gpu.triangle_count,
+            caster_triangles: hf.scene_gpu.caster_triangle_count,
+            shadow_resource_bytes: hf
+                .techniques
+                .iter()
+                .map(|t| t.technique.resource_bytes())
+                .sum(),
+            counters,
+        });
+    }
+    bar.finish_and_clear();
+    let none_ms = rows
+        .iter()
+        .find(|r| r.technique.starts_with("none:"))
+        .map(|r| r.frame_ms.median)
+        .unwrap_or(f64::NAN);
+    for r in &mut rows {
+        r.ratio_to_none = r.frame_ms.median / none_ms;
+    }
+    let meta = serde_json::json!({
+        "scene": scene.name,
+        "size": {"width": size.0, "height": size.1},
+        "camera": camera,
+        "lights": lights,
+        "warmup_frames": warmup,
+        "measured_frames": frames,
+        "adapter": gpu.adapter_summary(),
+        "gpu_timestamps": gpu.timestamps,
+    });
+    std::fs::write(
+        out.join("bench.json"),
+        serde_json::to_string_pretty(&serde_json::json!({"meta": meta, "rows": rows}))?,
+    )?;
+    std::fs::write(out.join("bench.csv"), csv(&rows))?;
+    std::fs::write(out.join("bench.md"), markdown(scene, &meta, &rows))?;
+    Ok(rows)
+}
+
+fn opt(s: &Option<Stat>) -> String {
+    s.map_or("-".into(), |s| format!("{:.2}", s.median))
+}
+
+fn csv(rows: &[BenchRow]) -> String {
+    let mut s = String::from(
+        "technique,frame_ms_median,frame_ms_p5,frame_ms_p95,masks_ms_median,gpu_frame_ms_median,gpu_prepass_ms_median,gpu_masks_ms_median,gpu_lighting_ms_median,ratio_to_none,triangles_drawn,caster_triangles,shadow_resource_bytes\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{:.3},{},{},{}",
+            r.technique,
+            r.frame_ms.median,
+            r.frame_ms.p5,
+            r.frame_ms.p95,
+            r.masks_ms.median,
+            opt(&r.gpu_frame_ms),
+            opt(&r.gpu_prepass_ms),
+            opt(&r.gpu_masks_ms),
+            opt(&r.gpu_lighting_ms),
+            r.ratio_to_none,
+            r.triangles_drawn,
+            r.caster_triangles,
+            r.shadow_resource_bytes
+        );
+    }
+    s
+}
+
+fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[BenchRow]) -> String {
+    let mut s = format!(
+        "# Timings on `{}`\n\n{} × {}, adapter {}, {} warm-up + {} measured frames. Frame = wall time (ms) of prepass + masks + lighting, each waited for; GPU = timestamp queries.\n\n",
+        scene.name,
+        meta["size"]["width"],
+        meta["size"]["height"],
+        meta["adapter"].as_str().unwrap_or(""),
+        meta["warmup_frames"],
+        meta["measured_frames"]
+    );
+    s += "| technique | frame median | p5 | p95 | masks (wall) | GPU frame | GPU prepass | GPU masks | GPU lighting | × none | triangles | casters | shadow bytes |\n";
+    s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "| `{}` | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | {} | {} | {:.2} | {} | {} | {} |",
+            r.technique,
+            r.frame_ms.median,
+            r.frame_ms.p5,
+            r.frame_ms.p95,
+            r.masks_ms.median,
+            opt(&r.gpu_frame_ms),
+            opt(&r.gpu_prepass_ms),
+            opt(&r.gpu_masks_ms),
+            opt(&r.gpu_lighting_ms),
+            r.ratio_to_none,
+            r.triangles_drawn,
+            r.caster_triangles,
+            r.shadow_resource_bytes
+        );
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn percentiles_of_a_known_series() {
+        let s = Stat::of((1..=101).map(f64::from).collect());
+        assert_eq!((s.median, s.p5, s.p95), (51.0, 6.0, 96.0));
+        assert_eq!(Stat::of(vec![]).median, 0.0);
+    }
+}

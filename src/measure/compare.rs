@@ -1,0 +1,235 @@
+//! `shadowlab compare`: every technique on the same frame against the
+//! `raytraced` reference, over pixels that show shadow-receiving geometry
+//! facing the light (N·L > 0).
+
+use super::quality::{self, FlipStats, MaskMetrics};
+use super::{choice_label, file_stem};
+use crate::frame::{self, FrameImages, HeadlessFrame};
+use crate::gpu::GpuContext;
+use crate::renderer::{RenderSettings, TechniqueInstance};
+use crate::scene::{Camera, Light, LightType, Scene};
+use crate::technique::TechniqueChoice;
+use anyhow::{Context, Result};
+use glam::Vec3;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// One technique's quality for one light.
+#[derive(Clone, Debug, Serialize)]
+pub struct QualityRow {
+    pub technique: String,
+    pub light: usize,
+    pub mask: MaskMetrics,
+    pub flip: FlipStats,
+    pub frame_ms: f64,
+    pub image: String,
+    pub heatmap: String,
+}
+
+/// Per light, the pixels that count: geometry drawn, receives shadows,
+/// geometric normal facing the light.
+pub fn considered_pixels(
+    gpu: &GpuContext,
+    hf: &HeadlessFrame,
+    lights: &[Light],
+) -> Result<Vec<Vec<bool>>> {
+    let pos = gpu.read_texture(&hf.frame.gbuffer_position, 0, 16)?;
+    let nrm = gpu.read_texture(&hf.frame.gbuffer_normal, 0, 8)?;
+    let pos: &[[f32; 4]] = bytemuck::cast_slice(&pos);
+    let nrm: &[[half::f16; 4]] = bytemuck::cast_slice(&nrm);
+    Ok(lights
+        .iter()
+        .map(|l| {
+            pos.iter()
+                .zip(nrm)
+                .map(|(p, n)| {
+                    let (pv, nv) = (
+                        Vec3::new(p[0], p[1], p[2]),
+                        Vec3::new(n[0].to_f32(), n[1].to_f32(), n[2].to_f32()),
+                    );
+                    let to_light = match l.kind {
+                        LightType::Directional => -l.direction,
+                        _ => l.position - pv,
+                    };
+                    p[3] > 0.5 && n[3].to_f32() > 0.5 && nv.dot(to_light) > 0.0
+                })
+                .collect()
+        })
+        .collect())
+}
+
+fn render_with(
+    gpu: &GpuContext,
+    hf: &mut HeadlessFrame,
+    scene: &Scene,
+    camera: &Camera,
+    lights: &[Light],
+    settings: &RenderSettings,
+    choice: &TechniqueChoice,
+) -> Result<(FrameImages, f64)> {
+    hf.techniques = (0..lights.len().max(1))
+        .map(|_| TechniqueInstance::new(gpu, choice.clone()))
+        .collect::<Result<_>>()?;
+    let t = hf.render(gpu, scene, camera, lights, settings)?;
+    Ok((frame::read_back(gpu, &hf.frame, lights.len())?, t.total_ms))
+}
+
+/// Renders the reference and every technique, writes images, heatmaps and
+/// `quality.{md,csv,json}` into `out`, and returns the rows.
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    gpu: &GpuContext,
+    scene: &Scene,
+    camera: &Camera,
+    lights: &[Light],
+    size: (u32, u32),
+    techniques: &[TechniqueChoice],
+    reference: &TechniqueChoice,
+    out: &Path,
+) -> Result<Vec<QualityRow>> {
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    if lights.is_empty() {
+        log::warn!("scene has no light: every technique is trivially exact");
+    }
+    let settings = RenderSettings {
+        show_light_icons: false,
+        ..Default::default()
+    };
+    let (w, h) = size;
+    let mut hf = HeadlessFrame::new(gpu, scene, &[reference.clone()], w, h)?;
+    let (ref_img, ref_ms) = render_with(gpu, &mut hf, scene, camera, lights, &settings, reference)?;
+    frame::write_images(&out.join("reference"), &ref_img)?;
+    let considered = considered_pixels(gpu, &hf, lights)?;
+    let mut rows = vec![];
+    for choice in techniques {
+        let label = choice_label(choice);
+        let stem = file_stem(&label);
+        let (img, ms) = render_with(gpu, &mut hf, scene, camera, lights, &settings, choice)?;
+        let image_name = format!("{stem}.png");
+        image::save_buffer(
+            out.join(&image_name),
+            &img.color,
+            w,
+            h,
+            image::ExtendedColorType::Rgba8,
+        )?;
+        let flip = quality::flip(&ref_img.color, &img.color, w, h);
+        for (li, cons) in considered.iter().enumerate() {
+            let mask = quality::mask_metrics(
+                w as usize,
+                h as usize,
+                cons,
+                &ref_img.masks[li],
+                &img.masks[li],
+            );
+            let heat = quality::heatmap(&ref_img.color, cons, &ref_img.masks[li], &img.masks[li]);
+            let heat_name = if lights.len() > 1 {
+                format!("heatmap-{stem}-light{li}.png")
+            } else {
+                format!("heatmap-{stem}.png")
+            };
+            image::save_buffer(
+                out.join(&heat_name),
+                &heat,
+                w,
+                h,
+                image::ExtendedColorType::Rgba8,
+            )?;
+            rows.push(QualityRow {
+                technique: label.clone(),
+                light: li,
+                mask,
+                flip,
+                frame_ms: ms,
+                image: image_name.clone(),
+                heatmap: heat_name,
+            });
+        }
+    }
+    let meta = serde_json::json!({
+        "scene": scene.name,
+        "size": {"width": w, "height": h},
+        "camera": camera,
+        "lights": lights,
+        "reference": choice_label(reference),
+        "reference_frame_ms": ref_ms,
+        "adapter": gpu.adapter_summary(),
+        "pixels": "considered = geometry that receives shadows with its geometric normal facing the light (N·L > 0); percentages are of considered pixels; edge = within 2 px of a reference shadow boundary",
+    });
+    std::fs::write(
+        out.join("quality.json"),
+        serde_json::to_string_pretty(&serde_json::json!({"meta": meta, "rows": rows}))?,
+    )?;
+    std::fs::write(out.join("quality.csv"), csv(&rows))?;
+    std::fs::write(out.join("quality.md"), markdown(scene, &meta, &rows))?;
+    Ok(rows)
+}
+
+fn csv(rows: &[QualityRow]) -> String {
+    let mut s = String::from(
+        "technique,light,considered_pixels,reference_shadowed_pct,false_shadow_pct,false_lit_pct,total_pct,edge_false_shadow_pct,edge_false_lit_pct,interior_false_shadow_pct,interior_false_lit_pct,mean_abs_error,rms_error,flip_mean,flip_p95,flip_p99,frame_ms\n",
+    );
+    for r in rows {
+        let m = &r.mask;
+        let _ = writeln!(
+            s,
+            "{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5},{:.5},{:.5},{:.2}",
+            r.technique,
+            r.light,
+            m.considered_pixels,
+            m.reference_shadowed_pct,
+            m.all.false_shadow_pct,
+            m.all.false_lit_pct,
+            m.all.total_pct,
+            m.edge.false_shadow_pct,
+            m.edge.false_lit_pct,
+            m.interior.false_shadow_pct,
+            m.interior.false_lit_pct,
+            m.mean_abs_error,
+            m.rms_error,
+            r.flip.mean,
+            r.flip.p95,
+            r.flip.p99,
+            r.frame_ms
+        );
+    }
+    s
+}
+
+fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[QualityRow]) -> String {
+    let mut s = format!(
+        "# Quality on `{}` against `{}`\n\n{} × {}, adapter {}. Mismatch at visibility 0.5, in % of considered pixels ({}).\n\n",
+        scene.name,
+        meta["reference"].as_str().unwrap_or(""),
+        meta["size"]["width"],
+        meta["size"]["height"],
+        meta["adapter"].as_str().unwrap_or(""),
+        meta["pixels"].as_str().unwrap_or("")
+    );
+    s += "| technique | light | ref. shadowed % | false shadow % | false lit % | total % | edge FS % | edge FL % | interior FS % | interior FL % | MAE | RMSE | FLIP mean | FLIP p95 | FLIP p99 |\n";
+    s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for r in rows {
+        let m = &r.mask;
+        let _ = writeln!(
+            s,
+            "| `{}` | {} | {:.2} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} |",
+            r.technique,
+            r.light,
+            m.reference_shadowed_pct,
+            m.all.false_shadow_pct,
+            m.all.false_lit_pct,
+            m.all.total_pct,
+            m.edge.false_shadow_pct,
+            m.edge.false_lit_pct,
+            m.interior.false_shadow_pct,
+            m.interior.false_lit_pct,
+            m.mean_abs_error,
+            m.rms_error,
+            r.flip.mean,
+            r.flip.p95,
+            r.flip.p99
+        );
+    }
+    s
+}

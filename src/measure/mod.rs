@@ -1,0 +1,136 @@
+//! The instruments: `compare` (quality against the ray-traced reference)
+//! and `bench` (frame and pass timings, ratios to `none`).
+
+pub mod bench;
+pub mod compare;
+pub mod quality;
+
+use crate::technique::{self, FAMILIES, TechniqueChoice};
+use anyhow::{Result, anyhow, bail};
+
+/// Parses a technique list: `all`, or comma-separated ids, each optionally
+/// with parameter values in brackets: `none,raytraced:reference[samples=64]`.
+/// `all` is every preset of every family except the reference itself.
+pub fn parse_technique_list(spec: &str) -> Result<Vec<TechniqueChoice>> {
+    if spec.trim() == "all" {
+        return FAMILIES
+            .iter()
+            .filter(|f| f.id != "raytraced")
+            .flat_map(|f| {
+                f.presets
+                    .iter()
+                    .map(move |p| format!("{}:{}", f.id, p.name))
+            })
+            .map(|id| technique::resolve(&id))
+            .collect();
+    }
+    let mut items = vec![];
+    let (mut depth, mut start) = (0i32, 0usize);
+    for (i, c) in spec.char_indices() {
+        match c {
+            '[' => depth += 1,
+            ']' => depth -= 1,
+            ',' if depth == 0 => {
+                items.push(&spec[start..i]);
+                start = i + 1;
+            }
+            _ => {}
+        }
+        if depth < 0 {
+            bail!("unbalanced ']' in technique list '{spec}'");
+        }
+    }
+    if depth != 0 {
+        bail!("unbalanced '[' in technique list '{spec}'");
+    }
+    items.push(&spec[start..]);
+    items
+        .into_iter()
+        .map(|item| {
+            let item = item.trim();
+            if item.is_empty() {
+                bail!("empty entry in technique list '{spec}'");
+            }
+            let (id, params) = match item.split_once('[') {
+                Some((id, rest)) => (
+                    id,
+                    rest.strip_suffix(']')
+                        .ok_or_else(|| anyhow!("expected ']' at the end of '{item}'"))?,
+                ),
+                None => (item, ""),
+            };
+            let mut c = technique::resolve(id)?;
+            let sets: Vec<String> = params
+                .split(',')
+                .filter(|s| !s.trim().is_empty())
+                .map(String::from)
+                .collect();
+            technique::apply_settings(&mut c.params, &sets)?;
+            Ok(c)
+        })
+        .collect()
+}
+
+/// A label for a technique choice: its id plus any parameter that differs
+/// from the preset, e.g. `raytraced:default[samples=64]`.
+pub fn choice_label(c: &TechniqueChoice) -> String {
+    let preset = technique::resolve(&c.id()).expect("a resolved id resolves again");
+    let diffs: Vec<String> = c
+        .params
+        .specs
+        .iter()
+        .zip(c.params.values.iter().zip(&preset.params.values))
+        .filter(|(_, (a, b))| a != b)
+        .map(|(s, (a, _))| format!("{}={}", s.name, s.format(*a)))
+        .collect();
+    if diffs.is_empty() {
+        c.id()
+    } else {
+        format!("{}[{}]", c.id(), diffs.join(","))
+    }
+}
+
+/// A file-name-safe form of a label.
+pub fn file_stem(label: &str) -> String {
+    label
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '.' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn technique_lists_parse_with_parameters() {
+        let l =
+            parse_technique_list("none, raytraced:reference[samples=64,offset_ulps=100]").unwrap();
+        assert_eq!(l.len(), 2);
+        assert_eq!(l[1].params.get("samples"), 64.0);
+        assert_eq!(
+            choice_label(&l[1]),
+            "raytraced:reference[samples=64,offset_ulps=100]"
+        );
+        assert_eq!(choice_label(&l[0]), "none:default");
+        assert!(parse_technique_list("none,,raytraced").is_err());
+        assert!(parse_technique_list("none[").is_err());
+        assert!(
+            parse_technique_list("bogus")
+                .err()
+                .unwrap()
+                .to_string()
+                .contains("valid")
+        );
+        assert!(parse_technique_list("raytraced[samples=0]").is_err());
+        let all = parse_technique_list("all").unwrap();
+        assert!(all.iter().all(|c| c.family.id != "raytraced") && !all.is_empty());
+        assert_eq!(file_stem("a:b[c=1]"), "a_b_c_1_");
+    }
+}

@@ -1,0 +1,251 @@
+//! Mask and image quality metrics against the ray-traced reference.
+
+use serde::Serialize;
+
+/// Mismatch counts as percentages of the considered pixels.
+#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
+pub struct Mismatch {
+    /// Technique says shadow (< 0.5), reference says lit.
+    pub false_shadow_pct: f64,
+    /// Technique says lit, reference says shadow.
+    pub false_lit_pct: f64,
+    pub total_pct: f64,
+}
+
+/// Quality of one technique's mask for one light.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct MaskMetrics {
+    /// Pixels showing shadow-receiving geometry that faces the light.
+    pub considered_pixels: usize,
+    /// Of those, pixels the reference puts in shadow (visibility < 0.5).
+    pub reference_shadowed_pct: f64,
+    /// Pixels within 2 px of a reference shadow boundary.
+    pub edge_pixels: usize,
+    pub all: Mismatch,
+    /// Mismatches inside the edge band (percent of all considered pixels).
+    pub edge: Mismatch,
+    /// Mismatches outside the edge band (percent of all considered pixels).
+    pub interior: Mismatch,
+    pub mean_abs_error: f64,
+    pub rms_error: f64,
+}
+
+/// Pixels within Chebyshev distance `radius` of a considered pixel whose
+/// reference class (shadow/lit at 0.5) differs.
+pub fn edge_band(
+    width: usize,
+    height: usize,
+    considered: &[bool],
+    reference: &[f32],
+    radius: usize,
+) -> Vec<bool> {
+    let shadow = |i: usize| reference[i] < 0.5;
+    let mut band = vec![false; width * height];
+    for y in 0..height {
+        for x in 0..width {
+            let i = y * width + x;
+            if !considered[i] {
+                continue;
+            }
+            let (x0, x1) = (x.saturating_sub(radius), (x + radius).min(width - 1));
+            let (y0, y1) = (y.saturating_sub(radius), (y + radius).min(height - 1));
+            band[i] = (y0..=y1).any(|yy| {
+                (x0..=x1).any(|xx| {
+                    let j = yy * width + xx;
+                    considered[j] && shadow(j) != shadow(i)
+                })
+            });
+        }
+    }
+    band
+}
+
+/// Compares `test` against `reference` over the `considered` pixels.
+pub fn mask_metrics(
+    width: usize,
+    height: usize,
+    considered: &[bool],
+    reference: &[f32],
+    test: &[f32],
+) -> MaskMetrics {
+    let band = edge_band(width, height, considered, reference, 2);
+    let (mut n, mut ref_shadow, mut edge_n) = (0usize, 0usize, 0usize);
+    let mut counts = [[0usize; 2]; 2]; // [edge?][false_shadow, false_lit]
+    let (mut abs, mut sq) = (0.0f64, 0.0f64);
+    for i in 0..width * height {
+        if !considered[i] {
+            continue;
+        }
+        n += 1;
+        let (r, t) = (reference[i] < 0.5, test[i] < 0.5);
+        ref_shadow += r as usize;
+        edge_n += band[i] as usize;
+        if t && !r {
+            counts[band[i] as usize][0] += 1;
+        } else if r && !t {
+            counts[band[i] as usize][1] += 1;
+        }
+        let d = (test[i] - reference[i]) as f64;
+        abs += d.abs();
+        sq += d * d;
+    }
+    let pct = |c: usize| {
+        if n == 0 {
+            0.0
+        } else {
+            100.0 * c as f64 / n as f64
+        }
+    };
+    let mm = |fs: usize, fl: usize| Mismatch {
+        false_shadow_pct: pct(fs),
+        false_lit_pct: pct(fl),
+        total_pct: pct(fs + fl),
+    };
+    MaskMetrics {
+        considered_pixels: n,
+        reference_shadowed_pct: pct(ref_shadow),
+        edge_pixels: edge_n,
+        all: mm(counts[0][0] + counts[1][0], counts[0][1] + counts[1][1]),
+        edge: mm(counts[1][0], counts[1][1]),
+        interior: mm(counts[0][0], counts[0][1]),
+        mean_abs_error: if n == 0 { 0.0 } else { abs / n as f64 },
+        rms_error: if n == 0 { 0.0 } else { (sq / n as f64).sqrt() },
+    }
+}
+
+/// FLIP statistics over all pixels of the frame.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct FlipStats {
+    pub mean: f64,
+    pub p95: f64,
+    pub p99: f64,
+}
+
+/// ꟻLIP (the `nv-flip` crate) between two sRGB RGBA8 images of one size.
+pub fn flip(reference_rgba: &[u8], test_rgba: &[u8], width: u32, height: u32) -> FlipStats {
+    let rgb = |rgba: &[u8]| -> Vec<u8> {
+        rgba.chunks_exact(4)
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .collect()
+    };
+    let r = nv_flip::FlipImageRgb8::with_data(width, height, &rgb(reference_rgba));
+    let t = nv_flip::FlipImageRgb8::with_data(width, height, &rgb(test_rgba));
+    let err = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    let mut v = err.to_vec();
+    v.sort_by(|a, b| a.total_cmp(b));
+    let pick = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize] as f64;
+    FlipStats {
+        mean: v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64,
+        p95: pick(0.95),
+        p99: pick(0.99),
+    }
+}
+
+/// Heatmap: false shadow red, false lit blue, agreeing pixels the grey
+/// luminance of the reference image.
+pub fn heatmap(
+    reference_rgba: &[u8],
+    considered: &[bool],
+    reference: &[f32],
+    test: &[f32],
+) -> Vec<u8> {
+    reference_rgba
+        .chunks_exact(4)
+        .enumerate()
+        .flat_map(|(i, p)| {
+            let (r, t) = (reference[i] < 0.5, test[i] < 0.5);
+            if considered[i] && t && !r {
+                [230, 30, 30, 255]
+            } else if considered[i] && r && !t {
+                [40, 80, 240, 255]
+            } else {
+                let l = (0.2126 * p[0] as f32 + 0.7152 * p[1] as f32 + 0.0722 * p[2] as f32) as u8;
+                [l, l, l, 255]
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 10×10 frame whose left half is in shadow in the reference.
+    fn half_shadow() -> (Vec<bool>, Vec<f32>) {
+        let reference: Vec<f32> = (0..100)
+            .map(|i| if i % 10 < 5 { 0.0 } else { 1.0 })
+            .collect();
+        (vec![true; 100], reference)
+    }
+
+    #[test]
+    fn identical_masks_have_no_error() {
+        let (c, r) = half_shadow();
+        let m = mask_metrics(10, 10, &c, &r, &r);
+        assert_eq!(m.all, Mismatch::default());
+        assert_eq!(m.mean_abs_error, 0.0);
+        assert_eq!(m.reference_shadowed_pct, 50.0);
+        // Columns 3..=6 lie within 2 px of the boundary between 4 and 5.
+        assert_eq!(m.edge_pixels, 40);
+    }
+
+    #[test]
+    fn all_lit_test_reports_the_shadowed_fraction_as_false_lit() {
+        let (c, r) = half_shadow();
+        let lit = vec![1.0; 100];
+        let m = mask_metrics(10, 10, &c, &r, &lit);
+        assert_eq!(m.all.false_lit_pct, 50.0);
+        assert_eq!(m.all.false_shadow_pct, 0.0);
+        // Shadowed columns 0..=4, of which 3 and 4 are in the edge band.
+        assert_eq!(m.edge.false_lit_pct, 20.0);
+        assert_eq!(m.interior.false_lit_pct, 30.0);
+        assert!((m.mean_abs_error - 0.5).abs() < 1e-12);
+        assert!((m.rms_error - 0.5f64.sqrt()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn shifted_boundary_is_an_edge_error_and_unconsidered_pixels_are_ignored() {
+        let (mut c, r) = half_shadow();
+        // The test's shadow reaches one column further: column 5 false shadow.
+        let t: Vec<f32> = (0..100)
+            .map(|i| if i % 10 < 6 { 0.0 } else { 1.0 })
+            .collect();
+        let m = mask_metrics(10, 10, &c, &r, &t);
+        assert_eq!(m.all.false_shadow_pct, 10.0);
+        assert_eq!(m.edge.false_shadow_pct, 10.0);
+        assert_eq!(m.interior.total_pct, 0.0);
+        // Ignore the first row: 90 pixels, 9 mismatches.
+        c[..10].fill(false);
+        let m = mask_metrics(10, 10, &c, &r, &t);
+        assert_eq!(m.considered_pixels, 90);
+        assert!((m.all.false_shadow_pct - 10.0).abs() < 1e-9);
+        // Soft values: 0.25 everywhere against 0/1.
+        let soft = vec![0.25; 100];
+        let m = mask_metrics(10, 10, &vec![true; 100], &r, &soft);
+        assert!(
+            (m.mean_abs_error - 0.5).abs() < 1e-9,
+            "{}",
+            m.mean_abs_error
+        );
+        assert_eq!(m.all.false_shadow_pct, 50.0);
+    }
+
+    #[test]
+    fn flip_of_identical_images_is_zero_and_grows_with_difference() {
+        let a: Vec<u8> = (0..64 * 64)
+            .flat_map(|i| [(i % 251) as u8, 100, 50, 255])
+            .collect();
+        assert_eq!(flip(&a, &a, 64, 64).mean, 0.0);
+        let b: Vec<u8> = a
+            .chunks_exact(4)
+            .flat_map(|p| [p[0] / 2, p[1], p[2], 255])
+            .collect();
+        let c: Vec<u8> = a
+            .chunks_exact(4)
+            .flat_map(|p| [p[0] / 8, p[1], p[2], 255])
+            .collect();
+        let (fb, fc) = (flip(&a, &b, 64, 64), flip(&a, &c, 64, 64));
+        assert!(fb.mean > 0.0 && fc.mean > fb.mean);
+        assert!(fc.p99 >= fc.p95);
+    }
+}

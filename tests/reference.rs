@@ -1,0 +1,243 @@
+//! The ray-traced reference against analytic shadows, and `compare` of
+//! `none` against it.
+
+mod common;
+use common::*;
+use glam::{Mat4, Vec3, Vec4};
+use shadowlab::frame::{self, HeadlessFrame};
+use shadowlab::measure;
+use shadowlab::renderer::RenderSettings;
+use shadowlab::scene::{Camera, Light, LightArea, Material, Scene, shapes};
+use shadowlab::technique;
+
+/// A floor and a 1×1 square occluder at height `h` facing down (so that
+/// with back-face culling a camera above sees the floor through it, while
+/// shadow rays, which hit both sides, are blocked).
+fn square_over_plane(h: f32, light: Light) -> Scene {
+    let mut s = Scene::new("square");
+    let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
+    let floor = s.add_mesh(shapes::plane(20.0, 20.0, 4));
+    s.add_object("Floor", floor, grey, Mat4::IDENTITY);
+    let quad = s.add_mesh(shapes::plane(1.0, 1.0, 1));
+    s.add_object(
+        "Square",
+        quad,
+        grey,
+        Mat4::from_translation(Vec3::new(0.0, h, 0.0))
+            * Mat4::from_rotation_x(std::f32::consts::PI),
+    );
+    s.lights = vec![light];
+    s.finalize().unwrap();
+    s
+}
+
+/// The floor point (y = 0) seen through pixel centre (x + 0.5, y + 0.5),
+/// using the conventions documented in frame.json.
+fn floor_point(view_proj: Mat4, w: u32, h: u32, x: u32, y: u32) -> Vec3 {
+    floor_point_at(view_proj, w, h, x as f32 + 0.5, y as f32 + 0.5)
+}
+
+/// The floor point under continuous pixel coordinates (fx, fy).
+fn floor_point_at(view_proj: Mat4, w: u32, h: u32, fx: f32, fy: f32) -> Vec3 {
+    let inv = view_proj.inverse();
+    let ndc_x = 2.0 * fx / w as f32 - 1.0;
+    let ndc_y = 1.0 - 2.0 * fy / h as f32;
+    let a = inv * Vec4::new(ndc_x, ndc_y, 0.0, 1.0);
+    let b = inv * Vec4::new(ndc_x, ndc_y, 1.0, 1.0);
+    let (a, b) = (a.truncate() / a.w, b.truncate() / b.w);
+    let t = a.y / (a.y - b.y);
+    a + (b - a) * t
+}
+
+fn render_reference(scene: &Scene, camera: &Camera, id: &str, w: u32, h: u32) -> (Vec<f32>, Mat4) {
+    let gpu = gpu();
+    let choice = technique::resolve(id).unwrap();
+    let mut hf = HeadlessFrame::new(gpu, scene, &[choice], w, h).unwrap();
+    let settings = RenderSettings {
+        show_light_icons: false,
+        ..Default::default()
+    };
+    hf.render(gpu, scene, camera, &scene.lights, &settings)
+        .unwrap();
+    let img = frame::read_back(gpu, &hf.frame, 1).unwrap();
+    (img.masks[0].clone(), hf.frame.uniform.view_proj)
+}
+
+#[test]
+fn hard_shadow_matches_the_projected_square() {
+    // Point light at height 4 over a square at height 1: the shadow is the
+    // square scaled by 4 / (4 − 1) about the light's foot, offset by its x, z.
+    let light_pos = Vec3::new(0.3, 4.0, -0.2);
+    let scene = square_over_plane(1.0, Light::point(light_pos, 1.0));
+    let camera = Camera {
+        up: Vec3::NEG_Z,
+        ..Camera::new(Vec3::new(0.0, 6.0, 0.0), Vec3::ZERO)
+    };
+    let (w, h) = (200, 200);
+    let (mask, vp) = render_reference(&scene, &camera, "raytraced", w, h);
+    let shadowed = |p: Vec3| {
+        // A floor point is shadowed iff the segment to the light crosses the
+        // square: at height 1 the segment is at light + (p − light)·(3/4).
+        let c = light_pos + (p - light_pos) * (3.0 / 4.0);
+        c.x.abs() < 0.5 && c.z.abs() < 0.5
+    };
+    let (mut checked, mut crossed, mut in_shadow) = (0, 0, 0);
+    for y in 0..h {
+        for x in 0..w {
+            // Pixels the boundary crosses: the classes at the pixel's corners differ.
+            let corners: Vec<bool> = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+                .iter()
+                .map(|&(dx, dy)| shadowed(floor_point_at(vp, w, h, x as f32 + dx, y as f32 + dy)))
+                .collect();
+            if corners.iter().any(|&c| c != corners[0]) {
+                crossed += 1;
+                continue;
+            }
+            let expect = shadowed(floor_point(vp, w, h, x, y));
+            let got = mask[(y * w + x) as usize];
+            assert_eq!(got < 0.5, expect, "pixel ({x}, {y}): visibility {got}");
+            assert!(
+                got == 0.0 || got == 1.0,
+                "hard light gives binary visibility"
+            );
+            checked += 1;
+            in_shadow += expect as usize;
+        }
+    }
+    assert!(
+        in_shadow > 1000 && crossed < 2000 && checked > 35000,
+        "{in_shadow} {crossed} {checked}"
+    );
+}
+
+#[test]
+fn area_light_umbra_and_penumbra_match_similar_triangles() {
+    // Sphere light radius R at height H, square half-size e at height hh:
+    // k = H / (H − hh); umbra half-width e·k − R(k − 1); penumbra width 2R(k − 1).
+    let (big_h, hh, r, e) = (5.0f32, 2.5f32, 0.5f32, 0.5f32);
+    let mut light = Light::point(Vec3::new(0.0, big_h, 0.0), 1.0);
+    light.area = Some(LightArea::Sphere { radius: r });
+    let scene = square_over_plane(hh, light);
+    let (w, h) = (320, 16);
+    let half_width = 2.2f32;
+    let aspect = w as f32 / h as f32;
+    let camera = Camera {
+        up: Vec3::NEG_Z,
+        fov_y_deg: 2.0 * ((half_width / 6.0) / aspect).atan().to_degrees(),
+        ..Camera::new(Vec3::new(0.0, 6.0, 0.0), Vec3::ZERO)
+    };
+    let (mask, vp) = render_reference(&scene, &camera, "raytraced:reference", w, h);
+    let row = h / 2;
+    let px = (floor_point(vp, w, h, 1, row).x - floor_point(vp, w, h, 0, row).x).abs();
+    let k = big_h / (big_h - hh);
+    let umbra_expect = 2.0 * (e * k - r * (k - 1.0));
+    let penumbra_expect = 2.0 * r * (k - 1.0);
+    let vis: Vec<f32> = (0..w).map(|x| mask[(row * w + x) as usize]).collect();
+    let umbra = vis.iter().filter(|&&v| v == 0.0).count() as f32 * px;
+    let penumbra = vis.iter().filter(|&&v| v > 0.0 && v < 1.0).count() as f32 * px / 2.0;
+    assert!(
+        (umbra - umbra_expect).abs() <= 2.0 * px,
+        "umbra {umbra} vs {umbra_expect} (pixel {px})"
+    );
+    assert!(
+        (penumbra - penumbra_expect).abs() <= 2.0 * px,
+        "penumbra {penumbra} vs {penumbra_expect} (pixel {px})"
+    );
+    // Visibility grows monotonically (within sampling noise) from the umbra outwards.
+    let centre = (w / 2) as usize;
+    for x in centre..w as usize - 1 {
+        assert!(
+            vis[x + 1] + 0.05 >= vis[x],
+            "x {x}: {} then {}",
+            vis[x],
+            vis[x + 1]
+        );
+    }
+}
+
+#[test]
+fn a_scene_without_casters_is_fully_lit() {
+    let mut scene = square_over_plane(1.0, Light::point(Vec3::new(0.0, 4.0, 0.0), 1.0));
+    for o in &mut scene.objects {
+        o.casts_shadow = false;
+    }
+    let camera = Camera::new(Vec3::new(3.0, 5.0, 3.0), Vec3::ZERO);
+    let (mask, _) = render_reference(&scene, &camera, "raytraced", 64, 64);
+    assert!(mask.iter().all(|&v| v == 1.0));
+}
+
+#[test]
+fn compare_none_reports_the_reference_shadow_as_false_lit() {
+    let scene = shadowlab::scene::builtin::by_name("room").unwrap().unwrap();
+    let out = tmpdir("compare");
+    let none = measure::parse_technique_list("none").unwrap();
+    let reference = technique::resolve("raytraced").unwrap();
+    let rows = measure::compare::run(
+        gpu(),
+        &scene,
+        &scene.camera,
+        &scene.lights,
+        (160, 90),
+        &none,
+        &reference,
+        &out,
+    )
+    .unwrap();
+    assert_eq!(rows.len(), 1);
+    let m = &rows[0].mask;
+    assert!(
+        m.reference_shadowed_pct > 1.0,
+        "the room has shadows: {}",
+        m.reference_shadowed_pct
+    );
+    assert_eq!(m.all.false_shadow_pct, 0.0);
+    assert!((m.all.false_lit_pct - m.reference_shadowed_pct).abs() < 1e-9);
+    assert!(rows[0].flip.mean > 0.0);
+    for f in [
+        "quality.md",
+        "quality.csv",
+        "quality.json",
+        "heatmap-none_default.png",
+        "none_default.png",
+        "reference/image.png",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("quality.json")).unwrap()).unwrap();
+    assert_eq!(j["rows"][0]["technique"], "none:default");
+}
+
+#[test]
+fn bench_writes_ratios_to_none() {
+    let scene = shadowlab::scene::builtin::by_name("floating")
+        .unwrap()
+        .unwrap();
+    let out = tmpdir("bench");
+    let list = measure::parse_technique_list("raytraced").unwrap();
+    let rows = measure::bench::run(
+        gpu(),
+        &scene,
+        &scene.camera,
+        &scene.lights,
+        (96, 54),
+        &list,
+        1,
+        3,
+        &out,
+    )
+    .unwrap();
+    assert_eq!(rows.len(), 2, "none is added");
+    assert_eq!(rows[0].technique, "none:default");
+    assert!((rows[0].ratio_to_none - 1.0).abs() < 1e-12);
+    assert!(rows[1].frame_ms.median > 0.0 && rows[1].shadow_resource_bytes > 0);
+    assert!(
+        rows[1]
+            .counters
+            .iter()
+            .any(|(k, v)| k == "rays" && *v > 0.0)
+    );
+    for f in ["bench.md", "bench.csv", "bench.json"] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+}
