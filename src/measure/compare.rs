@@ -97,7 +97,7 @@ pub fn run(
         ..Default::default()
     };
     let (w, h) = size;
-    let mut hf = HeadlessFrame::new(gpu, scene, &[reference.clone()], w, h)?;
+    let mut hf = HeadlessFrame::new(gpu, scene, std::slice::from_ref(reference), w, h)?;
     let (ref_img, ref_ms) = render_with(gpu, &mut hf, scene, camera, lights, &settings, reference)?;
     frame::write_images(&out.join("reference"), &ref_img)?;
     let considered = considered_pixels(gpu, &hf, lights)?;

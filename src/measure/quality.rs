@@ -221,7 +221,7 @@ mod tests {
         assert!((m.all.false_shadow_pct - 10.0).abs() < 1e-9);
         // Soft values: 0.25 everywhere against 0/1.
         let soft = vec![0.25; 100];
-        let m = mask_metrics(10, 10, &vec![true; 100], &r, &soft);
+        let m = mask_metrics(10, 10, &[true; 100], &r, &soft);
         assert!(
             (m.mean_abs_error - 0.5).abs() < 1e-9,
             "{}",
