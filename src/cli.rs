@@ -470,7 +470,7 @@ fn render(a: RenderArgs) -> Result<()> {
         scene_gpu: &hf.scene_gpu,
         camera: &camera,
         lights: &lights,
-        techniques: hf.techniques.iter().map(|t| &t.choice).collect(),
+        techniques: hf.techniques.iter().collect(),
         settings: &settings,
         frame: &hf.frame,
         timings: &timings,
@@ -503,5 +503,12 @@ fn render(a: RenderArgs) -> Result<()> {
         timings.lighting_ms,
         a.out.display()
     );
+    for (i, t) in hf.techniques.iter().enumerate().take(lights.len()) {
+        let c = t.technique.counters();
+        if !c.is_empty() {
+            let text: Vec<String> = c.iter().map(|(k, v)| format!("{k} {v:.1}")).collect();
+            println!("  light {i}: {}", text.join(", "));
+        }
+    }
     Ok(())
 }

@@ -102,7 +102,7 @@ pub struct FrameRecord<'a> {
     pub scene_gpu: &'a SceneGpu,
     pub camera: &'a Camera,
     pub lights: &'a [Light],
-    pub techniques: Vec<&'a TechniqueChoice>,
+    pub techniques: Vec<&'a TechniqueInstance>,
     pub settings: &'a RenderSettings,
     pub frame: &'a FrameResources,
     pub timings: &'a FrameTimings,
@@ -117,13 +117,18 @@ pub fn frame_json(r: &FrameRecord) -> serde_json::Value {
         "scene_source": r.scene.source,
         "adapter": r.adapter,
         "size": {"width": r.frame.width, "height": r.frame.height},
-        "techniques": r.techniques.iter().enumerate().map(|(i, t)| json!({
-            "light": i,
-            "id": t.id(),
-            "family": t.family.id,
-            "preset": t.preset,
-            "parameters": t.params.to_json(),
-        })).collect::<Vec<_>>(),
+        "techniques": r.techniques.iter().enumerate().map(|(i, inst)| {
+            let t = &inst.choice;
+            json!({
+                "light": i,
+                "id": t.id(),
+                "family": t.family.id,
+                "preset": t.preset,
+                "parameters": t.params.to_json(),
+                "counters": inst.technique.counters().into_iter().collect::<std::collections::BTreeMap<_, _>>(),
+                "resource_bytes": inst.technique.resource_bytes(),
+            })
+        }).collect::<Vec<_>>(),
         "render_settings": r.settings,
         "camera": {
             "eye": r.camera.eye.to_array(),

@@ -56,6 +56,7 @@ pub static FAMILY: Family = Family {
 
 /// BVH over the world-space triangles of a scene's shadow casters.
 pub struct CasterBvh {
+    key: u64,
     bvh: Option<CwBvh>,
     triangles: Vec<Triangle>,
     pub build_ms: f64,
@@ -82,6 +83,7 @@ fn fingerprint(scene: &Scene) -> u64 {
 impl CasterBvh {
     pub fn build(scene: &Scene) -> CasterBvh {
         let t = Instant::now();
+        let key = fingerprint(scene);
         let triangles: Vec<Triangle> = scene
             .world_triangles(|o| o.casts_shadow && !o.shadow_plane)
             .into_iter()
@@ -99,16 +101,21 @@ impl CasterBvh {
             )
         });
         CasterBvh {
+            key,
             bvh,
             triangles,
             build_ms: t.elapsed().as_secs_f64() * 1e3,
         }
     }
 
-    /// The BVH of `scene`'s casters, shared between all users while alive.
-    pub fn for_scene(scene: &Scene) -> Arc<CasterBvh> {
+    /// The BVH of `scene`'s casters, shared between all users while alive;
+    /// `held` is returned as is when it still matches the scene.
+    pub fn for_scene(scene: &Scene, held: Option<&Arc<CasterBvh>>) -> Arc<CasterBvh> {
         static CACHE: Mutex<Vec<(u64, Weak<CasterBvh>)>> = Mutex::new(Vec::new());
         let key = fingerprint(scene);
+        if let Some(h) = held.filter(|h| h.key == key) {
+            return h.clone();
+        }
         let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
         cache.retain(|(_, w)| w.strong_count() > 0);
         if let Some(b) = cache
@@ -306,6 +313,7 @@ pub fn mask_from_gbuffer(
 
 #[derive(Default)]
 pub struct RayTraced {
+    bvh: Option<Arc<CasterBvh>>,
     rays: f64,
     trace_ms: f64,
     build_ms: f64,
@@ -320,7 +328,8 @@ impl ShadowTechnique for RayTraced {
     ) -> Result<()> {
         let gpu = ctx.gpu;
         let frame = ctx.frame;
-        let bvh = CasterBvh::for_scene(ctx.scene);
+        let bvh = CasterBvh::for_scene(ctx.scene, self.bvh.as_ref());
+        self.bvh = Some(bvh.clone());
         self.build_ms = bvh.build_ms;
         self.bvh_bytes = bvh.bytes();
         let pos_raw = gpu.read_texture(&frame.gbuffer_position, 0, 16)?;
