@@ -21,10 +21,33 @@ pub struct QualityRow {
     pub technique: String,
     pub light: usize,
     pub mask: MaskMetrics,
+    /// The same over pixels on a receiver plane (see `planar::receiver_planes`)...
+    pub on_planes: MaskMetrics,
+    /// ...and over the other pixels.
+    pub off_planes: MaskMetrics,
     pub flip: FlipStats,
     pub frame_ms: f64,
     pub image: String,
     pub heatmap: String,
+}
+
+/// Pixels whose visible surface lies on one of the scene's receiver planes.
+pub fn plane_pixels(gpu: &GpuContext, hf: &HeadlessFrame, scene: &Scene) -> Result<Vec<bool>> {
+    let planes = crate::technique::planar::receiver_planes(scene);
+    let tol = scene.bounds().size().length().max(1e-3) * 1e-4;
+    let pos = gpu.read_texture(&hf.frame.gbuffer_position, 0, 16)?;
+    Ok(bytemuck::cast_slice::<u8, [f32; 4]>(&pos)
+        .iter()
+        .map(|p| {
+            p[3] > 0.5
+                && planes.iter().any(|pl| {
+                    pl.equation
+                        .dot(glam::Vec4::new(p[0], p[1], p[2], 1.0))
+                        .abs()
+                        <= tol
+                })
+        })
+        .collect())
 }
 
 /// Per light, the pixels that count: geometry drawn, receives shadows,
@@ -101,6 +124,13 @@ pub fn run(
     let (ref_img, ref_ms) = render_with(gpu, &mut hf, scene, camera, lights, &settings, reference)?;
     frame::write_images(&out.join("reference"), &ref_img)?;
     let considered = considered_pixels(gpu, &hf, lights)?;
+    let on_plane = plane_pixels(gpu, &hf, scene)?;
+    let split = |cons: &[bool], want: bool| -> Vec<bool> {
+        cons.iter()
+            .zip(&on_plane)
+            .map(|(&c, &p)| c && p == want)
+            .collect()
+    };
     let mut rows = vec![];
     for choice in techniques {
         let label = choice_label(choice);
@@ -116,13 +146,18 @@ pub fn run(
         )?;
         let flip = quality::flip(&ref_img.color, &img.color, w, h);
         for (li, cons) in considered.iter().enumerate() {
-            let mask = quality::mask_metrics(
-                w as usize,
-                h as usize,
-                cons,
-                &ref_img.masks[li],
-                &img.masks[li],
-            );
+            let metrics = |c: &[bool]| {
+                quality::mask_metrics(
+                    w as usize,
+                    h as usize,
+                    c,
+                    &ref_img.masks[li],
+                    &img.masks[li],
+                )
+            };
+            let mask = metrics(cons);
+            let on_planes = metrics(&split(cons, true));
+            let off_planes = metrics(&split(cons, false));
             let heat = quality::heatmap(&ref_img.color, cons, &ref_img.masks[li], &img.masks[li]);
             let heat_name = if lights.len() > 1 {
                 format!("heatmap-{stem}-light{li}.png")
@@ -140,6 +175,8 @@ pub fn run(
                 technique: label.clone(),
                 light: li,
                 mask,
+                on_planes,
+                off_planes,
                 flip,
                 frame_ms: ms,
                 image: image_name.clone(),
@@ -229,6 +266,28 @@ fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[QualityRow]) -> Str
             r.flip.mean,
             r.flip.p95,
             r.flip.p99
+        );
+    }
+    s += "\nSplit by receiver planes (the scene's ShadowPlane objects, else its largest planar receiver); % of the pixels of each region.\n\n";
+    s += "| technique | light | plane pixels | plane FS % | plane FL % | plane total % | plane edge % | other pixels | other FS % | other FL % | other total % | other edge % |\n";
+    s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for r in rows {
+        let (p, o) = (&r.on_planes, &r.off_planes);
+        let _ = writeln!(
+            s,
+            "| `{}` | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {} | {:.3} | {:.3} | {:.3} | {:.3} |",
+            r.technique,
+            r.light,
+            p.considered_pixels,
+            p.all.false_shadow_pct,
+            p.all.false_lit_pct,
+            p.all.total_pct,
+            p.edge.total_pct,
+            o.considered_pixels,
+            o.all.false_shadow_pct,
+            o.all.false_lit_pct,
+            o.all.total_pct,
+            o.edge.total_pct
         );
     }
     s

@@ -16,6 +16,8 @@ struct LightGpu {
     // x cos(outer cone), y area radius or width, z area height,
     // w area shape (0 none, 1 sphere, 2 rectangle)
     cone: vec4f,
+    // x compose mode of this light's mask (0 relight, 1 darken)
+    extra: vec4f,
 };
 
 struct Frame {
@@ -88,4 +90,11 @@ fn sample_light(i: u32, pos: vec3f) -> LightSample {
     }
     s.radiance = l.color.rgb * att;
     return s;
+}
+
+// A triangle covering the whole target (for screen-space passes).
+@vertex
+fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
+    let uv = vec2f(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4f(uv * 2.0 - 1.0, 0.0, 1.0);
 }

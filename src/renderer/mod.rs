@@ -101,10 +101,32 @@ pub struct LightGpu {
     pub direction: Vec4,
     pub color: Vec4,
     pub cone: Vec4,
+    pub extra: Vec4,
+}
+
+/// How the lighting pass uses a light's visibility mask `v`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Compose {
+    /// `ambient + v · (diffuse + specular)`: the shadow removes the light.
+    Relight,
+    /// The documents' way: the lit colour (ambient included) times `v`, a
+    /// shadow colour blended over the lit image.
+    Darken,
+}
+
+impl Compose {
+    /// From a technique's parameters: its `compose` choice when it has one.
+    pub fn of(params: &crate::technique::ParamValues) -> Compose {
+        match params.specs.iter().position(|s| s.name == "compose") {
+            Some(i) if params.values[i] == 1.0 => Compose::Darken,
+            _ => Compose::Relight,
+        }
+    }
 }
 
 impl LightGpu {
-    pub fn from_light(l: &Light) -> LightGpu {
+    pub fn from_light(l: &Light, compose: Compose) -> LightGpu {
         let kind = match l.kind {
             LightType::Point => 0.0,
             LightType::Spot => 1.0,
@@ -120,6 +142,7 @@ impl LightGpu {
             direction: l.direction.normalize_or_zero().extend(l.range),
             color: (l.color * l.intensity).extend(l.inner_cone_deg.to_radians().cos()),
             cone: Vec4::new(l.outer_cone_deg.to_radians().cos(), a, b, shape),
+            extra: Vec4::new((compose == Compose::Darken) as u32 as f32, 0.0, 0.0, 0.0),
         }
     }
 }
@@ -258,8 +281,9 @@ pub struct GpuPassTimes {
     pub total_ms: f64,
 }
 
-/// Four timestamps per frame: start, after the prepass, after the masks,
-/// after lighting.
+/// Six timestamps per frame: start and end of the prepass, mask and lighting
+/// encoders (bracketing each encoder, so time between submissions, such as
+/// CPU-side technique work, is not counted as GPU time).
 struct GpuTimer {
     queries: wgpu::QuerySet,
     resolve: wgpu::Buffer,
@@ -272,17 +296,17 @@ impl GpuTimer {
             queries: device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("pass timestamps"),
                 ty: wgpu::QueryType::Timestamp,
-                count: 4,
+                count: 6,
             }),
             resolve: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("timestamp resolve"),
-                size: 32,
+                size: 48,
                 usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             }),
             readback: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("timestamp readback"),
-                size: 32,
+                size: 48,
                 usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
                 mapped_at_creation: false,
             }),
@@ -303,9 +327,9 @@ impl GpuTimer {
         let d = |a: usize, b: usize| t[b].saturating_sub(t[a]) as f64 * period;
         Ok(GpuPassTimes {
             prepass_ms: d(0, 1),
-            masks_ms: d(1, 2),
-            lighting_ms: d(2, 3),
-            total_ms: d(0, 3),
+            masks_ms: d(2, 3),
+            lighting_ms: d(4, 5),
+            total_ms: d(0, 1) + d(2, 3) + d(4, 5),
         })
     }
 }
@@ -355,6 +379,30 @@ fn texture_entry(
         },
         count: None,
     }
+}
+
+/// The layouts of group 0 (frame uniform) and group 1 (object table), which
+/// every scene and technique pipeline shares (wgpu deduplicates identical
+/// layouts, so layouts made here by techniques match the renderer's).
+pub fn shared_layouts(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::BindGroupLayout) {
+    let frame = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("frame"),
+        entries: &[uniform_entry(0, wgpu::ShaderStages::all(), false)],
+    });
+    let objects = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("objects"),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }],
+    });
+    (frame, objects)
 }
 
 /// Builds a shader module from `common.wgsl` followed by `sources`.
@@ -421,23 +469,7 @@ impl Renderer {
     pub fn new(gpu: &GpuContext) -> Renderer {
         let device = &gpu.device;
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
-        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("frame"),
-            entries: &[uniform_entry(0, wgpu::ShaderStages::all(), false)],
-        });
-        let object_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("objects"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: true },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
-        });
+        let (frame_layout, object_layout) = shared_layouts(device);
         let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("material"),
             entries: &[
@@ -871,7 +903,19 @@ impl Renderer {
             l.validate()?;
         }
         let t0 = Instant::now();
-        frame.uniform = frame_uniform(scene, camera, lights, settings, frame.width, frame.height);
+        let compose: Vec<Compose> = techniques
+            .iter()
+            .map(|t| Compose::of(&t.choice.params))
+            .collect();
+        frame.uniform = frame_uniform(
+            scene,
+            camera,
+            lights,
+            &compose,
+            settings,
+            frame.width,
+            frame.height,
+        );
         gpu.queue
             .write_buffer(&frame.frame_buffer, 0, bytemuck::bytes_of(&frame.uniform));
         let cull = settings.cull_back_faces as usize;
@@ -921,6 +965,7 @@ impl Renderer {
         let t1 = Instant::now();
 
         let mut enc = gpu.device.create_command_encoder(&Default::default());
+        stamp(&mut enc, 2);
         for (i, light) in lights.iter().enumerate() {
             let inst = &mut techniques[i];
             let ctx = MaskContext {
@@ -935,13 +980,14 @@ impl Renderer {
             };
             inst.technique.render_mask(&ctx, &mut enc)?;
         }
-        stamp(&mut enc, 2);
+        stamp(&mut enc, 3);
         gpu.queue.submit([enc.finish()]);
         gpu.wait_idle()?;
         let t2 = Instant::now();
 
         let bg = settings.background.unwrap_or(scene.background);
         let mut enc = gpu.device.create_command_encoder(&Default::default());
+        stamp(&mut enc, 4);
         {
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("lighting"),
@@ -992,10 +1038,10 @@ impl Renderer {
                 );
             }
         }
-        stamp(&mut enc, 3);
+        stamp(&mut enc, 5);
         if let Some(t) = timer {
-            enc.resolve_query_set(&t.queries, 0..4, &t.resolve, 0);
-            enc.copy_buffer_to_buffer(&t.resolve, 0, &t.readback, 0, 32);
+            enc.resolve_query_set(&t.queries, 0..6, &t.resolve, 0);
+            enc.copy_buffer_to_buffer(&t.resolve, 0, &t.readback, 0, 48);
         }
         gpu.queue.submit([enc.finish()]);
         gpu.wait_idle()?;
@@ -1059,11 +1105,13 @@ fn color_attachment(
     }
 }
 
-/// The frame uniform for a camera and lights at a frame size.
+/// The frame uniform for a camera and lights (each with its mask's compose
+/// mode) at a frame size.
 pub fn frame_uniform(
     scene: &Scene,
     camera: &Camera,
     lights: &[Light],
+    compose: &[Compose],
     settings: &RenderSettings,
     width: u32,
     height: u32,
@@ -1072,8 +1120,8 @@ pub fn frame_uniform(
     let proj = camera.projection(width as f32 / height as f32);
     let view_proj = proj * view;
     let mut gl = [LightGpu::default(); MAX_LIGHTS];
-    for (g, l) in gl.iter_mut().zip(lights) {
-        *g = LightGpu::from_light(l);
+    for (i, (g, l)) in gl.iter_mut().zip(lights).enumerate() {
+        *g = LightGpu::from_light(l, compose.get(i).copied().unwrap_or(Compose::Relight));
     }
     FrameUniform {
         view_proj,

@@ -48,7 +48,7 @@ fn face_normal(world_pos: vec3f) -> vec3f {
 }
 
 struct GBuffer {
-    // xyz world position, w 1 where geometry was drawn
+    // xyz world position, w object index + 1 where geometry was drawn (0: background)
     @location(0) position: vec4f,
     // xyz geometric normal facing the camera, w 1 if the surface receives shadows
     @location(1) normal: vec4f,
@@ -57,7 +57,7 @@ struct GBuffer {
 @fragment
 fn fs_gbuffer(i: GOut) -> GBuffer {
     var g: GBuffer;
-    g.position = vec4f(i.world_pos, 1.0);
+    g.position = vec4f(i.world_pos, f32(i.object + 1u));
     g.normal = vec4f(face_normal(i.world_pos), f32(objects[i.object].info.z));
     return g;
 }
@@ -166,7 +166,10 @@ fn fs_lit(i: LitOut) -> @location(0) vec4f {
             n = normalize(t * m.x + b * m.y + n * m.z);
         }
     }
+    // Relight lights add v·(diffuse + specular); darken lights add their
+    // full light and multiply the final colour by v.
     var color = frame.ambient.rgb * ka;
+    var darken = 1.0;
     let px = vec2i(i.clip.xy);
     let receives = obj.info.z != 0u;
     let gd = array<vec4f, 4>(i.g_diffuse0, i.g_diffuse1, i.g_diffuse2, i.g_diffuse3);
@@ -186,8 +189,14 @@ fn fs_lit(i: LitOut) -> @location(0) vec4f {
             diffuse = t[0];
             specular = t[1];
         }
-        color += vis * (diffuse * kd + specular * material.ks.rgb);
+        let direct = diffuse * kd + specular * material.ks.rgb;
+        if frame.lights[l].extra.x > 0.5 {
+            color += direct;
+            darken *= vis;
+        } else {
+            color += vis * direct;
+        }
     }
-    return vec4f(color, 1.0);
+    return vec4f(color * darken, 1.0);
 }
 

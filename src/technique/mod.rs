@@ -4,8 +4,11 @@
 //! light that reaches the surface seen in each pixel) that the lighting pass
 //! composes as `ambient + visibility × (diffuse + specular)`.
 
+pub mod light_space;
 pub mod none;
 pub mod params;
+pub mod planar;
+pub mod projective;
 pub mod raytraced;
 
 use crate::gpu::GpuContext;
@@ -63,7 +66,92 @@ pub struct Family {
 }
 
 /// The registry: every technique family.
-pub static FAMILIES: &[&Family] = &[&none::FAMILY, &raytraced::FAMILY];
+pub static FAMILIES: &[&Family] = &[
+    &none::FAMILY,
+    &raytraced::FAMILY,
+    &planar::FAMILY,
+    &projective::FAMILY,
+];
+
+/// Identifies a scene's geometry and flags cheaply (object transforms,
+/// flags, mesh sizes), so that per-scene data is rebuilt only on change.
+pub fn scene_fingerprint(scene: &Scene) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    scene.source.hash(&mut h);
+    for o in &scene.objects {
+        (o.casts_shadow, o.receives_shadow, o.shadow_plane, o.mesh).hash(&mut h);
+        for f in o.transform.to_cols_array() {
+            f.to_bits().hash(&mut h);
+        }
+        let m = &scene.meshes[o.mesh];
+        (m.positions.len(), m.indices.len()).hash(&mut h);
+    }
+    h.finish()
+}
+
+/// Layout entry of a G-buffer texture read with `textureLoad` in fragment shaders.
+pub fn gbuffer_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// Pipeline layout of a mask pass: the frame uniform (group 0), the object
+/// table (group 1) and the technique's own group 2.
+pub fn pipeline_layout(
+    gpu: &GpuContext,
+    label: &str,
+    own: &wgpu::BindGroupLayout,
+) -> wgpu::PipelineLayout {
+    let r = crate::renderer::shared_layouts(&gpu.device);
+    gpu.device
+        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: &[Some(&r.0), Some(&r.1), Some(own)],
+            immediate_size: 0,
+        })
+}
+
+/// Begins a render pass on the light's mask layer, cleared to 1 (lit), with
+/// the frame's depth (read) and a cleared stencil.
+pub fn mask_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    ctx: &MaskContext,
+    label: &str,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: ctx.target,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: &ctx.frame.depth_view,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(0),
+                store: wgpu::StoreOp::Store,
+            }),
+        }),
+        ..Default::default()
+    })
+}
 
 /// A resolved technique id: family, preset name and parameter values.
 #[derive(Clone)]

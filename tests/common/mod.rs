@@ -50,3 +50,55 @@ pub fn tmpdir(name: &str) -> std::path::PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
+
+use glam::{Mat4, Vec3};
+use shadowlab::scene::{Light, Material, shapes};
+
+/// A 20×20 floor at y = 0 (also a `ShadowPlane` when `plane_object`) and
+/// axis-aligned square casters `(centre, half size)` facing down, so a camera
+/// above sees the floor through them with back-face culling while shadow
+/// rays and flattened shadows still see them.
+pub fn squares_over_floor(squares: &[(Vec3, f32)], light: Light, plane_object: bool) -> Scene {
+    let mut s = Scene::new("squares");
+    let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
+    let floor = s.add_mesh(shapes::plane(20.0, 20.0, 4));
+    s.add_object("Floor", floor, grey, Mat4::IDENTITY);
+    if plane_object {
+        s.add_object("ShadowPlaneFloor", floor, grey, Mat4::IDENTITY);
+    }
+    let quad = s.add_mesh(shapes::plane(2.0, 2.0, 1));
+    for (i, &(c, h)) in squares.iter().enumerate() {
+        s.add_object(
+            &format!("Square{i}"),
+            quad,
+            grey,
+            Mat4::from_translation(c)
+                * Mat4::from_scale(Vec3::splat(h))
+                * Mat4::from_rotation_x(std::f32::consts::PI),
+        );
+    }
+    s.lights = vec![light];
+    s.camera = shadowlab::scene::Camera {
+        up: Vec3::NEG_Z,
+        ..shadowlab::scene::Camera::new(Vec3::new(0.0, 8.0, 0.0), Vec3::ZERO)
+    };
+    s.finalize().unwrap();
+    s
+}
+
+/// Renders one frame with `technique_id` (with `--set`-style settings) and
+/// returns light 0's mask.
+pub fn mask_of(scene: &Scene, technique_id: &str, set: &[&str], w: u32, h: u32) -> Vec<f32> {
+    let gpu = gpu();
+    let mut choice = technique::resolve(technique_id).unwrap();
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    technique::apply_settings(&mut choice.params, &set).unwrap();
+    let mut hf = HeadlessFrame::new(gpu, scene, &[choice], w, h).unwrap();
+    let settings = RenderSettings {
+        show_light_icons: false,
+        ..Default::default()
+    };
+    hf.render(gpu, scene, &scene.camera, &scene.lights, &settings)
+        .unwrap();
+    frame::read_back(gpu, &hf.frame, 1).unwrap().masks.remove(0)
+}

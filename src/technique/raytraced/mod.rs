@@ -62,28 +62,10 @@ pub struct CasterBvh {
     pub build_ms: f64,
 }
 
-/// Identifies a scene's caster geometry cheaply (object transforms, flags,
-/// mesh sizes), so a BVH is rebuilt only when the casters change.
-fn fingerprint(scene: &Scene) -> u64 {
-    use std::hash::{Hash, Hasher};
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    scene.source.hash(&mut h);
-    for o in &scene.objects {
-        (o.casts_shadow && !o.shadow_plane).hash(&mut h);
-        o.mesh.hash(&mut h);
-        for f in o.transform.to_cols_array() {
-            f.to_bits().hash(&mut h);
-        }
-        let m = &scene.meshes[o.mesh];
-        (m.positions.len(), m.indices.len()).hash(&mut h);
-    }
-    h.finish()
-}
-
 impl CasterBvh {
     pub fn build(scene: &Scene) -> CasterBvh {
         let t = Instant::now();
-        let key = fingerprint(scene);
+        let key = super::scene_fingerprint(scene);
         let triangles: Vec<Triangle> = scene
             .world_triangles(|o| o.casts_shadow && !o.shadow_plane)
             .into_iter()
@@ -112,7 +94,7 @@ impl CasterBvh {
     /// `held` is returned as is when it still matches the scene.
     pub fn for_scene(scene: &Scene, held: Option<&Arc<CasterBvh>>) -> Arc<CasterBvh> {
         static CACHE: Mutex<Vec<(u64, Weak<CasterBvh>)>> = Mutex::new(Vec::new());
-        let key = fingerprint(scene);
+        let key = super::scene_fingerprint(scene);
         if let Some(h) = held.filter(|h| h.key == key) {
             return h.clone();
         }

@@ -1,0 +1,410 @@
+//! `projective`: projective shadow-mask textures (SEEDS §3; 001 §3.5.3,
+//! 002 §1, 003 §2). Per caster, a black-on-white texture is rendered from
+//! the light with a frustum fitted around the caster (orthographic for
+//! directional lights, perspective otherwise) and projected onto the visible
+//! receivers through the texture matrix `bias · P_light · V_light`. There is
+//! no depth test, hence no self-shadowing. Preset `projective:alpha-depth` is
+//! 003 §4's variant: the caster's depth in an 8-bit channel, compared per
+//! receiver, whose low precision gives false self-shadowing.
+
+use super::light_space::{LightFrustum, fit_bounds};
+use super::{Family, MaskContext, ParamSpec, Preset, ShadowTechnique};
+use crate::renderer::{DEPTH_FORMAT, MASK_FORMAT, VERTEX_LAYOUT};
+use anyhow::{Result, bail};
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, UVec4, Vec4};
+
+pub static FAMILY: Family = Family {
+    id: "projective",
+    summary: "projective shadow textures: one black-on-white texture per caster, projected onto receivers",
+    params: &[
+        ParamSpec::int("size", 512, 16, 8192, "texture side in texels, per caster"),
+        ParamSpec::float(
+            "margin",
+            0.05,
+            0.0,
+            1.0,
+            0.01,
+            "widening of the frustum fitted around each caster, as a fraction of its bounding radius",
+        ),
+        ParamSpec::boolean(
+            "depth_in_alpha",
+            false,
+            "store the caster's depth in an 8-bit channel and compare it per receiver (003 §4): shadows on the caster itself, with 8-bit acne",
+        ),
+        ParamSpec::float(
+            "alpha_bias",
+            0.004,
+            0.0,
+            0.1,
+            0.001,
+            "depth-in-alpha comparison bias, as a fraction of the fitted depth range",
+        ),
+    ],
+    presets: &[
+        Preset {
+            name: "default",
+            summary: "black-on-white texture per caster, 512²",
+            values: &[],
+        },
+        Preset {
+            name: "alpha-depth",
+            summary: "caster depth in 8 bits, compared per receiver: shows false self-shadowing",
+            values: &[("depth_in_alpha", "true")],
+        },
+    ],
+    create: |gpu| Ok(Box::new(ProjectiveShadows::new(gpu))),
+};
+
+const TEXTURE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+const PROJECTOR_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ProjectorUniform {
+    view_proj: Mat4,
+    view: Mat4,
+    texture: Mat4,
+    params: Vec4,
+    info: UVec4,
+    _pad: [Vec4; 2],
+}
+
+/// One caster's texture.
+struct Projector {
+    object: u32,
+    color: wgpu::TextureView,
+    depth: wgpu::TextureView,
+}
+
+pub struct ProjectiveShadows {
+    layout: wgpu::BindGroupLayout,
+    caster_pipeline: wgpu::RenderPipeline,
+    project_pipeline: wgpu::RenderPipeline,
+    uniforms: Option<wgpu::Buffer>,
+    /// Bound in place of a projector's texture while that texture is rendered.
+    placeholder: wgpu::TextureView,
+    projectors: Vec<Projector>,
+    /// (scene fingerprint, texture size) the projectors were made for.
+    made_for: Option<(u64, u32)>,
+    bytes: u64,
+}
+
+impl ProjectiveShadows {
+    pub fn new(gpu: &crate::gpu::GpuContext) -> ProjectiveShadows {
+        let device = &gpu.device;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("projective"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                super::gbuffer_entry(1),
+                super::gbuffer_entry(2),
+                super::gbuffer_entry(3),
+            ],
+        });
+        let module = crate::renderer::shader_module(
+            device,
+            "projective",
+            &[include_str!("projective.wgsl")],
+        );
+        let pl = super::pipeline_layout(gpu, "projective", &layout);
+        let caster_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("projective caster"),
+            layout: Some(&pl),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_caster"),
+                compilation_options: Default::default(),
+                buffers: &[Some(VERTEX_LAYOUT)],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: PROJECTOR_DEPTH,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_caster"),
+                compilation_options: Default::default(),
+                targets: &[Some(TEXTURE_FORMAT.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let project_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("projective project"),
+            layout: Some(&pl),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_project"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: MASK_FORMAT,
+                    // Multiply: several casters combine.
+                    blend: Some(wgpu::BlendState {
+                        color: wgpu::BlendComponent {
+                            src_factor: wgpu::BlendFactor::Zero,
+                            dst_factor: wgpu::BlendFactor::Src,
+                            operation: wgpu::BlendOperation::Add,
+                        },
+                        alpha: wgpu::BlendComponent::REPLACE,
+                    }),
+                    write_mask: wgpu::ColorWrites::RED,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let placeholder = device
+            .create_texture(&wgpu::TextureDescriptor {
+                label: Some("projective placeholder"),
+                size: wgpu::Extent3d {
+                    width: 1,
+                    height: 1,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: TEXTURE_FORMAT,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+            .create_view(&Default::default());
+        ProjectiveShadows {
+            placeholder,
+            layout,
+            caster_pipeline,
+            project_pipeline,
+            uniforms: None,
+            projectors: vec![],
+            made_for: None,
+            bytes: 0,
+        }
+    }
+
+    fn make_projectors(&mut self, ctx: &MaskContext, size: u32) -> Result<()> {
+        let max = ctx.gpu.max_texture_size();
+        if size > max {
+            bail!("projective: texture size {size} exceeds the device's largest texture ({max})");
+        }
+        let device = &ctx.gpu.device;
+        let texture = |format, usage| {
+            device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some("projective"),
+                    size: wgpu::Extent3d {
+                        width: size,
+                        height: size,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default())
+        };
+        use wgpu::TextureUsages as U;
+        self.projectors = ctx
+            .scene_gpu
+            .draws
+            .iter()
+            .filter(|d| d.casts_shadow && !d.shadow_plane)
+            .map(|d| Projector {
+                object: d.object,
+                color: texture(TEXTURE_FORMAT, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING),
+                depth: texture(PROJECTOR_DEPTH, U::RENDER_ATTACHMENT),
+            })
+            .collect();
+        let n = self.projectors.len().max(1);
+        self.uniforms = Some(device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("projectors"),
+            size: (n * std::mem::size_of::<ProjectorUniform>()) as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        }));
+        self.bytes = (self.projectors.len() as u64) * (size as u64 * size as u64) * (1 + 4);
+        Ok(())
+    }
+}
+
+impl ShadowTechnique for ProjectiveShadows {
+    fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        let size = ctx.params.get_usize("size") as u32;
+        let key = (super::scene_fingerprint(ctx.scene), size);
+        if self.made_for != Some(key) {
+            self.make_projectors(ctx, size)?;
+            self.made_for = Some(key);
+        }
+        let margin = ctx.params.get_f32("margin");
+        let depth_mode = ctx.params.get_bool("depth_in_alpha");
+        // One frustum per caster; casters that contain a local light are skipped.
+        let frusta: Vec<Option<LightFrustum>> = self
+            .projectors
+            .iter()
+            .map(|p| {
+                let o = &ctx.scene.objects[p.object as usize];
+                let b = ctx.scene.meshes[o.mesh].bounds().transformed(o.transform);
+                fit_bounds(ctx.light, &b, margin)
+            })
+            .collect();
+        let uniforms: Vec<ProjectorUniform> = self
+            .projectors
+            .iter()
+            .zip(&frusta)
+            .map(|(p, f)| {
+                let f = f.unwrap_or(LightFrustum {
+                    view: Mat4::IDENTITY,
+                    proj: Mat4::IDENTITY,
+                    near: 0.0,
+                    far: 1.0,
+                    orthographic: true,
+                });
+                ProjectorUniform {
+                    view_proj: f.view_proj(),
+                    view: f.view,
+                    texture: f.texture_matrix(),
+                    params: Vec4::new(
+                        f.near,
+                        f.far,
+                        ctx.params.get_f32("alpha_bias"),
+                        depth_mode as u32 as f32,
+                    ),
+                    info: UVec4::new(p.object, size, 0, 0),
+                    _pad: [Vec4::ZERO; 2],
+                }
+            })
+            .collect();
+        let Some(ubuf) = &self.uniforms else {
+            return Ok(());
+        };
+        ctx.gpu
+            .queue
+            .write_buffer(ubuf, 0, bytemuck::cast_slice(&uniforms));
+        let stride = std::mem::size_of::<ProjectorUniform>() as u32;
+        let bind_group = |texture: &wgpu::TextureView| {
+            ctx.gpu
+                .device
+                .create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("projector"),
+                    layout: &self.layout,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                                buffer: ubuf,
+                                offset: 0,
+                                size: wgpu::BufferSize::new(stride as u64),
+                            }),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::TextureView(texture),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::TextureView(
+                                &ctx.frame.gbuffer_position_view,
+                            ),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 3,
+                            resource: wgpu::BindingResource::TextureView(
+                                &ctx.frame.gbuffer_normal_view,
+                            ),
+                        },
+                    ],
+                })
+        };
+        let caster_group = bind_group(&self.placeholder);
+        let bind_groups: Vec<wgpu::BindGroup> = self
+            .projectors
+            .iter()
+            .map(|p| bind_group(&p.color))
+            .collect();
+        // Render each caster's texture from the light.
+        for (i, p) in self.projectors.iter().enumerate() {
+            if frusta[i].is_none() {
+                continue;
+            }
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("projective caster"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &p.color,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &p.depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            pass.set_pipeline(&self.caster_pipeline);
+            pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
+            pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+            pass.set_bind_group(2, &caster_group, &[i as u32 * stride]);
+            ctx.scene_gpu
+                .draw_objects(&mut pass, |d| d.object == p.object);
+        }
+        // Project every texture onto the receivers, multiplying into the mask.
+        let mut pass = super::mask_pass(encoder, ctx, "projective");
+        pass.set_pipeline(&self.project_pipeline);
+        pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
+        pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+        for (i, bg) in bind_groups.iter().enumerate() {
+            if frusta[i].is_some() {
+                pass.set_bind_group(2, bg, &[i as u32 * stride]);
+                pass.draw(0..3, 0..1);
+            }
+        }
+        Ok(())
+    }
+
+    fn counters(&self) -> Vec<(&'static str, f64)> {
+        vec![("projectors", self.projectors.len() as f64)]
+    }
+
+    fn resource_bytes(&self) -> u64 {
+        self.bytes
+    }
+}

@@ -1,0 +1,149 @@
+//! Planar projected shadows and projective shadow textures against the
+//! ray-traced reference and their documented limits.
+
+mod common;
+use common::*;
+use glam::Vec3;
+use shadowlab::measure;
+use shadowlab::scene::{Light, builtin};
+use shadowlab::technique;
+
+fn distinct(mask: &[f32]) -> Vec<f32> {
+    let mut v: Vec<f32> = mask.iter().map(|x| (x * 1000.0).round() / 1000.0).collect();
+    v.sort_by(|a, b| a.total_cmp(b));
+    v.dedup();
+    v
+}
+
+#[test]
+fn stencil_darkens_each_pixel_once_and_no_stencil_twice() {
+    // Two overlapping squares at different heights under a point light.
+    let scene = squares_over_floor(
+        &[
+            (Vec3::new(-0.3, 1.0, 0.0), 0.6),
+            (Vec3::new(0.3, 1.5, 0.2), 0.6),
+        ],
+        Light::point(Vec3::new(0.0, 5.0, 0.0), 1.0),
+        true,
+    );
+    let with = mask_of(&scene, "planar", &["darkening=0.5"], 160, 160);
+    assert_eq!(
+        distinct(&with),
+        vec![0.5, 1.0],
+        "stencil: each pixel darkened once"
+    );
+    let without = mask_of(
+        &scene,
+        "planar",
+        &["darkening=0.5", "stencil=false"],
+        160,
+        160,
+    );
+    let values = distinct(&without);
+    assert!(
+        values.contains(&0.25),
+        "no stencil: overlaps darken twice: {values:?}"
+    );
+}
+
+#[test]
+fn anti_shadows_and_false_shadows_are_not_drawn() {
+    // A square above the light (anti-shadow) and one below the floor (false shadow).
+    let light = Light::point(Vec3::new(0.0, 2.0, 0.0), 1.0);
+    for square in [
+        (Vec3::new(0.5, 3.0, 0.0), 0.5),
+        (Vec3::new(0.5, -1.0, 0.0), 0.5),
+    ] {
+        let scene = squares_over_floor(&[square], light, true);
+        let mask = mask_of(&scene, "planar", &[], 120, 120);
+        assert!(
+            mask.iter().all(|&v| v == 1.0),
+            "square at {:?} cast a shadow",
+            square.0
+        );
+    }
+    // Control: the same square between light and floor does cast one.
+    let scene = squares_over_floor(&[(Vec3::new(0.5, 1.0, 0.0), 0.5)], light, true);
+    assert!(mask_of(&scene, "planar", &[], 120, 120).contains(&0.0));
+}
+
+/// Mismatch of `technique` against `raytraced` on a frame of `scene`.
+fn compare(
+    scene: &shadowlab::scene::Scene,
+    technique_id: &str,
+    size: (u32, u32),
+) -> measure::compare::QualityRow {
+    let out = tmpdir(&format!("cmp-{}", measure::file_stem(technique_id)));
+    let list = measure::parse_technique_list(technique_id).unwrap();
+    let reference = technique::resolve("raytraced").unwrap();
+    measure::compare::run(
+        gpu(),
+        scene,
+        &scene.camera,
+        &scene.lights,
+        size,
+        &list,
+        &reference,
+        &out,
+    )
+    .unwrap()
+    .remove(0)
+}
+
+#[test]
+fn planar_matches_ray_tracing_on_the_plane_for_every_light_type() {
+    let lights = [
+        Light::point(Vec3::new(0.4, 5.0, -0.3), 1.0),
+        Light::spot(Vec3::new(1.0, 5.0, 1.0), Vec3::ZERO, 1.0, 30.0, 40.0),
+        Light::directional(Vec3::new(0.3, -1.0, 0.2), 1.0),
+    ];
+    for light in lights {
+        // No ShadowPlane object: the floor is found as the largest planar receiver.
+        let scene = squares_over_floor(
+            &[
+                (Vec3::new(0.0, 1.0, 0.0), 0.7),
+                (Vec3::new(0.8, 2.0, 0.5), 0.4),
+            ],
+            light,
+            false,
+        );
+        let row = compare(&scene, "planar", (200, 200));
+        let m = &row.on_planes;
+        assert!(
+            m.considered_pixels > 30000 && m.reference_shadowed_pct > 3.0,
+            "{m:?}"
+        );
+        assert_eq!(m.interior.total_pct, 0.0, "{:?}: {m:?}", light.kind);
+        assert!(m.edge.total_pct <= 0.05, "{:?}: {m:?}", light.kind);
+    }
+}
+
+#[test]
+fn projective_matches_on_receivers_and_alpha_depth_self_shadows() {
+    let scene = squares_over_floor(
+        &[(Vec3::new(0.0, 1.0, 0.0), 0.7)],
+        Light::point(Vec3::new(0.4, 5.0, -0.3), 1.0),
+        false,
+    );
+    let row = compare(&scene, "projective[size=1024]", (200, 200));
+    assert!(
+        row.mask.interior.total_pct < 0.01 && row.mask.edge.total_pct < 0.2,
+        "{:?}",
+        row.mask
+    );
+
+    // On a curved caster, 8-bit depth-in-alpha shadows the caster's own lit side.
+    let s = builtin::by_name("floating").unwrap().unwrap();
+    let plain = compare(&s, "projective", (320, 180));
+    let alpha = compare(&s, "projective:alpha-depth", (320, 180));
+    assert!(
+        plain.off_planes.all.false_shadow_pct < 0.01,
+        "{:?}",
+        plain.off_planes
+    );
+    assert!(
+        alpha.off_planes.all.false_shadow_pct > 0.5,
+        "{:?}",
+        alpha.off_planes
+    );
+}
