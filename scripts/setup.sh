@@ -13,6 +13,7 @@ if [[ "${1:-}" == "--test" ]]; then
   command -v node >/dev/null || need+=(nodejs)
   command -v npm >/dev/null || need+=(npm)
   have_pkg xvfb || need+=(xvfb)
+  have_pkg xauth || need+=(xauth)
 fi
 
 if ((${#need[@]})); then

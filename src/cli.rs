@@ -45,6 +45,33 @@ pub enum Command {
     /// Time techniques on one frame: median/p5/p95 per pass, ratio to `none`
     /// (DIR/bench.{md,csv,json}).
     Bench(Box<BenchArgs>),
+    /// Interactive viewer: switch and tune techniques, move camera and lights.
+    View(Box<ViewCmdArgs>),
+}
+
+#[derive(Args)]
+pub struct ViewCmdArgs {
+    #[command(flatten)]
+    pub view: ViewArgs,
+    /// Technique id for every light (family or family:preset).
+    #[arg(long, default_value = "none")]
+    pub technique: String,
+    /// Set a technique parameter, key=value (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Save a screenshot (PNG, and frame.json beside it) after --frames frames, then exit.
+    #[arg(long, requires = "frames")]
+    pub screenshot: Option<PathBuf>,
+    /// Render this many frames, then exit (with --screenshot: save it first).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub frames: Option<u32>,
+    /// Present without vsync.
+    #[arg(long)]
+    pub no_vsync: bool,
+    /// Compute the error heatmap against raytraced at start-up (on a
+    /// background thread); with --frames, exit once it is shown.
+    #[arg(long)]
+    pub heatmap: bool,
 }
 
 #[derive(Args)]
@@ -290,6 +317,18 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(a) => render(*a),
         Command::Compare(a) => compare(*a),
         Command::Bench(a) => bench(*a),
+        Command::View(a) => {
+            let a = *a;
+            crate::viewer::run(crate::viewer::ViewerOptions {
+                view: a.view,
+                technique: a.technique,
+                set: a.set,
+                screenshot: a.screenshot,
+                frames: a.frames,
+                vsync: !a.no_vsync,
+                heatmap: a.heatmap,
+            })
+        }
     }
 }
 

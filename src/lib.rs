@@ -11,3 +11,4 @@ pub mod measure;
 pub mod renderer;
 pub mod scene;
 pub mod technique;
+pub mod viewer;

@@ -1,0 +1,1045 @@
+//! `shadowlab view`: the interactive viewer. A winit window rendered by the
+//! same [`Renderer`] as the headless commands, with egui panels generated
+//! from the technique registry and parameter tables.
+
+mod orbit;
+mod ui;
+
+use crate::cli::ViewArgs;
+use crate::frame;
+use crate::gpu::GpuContext;
+use crate::renderer::{
+    FrameResources, FrameTimings, RenderSettings, Renderer, SceneGpu, TechniqueInstance,
+};
+use crate::scene::{self, Camera, Light, Scene};
+use crate::technique::{self, TechniqueChoice};
+use anyhow::{Context as _, Result, anyhow};
+use glam::Vec2;
+use std::path::PathBuf;
+use std::sync::{Arc, mpsc};
+use std::time::Instant;
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+/// Options of `shadowlab view`.
+pub struct ViewerOptions {
+    pub view: ViewArgs,
+    pub technique: String,
+    pub set: Vec<String>,
+    pub screenshot: Option<PathBuf>,
+    pub frames: Option<u32>,
+    pub vsync: bool,
+    /// Compute the error heatmap of light 1 at start-up (with `frames`, the
+    /// viewer waits for it before it exits).
+    pub heatmap: bool,
+}
+
+/// The composited window image (also what screenshots read) holds sRGB-encoded
+/// bytes: the 3D view is written through an sRGB view of it, egui (which
+/// blends in gamma space) through a plain one.
+const COMPOSITE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+const COMPOSITE_SRGB: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+/// The composite texture with its two views.
+struct Composite {
+    texture: wgpu::Texture,
+    srgb: wgpu::TextureView,
+    plain: wgpu::TextureView,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct BlitUniform {
+    mode: [u32; 4],
+}
+
+/// Draws a texture (or a mask layer) over a whole target.
+struct Blit {
+    layout: wgpu::BindGroupLayout,
+    uniform: wgpu::Buffer,
+    sampler: wgpu::Sampler,
+    module: wgpu::ShaderModule,
+    pipelines: Vec<(wgpu::TextureFormat, wgpu::RenderPipeline)>,
+}
+
+impl Blit {
+    fn new(device: &wgpu::Device) -> Blit {
+        let tex = |binding, dim| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float {
+                    filterable: binding == 1,
+                },
+                view_dimension: dim,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("blit"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                tex(1, wgpu::TextureViewDimension::D2),
+                tex(2, wgpu::TextureViewDimension::D2Array),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        Blit {
+            uniform: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("blit"),
+                size: 16,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            sampler: device.create_sampler(&wgpu::SamplerDescriptor {
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            }),
+            module: device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("blit"),
+                source: wgpu::ShaderSource::Wgsl(include_str!("blit.wgsl").into()),
+            }),
+            layout,
+            pipelines: vec![],
+        }
+    }
+
+    fn pipeline(
+        &mut self,
+        device: &wgpu::Device,
+        format: wgpu::TextureFormat,
+    ) -> &wgpu::RenderPipeline {
+        if !self.pipelines.iter().any(|(f, _)| *f == format) {
+            let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("blit"),
+                bind_group_layouts: &[Some(&self.layout)],
+                immediate_size: 0,
+            });
+            let p = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("blit"),
+                layout: Some(&pl),
+                vertex: wgpu::VertexState {
+                    module: &self.module,
+                    entry_point: Some("vs_blit"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: Default::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &self.module,
+                    entry_point: Some("fs_blit"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(format.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+            self.pipelines.push((format, p));
+        }
+        &self
+            .pipelines
+            .iter()
+            .find(|(f, _)| *f == format)
+            .expect("inserted above")
+            .1
+    }
+
+    /// Draws `source` (or a mask) into the `viewport` (x, y, w, h) of
+    /// `target`, clearing the rest.
+    #[allow(clippy::too_many_arguments)]
+    fn draw(
+        &mut self,
+        gpu: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        viewport: [f32; 4],
+        target: &wgpu::TextureView,
+        format: wgpu::TextureFormat,
+        source: &wgpu::TextureView,
+        masks: &wgpu::TextureView,
+        mode: [u32; 4],
+    ) {
+        gpu.queue
+            .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&BlitUniform { mode }));
+        let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("blit"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.uniform.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(source),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(masks),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+            ],
+        });
+        let pipeline = self.pipeline(&gpu.device, format).clone();
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("blit"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.set_viewport(viewport[0], viewport[1], viewport[2], viewport[3], 0.0, 1.0);
+        pass.draw(0..3, 0..1);
+    }
+}
+
+/// What the main view shows.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Overlay {
+    Image,
+    /// The visibility mask of light N, in grey.
+    Mask(usize),
+}
+
+/// A heatmap against `raytraced` computed on a background thread.
+pub struct Heatmap {
+    pub texture: egui::TextureHandle,
+    pub summary: String,
+}
+
+/// The scene being viewed and everything derived from it.
+pub struct SceneState {
+    pub scene: Arc<Scene>,
+    pub scene_gpu: SceneGpu,
+    pub camera: Camera,
+    pub lights: Vec<Light>,
+    /// One technique instance per light.
+    pub techniques: Vec<TechniqueInstance>,
+}
+
+impl SceneState {
+    fn load(
+        gpu: &GpuContext,
+        renderer: &Renderer,
+        scene: Scene,
+        camera: Camera,
+        lights: Vec<Light>,
+        choice: &TechniqueChoice,
+    ) -> Result<SceneState> {
+        let scene_gpu = renderer.upload_scene(gpu, &scene)?;
+        let techniques = (0..crate::renderer::MAX_LIGHTS)
+            .map(|_| TechniqueInstance::new(gpu, choice.clone()))
+            .collect::<Result<_>>()?;
+        Ok(SceneState {
+            scene: Arc::new(scene),
+            scene_gpu,
+            camera,
+            lights,
+            techniques,
+        })
+    }
+}
+
+/// Everything that needs the window.
+struct Gfx {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    gpu: GpuContext,
+    renderer: Renderer,
+    frame: Option<FrameResources>,
+    composite: Option<Composite>,
+    blit: Blit,
+    egui_ctx: egui::Context,
+    egui_state: egui_winit::State,
+    egui_renderer: egui_wgpu::Renderer,
+}
+
+/// Viewer state shown and edited by the panels.
+pub struct ViewerState {
+    pub scene_name: String,
+    pub settings: RenderSettings,
+    pub vsync: bool,
+    /// Supersampling factor of the 3D view (1 = off, 2 = 2×2).
+    pub supersampling: u32,
+    pub overlay: Overlay,
+    pub selected_light: usize,
+    pub same_technique_for_all: bool,
+    pub show_panel: bool,
+    pub show_help: bool,
+    pub last_timings: Option<FrameTimings>,
+    pub frame_times: std::collections::VecDeque<f64>,
+    pub error: Option<String>,
+    pub heatmap: Option<Heatmap>,
+    pub heatmap_job: Option<mpsc::Receiver<Result<(egui::ColorImage, String), String>>>,
+    pub screenshot_requested: bool,
+    /// Left edge of the 3D view in physical pixels (the width of the panel).
+    pub view_left: u32,
+    pub pending_scene: Option<String>,
+    pub message: Option<String>,
+}
+
+struct App {
+    options: ViewerOptions,
+    gfx: Option<Gfx>,
+    scene: Option<SceneState>,
+    state: ViewerState,
+    cursor: Vec2,
+    buttons: [bool; 3],
+    dragging_light: Option<usize>,
+    keys: std::collections::HashSet<KeyCode>,
+    last_frame: Instant,
+    frames_rendered: u32,
+    started: Instant,
+    first_frame_logged: bool,
+    /// Frame at which the start-up heatmap was requested, until it arrives.
+    heatmap_started_at: Option<u32>,
+    heatmap_reported: bool,
+    exit_error: Option<anyhow::Error>,
+}
+
+/// Runs the viewer until the window closes (or `--frames` frames with `--screenshot`).
+pub fn run(options: ViewerOptions) -> Result<()> {
+    let started = Instant::now();
+    let event_loop = EventLoop::new().map_err(|e| anyhow!("cannot open a window (no display? set DISPLAY or WAYLAND_DISPLAY, or run under xvfb-run): {e}"))?;
+    let scene_name = options.view.scene.clone();
+    let mut app = App {
+        state: ViewerState {
+            scene_name,
+            settings: RenderSettings {
+                gpu_timing: true,
+                ..options.view.settings()
+            },
+            vsync: options.vsync,
+            supersampling: 1,
+            overlay: Overlay::Image,
+            selected_light: 0,
+            same_technique_for_all: true,
+            show_panel: true,
+            show_help: false,
+            last_timings: None,
+            frame_times: Default::default(),
+            error: None,
+            heatmap: None,
+            heatmap_job: None,
+            screenshot_requested: false,
+            view_left: 0,
+            pending_scene: None,
+            message: None,
+        },
+        options,
+        gfx: None,
+        scene: None,
+        cursor: Vec2::ZERO,
+        buttons: [false; 3],
+        dragging_light: None,
+        keys: Default::default(),
+        last_frame: Instant::now(),
+        frames_rendered: 0,
+        started,
+        first_frame_logged: false,
+        heatmap_started_at: None,
+        heatmap_reported: false,
+        exit_error: None,
+    };
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| anyhow!("event loop: {e}"))?;
+    match app.exit_error {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
+impl App {
+    fn init(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+        let (w, h) = self.options.view.size;
+        let window = Arc::new(
+            event_loop
+                .create_window(
+                    Window::default_attributes()
+                        .with_title("shadowlab")
+                        .with_inner_size(winit::dpi::PhysicalSize::new(w, h)),
+                )
+                .context("creating the window")?,
+        );
+        let backends = match self.options.view.backend.as_deref() {
+            Some(b) => crate::gpu::parse_backend(b)?,
+            None => wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY),
+        };
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends,
+            ..wgpu::InstanceDescriptor::new_without_display_handle().with_env()
+        });
+        let surface = instance
+            .create_surface(window.clone())
+            .context("creating the window surface")?;
+        let gpu = GpuContext::with_instance(instance, backends, Some(&surface))?;
+        let size = window.inner_size();
+        let mut config = surface
+            .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
+            .ok_or_else(|| anyhow!("the adapter cannot present to this window"))?;
+        let caps = surface.get_capabilities(&gpu.adapter);
+        if let Some(f) = caps.formats.iter().find(|f| f.is_srgb()) {
+            config.format = *f;
+        }
+        config.present_mode = present_mode(self.state.vsync);
+        surface.configure(&gpu.device, &config);
+        let renderer = Renderer::new(&gpu);
+        let (scene, camera, lights) = self.options.view.resolve()?;
+        let mut choice = technique::resolve(&self.options.technique)?;
+        technique::apply_settings(&mut choice.params, &self.options.set)?;
+        self.scene = Some(SceneState::load(
+            &gpu, &renderer, scene, camera, lights, &choice,
+        )?);
+        let egui_ctx = egui::Context::default();
+        let egui_state = egui_winit::State::new(
+            egui_ctx.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(gpu.max_texture_size() as usize),
+        );
+        let egui_renderer =
+            egui_wgpu::Renderer::new(&gpu.device, COMPOSITE_FORMAT, Default::default());
+        self.gfx = Some(Gfx {
+            blit: Blit::new(&gpu.device),
+            window,
+            surface,
+            config,
+            gpu,
+            renderer,
+            frame: None,
+            composite: None,
+            egui_ctx,
+            egui_state,
+            egui_renderer,
+        });
+        Ok(())
+    }
+
+    fn switch_scene(&mut self, name: &str) -> Result<()> {
+        let (Some(gfx), Some(old)) = (&self.gfx, &self.scene) else {
+            return Ok(());
+        };
+        let scene = scene::load(name)?;
+        let choice = old.techniques[0].choice.clone();
+        let (camera, lights) = (scene.camera, scene.lights.clone());
+        self.scene = Some(SceneState::load(
+            &gfx.gpu,
+            &gfx.renderer,
+            scene,
+            camera,
+            lights,
+            &choice,
+        )?);
+        self.state.scene_name = name.to_string();
+        self.state.heatmap = None;
+        self.state.selected_light = 0;
+        Ok(())
+    }
+
+    fn update_camera(&mut self, dt: f32) {
+        let Some(s) = &mut self.scene else { return };
+        let speed = (s.camera.eye - s.camera.target).length().max(1.0) * dt;
+        let k = |c: KeyCode| self.keys.contains(&c) as i32 as f32;
+        let (f, r, u) = (
+            k(KeyCode::KeyW) - k(KeyCode::KeyS),
+            k(KeyCode::KeyD) - k(KeyCode::KeyA),
+            k(KeyCode::KeyE) - k(KeyCode::KeyQ),
+        );
+        if f != 0.0 || r != 0.0 || u != 0.0 {
+            orbit::fly(&mut s.camera, f * speed, r * speed, u * speed);
+        }
+        // Arrow keys and PageUp/PageDown move the selected light.
+        let (lx, lz, ly) = (
+            k(KeyCode::ArrowRight) - k(KeyCode::ArrowLeft),
+            k(KeyCode::ArrowDown) - k(KeyCode::ArrowUp),
+            k(KeyCode::PageUp) - k(KeyCode::PageDown),
+        );
+        if let Some(l) = s.lights.get_mut(self.state.selected_light)
+            && (lx != 0.0 || ly != 0.0 || lz != 0.0)
+        {
+            l.position += glam::Vec3::new(lx, ly, lz) * speed * 0.5;
+        }
+    }
+
+    fn redraw(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+        let now = Instant::now();
+        let dt = (now - self.last_frame).as_secs_f32().min(0.1);
+        self.last_frame = now;
+        if let Some(name) = self.state.pending_scene.take()
+            && let Err(e) = self.switch_scene(&name)
+        {
+            self.state.error = Some(format!("{e:#}"));
+        }
+        self.update_camera(dt);
+        let (Some(gfx), Some(scene)) = (&mut self.gfx, &mut self.scene) else {
+            return Ok(());
+        };
+        let size = gfx.window.inner_size();
+        if size.width == 0 || size.height == 0 {
+            return Ok(()); // minimised
+        }
+        if (gfx.config.width, gfx.config.height) != (size.width, size.height) {
+            gfx.config.width = size.width;
+            gfx.config.height = size.height;
+            gfx.surface.configure(&gfx.gpu.device, &gfx.config);
+        }
+        let wanted = gfx.config.present_mode;
+        if wanted != present_mode(self.state.vsync) {
+            gfx.config.present_mode = present_mode(self.state.vsync);
+            gfx.surface.configure(&gfx.gpu.device, &gfx.config);
+        }
+        let ss = self.state.supersampling.max(1);
+        let left = self.state.view_left.min(size.width - 1);
+        let view_w = size.width - left;
+        let (fw, fh) = (view_w * ss, size.height * ss);
+        if gfx
+            .frame
+            .as_ref()
+            .is_none_or(|f| (f.width, f.height) != (fw, fh))
+        {
+            gfx.frame = Some(gfx.renderer.create_frame(&gfx.gpu, fw, fh)?);
+        }
+        if gfx
+            .composite
+            .as_ref()
+            .is_none_or(|c| (c.texture.width(), c.texture.height()) != (size.width, size.height))
+        {
+            let t = gfx.gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("composite"),
+                size: wgpu::Extent3d {
+                    width: size.width,
+                    height: size.height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: COMPOSITE_FORMAT,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::COPY_SRC
+                    | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[COMPOSITE_SRGB],
+            });
+            gfx.composite = Some(Composite {
+                srgb: t.create_view(&wgpu::TextureViewDescriptor {
+                    format: Some(COMPOSITE_SRGB),
+                    ..Default::default()
+                }),
+                plain: t.create_view(&Default::default()),
+                texture: t,
+            });
+        }
+        let frame = gfx.frame.as_mut().expect("created above");
+        let nl = scene.lights.len();
+        let result = gfx.gpu.checked("rendering", || {
+            gfx.renderer.render(
+                &gfx.gpu,
+                &scene.scene,
+                &scene.scene_gpu,
+                frame,
+                &scene.camera,
+                &scene.lights,
+                &mut scene.techniques[..nl.max(1)],
+                &self.state.settings,
+            )
+        });
+        match result {
+            Ok(t) => {
+                self.state.frame_times.push_back(t.total_ms);
+                if self.state.frame_times.len() > 60 {
+                    self.state.frame_times.pop_front();
+                }
+                self.state.last_timings = Some(t);
+                self.state.error = None;
+            }
+            Err(e) => self.state.error = Some(format!("{e:#}")),
+        }
+        // Poll the heatmap job.
+        if let Some(rx) = &self.state.heatmap_job {
+            match rx.try_recv() {
+                Ok(Ok((img, summary))) => {
+                    let texture =
+                        gfx.egui_ctx
+                            .load_texture("heatmap", img, egui::TextureOptions::LINEAR);
+                    if let Some(at) = self.heatmap_started_at.take() {
+                        println!(
+                            "heatmap: {summary} ({} frames rendered while it was computed)",
+                            self.frames_rendered - at
+                        );
+                        self.heatmap_reported = true;
+                    }
+                    self.state.heatmap = Some(Heatmap { texture, summary });
+                    self.state.heatmap_job = None;
+                }
+                Ok(Err(e)) => {
+                    self.state.error = Some(e);
+                    self.state.heatmap_job = None;
+                }
+                Err(mpsc::TryRecvError::Empty) => {}
+                Err(mpsc::TryRecvError::Disconnected) => self.state.heatmap_job = None,
+            }
+        }
+
+        // egui
+        let raw_input = gfx.egui_state.take_egui_input(&gfx.window);
+        let mut actions = ui::Actions::default();
+        let mut full_output = gfx.egui_ctx.run_ui(raw_input, |ui_root| {
+            ui::build(ui_root, &mut self.state, scene, &gfx.gpu, &mut actions);
+        });
+        gfx.egui_state
+            .handle_platform_output(&gfx.window, full_output.platform_output);
+        let ppp = full_output.pixels_per_point;
+        let jobs = gfx.egui_ctx.tessellate(full_output.shapes, ppp);
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [size.width, size.height],
+            pixels_per_point: ppp,
+        };
+        let mut textures_delta = std::mem::take(&mut full_output.textures_delta);
+        for (id, deltas) in textures_delta.set.drain() {
+            for delta in &deltas {
+                gfx.egui_renderer
+                    .update_texture(&gfx.gpu.device, &gfx.gpu.queue, id, delta);
+            }
+        }
+        let frame = gfx.frame.as_ref().expect("created above");
+        let composite = gfx.composite.as_ref().expect("created above");
+        let mask_view = frame.masks.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let mut enc = gfx.gpu.device.create_command_encoder(&Default::default());
+        let mode = match self.state.overlay {
+            Overlay::Mask(l) if l < nl => [1, l as u32, 0, 0],
+            _ => [0, 0, 0, 0],
+        };
+        let full = [0.0, 0.0, size.width as f32, size.height as f32];
+        let view3d = [left as f32, 0.0, view_w as f32, size.height as f32];
+        gfx.blit.draw(
+            &gfx.gpu,
+            &mut enc,
+            view3d,
+            &composite.srgb,
+            COMPOSITE_SRGB,
+            &frame.color_view,
+            &mask_view,
+            mode,
+        );
+        let cmd = gfx.egui_renderer.update_buffers(
+            &gfx.gpu.device,
+            &gfx.gpu.queue,
+            &mut enc,
+            &jobs,
+            &screen,
+        );
+        {
+            let mut pass = enc
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("egui"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &composite.plain,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    ..Default::default()
+                })
+                .forget_lifetime();
+            gfx.egui_renderer.render(&mut pass, &jobs, &screen);
+        }
+        let surface_texture = match gfx.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => Some(t),
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                gfx.surface.configure(&gfx.gpu.device, &gfx.config);
+                None
+            }
+            _ => None,
+        };
+        if let Some(st) = &surface_texture {
+            let view = st.texture.create_view(&Default::default());
+            gfx.blit.draw(
+                &gfx.gpu,
+                &mut enc,
+                full,
+                &view,
+                gfx.config.format,
+                &composite.srgb,
+                &mask_view,
+                [0; 4],
+            );
+        }
+        gfx.gpu.queue.submit(cmd.into_iter().chain([enc.finish()]));
+        if let Some(st) = surface_texture {
+            gfx.window.pre_present_notify();
+            gfx.gpu.queue.present(st);
+        }
+        for id in textures_delta.free.drain() {
+            gfx.egui_renderer.free_texture(&id);
+        }
+        self.frames_rendered += 1;
+        if !self.first_frame_logged {
+            self.first_frame_logged = true;
+            log::info!(
+                "viewer start-up: first frame after {:.0} ms",
+                self.started.elapsed().as_secs_f64() * 1e3
+            );
+            println!(
+                "start-up: first frame after {:.0} ms",
+                self.started.elapsed().as_secs_f64() * 1e3
+            );
+        }
+
+        if self.options.heatmap && self.frames_rendered == 1 {
+            self.heatmap_started_at = Some(self.frames_rendered);
+            actions.heatmap = true;
+        }
+        // Screenshots: the key, or --screenshot after --frames (and after
+        // the start-up heatmap when one was asked for).
+        let heatmap_pending = self.options.heatmap && !self.heatmap_reported;
+        let done = self
+            .options
+            .frames
+            .is_some_and(|n| self.frames_rendered >= n)
+            && !heatmap_pending;
+        let auto_path = self.options.screenshot.clone().filter(|_| done);
+        if self.state.screenshot_requested || auto_path.is_some() {
+            self.state.screenshot_requested = false;
+            let path = auto_path
+                .unwrap_or_else(|| PathBuf::from(format!("shadowlab-{}.png", chrono_stamp())));
+            let rgba = gfx.gpu.read_texture(&composite.texture, 0, 4)?;
+            image::save_buffer(
+                &path,
+                &rgba,
+                size.width,
+                size.height,
+                image::ExtendedColorType::Rgba8,
+            )
+            .with_context(|| format!("writing {}", path.display()))?;
+            let timings = self.state.last_timings.clone().unwrap_or_default();
+            let record = frame::FrameRecord {
+                scene: &scene.scene,
+                scene_gpu: &scene.scene_gpu,
+                camera: &scene.camera,
+                lights: &scene.lights,
+                techniques: scene.techniques.iter().take(nl).collect(),
+                settings: &self.state.settings,
+                frame,
+                timings: &timings,
+                adapter: gfx.gpu.adapter_summary(),
+                extra_timings: serde_json::json!({"supersampling": ss}),
+            };
+            std::fs::write(
+                path.with_extension("json"),
+                serde_json::to_string_pretty(&frame::frame_json(&record))?,
+            )?;
+            self.state.message = Some(format!("saved {}", path.display()));
+            println!("screenshot: {}", path.display());
+        }
+        if done {
+            event_loop.exit();
+        }
+        if actions.heatmap {
+            self.start_heatmap();
+        }
+        if let Some(name) = actions.switch_scene {
+            self.state.pending_scene = Some(name);
+        }
+        Ok(())
+    }
+
+    /// Starts the heatmap of the selected light's mask against `raytraced`
+    /// on a background thread (reads back the frame first).
+    fn start_heatmap(&mut self) {
+        let (Some(gfx), Some(scene)) = (&self.gfx, &self.scene) else {
+            return;
+        };
+        let Some(frame) = &gfx.frame else { return };
+        let li = self
+            .state
+            .selected_light
+            .min(scene.lights.len().saturating_sub(1));
+        let Some(light) = scene.lights.get(li).copied() else {
+            return;
+        };
+        let read = || -> Result<FrameData> {
+            Ok(FrameData {
+                width: frame.width as usize,
+                height: frame.height as usize,
+                positions: gfx.gpu.read_texture(&frame.gbuffer_position, 0, 16)?,
+                normals: gfx.gpu.read_texture(&frame.gbuffer_normal, 0, 8)?,
+                mask: gfx.gpu.read_texture(&frame.masks, li as u32, 2)?,
+                color: gfx.gpu.read_texture(&frame.color, 0, 4)?,
+            })
+        };
+        let data = match read() {
+            Ok(d) => d,
+            Err(e) => {
+                self.state.error = Some(format!("{e:#}"));
+                return;
+            }
+        };
+        let scene_arc = scene.scene.clone();
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            let _ = tx.send(heatmap_job(&scene_arc, &light, &data));
+        });
+        self.state.heatmap_job = Some(rx);
+    }
+}
+
+/// G-buffer, one light's mask and the colour image of a frame, read back.
+struct FrameData {
+    width: usize,
+    height: usize,
+    positions: Vec<u8>,
+    normals: Vec<u8>,
+    mask: Vec<u8>,
+    color: Vec<u8>,
+}
+
+/// The work of the heatmap thread.
+fn heatmap_job(
+    scene: &Scene,
+    light: &Light,
+    data: &FrameData,
+) -> Result<(egui::ColorImage, String), String> {
+    let (w, h) = (data.width, data.height);
+    let (pos, nrm, mask, color) = (&data.positions, &data.normals, &data.mask, &data.color);
+    use crate::technique::raytraced::{CasterBvh, mask_from_gbuffer};
+    let positions: &[[f32; 4]] = bytemuck::cast_slice(pos);
+    let normals: Vec<glam::Vec3> = bytemuck::cast_slice::<u8, [half::f16; 4]>(nrm)
+        .iter()
+        .map(|n| glam::Vec3::new(n[0].to_f32(), n[1].to_f32(), n[2].to_f32()).normalize_or_zero())
+        .collect();
+    let test: Vec<f32> = bytemuck::cast_slice::<u8, half::f16>(mask)
+        .iter()
+        .map(|v| v.to_f32())
+        .collect();
+    let bvh = CasterBvh::for_scene(scene, None);
+    let samples = if light.area.is_some() { 256 } else { 1 };
+    let reference = mask_from_gbuffer(&bvh, light, positions, &normals, samples, 512.0);
+    let considered: Vec<bool> = positions
+        .iter()
+        .zip(bytemuck::cast_slice::<u8, [half::f16; 4]>(nrm))
+        .zip(&normals)
+        .map(|((p, n), nv)| {
+            let pv = glam::Vec3::new(p[0], p[1], p[2]);
+            let to_light = match light.kind {
+                crate::scene::LightType::Directional => -light.direction,
+                _ => light.position - pv,
+            };
+            p[3] > 0.5 && n[3].to_f32() > 0.5 && nv.dot(to_light) > 0.0
+        })
+        .collect();
+    let m = crate::measure::quality::mask_metrics(w, h, &considered, &reference, &test);
+    let rgba = crate::measure::quality::heatmap(color, &considered, &reference, &test);
+    let summary = format!(
+        "false shadow {:.3} %, false lit {:.3} % (edge {:.3} %, interior {:.3} %), MAE {:.4}",
+        m.all.false_shadow_pct,
+        m.all.false_lit_pct,
+        m.edge.total_pct,
+        m.interior.total_pct,
+        m.mean_abs_error
+    );
+    Ok((
+        egui::ColorImage::from_rgba_unmultiplied([w, h], &rgba),
+        summary,
+    ))
+}
+
+fn present_mode(vsync: bool) -> wgpu::PresentMode {
+    if vsync {
+        wgpu::PresentMode::AutoVsync
+    } else {
+        wgpu::PresentMode::AutoNoVsync
+    }
+}
+
+/// Seconds since the Unix epoch, for screenshot names.
+fn chrono_stamp() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs())
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.gfx.is_none()
+            && let Err(e) = self.init(event_loop)
+        {
+            self.exit_error = Some(e);
+            event_loop.exit();
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(gfx) = &mut self.gfx else { return };
+        let consumed = gfx.egui_state.on_window_event(&gfx.window, &event).consumed;
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::RedrawRequested => {
+                if let Err(e) = self.redraw(event_loop) {
+                    self.exit_error = Some(e);
+                    event_loop.exit();
+                }
+            }
+            WindowEvent::KeyboardInput { event, .. } => {
+                let PhysicalKey::Code(code) = event.physical_key else {
+                    return;
+                };
+                if event.state == ElementState::Pressed {
+                    if !consumed && !gfx.egui_ctx.egui_wants_keyboard_input() {
+                        self.keys.insert(code);
+                        match code {
+                            KeyCode::F12 | KeyCode::KeyP => self.state.screenshot_requested = true,
+                            KeyCode::F1 => self.state.show_help = !self.state.show_help,
+                            KeyCode::Tab => self.state.show_panel = !self.state.show_panel,
+                            KeyCode::KeyM => {
+                                self.state.overlay = match self.state.overlay {
+                                    Overlay::Image => Overlay::Mask(self.state.selected_light),
+                                    Overlay::Mask(_) => Overlay::Image,
+                                }
+                            }
+                            KeyCode::KeyH => self.start_heatmap(),
+                            KeyCode::Digit1
+                            | KeyCode::Digit2
+                            | KeyCode::Digit3
+                            | KeyCode::Digit4 => {
+                                let i = match code {
+                                    KeyCode::Digit1 => 0,
+                                    KeyCode::Digit2 => 1,
+                                    KeyCode::Digit3 => 2,
+                                    _ => 3,
+                                };
+                                if self.scene.as_ref().is_some_and(|s| i < s.lights.len()) {
+                                    self.state.selected_light = i;
+                                }
+                            }
+                            KeyCode::Escape => event_loop.exit(),
+                            _ => {}
+                        }
+                    }
+                } else {
+                    self.keys.remove(&code);
+                }
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                // Cursor relative to the 3D view (right of the panel).
+                let p = Vec2::new(
+                    position.x as f32 - self.state.view_left as f32,
+                    position.y as f32,
+                );
+                let d = p - self.cursor;
+                self.cursor = p;
+                let size = gfx.window.inner_size();
+                let sz = Vec2::new(
+                    size.width.saturating_sub(self.state.view_left).max(1) as f32,
+                    size.height.max(1) as f32,
+                );
+                let Some(s) = &mut self.scene else { return };
+                if let Some(li) = self.dragging_light {
+                    let vp = s.camera.projection(sz.x / sz.y) * s.camera.view();
+                    if let Some(l) = s.lights.get_mut(li)
+                        && let Some(q) = orbit::drag_point(&s.camera, vp, sz, p, l.position)
+                    {
+                        l.position = q;
+                    }
+                } else if self.buttons[0] {
+                    orbit::orbit(&mut s.camera, d.x / sz.y * 3.0, d.y / sz.y * 3.0);
+                } else if self.buttons[2] {
+                    orbit::pan(&mut s.camera, d.x / sz.y, d.y / sz.y);
+                } else if self.buttons[1] {
+                    orbit::zoom(&mut s.camera, (1.0 + d.y / sz.y * 2.0).max(0.1));
+                }
+            }
+            WindowEvent::MouseInput { state, button, .. } => {
+                let i = match button {
+                    MouseButton::Left => 0,
+                    MouseButton::Middle => 1,
+                    MouseButton::Right => 2,
+                    _ => return,
+                };
+                let pressed = state == ElementState::Pressed;
+                if pressed && consumed {
+                    return;
+                }
+                self.buttons[i] = pressed;
+                if !pressed {
+                    self.dragging_light = None;
+                } else if i == 0 {
+                    // Grab a light icon within 16 px of the cursor.
+                    let size = gfx.window.inner_size();
+                    let sz = Vec2::new(
+                        size.width.saturating_sub(self.state.view_left).max(1) as f32,
+                        size.height.max(1) as f32,
+                    );
+                    if let Some(s) = &self.scene {
+                        let vp = s.camera.projection(sz.x / sz.y) * s.camera.view();
+                        self.dragging_light = s.lights.iter().position(|l| {
+                            l.kind != crate::scene::LightType::Directional
+                                && orbit::project(vp, sz, l.position)
+                                    .is_some_and(|q| q.distance(self.cursor) < 16.0)
+                        });
+                        if let Some(li) = self.dragging_light {
+                            self.state.selected_light = li;
+                        }
+                    }
+                }
+            }
+            WindowEvent::MouseWheel { delta, .. } if !consumed => {
+                let y = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+                if let Some(s) = &mut self.scene {
+                    orbit::zoom(&mut s.camera, 0.9f32.powf(y));
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
+        if let Some(gfx) = &self.gfx {
+            gfx.window.request_redraw();
+        }
+    }
+}

@@ -1,0 +1,492 @@
+//! The viewer's egui panels, generated from the registry and the parameter
+//! tables: technique and parameters, lights, scene and camera, rendering
+//! settings, statistics, debug overlays and help.
+
+use super::{Overlay, SceneState, ViewerState};
+use crate::gpu::GpuContext;
+use crate::renderer::{LightingModel, MAX_LIGHTS, Shading, TechniqueInstance};
+use crate::scene::{Light, LightArea, LightType, builtin};
+use crate::technique::{self, FAMILIES, ParamKind, ParamSpec, ParamValues};
+use glam::Vec3;
+
+/// Requests from the panels that the app carries out after the frame.
+#[derive(Default)]
+pub struct Actions {
+    pub heatmap: bool,
+    pub switch_scene: Option<String>,
+}
+
+/// One widget per parameter, from its table row; returns true on change.
+pub fn param_widget(ui: &mut egui::Ui, spec: &ParamSpec, value: &mut f64) -> bool {
+    match spec.kind {
+        ParamKind::Float => ui
+            .add(
+                egui::Slider::new(value, spec.min..=spec.max)
+                    .step_by(spec.step)
+                    .text(spec.name),
+            )
+            .changed(),
+        ParamKind::Int => {
+            let mut v = *value as i64;
+            let c = ui
+                .add(egui::Slider::new(&mut v, spec.min as i64..=spec.max as i64).text(spec.name))
+                .changed();
+            *value = v as f64;
+            c
+        }
+        ParamKind::Bool => {
+            let mut b = *value != 0.0;
+            let c = ui.checkbox(&mut b, spec.name).changed();
+            *value = b as u32 as f64;
+            c
+        }
+        ParamKind::Choice(options) => {
+            let mut i = *value as usize;
+            let before = i;
+            egui::ComboBox::from_label(spec.name)
+                .selected_text(options.get(i).copied().unwrap_or("?"))
+                .show_ui(ui, |ui| {
+                    for (k, o) in options.iter().enumerate() {
+                        ui.selectable_value(&mut i, k, *o);
+                    }
+                });
+            *value = i as f64;
+            i != before
+        }
+    }
+}
+
+/// What a parameter panel did this frame.
+pub struct PanelResult {
+    pub changed: bool,
+    /// Widgets drawn (one per parameter).
+    pub widgets: usize,
+}
+
+/// The parameter panel of a technique instance (hover for each doc).
+pub fn param_panel(ui: &mut egui::Ui, params: &mut ParamValues) -> PanelResult {
+    let mut r = PanelResult {
+        changed: false,
+        widgets: 0,
+    };
+    if params.specs.is_empty() {
+        ui.label("no parameters");
+    }
+    for (spec, value) in params.specs.iter().zip(params.values.iter_mut()) {
+        let w = ui.scope(|ui| param_widget(ui, spec, value));
+        r.changed |= w.inner;
+        r.widgets += 1;
+        w.response.on_hover_text(spec.doc);
+    }
+    r
+}
+
+fn all_ids() -> Vec<String> {
+    FAMILIES
+        .iter()
+        .flat_map(|f| {
+            f.presets
+                .iter()
+                .map(move |p| format!("{}:{}", f.id, p.name))
+        })
+        .collect()
+}
+
+fn vec3_edit(ui: &mut egui::Ui, label: &str, v: &mut Vec3, speed: f32) {
+    ui.horizontal(|ui| {
+        ui.label(label);
+        ui.add(egui::DragValue::new(&mut v.x).speed(speed).prefix("x "));
+        ui.add(egui::DragValue::new(&mut v.y).speed(speed).prefix("y "));
+        ui.add(egui::DragValue::new(&mut v.z).speed(speed).prefix("z "));
+    });
+}
+
+fn light_panel(ui: &mut egui::Ui, state: &mut ViewerState, scene: &mut SceneState) {
+    ui.horizontal(|ui| {
+        for i in 0..scene.lights.len() {
+            ui.selectable_value(&mut state.selected_light, i, format!("light {}", i + 1));
+        }
+        if scene.lights.len() < MAX_LIGHTS && ui.button("+").on_hover_text("add a light").clicked()
+        {
+            let c = scene.scene_gpu.bounds.center();
+            let r = scene.scene_gpu.bounds.size().length() * 0.5;
+            scene
+                .lights
+                .push(Light::point(c + Vec3::new(0.3, 1.0, 0.4) * r, 0.6));
+            state.selected_light = scene.lights.len() - 1;
+        }
+        if scene.lights.len() > 1
+            && ui
+                .button("−")
+                .on_hover_text("remove the selected light")
+                .clicked()
+        {
+            scene.lights.remove(state.selected_light);
+            state.selected_light = state.selected_light.min(scene.lights.len() - 1);
+        }
+    });
+    let Some(l) = scene.lights.get_mut(state.selected_light) else {
+        ui.label("no light");
+        return;
+    };
+    egui::ComboBox::from_label("type")
+        .selected_text(format!("{:?}", l.kind).to_lowercase())
+        .show_ui(ui, |ui| {
+            for k in [LightType::Point, LightType::Spot, LightType::Directional] {
+                ui.selectable_value(&mut l.kind, k, format!("{k:?}").to_lowercase());
+            }
+        });
+    let speed = (scene.scene_gpu.bounds.size().length() * 0.005).max(0.001);
+    if l.kind != LightType::Directional {
+        vec3_edit(ui, "position", &mut l.position, speed);
+    }
+    if l.kind != LightType::Point {
+        let mut d = l.direction;
+        vec3_edit(ui, "direction", &mut d, 0.01);
+        if d.length_squared() > 1e-6 {
+            l.direction = d.normalize();
+        }
+    }
+    let mut c = l.color.to_array();
+    ui.horizontal(|ui| {
+        ui.label("colour");
+        ui.color_edit_button_rgb(&mut c);
+    });
+    l.color = Vec3::from(c);
+    ui.add(egui::Slider::new(&mut l.intensity, 0.0..=4.0).text("intensity"));
+    ui.add(egui::Slider::new(&mut l.range, 0.0..=100.0).text("range (0 = none)"));
+    if l.kind == LightType::Spot {
+        ui.add(egui::Slider::new(&mut l.outer_cone_deg, 1.0..=89.0).text("outer cone°"));
+        ui.add(
+            egui::Slider::new(&mut l.inner_cone_deg, 0.0..=l.outer_cone_deg).text("inner cone°"),
+        );
+    }
+    let mut area = match l.area {
+        None => 0.0,
+        Some(LightArea::Sphere { radius }) => radius,
+        Some(LightArea::Rect { width, .. }) => width,
+    };
+    ui.add(egui::Slider::new(&mut area, 0.0..=2.0).text("area size (0 = hard)"))
+        .on_hover_text("sphere radius (point, spot) or tangent of the half-angle (directional): soft shadows where the technique supports them");
+    l.area = (area > 0.0).then_some(LightArea::Sphere { radius: area });
+}
+
+fn technique_panel(
+    ui: &mut egui::Ui,
+    state: &mut ViewerState,
+    scene: &mut SceneState,
+    gpu: &GpuContext,
+) {
+    ui.checkbox(
+        &mut state.same_technique_for_all,
+        "same technique for every light",
+    );
+    let li = state.selected_light.min(MAX_LIGHTS - 1);
+    let current = scene.techniques[li].choice.id();
+    let mut chosen = current.clone();
+    egui::ComboBox::from_label("technique")
+        .selected_text(&chosen)
+        .show_ui(ui, |ui| {
+            for id in all_ids() {
+                let summary = technique::resolve(&id)
+                    .map(|c| c.family.summary)
+                    .unwrap_or("");
+                ui.selectable_value(&mut chosen, id.clone(), id)
+                    .on_hover_text(summary);
+            }
+        });
+    if chosen != current {
+        match technique::resolve(&chosen).and_then(|c| TechniqueInstance::new(gpu, c)) {
+            Ok(_) => {
+                let range = if state.same_technique_for_all {
+                    0..MAX_LIGHTS
+                } else {
+                    li..li + 1
+                };
+                for i in range {
+                    if let Ok(inst) =
+                        technique::resolve(&chosen).and_then(|c| TechniqueInstance::new(gpu, c))
+                    {
+                        scene.techniques[i] = inst;
+                    }
+                }
+            }
+            Err(e) => state.error = Some(format!("{e:#}")),
+        }
+    }
+    ui.label(scene.techniques[li].choice.family.summary);
+    let mut params = scene.techniques[li].choice.params.clone();
+    if param_panel(ui, &mut params).changed {
+        let range = if state.same_technique_for_all {
+            0..MAX_LIGHTS
+        } else {
+            li..li + 1
+        };
+        for i in range {
+            if scene.techniques[i].choice.family.id == scene.techniques[li].choice.family.id {
+                scene.techniques[i].choice.params = params.clone();
+            }
+        }
+    }
+}
+
+fn scene_panel(
+    ui: &mut egui::Ui,
+    state: &mut ViewerState,
+    scene: &mut SceneState,
+    actions: &mut Actions,
+) {
+    let mut name = state.scene_name.clone();
+    egui::ComboBox::from_label("scene")
+        .selected_text(&name)
+        .show_ui(ui, |ui| {
+            for n in builtin::NAMES {
+                ui.selectable_value(&mut name, n.to_string(), *n);
+            }
+        });
+    if name != state.scene_name {
+        actions.switch_scene = Some(name);
+    }
+    ui.horizontal_wrapped(|ui| {
+        ui.label("camera:");
+        for (n, c) in &scene.scene.camera_presets {
+            if ui.button(n).clicked() {
+                scene.camera = *c;
+            }
+        }
+    });
+    ui.horizontal_wrapped(|ui| {
+        ui.label("lights:");
+        for (n, l) in &scene.scene.light_presets {
+            if ui.button(n).clicked() {
+                scene.lights = l.clone();
+                state.selected_light = 0;
+            }
+        }
+    });
+    ui.add(egui::Slider::new(&mut scene.camera.fov_y_deg, 10.0..=120.0).text("fov°"));
+    let mut bg = state
+        .settings
+        .background
+        .unwrap_or(scene.scene.background)
+        .to_array();
+    ui.horizontal(|ui| {
+        ui.label("background");
+        ui.color_edit_button_rgb(&mut bg);
+    });
+    state.settings.background = Some(Vec3::from(bg));
+}
+
+fn render_panel(ui: &mut egui::Ui, state: &mut ViewerState) {
+    egui::ComboBox::from_label("shading")
+        .selected_text(format!("{:?}", state.settings.shading).to_lowercase())
+        .show_ui(ui, |ui| {
+            for s in [Shading::Flat, Shading::Gouraud, Shading::Pixel] {
+                ui.selectable_value(
+                    &mut state.settings.shading,
+                    s,
+                    format!("{s:?}").to_lowercase(),
+                );
+            }
+        });
+    egui::ComboBox::from_label("specular")
+        .selected_text(format!("{:?}", state.settings.lighting))
+        .show_ui(ui, |ui| {
+            for s in [LightingModel::Phong, LightingModel::BlinnPhong] {
+                ui.selectable_value(&mut state.settings.lighting, s, format!("{s:?}"));
+            }
+        });
+    ui.checkbox(&mut state.settings.cull_back_faces, "back-face culling");
+    ui.checkbox(&mut state.settings.show_light_icons, "light icons");
+    ui.checkbox(&mut state.vsync, "vsync");
+    ui.horizontal(|ui| {
+        ui.label("antialiasing");
+        ui.selectable_value(&mut state.supersampling, 1, "off");
+        ui.selectable_value(&mut state.supersampling, 2, "2×2 SSAA");
+    })
+    .response
+    .on_hover_text("supersampling: the frame is rendered at twice the window size and filtered down (the mask architecture works per pixel, so this replaces MSAA)");
+}
+
+fn stats_panel(ui: &mut egui::Ui, state: &ViewerState, scene: &SceneState) {
+    let n = state.frame_times.len().max(1) as f64;
+    let mean = state.frame_times.iter().sum::<f64>() / n;
+    ui.label(format!(
+        "{:.1} FPS, frame {:.1} ms (mean of {} frames)",
+        1000.0 / mean.max(1e-3),
+        mean,
+        state.frame_times.len()
+    ));
+    if let Some(t) = &state.last_timings {
+        ui.label(format!(
+            "wall: prepass {:.1}, masks {:.1}, lighting {:.1} ms",
+            t.prepass_ms, t.masks_ms, t.lighting_ms
+        ));
+        if let Some(g) = &t.gpu {
+            ui.label(format!(
+                "GPU: prepass {:.2}, masks {:.2}, lighting {:.2} ms",
+                g.prepass_ms, g.masks_ms, g.lighting_ms
+            ));
+        }
+    }
+    ui.label(format!(
+        "triangles: {} drawn, {} casters",
+        scene.scene_gpu.triangle_count, scene.scene_gpu.caster_triangle_count
+    ));
+    for (i, t) in scene.techniques.iter().take(scene.lights.len()).enumerate() {
+        let c: Vec<String> = t
+            .technique
+            .counters()
+            .iter()
+            .map(|(k, v)| format!("{k} {v:.0}"))
+            .collect();
+        if !c.is_empty() {
+            ui.label(format!("light {}: {}", i + 1, c.join(", ")));
+        }
+    }
+}
+
+fn debug_panel(
+    ui: &mut egui::Ui,
+    state: &mut ViewerState,
+    scene: &SceneState,
+    actions: &mut Actions,
+) {
+    ui.horizontal(|ui| {
+        ui.selectable_value(&mut state.overlay, Overlay::Image, "image");
+        for i in 0..scene.lights.len() {
+            ui.selectable_value(
+                &mut state.overlay,
+                Overlay::Mask(i),
+                format!("mask {}", i + 1),
+            );
+        }
+    });
+    ui.label("Depth maps, light frusta and shadow volumes appear here with the techniques that have them.");
+    if state.heatmap_job.is_some() {
+        ui.horizontal(|ui| {
+            ui.spinner();
+            ui.label("ray tracing the reference…");
+        });
+    } else if ui.button("error heatmap vs raytraced (H)").clicked() {
+        actions.heatmap = true;
+    }
+}
+
+const HELP: &str = "\
+Mouse: left drag orbits (or drags a light icon), middle drag or wheel zooms, right drag pans.
+Keys: W/A/S/D fly, Q/E down/up; arrows and PageUp/PageDown move the selected light;
+1-4 select a light; M toggles the mask view; H computes the error heatmap against
+raytraced; P or F12 saves a screenshot (PNG + frame.json); Tab hides the panel;
+F1 this help; Esc quits.";
+
+/// Builds every panel for this frame.
+pub fn build(
+    root: &mut egui::Ui,
+    state: &mut ViewerState,
+    scene: &mut SceneState,
+    gpu: &GpuContext,
+    actions: &mut Actions,
+) {
+    state.view_left = 0;
+    if state.show_panel {
+        let panel = egui::Panel::left("controls")
+            .default_size(320.0)
+            .show(root, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    ui.heading("shadowlab");
+                    if let Some(e) = &state.error {
+                        ui.colored_label(egui::Color32::LIGHT_RED, e);
+                    }
+                    if let Some(m) = &state.message {
+                        ui.label(m);
+                    }
+                    egui::CollapsingHeader::new("Technique")
+                        .default_open(true)
+                        .show(ui, |ui| technique_panel(ui, state, scene, gpu));
+                    egui::CollapsingHeader::new("Lights")
+                        .default_open(true)
+                        .show(ui, |ui| light_panel(ui, state, scene));
+                    egui::CollapsingHeader::new("Scene and camera")
+                        .default_open(false)
+                        .show(ui, |ui| scene_panel(ui, state, scene, actions));
+                    egui::CollapsingHeader::new("Rendering")
+                        .default_open(false)
+                        .show(ui, |ui| render_panel(ui, state));
+                    egui::CollapsingHeader::new("Statistics")
+                        .default_open(true)
+                        .show(ui, |ui| stats_panel(ui, state, scene));
+                    egui::CollapsingHeader::new("Debug views")
+                        .default_open(false)
+                        .show(ui, |ui| debug_panel(ui, state, scene, actions));
+                    if ui.button("help (F1)").clicked() {
+                        state.show_help = !state.show_help;
+                    }
+                });
+            });
+        state.view_left =
+            (panel.response.rect.right() * root.ctx().pixels_per_point()).round() as u32;
+    }
+    let ctx = root.ctx().clone();
+    if state.show_help {
+        egui::Window::new("Help")
+            .open(&mut state.show_help)
+            .show(&ctx, |ui| {
+                ui.label(HELP);
+            });
+    }
+    let mut close = false;
+    if let Some(h) = &state.heatmap {
+        egui::Window::new("Error heatmap vs raytraced").show(&ctx, |ui| {
+            ui.label(&h.summary);
+            ui.label("red: false shadow, blue: false lit");
+            let size = h.texture.size_vec2();
+            let scale = (480.0 / size.x).min(1.0);
+            ui.image((h.texture.id(), size * scale));
+            close = ui.button("close").clicked();
+        });
+    }
+    if close {
+        state.heatmap = None;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every registered technique's parameter panel builds, with one widget
+    /// per parameter, and leaves valid values.
+    #[test]
+    fn parameter_panels_exist_for_every_technique() {
+        let ctx = egui::Context::default();
+        for f in FAMILIES {
+            for p in f.presets {
+                let mut choice = technique::resolve(&format!("{}:{}", f.id, p.name)).unwrap();
+                let before = choice.params.values.clone();
+                let mut widgets = 0;
+                ctx.run_ui(Default::default(), |ui| {
+                    widgets = param_panel(ui, &mut choice.params).widgets;
+                })
+                .drop_without_applying_deltas();
+                assert_eq!(
+                    widgets,
+                    f.params.len(),
+                    "{}: one widget per parameter",
+                    f.id
+                );
+                // Sliders snap to their step, so allow rounding noise only.
+                for (a, b) in choice.params.values.iter().zip(&before) {
+                    assert!(
+                        (a - b).abs() < 1e-9,
+                        "{}: building the panel changed {b} to {a}",
+                        f.id
+                    );
+                }
+                for (s, v) in choice.params.specs.iter().zip(&choice.params.values) {
+                    assert!(s.min <= *v && *v <= s.max);
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,75 @@
+//! The interactive viewer, started under Xvfb on the CPU Vulkan driver:
+//! its screenshot must show the scene and the egui panel.
+
+mod common;
+use common::*;
+use std::process::Command;
+
+#[test]
+fn viewer_screenshot_shows_scene_and_panel() {
+    let dir = tmpdir("viewer");
+    let shot = dir.join("view.png");
+    let o = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1024x768x24"])
+        .arg(env!("CARGO_BIN_EXE_shadowlab"))
+        .args([
+            "view",
+            "--scene",
+            "floating",
+            "--technique",
+            "planar",
+            "--size",
+            "800x450",
+            "--frames",
+            "4",
+            "--heatmap",
+            "--screenshot",
+        ])
+        .arg(&shot)
+        .output()
+        .expect("xvfb-run (package xvfb) must be installed: scripts/setup.sh --test does it");
+    assert!(o.status.success(), "viewer failed: {}", stderr(&o));
+    // The heatmap against raytraced arrived from its background thread.
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("heatmap: false shadow"), "{stdout}");
+    let img = image::open(&shot).unwrap().to_rgba8();
+    assert_eq!(img.dimensions(), (800, 450));
+    // The panel: a dark, nearly grey strip on the left with some light text.
+    let panel_dark = (0..450)
+        .step_by(3)
+        .flat_map(|y| (0..150).step_by(3).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            let p = img.get_pixel(x, y);
+            p[0] < 60 && p[1] < 60 && p[2] < 60 && p[0].abs_diff(p[2]) < 8
+        })
+        .count();
+    assert!(
+        panel_dark > 1500,
+        "no egui panel on the left ({panel_dark} dark samples)"
+    );
+    let text = (0..450)
+        .flat_map(|y| (0..250).map(move |x| (x, y)))
+        .filter(|&(x, y)| img.get_pixel(x, y)[0] > 150)
+        .count();
+    assert!(text > 200, "the panel shows no text ({text} light pixels)");
+    // The scene: the red sphere and the checker floor on the right.
+    let right: Vec<_> = (0..450)
+        .flat_map(|y| (400..800).map(move |x| (x, y)))
+        .map(|(x, y)| *img.get_pixel(x, y))
+        .collect();
+    let red = right
+        .iter()
+        .filter(|p| p[0] > 120 && p[1] < 80 && p[2] < 80)
+        .count();
+    let light_floor = right
+        .iter()
+        .filter(|p| p[0] > 150 && p[0].abs_diff(p[2]) < 12)
+        .count();
+    assert!(
+        red > 200 && light_floor > 5000,
+        "scene not visible: {red} red, {light_floor} floor pixels"
+    );
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("view.json")).unwrap()).unwrap();
+    assert_eq!(j["techniques"][0]["id"], "planar:default");
+}
