@@ -326,6 +326,8 @@ struct App {
     /// Frame at which the start-up heatmap was requested, until it arrives.
     heatmap_started_at: Option<u32>,
     heatmap_reported: bool,
+    /// Seconds between redraws, after the first frames.
+    intervals: Vec<f64>,
     exit_error: Option<anyhow::Error>,
 }
 
@@ -371,6 +373,7 @@ pub fn run(options: ViewerOptions) -> Result<()> {
         first_frame_logged: false,
         heatmap_started_at: None,
         heatmap_reported: false,
+        intervals: vec![],
         exit_error: None,
     };
     event_loop
@@ -498,7 +501,8 @@ impl App {
 
     fn redraw(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
         let now = Instant::now();
-        let dt = (now - self.last_frame).as_secs_f32().min(0.1);
+        let interval = (now - self.last_frame).as_secs_f64();
+        let dt = interval.min(0.1) as f32;
         self.last_frame = now;
         if let Some(name) = self.state.pending_scene.take()
             && let Err(e) = self.switch_scene(&name)
@@ -773,7 +777,19 @@ impl App {
             self.state.message = Some(format!("saved {}", path.display()));
             println!("screenshot: {}", path.display());
         }
+        if self.frames_rendered > 3 {
+            self.intervals.push(interval);
+        }
         if done {
+            if !self.intervals.is_empty() {
+                let mean = self.intervals.iter().sum::<f64>() / self.intervals.len() as f64;
+                println!(
+                    "viewer: {:.1} FPS ({:.1} ms per frame, window to window, over {} frames after the first 3)",
+                    1.0 / mean,
+                    mean * 1e3,
+                    self.intervals.len()
+                );
+            }
             event_loop.exit();
         }
         if actions.heatmap {
