@@ -975,6 +975,7 @@ impl Renderer {
                 frame,
                 light_index: i,
                 light,
+                camera,
                 params: &inst.choice.params,
                 target: &frame.mask_layer_views[i],
             };

@@ -410,10 +410,35 @@ pub fn export(scene: &Scene, out: &Path) -> Result<()> {
             ELEMENTS,
             None,
         );
+        let mut attributes = json!({"POSITION": pa, "NORMAL": na, "TEXCOORD_0": ta});
+        // Normal-mapped materials get their tangent space (xyz unit, w ±1).
+        if scene.materials[o.material].normal_map.is_some() && m.tangents.len() == m.positions.len()
+        {
+            let tangents: Vec<glam::Vec4> = m
+                .tangents
+                .iter()
+                .map(|t| {
+                    let v = o
+                        .transform
+                        .transform_vector3(t.truncate())
+                        .try_normalize()
+                        .unwrap_or(Vec3::X);
+                    v.extend(if t.w < 0.0 { -1.0 } else { 1.0 })
+                })
+                .collect();
+            attributes["TANGENT"] = json!(w.accessor(
+                bytemuck::cast_slice(&tangents),
+                tangents.len(),
+                "VEC4",
+                FLOAT,
+                ARRAY,
+                None
+            ));
+        }
         meshes.push(json!({
             "name": m.name,
             "primitives": [{
-                "attributes": {"POSITION": pa, "NORMAL": na, "TEXCOORD_0": ta},
+                "attributes": attributes,
                 "indices": ia,
                 "material": o.material,
                 "mode": 4,

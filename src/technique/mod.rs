@@ -10,6 +10,7 @@ pub mod params;
 pub mod planar;
 pub mod projective;
 pub mod raytraced;
+pub mod shadow_map;
 
 use crate::gpu::GpuContext;
 use crate::renderer::{FrameResources, SceneGpu};
@@ -25,6 +26,8 @@ pub struct MaskContext<'a> {
     pub frame: &'a FrameResources,
     pub light_index: usize,
     pub light: &'a Light,
+    /// The camera of the frame.
+    pub camera: &'a crate::scene::Camera,
     pub params: &'a ParamValues,
     /// The mask layer to write (format [`crate::renderer::MASK_FORMAT`]).
     pub target: &'a wgpu::TextureView,
@@ -71,6 +74,7 @@ pub static FAMILIES: &[&Family] = &[
     &raytraced::FAMILY,
     &planar::FAMILY,
     &projective::FAMILY,
+    &shadow_map::FAMILY,
 ];
 
 /// Identifies a scene's geometry and flags cheaply (object transforms,

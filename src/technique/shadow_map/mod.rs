@@ -1,0 +1,820 @@
+//! `shadow-map`: shadow maps (Williams 1978; SEEDS §5, 000 §4, 001 §3,
+//! 002 §2). Depth from the light — perspective for spot lights, six 90°
+//! faces for point lights, orthographic for directional lights fitted to the
+//! scene and clipped to what the camera sees — then a screen-space lookup
+//! that moves each G-buffer point along its normal (normal offset), projects
+//! it with the light's matrices (wgpu: NDC z in [0,1], texture v down, see
+//! `light_space::bias_matrix`), compares depths (`z ≤ stored` is lit,
+//! outside the map is lit) and filters: nearest, hardware 2×2 PCF, N×N grid,
+//! rotated Vogel disk, PCSS, or the documents' variable-width PCF.
+
+use super::{Family, MaskContext, ParamSpec, Preset, ShadowTechnique};
+use crate::renderer::{DEPTH_FORMAT, MASK_FORMAT, VERTEX_LAYOUT};
+use crate::scene::{Aabb, Camera, Light, LightType};
+use anyhow::{Result, bail};
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, UVec4, Vec3, Vec4};
+use std::collections::HashMap;
+
+const FILTERS: &[&str] = &["hard", "pcf2x2", "grid", "disk", "pcss", "varwidth"];
+const FORMATS: &[&str] = &["d16", "d24", "d32f", "r8"];
+
+pub static FAMILY: Family = Family {
+    id: "shadow-map",
+    summary: "shadow maps: depth from the light, compared per pixel, with the PCF family of filters",
+    params: &[
+        ParamSpec::choice(
+            "filter",
+            FILTERS,
+            2,
+            "hard: nearest texel; pcf2x2: hardware bilinear comparison; grid: N×N 2×2-PCF taps; disk: N² taps on a rotated Vogel disk; pcss: blocker search + penumbra from the light size; varwidth: radius ∝ |d_blocker − d_receiver|^exponent (002)",
+        ),
+        ParamSpec::int(
+            "samples",
+            3,
+            1,
+            16,
+            "taps per side: grid N×N (up to 16×16), disk N²",
+        ),
+        ParamSpec::float(
+            "radius",
+            1.5,
+            0.0,
+            32.0,
+            0.25,
+            "filter radius in texels (grid and disk)",
+        ),
+        ParamSpec::int(
+            "size",
+            2048,
+            64,
+            16384,
+            "map side in texels (per cube face for point lights)",
+        ),
+        ParamSpec::choice(
+            "format",
+            FORMATS,
+            2,
+            "depth format; r8 stores depth in 8 bits and shows the low-precision failure",
+        ),
+        ParamSpec::float(
+            "depth_bias",
+            2.0,
+            0.0,
+            100000.0,
+            1.0,
+            "constant depth bias of the depth pass, in the format's smallest steps",
+        ),
+        ParamSpec::float(
+            "slope_bias",
+            2.0,
+            0.0,
+            20.0,
+            0.1,
+            "slope-scaled depth bias (polygon offset factor)",
+        ),
+        ParamSpec::float(
+            "normal_offset",
+            1.0,
+            0.0,
+            10.0,
+            0.1,
+            "lookup point moved along the geometric normal, in shadow-map texels",
+        ),
+        ParamSpec::choice(
+            "cull",
+            &["back", "front", "none"],
+            0,
+            "faces culled in the depth pass; front culling moves acne to back faces but fails on open meshes",
+        ),
+        ParamSpec::float(
+            "near",
+            0.0,
+            0.0,
+            10000.0,
+            0.01,
+            "near plane of the light frustum (0 = fitted to the scene)",
+        ),
+        ParamSpec::float(
+            "far",
+            0.0,
+            0.0,
+            100000.0,
+            0.1,
+            "far plane of the light frustum (0 = fitted to the scene)",
+        ),
+        ParamSpec::float(
+            "fov",
+            0.0,
+            0.0,
+            170.0,
+            1.0,
+            "spot light frustum angle in degrees (0 = the cone plus 4°); precision degrades above 90°",
+        ),
+        ParamSpec::float(
+            "light_size",
+            24.0,
+            0.0,
+            400.0,
+            1.0,
+            "pcss: light size, as the penumbra width in texels per unit of (d_receiver − d_blocker)/d_blocker",
+        ),
+        ParamSpec::float(
+            "blocker_search",
+            12.0,
+            1.0,
+            64.0,
+            1.0,
+            "pcss and varwidth: blocker-search radius in texels",
+        ),
+        ParamSpec::float(
+            "varwidth_scale",
+            8.0,
+            0.0,
+            200.0,
+            0.5,
+            "varwidth: texels of radius per unit of |d_blocker − d_receiver|^exponent",
+        ),
+        ParamSpec::float(
+            "varwidth_exponent",
+            1.0,
+            0.1,
+            4.0,
+            0.1,
+            "varwidth: the exponent",
+        ),
+    ],
+    presets: &[
+        Preset {
+            name: "pcf",
+            summary: "3×3 grid of hardware 2×2 PCF taps over ±1.5 texels, 2048², d32f",
+            values: &[],
+        },
+        Preset {
+            name: "hard",
+            summary: "nearest texel, no filtering",
+            values: &[("filter", "hard")],
+        },
+        Preset {
+            name: "pcf2x2",
+            summary: "one hardware bilinear comparison",
+            values: &[("filter", "pcf2x2")],
+        },
+        Preset {
+            name: "pcf-disk",
+            summary: "16 taps on a per-pixel rotated Vogel disk of radius 2.5 texels",
+            values: &[("filter", "disk"), ("samples", "4"), ("radius", "2.5")],
+        },
+        Preset {
+            name: "pcss",
+            summary: "percentage-closer soft shadows",
+            values: &[("filter", "pcss"), ("samples", "5")],
+        },
+        Preset {
+            name: "varwidth",
+            summary: "the documents' variable-width PCF",
+            values: &[("filter", "varwidth"), ("samples", "4")],
+        },
+        Preset {
+            name: "8bit",
+            summary: "depth stored in 8 bits: acne everywhere",
+            values: &[("format", "r8"), ("filter", "hard")],
+        },
+    ],
+    create: |gpu| Ok(Box::new(ShadowMapTechnique::new(gpu))),
+};
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ShadowMapUniform {
+    faces: [Mat4; 6],
+    light: Vec4,
+    kernel: Vec4,
+    map: Vec4,
+    soft: Vec4,
+    depth: Vec4,
+    face: UVec4,
+    _pad: Vec4,
+}
+
+/// The light's matrices for one frame.
+#[derive(Clone, Debug)]
+pub struct LightSetup {
+    pub faces: Vec<Mat4>,
+    pub near: f32,
+    pub far: f32,
+    pub orthographic: bool,
+    /// World size of a texel at unit distance (perspective) or anywhere (orthographic), for a 1-texel map.
+    pub texel_scale: f32,
+}
+
+fn up_for(dir: Vec3) -> Vec3 {
+    if dir.normalize().dot(Vec3::Y).abs() > 0.99 {
+        Vec3::Z
+    } else {
+        Vec3::Y
+    }
+}
+
+/// Near/far of a local light around `bounds`, unless given.
+fn near_far(pos: Vec3, bounds: &Aabb, near: f32, far: f32) -> (f32, f32) {
+    let auto_far = bounds
+        .corners()
+        .iter()
+        .map(|c| c.distance(pos))
+        .fold(0.0f32, f32::max)
+        .max(1e-3)
+        * 1.01;
+    let f = if far > 0.0 { far } else { auto_far };
+    let closest = pos.clamp(bounds.min, bounds.max).distance(pos);
+    let n = if near > 0.0 {
+        near
+    } else {
+        (closest * 0.95).max(f * 2e-3)
+    };
+    (n, f.max(n * 1.01))
+}
+
+/// The six 90° views of a point light: +X, −X, +Y, −Y, +Z, −Z.
+pub fn cube_views(pos: Vec3) -> [Mat4; 6] {
+    let v = |d: Vec3, up: Vec3| glam::camera::rh::view::look_to_mat4(pos, d, up);
+    [
+        v(Vec3::X, Vec3::NEG_Y),
+        v(Vec3::NEG_X, Vec3::NEG_Y),
+        v(Vec3::Y, Vec3::Z),
+        v(Vec3::NEG_Y, Vec3::NEG_Z),
+        v(Vec3::Z, Vec3::NEG_Y),
+        v(Vec3::NEG_Z, Vec3::NEG_Y),
+    ]
+}
+
+/// Light matrices: spot (perspective over the cone), point (six faces),
+/// directional (orthographic around the scene, its xy clipped to the
+/// camera's view of the scene).
+pub fn light_setup(
+    light: &Light,
+    scene_bounds: &Aabb,
+    camera: &Camera,
+    aspect: f32,
+    near: f32,
+    far: f32,
+    fov_deg: f32,
+) -> LightSetup {
+    use glam::camera::rh::proj::directx::{orthographic, perspective};
+    match light.kind {
+        LightType::Spot => {
+            let (n, f) = near_far(light.position, scene_bounds, near, far);
+            let fov = if fov_deg > 0.0 {
+                fov_deg
+            } else {
+                (2.0 * light.outer_cone_deg + 4.0).min(170.0)
+            }
+            .to_radians();
+            let view = glam::camera::rh::view::look_to_mat4(
+                light.position,
+                light.direction,
+                up_for(light.direction),
+            );
+            LightSetup {
+                faces: vec![perspective(fov, 1.0, n, f) * view],
+                near: n,
+                far: f,
+                orthographic: false,
+                texel_scale: 2.0 * (fov * 0.5).tan(),
+            }
+        }
+        LightType::Point => {
+            let (n, f) = near_far(light.position, scene_bounds, near, far);
+            let proj = perspective(std::f32::consts::FRAC_PI_2, 1.0, n, f);
+            LightSetup {
+                faces: cube_views(light.position)
+                    .iter()
+                    .map(|v| proj * *v)
+                    .collect(),
+                near: n,
+                far: f,
+                orthographic: false,
+                texel_scale: 2.0,
+            }
+        }
+        LightType::Directional => {
+            let dir = light.direction.normalize();
+            let c = scene_bounds.center();
+            let r = scene_bounds.size().length() * 0.5 + 1e-3;
+            let view = glam::camera::rh::view::look_to_mat4(c - dir * (2.0 * r), dir, up_for(dir));
+            let scene_ls = scene_bounds.transformed(view);
+            // The camera frustum, its far plane pulled in to the scene, in light space.
+            let vp = camera.projection(aspect) * camera.view();
+            let inv = vp.inverse();
+            let reach = (camera.eye.distance(c) + r).min(camera.far);
+            let far_z = {
+                let p = camera.projection(aspect) * Vec4::new(0.0, 0.0, -reach, 1.0);
+                (p.z / p.w).clamp(0.0, 1.0)
+            };
+            let corners = [0.0f32, far_z].into_iter().flat_map(|z| {
+                [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)].map(|(x, y)| {
+                    let w = inv * Vec4::new(x, y, z, 1.0);
+                    view.transform_point3(w.truncate() / w.w)
+                })
+            });
+            let cam_ls = Aabb::from_points(corners);
+            let min_x = scene_ls.min.x.max(cam_ls.min.x);
+            let max_x = scene_ls.max.x.min(cam_ls.max.x);
+            let min_y = scene_ls.min.y.max(cam_ls.min.y);
+            let max_y = scene_ls.max.y.min(cam_ls.max.y);
+            let (min_x, max_x, min_y, max_y) = if min_x < max_x && min_y < max_y {
+                (min_x, max_x, min_y, max_y)
+            } else {
+                (
+                    scene_ls.min.x,
+                    scene_ls.max.x,
+                    scene_ls.min.y,
+                    scene_ls.max.y,
+                )
+            };
+            // Square texels: the larger extent on both axes.
+            let half = ((max_x - min_x).max(max_y - min_y) * 0.5).max(1e-3);
+            let (cx, cy) = ((min_x + max_x) * 0.5, (min_y + max_y) * 0.5);
+            // View space looks down −z: depth range from the scene's z extent.
+            let (n, f) = (-scene_ls.max.z - 1e-3, -scene_ls.min.z + 1e-3);
+            LightSetup {
+                faces: vec![
+                    orthographic(cx - half, cx + half, cy - half, cy + half, n.max(0.0), f) * view,
+                ],
+                near: n.max(0.0),
+                far: f,
+                orthographic: true,
+                texel_scale: 2.0 * half,
+            }
+        }
+    }
+}
+
+struct Maps {
+    size: u32,
+    layers: u32,
+    format: usize,
+    depth_layer_views: Vec<wgpu::TextureView>,
+    depth_array: wgpu::TextureView,
+    byte: Option<(Vec<wgpu::TextureView>, wgpu::TextureView)>,
+    bytes: u64,
+}
+
+pub struct ShadowMapTechnique {
+    layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
+    depth_pipelines: HashMap<(usize, usize, i32, u32), wgpu::RenderPipeline>,
+    lookup: wgpu::RenderPipeline,
+    uniforms: wgpu::Buffer,
+    compare_sampler: wgpu::Sampler,
+    placeholder_bytes: wgpu::TextureView,
+    /// Bound in place of the maps while they are rendered.
+    placeholder_depth: wgpu::TextureView,
+    maps: Option<Maps>,
+}
+
+const STRIDE: u64 = 512;
+
+fn depth_format(i: usize) -> wgpu::TextureFormat {
+    match i {
+        0 | 3 => wgpu::TextureFormat::Depth16Unorm,
+        1 => wgpu::TextureFormat::Depth24Plus,
+        _ => wgpu::TextureFormat::Depth32Float,
+    }
+}
+
+impl ShadowMapTechnique {
+    pub fn new(gpu: &crate::gpu::GpuContext) -> ShadowMapTechnique {
+        let device = &gpu.device;
+        let tex = |binding, sample_type| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type,
+                view_dimension: wgpu::TextureViewDimension::D2Array,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shadow map"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                super::gbuffer_entry(1),
+                super::gbuffer_entry(2),
+                tex(3, wgpu::TextureSampleType::Depth),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 4,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+                    count: None,
+                },
+                tex(5, wgpu::TextureSampleType::Float { filterable: false }),
+            ],
+        });
+        let module = crate::renderer::shader_module(
+            device,
+            "shadow map",
+            &[include_str!("shadow_map.wgsl")],
+        );
+        let pipeline_layout = super::pipeline_layout(gpu, "shadow map", &layout);
+        let lookup = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("shadow map lookup"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_lookup"),
+                compilation_options: Default::default(),
+                targets: &[Some(MASK_FORMAT.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let placeholder = |format| {
+            device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some("shadow map placeholder"),
+                    size: wgpu::Extent3d {
+                        width: 1,
+                        height: 1,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+                .create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2Array),
+                    ..Default::default()
+                })
+        };
+        ShadowMapTechnique {
+            uniforms: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("shadow map uniforms"),
+                size: STRIDE * 6,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            compare_sampler: device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("shadow compare"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                compare: Some(wgpu::CompareFunction::LessEqual),
+                ..Default::default()
+            }),
+            layout,
+            pipeline_layout,
+            module,
+            depth_pipelines: HashMap::new(),
+            lookup,
+            placeholder_bytes: placeholder(wgpu::TextureFormat::R8Unorm),
+            placeholder_depth: placeholder(wgpu::TextureFormat::Depth32Float),
+            maps: None,
+        }
+    }
+
+    fn depth_pipeline(
+        &mut self,
+        device: &wgpu::Device,
+        format: usize,
+        cull: usize,
+        bias: i32,
+        slope: f32,
+    ) -> &wgpu::RenderPipeline {
+        let key = (format, cull, bias, slope.to_bits());
+        let (module, layout) = (&self.module, &self.pipeline_layout);
+        self.depth_pipelines.entry(key).or_insert_with(|| {
+            let byte = format == 3;
+            let targets = [Some(wgpu::ColorTargetState::from(
+                wgpu::TextureFormat::R8Unorm,
+            ))];
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("shadow map depth"),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some("vs_depth"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(VERTEX_LAYOUT)],
+                },
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: [Some(wgpu::Face::Back), Some(wgpu::Face::Front), None][cull],
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: depth_format(format),
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                    stencil: Default::default(),
+                    bias: wgpu::DepthBiasState {
+                        constant: bias,
+                        slope_scale: slope,
+                        clamp: 0.0,
+                    },
+                }),
+                multisample: Default::default(),
+                fragment: byte.then_some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some("fs_depth_byte"),
+                    compilation_options: Default::default(),
+                    targets: &targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        })
+    }
+
+    fn ensure_maps(
+        &mut self,
+        gpu: &crate::gpu::GpuContext,
+        size: u32,
+        layers: u32,
+        format: usize,
+    ) -> Result<()> {
+        if self
+            .maps
+            .as_ref()
+            .is_some_and(|m| (m.size, m.layers, m.format) == (size, layers, format))
+        {
+            return Ok(());
+        }
+        let max = gpu.max_texture_size();
+        if size > max {
+            bail!(
+                "shadow-map: size {size} exceeds the device's largest texture ({max}); choose --set size=N with N ≤ {max}"
+            );
+        }
+        let make = |f: wgpu::TextureFormat| {
+            gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("shadow map"),
+                size: wgpu::Extent3d {
+                    width: size,
+                    height: size,
+                    depth_or_array_layers: layers,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: f,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+        };
+        let layer_views = |t: &wgpu::Texture| -> Vec<wgpu::TextureView> {
+            (0..layers)
+                .map(|i| {
+                    t.create_view(&wgpu::TextureViewDescriptor {
+                        dimension: Some(wgpu::TextureViewDimension::D2),
+                        base_array_layer: i,
+                        array_layer_count: Some(1),
+                        ..Default::default()
+                    })
+                })
+                .collect()
+        };
+        let array = |t: &wgpu::Texture| {
+            t.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            })
+        };
+        let depth = make(depth_format(format));
+        let texels = size as u64 * size as u64 * layers as u64;
+        let depth_bytes = [2u64, 4, 4, 2][format];
+        let byte = (format == 3).then(|| {
+            let t = make(wgpu::TextureFormat::R8Unorm);
+            (layer_views(&t), array(&t))
+        });
+        self.maps = Some(Maps {
+            size,
+            layers,
+            format,
+            depth_layer_views: layer_views(&depth),
+            depth_array: array(&depth),
+            byte,
+            bytes: texels * (depth_bytes + (format == 3) as u64),
+        });
+        Ok(())
+    }
+}
+
+impl ShadowTechnique for ShadowMapTechnique {
+    fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        let p = ctx.params;
+        let aspect = ctx.frame.width as f32 / ctx.frame.height as f32;
+        let setup = light_setup(
+            ctx.light,
+            &ctx.scene_gpu.bounds,
+            ctx.camera,
+            aspect,
+            p.get_f32("near"),
+            p.get_f32("far"),
+            p.get_f32("fov"),
+        );
+        let size = p.get_usize("size") as u32;
+        let format = p.get_usize("format");
+        let layers = setup.faces.len() as u32;
+        self.ensure_maps(ctx.gpu, size, layers, format)?;
+        let mut faces = [Mat4::IDENTITY; 6];
+        faces[..setup.faces.len()].copy_from_slice(&setup.faces);
+        let base = ShadowMapUniform {
+            faces,
+            light: ctx
+                .light
+                .position
+                .extend(if layers == 6 { 6.0 } else { 1.0 }),
+            kernel: Vec4::new(
+                p.get_usize("filter") as f32,
+                p.get_f32("samples"),
+                p.get_f32("radius"),
+                p.get_f32("normal_offset"),
+            ),
+            map: Vec4::new(
+                size as f32,
+                1.0 / size as f32,
+                setup.texel_scale / size as f32,
+                setup.orthographic as u32 as f32,
+            ),
+            soft: Vec4::new(
+                p.get_f32("light_size"),
+                p.get_f32("varwidth_scale"),
+                p.get_f32("varwidth_exponent"),
+                p.get_f32("blocker_search"),
+            ),
+            depth: Vec4::new(setup.near, setup.far, (format == 3) as u32 as f32, 0.0),
+            face: UVec4::ZERO,
+            _pad: Vec4::ZERO,
+        };
+        let mut data = vec![0u8; (STRIDE * 6) as usize];
+        for f in 0..6usize {
+            let u = ShadowMapUniform {
+                face: UVec4::new(f as u32, 0, 0, 0),
+                ..base
+            };
+            data[f * STRIDE as usize
+                ..f * STRIDE as usize + std::mem::size_of::<ShadowMapUniform>()]
+                .copy_from_slice(bytemuck::bytes_of(&u));
+        }
+        ctx.gpu.queue.write_buffer(&self.uniforms, 0, &data);
+        let device = &ctx.gpu.device;
+        let depth_bias = p.get("depth_bias").round().min(i32::MAX as f64) as i32;
+        let pipeline = self
+            .depth_pipeline(
+                device,
+                format,
+                p.get_usize("cull"),
+                depth_bias,
+                p.get_f32("slope_bias"),
+            )
+            .clone();
+        let maps = self.maps.as_ref().expect("ensured above");
+        let byte_array = maps.byte.as_ref().map_or(&self.placeholder_bytes, |b| &b.1);
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shadow map"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &self.uniforms,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(std::mem::size_of::<ShadowMapUniform>() as u64),
+                    }),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&ctx.frame.gbuffer_position_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&ctx.frame.gbuffer_normal_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&maps.depth_array),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::Sampler(&self.compare_sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::TextureView(byte_array),
+                },
+            ],
+        });
+        // A bind group without the maps for the depth pass (they are its targets).
+        let depth_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shadow map depth pass"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &self.uniforms,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(std::mem::size_of::<ShadowMapUniform>() as u64),
+                    }),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&ctx.frame.gbuffer_position_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&ctx.frame.gbuffer_normal_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&self.placeholder_depth),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::Sampler(&self.compare_sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::TextureView(&self.placeholder_bytes),
+                },
+            ],
+        });
+        for face in 0..layers as usize {
+            let color = maps.byte.as_ref().map(|b| wgpu::RenderPassColorAttachment {
+                view: &b.0[face],
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
+                    store: wgpu::StoreOp::Store,
+                },
+            });
+            let colors = [color];
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shadow map depth"),
+                color_attachments: if colors[0].is_some() { &colors } else { &[] },
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &maps.depth_layer_views[face],
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
+            pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+            pass.set_bind_group(2, &depth_bind_group, &[(face as u64 * STRIDE) as u32]);
+            ctx.scene_gpu.draw_objects(&mut pass, |d| d.casts_shadow);
+        }
+        let mut pass = super::mask_pass(encoder, ctx, "shadow map lookup");
+        pass.set_pipeline(&self.lookup);
+        pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
+        pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+        pass.set_bind_group(2, &bind_group, &[0]);
+        pass.draw(0..3, 0..1);
+        Ok(())
+    }
+
+    fn counters(&self) -> Vec<(&'static str, f64)> {
+        self.maps
+            .as_ref()
+            .map(|m| vec![("map_size", m.size as f64), ("faces", m.layers as f64)])
+            .unwrap_or_default()
+    }
+
+    fn resource_bytes(&self) -> u64 {
+        self.maps.as_ref().map_or(0, |m| m.bytes)
+    }
+}
