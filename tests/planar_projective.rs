@@ -67,29 +67,6 @@ fn anti_shadows_and_false_shadows_are_not_drawn() {
     assert!(mask_of(&scene, "planar", &[], 120, 120).contains(&0.0));
 }
 
-/// Mismatch of `technique` against `raytraced` on a frame of `scene`.
-fn compare(
-    scene: &shadowlab::scene::Scene,
-    technique_id: &str,
-    size: (u32, u32),
-) -> measure::compare::QualityRow {
-    let out = tmpdir(&format!("cmp-{}", measure::file_stem(technique_id)));
-    let list = measure::parse_technique_list(technique_id).unwrap();
-    let reference = technique::resolve("raytraced").unwrap();
-    measure::compare::run(
-        gpu(),
-        scene,
-        &scene.camera,
-        &scene.lights,
-        size,
-        &list,
-        &reference,
-        &out,
-    )
-    .unwrap()
-    .remove(0)
-}
-
 #[test]
 fn planar_matches_ray_tracing_on_the_plane_for_every_light_type() {
     let lights = [

@@ -7,7 +7,7 @@ use super::{choice_label, file_stem};
 use crate::frame::{self, FrameImages, HeadlessFrame};
 use crate::gpu::GpuContext;
 use crate::renderer::{RenderSettings, TechniqueInstance};
-use crate::scene::{Camera, Light, LightType, Scene};
+use crate::scene::{Camera, Light, Scene};
 use crate::technique::TechniqueChoice;
 use anyhow::{Context, Result};
 use glam::Vec3;
@@ -50,8 +50,9 @@ pub fn plane_pixels(gpu: &GpuContext, hf: &HeadlessFrame, scene: &Scene) -> Resu
         .collect())
 }
 
-/// Per light, the pixels that count: geometry drawn, receives shadows,
-/// geometric normal facing the light.
+/// Per light, the pixels that count: geometry drawn that receives shadows
+/// and that the light's direct light reaches (facing it, inside a spot's
+/// cone, within range).
 pub fn considered_pixels(
     gpu: &GpuContext,
     hf: &HeadlessFrame,
@@ -67,15 +68,10 @@ pub fn considered_pixels(
             pos.iter()
                 .zip(nrm)
                 .map(|(p, n)| {
-                    let (pv, nv) = (
-                        Vec3::new(p[0], p[1], p[2]),
-                        Vec3::new(n[0].to_f32(), n[1].to_f32(), n[2].to_f32()),
-                    );
-                    let to_light = match l.kind {
-                        LightType::Directional => -l.direction,
-                        _ => l.position - pv,
-                    };
-                    p[3] > 0.5 && n[3].to_f32() > 0.5 && nv.dot(to_light) > 0.0
+                    let normal = Vec3::new(n[0].to_f32(), n[1].to_f32(), n[2].to_f32());
+                    p[3] > 0.5
+                        && n[3].to_f32() > 0.5
+                        && l.reaches(Vec3::new(p[0], p[1], p[2]), normal)
                 })
                 .collect()
         })

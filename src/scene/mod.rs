@@ -462,6 +462,27 @@ impl Light {
             _ => self.position.extend(1.0),
         }
     }
+    /// True where this light's direct light can reach a surface point `p`
+    /// with normal `n`: the surface faces the light (N·L > 0), lies inside a
+    /// spot light's outer cone and within the range (when one is set).
+    pub fn reaches(&self, p: Vec3, n: Vec3) -> bool {
+        let to_light = match self.kind {
+            LightType::Directional => -self.direction,
+            _ => self.position - p,
+        };
+        if n.dot(to_light) <= 0.0 {
+            return false;
+        }
+        if self.kind == LightType::Directional {
+            return true;
+        }
+        let d = to_light.length();
+        let in_cone = self.kind != LightType::Spot
+            || (-to_light / d).dot(self.direction.normalize())
+                > self.outer_cone_deg.to_radians().cos();
+        in_cone && (self.range <= 0.0 || d < self.range)
+    }
+
     pub fn validate(&self) -> Result<()> {
         let ok = self.position.is_finite()
             && self.direction.is_finite()

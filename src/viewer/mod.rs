@@ -877,12 +877,9 @@ fn heatmap_job(
         .zip(bytemuck::cast_slice::<u8, [half::f16; 4]>(nrm))
         .zip(&normals)
         .map(|((p, n), nv)| {
-            let pv = glam::Vec3::new(p[0], p[1], p[2]);
-            let to_light = match light.kind {
-                crate::scene::LightType::Directional => -light.direction,
-                _ => light.position - pv,
-            };
-            p[3] > 0.5 && n[3].to_f32() > 0.5 && nv.dot(to_light) > 0.0
+            p[3] > 0.5
+                && n[3].to_f32() > 0.5
+                && light.reaches(glam::Vec3::new(p[0], p[1], p[2]), *nv)
         })
         .collect();
     let m = crate::measure::quality::mask_metrics(w, h, &considered, &reference, &test);

@@ -102,3 +102,37 @@ pub fn mask_of(scene: &Scene, technique_id: &str, set: &[&str], w: u32, h: u32) 
         .unwrap();
     frame::read_back(gpu, &hf.frame, 1).unwrap().masks.remove(0)
 }
+
+/// Quality of `technique_id` against `raytraced` on `scene`'s camera and lights.
+pub fn compare(
+    scene: &Scene,
+    technique_id: &str,
+    size: (u32, u32),
+) -> shadowlab::measure::compare::QualityRow {
+    compare_with(scene, &scene.camera, technique_id, size)
+}
+
+/// The same from another camera.
+pub fn compare_with(
+    scene: &Scene,
+    camera: &shadowlab::scene::Camera,
+    technique_id: &str,
+    size: (u32, u32),
+) -> shadowlab::measure::compare::QualityRow {
+    use shadowlab::measure;
+    let out = tmpdir(&format!("cmp-{}", measure::file_stem(technique_id)));
+    let list = measure::parse_technique_list(technique_id).unwrap();
+    let reference = technique::resolve("raytraced").unwrap();
+    measure::compare::run(
+        gpu(),
+        scene,
+        camera,
+        &scene.lights,
+        size,
+        &list,
+        &reference,
+        &out,
+    )
+    .unwrap()
+    .remove(0)
+}

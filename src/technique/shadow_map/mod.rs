@@ -74,18 +74,26 @@ pub static FAMILY: Family = Family {
             "slope-scaled depth bias (polygon offset factor)",
         ),
         ParamSpec::float(
-            "normal_offset",
+            "normal_offset_directional",
             1.0,
             0.0,
             10.0,
             0.1,
-            "lookup point moved along the geometric normal, in shadow-map texels",
+            "directional lights: lookup point moved along the geometric normal, in shadow-map texels",
+        ),
+        ParamSpec::float(
+            "normal_offset_local",
+            0.5,
+            0.0,
+            10.0,
+            0.1,
+            "point and spot lights: lookup point moved along the geometric normal, in shadow-map texels at the point's distance",
         ),
         ParamSpec::choice(
             "cull",
             &["back", "front", "none"],
-            0,
-            "faces culled in the depth pass; front culling moves acne to back faces but fails on open meshes",
+            2,
+            "faces culled in the depth pass; back or front culling leaks light through open meshes (bunny, teapot)",
         ),
         ParamSpec::float(
             "near",
@@ -643,6 +651,10 @@ impl ShadowTechnique for ShadowMapTechnique {
         );
         let size = p.get_usize("size") as u32;
         let format = p.get_usize("format");
+        let normal_offset = match ctx.light.kind {
+            LightType::Directional => p.get_f32("normal_offset_directional"),
+            _ => p.get_f32("normal_offset_local"),
+        };
         let layers = setup.faces.len() as u32;
         self.ensure_maps(ctx.gpu, size, layers, format)?;
         let mut faces = [Mat4::IDENTITY; 6];
@@ -657,7 +669,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 p.get_usize("filter") as f32,
                 p.get_f32("samples"),
                 p.get_f32("radius"),
-                p.get_f32("normal_offset"),
+                normal_offset,
             ),
             map: Vec4::new(
                 size as f32,

@@ -1,0 +1,193 @@
+//! Shadow maps: the light's texture matrix, cube-face selection, the filters
+//! against the ray-traced reference, and the 8-bit failure.
+
+mod common;
+use common::*;
+use glam::{Mat4, Vec3, Vec4};
+use shadowlab::scene::{Camera, Light, Material, Scene, builtin, shapes};
+use shadowlab::technique::light_space::bias_matrix;
+use shadowlab::technique::shadow_map::light_setup;
+
+#[test]
+fn texture_matrix_maps_a_known_point_to_its_texel_and_depth() {
+    // Spot light at (0, 5, 0) looking down, 90° frustum, near 1, far 10: the
+    // origin lies on the axis at distance 5, so uv = (0.5, 0.5) and
+    // z = f/(f−n) − f·n/((f−n)·5) = 10/9 − 2/9 = 8/9.
+    let light = Light::spot(Vec3::new(0.0, 5.0, 0.0), Vec3::ZERO, 1.0, 30.0, 40.0);
+    let bounds = shadowlab::scene::Aabb {
+        min: Vec3::splat(-1.0),
+        max: Vec3::splat(1.0),
+    };
+    let cam = Camera::new(Vec3::new(0.0, 3.0, 8.0), Vec3::ZERO);
+    let s = light_setup(&light, &bounds, &cam, 1.0, 1.0, 10.0, 90.0);
+    let t = bias_matrix() * s.faces[0] * Vec4::new(0.0, 0.0, 0.0, 1.0);
+    let t = t / t.w;
+    assert!((t.x - 0.5).abs() < 1e-6 && (t.y - 0.5).abs() < 1e-6, "{t}");
+    assert!((t.z - 8.0 / 9.0).abs() < 1e-6, "{t}");
+    // In a 2048² map that is texel (1024, 1024); a point 1 unit along +x at
+    // the same depth lands tan⁻¹(1/5) off-axis: u = 0.5 + 0.5·(1/5)/tan(45°) = 0.6.
+    let t = bias_matrix() * s.faces[0] * Vec4::new(1.0, 0.0, 0.0, 1.0);
+    let u = t.x / t.w;
+    assert!((u - 0.6).abs() < 1e-6 || (u - 0.4).abs() < 1e-6, "{u}");
+    assert_eq!(((t.y / t.w) * 2048.0).floor(), 1024.0);
+}
+
+/// A point light in the middle of a closed box whose inside receives the
+/// shadows of six squares, one on each axis.
+fn light_in_a_box() -> Scene {
+    let mut s = Scene::new("box");
+    let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
+    let mut walls = shapes::cuboid(Vec3::splat(10.0));
+    walls.make_double_sided();
+    let walls = s.add_mesh(walls);
+    let mut o = shadowlab::scene::Object::from_name("BoxNS", walls, grey, Mat4::IDENTITY);
+    o.casts_shadow = false;
+    s.objects.push(o);
+    let mut quad = shapes::plane(1.2, 1.2, 1);
+    quad.make_double_sided();
+    let quad = s.add_mesh(quad);
+    for (i, d) in [
+        Vec3::X,
+        Vec3::NEG_X,
+        Vec3::Y,
+        Vec3::NEG_Y,
+        Vec3::Z,
+        Vec3::NEG_Z,
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        // Each square faces the light, 2 units out, slightly off-axis so its
+        // shadow crosses into a neighbouring cube face.
+        let rot = glam::Quat::from_rotation_arc(Vec3::Y, -d);
+        let pos = d * 2.0 + rot * Vec3::new(0.9, 0.0, 0.6);
+        s.add_object(
+            &format!("Square{i}"),
+            quad,
+            grey,
+            Mat4::from_rotation_translation(rot, pos),
+        );
+    }
+    s.lights = vec![Light::point(Vec3::ZERO, 1.0)];
+    s.camera = Camera::new(Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.1, 0.2, -1.0));
+    s.finalize().unwrap();
+    s
+}
+
+#[test]
+fn cube_faces_cover_every_direction() {
+    let scene = light_in_a_box();
+    // Look at each wall from inside, near the light, with a wide lens.
+    for d in [
+        Vec3::X,
+        Vec3::NEG_X,
+        Vec3::Y,
+        Vec3::NEG_Y,
+        Vec3::Z,
+        Vec3::NEG_Z,
+    ] {
+        let eye = Vec3::new(0.05, 0.07, 0.03) - d * 0.5;
+        let up = if d.y.abs() > 0.5 { Vec3::Z } else { Vec3::Y };
+        let cam = Camera {
+            up,
+            fov_y_deg: 100.0,
+            ..Camera::new(eye, eye + d)
+        };
+        let row = compare_with(&scene, &cam, "shadow-map:hard", (160, 160));
+        let m = &row.mask;
+        assert!(
+            m.reference_shadowed_pct > 1.0,
+            "{d}: no shadow in view: {m:?}"
+        );
+        assert!(m.interior.total_pct < 0.1, "{d}: {m:?}");
+    }
+}
+
+#[test]
+fn filters_match_the_reference_on_a_square_over_a_plane() {
+    for light in [
+        Light::point(Vec3::new(0.4, 5.0, -0.3), 1.0),
+        Light::spot(Vec3::new(1.0, 5.0, 1.0), Vec3::ZERO, 1.0, 30.0, 40.0),
+        Light::directional(Vec3::new(0.3, -1.0, 0.2), 1.0),
+    ] {
+        let scene = squares_over_floor(&[(Vec3::new(0.0, 1.0, 0.0), 0.7)], light, false);
+        for (id, interior_tol) in [
+            ("shadow-map:hard", 0.0),
+            ("shadow-map:pcf2x2", 0.0),
+            ("shadow-map:pcf", 0.0),
+            ("shadow-map:pcf-disk", 0.0),
+            ("shadow-map:pcss", 0.5),
+            ("shadow-map:varwidth", 0.5),
+        ] {
+            let row = compare(&scene, id, (200, 200));
+            let m = &row.mask;
+            assert!(m.reference_shadowed_pct > 2.0);
+            assert!(
+                m.interior.total_pct <= interior_tol,
+                "{id} {:?}: {m:?}",
+                light.kind
+            );
+            assert!(m.all.total_pct <= 1.5, "{id} {:?}: {m:?}", light.kind);
+        }
+    }
+}
+
+#[test]
+fn eight_bit_depth_shows_acne_that_d32f_does_not() {
+    let scene = builtin::by_name("floating").unwrap().unwrap();
+    let byte = compare(&scene, "shadow-map:8bit", (320, 180));
+    let float = compare(&scene, "shadow-map:hard[format=d32f]", (320, 180));
+    assert!(
+        byte.mask.interior.false_shadow_pct > 1.0,
+        "8-bit: {:?}",
+        byte.mask
+    );
+    assert!(
+        float.mask.interior.false_shadow_pct < 0.1,
+        "d32f: {:?}",
+        float.mask
+    );
+    for f in ["d16", "d24"] {
+        let r = compare(&scene, &format!("shadow-map:hard[format={f}]"), (320, 180));
+        assert!(r.mask.interior.total_pct < 0.1, "{f}: {:?}", r.mask);
+    }
+}
+
+#[test]
+fn a_map_larger_than_the_device_allows_is_an_error() {
+    let scene = builtin::by_name("floating").unwrap().unwrap();
+    let gpu = gpu();
+    // Frames beyond the device limit are refused the same way.
+    let r = shadowlab::renderer::Renderer::new(gpu);
+    let e = r
+        .create_frame(gpu, gpu.max_texture_size() + 1, 8)
+        .err()
+        .unwrap();
+    assert!(
+        e.to_string().contains("the device's largest texture"),
+        "{e}"
+    );
+    if gpu.max_texture_size() >= 16384 {
+        // The parameter's own maximum is 16384: beyond it is a parameter error.
+        let mut c = shadowlab::technique::resolve("shadow-map").unwrap();
+        assert!(c.params.set("size", "32768").is_err());
+        return;
+    }
+    let mut c = shadowlab::technique::resolve("shadow-map").unwrap();
+    c.params.set("size", "16384").unwrap();
+    let mut hf = shadowlab::frame::HeadlessFrame::new(gpu, &scene, &[c], 64, 64).unwrap();
+    let e = hf
+        .render(
+            gpu,
+            &scene,
+            &scene.camera,
+            &scene.lights,
+            &Default::default(),
+        )
+        .unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("exceeds the device's largest texture"),
+        "{e}"
+    );
+}
