@@ -4,9 +4,7 @@
 mod common;
 use common::*;
 use glam::Vec3;
-use shadowlab::measure;
 use shadowlab::scene::{Light, builtin};
-use shadowlab::technique;
 
 fn distinct(mask: &[f32]) -> Vec<f32> {
     let mut v: Vec<f32> = mask.iter().map(|x| (x * 1000.0).round() / 1000.0).collect();
