@@ -118,6 +118,11 @@ fn filters_match_the_reference_on_a_square_over_a_plane() {
             ("shadow-map:pcf-disk", 0.0),
             ("shadow-map:pcss", 0.5),
             ("shadow-map:varwidth", 0.5),
+            ("shadow-map:vsm", 0.5),
+            ("shadow-map:esm", 0.5),
+            ("shadow-map:evsm2", 0.5),
+            ("shadow-map:evsm4", 0.5),
+            ("shadow-map:msm", 0.5),
         ] {
             let row = compare(&scene, id, (200, 200));
             let m = &row.mask;

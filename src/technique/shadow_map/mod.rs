@@ -16,7 +16,11 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec3, Vec4};
 use std::collections::HashMap;
 
-const FILTERS: &[&str] = &["hard", "pcf2x2", "grid", "disk", "pcss", "varwidth"];
+const FILTERS: &[&str] = &[
+    "hard", "pcf2x2", "grid", "disk", "pcss", "varwidth", "vsm", "esm", "evsm2", "evsm4", "msm",
+];
+/// Index of the first moment-based filter in [`FILTERS`].
+const FIRST_MOMENT_FILTER: usize = 6;
 const FORMATS: &[&str] = &["d16", "d24", "d32f", "r8"];
 
 pub static FAMILY: Family = Family {
@@ -27,7 +31,7 @@ pub static FAMILY: Family = Family {
             "filter",
             FILTERS,
             2,
-            "hard: nearest texel; pcf2x2: hardware bilinear comparison; grid: N×N 2×2-PCF taps; disk: N² taps on a rotated Vogel disk; pcss: blocker search + penumbra from the light size; varwidth: radius ∝ |d_blocker − d_receiver|^exponent (002)",
+            "hard: nearest texel; pcf2x2: hardware bilinear comparison; grid: N×N 2×2-PCF taps; disk: N² taps on a rotated Vogel disk; pcss: blocker search + penumbra from the light size; varwidth: radius ∝ |d_blocker − d_receiver|^exponent (002); vsm: variance (Chebyshev) with light-bleeding reduction; esm: exponential; evsm2/evsm4: exponential variance, 2 or 4 moments; msm: 4-moment Hamburger (Peters & Klein 2015)",
         ),
         ParamSpec::int(
             "samples",
@@ -151,6 +155,45 @@ pub static FAMILY: Family = Family {
             0.1,
             "varwidth: the exponent",
         ),
+        ParamSpec::int(
+            "blur",
+            2,
+            0,
+            16,
+            "moment filters: separable box blur radius in texels (0 = none)",
+        ),
+        ParamSpec::float(
+            "bleeding_reduction",
+            0.2,
+            0.0,
+            0.95,
+            0.01,
+            "vsm and evsm: light-bleeding reduction, the lower cut of the Chebyshev bound",
+        ),
+        ParamSpec::float(
+            "exponent",
+            40.0,
+            1.0,
+            80.0,
+            1.0,
+            "esm and evsm: exponent c of the positive warp exp(c(z − 1))",
+        ),
+        ParamSpec::float(
+            "exponent_negative",
+            5.0,
+            1.0,
+            40.0,
+            1.0,
+            "evsm4: exponent of the negative warp −exp(−c z)",
+        ),
+        ParamSpec::float(
+            "moment_bias",
+            3e-5,
+            0.0,
+            0.01,
+            1e-5,
+            "msm: moment bias α towards (0.5, 0.5, 0.5, 0.5)",
+        ),
     ],
     presets: &[
         Preset {
@@ -184,6 +227,31 @@ pub static FAMILY: Family = Family {
             values: &[("filter", "varwidth"), ("samples", "4")],
         },
         Preset {
+            name: "vsm",
+            summary: "variance shadow map, 1024², blurred",
+            values: &[("filter", "vsm"), ("size", "1024")],
+        },
+        Preset {
+            name: "esm",
+            summary: "exponential shadow map, 1024², blurred",
+            values: &[("filter", "esm"), ("size", "1024")],
+        },
+        Preset {
+            name: "evsm2",
+            summary: "exponential variance shadow map, positive warp only",
+            values: &[("filter", "evsm2"), ("size", "1024")],
+        },
+        Preset {
+            name: "evsm4",
+            summary: "exponential variance shadow map, both warps",
+            values: &[("filter", "evsm4"), ("size", "1024")],
+        },
+        Preset {
+            name: "msm",
+            summary: "4-moment Hamburger shadow map",
+            values: &[("filter", "msm"), ("size", "1024")],
+        },
+        Preset {
             name: "8bit",
             summary: "depth stored in 8 bits: acne everywhere",
             values: &[("format", "r8"), ("filter", "hard")],
@@ -202,7 +270,7 @@ struct ShadowMapUniform {
     soft: Vec4,
     depth: Vec4,
     face: UVec4,
-    _pad: Vec4,
+    moments: Vec4,
 }
 
 /// The light's matrices for one frame.
@@ -362,9 +430,13 @@ struct Maps {
     size: u32,
     layers: u32,
     format: usize,
+    moments: bool,
     depth_layer_views: Vec<wgpu::TextureView>,
     depth_array: wgpu::TextureView,
+    /// The 8-bit map: per-layer views and the array view.
     byte: Option<(Vec<wgpu::TextureView>, wgpu::TextureView)>,
+    /// Moment maps A (result) and B (blur scratch): per-layer views and array views.
+    moment: Option<[(Vec<wgpu::TextureView>, wgpu::TextureView); 2]>,
     bytes: u64,
 }
 
@@ -372,17 +444,22 @@ pub struct ShadowMapTechnique {
     layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
-    depth_pipelines: HashMap<(usize, usize, i32, u32), wgpu::RenderPipeline>,
+    depth_pipelines: HashMap<(usize, usize, i32, u32, bool), wgpu::RenderPipeline>,
     lookup: wgpu::RenderPipeline,
+    blur: wgpu::RenderPipeline,
     uniforms: wgpu::Buffer,
     compare_sampler: wgpu::Sampler,
     placeholder_bytes: wgpu::TextureView,
     /// Bound in place of the maps while they are rendered.
     placeholder_depth: wgpu::TextureView,
+    placeholder_moments: wgpu::TextureView,
     maps: Option<Maps>,
 }
 
+/// Uniform slots: per face, the depth pass (and lookup), blur along x, blur along y.
 const STRIDE: u64 = 512;
+const SLOTS: u64 = 18;
+const MOMENT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 fn depth_format(i: usize) -> wgpu::TextureFormat {
     match i {
@@ -390,6 +467,28 @@ fn depth_format(i: usize) -> wgpu::TextureFormat {
         1 => wgpu::TextureFormat::Depth24Plus,
         _ => wgpu::TextureFormat::Depth32Float,
     }
+}
+
+fn placeholder(device: &wgpu::Device, format: wgpu::TextureFormat) -> wgpu::TextureView {
+    device
+        .create_texture(&wgpu::TextureDescriptor {
+            label: Some("shadow map placeholder"),
+            size: wgpu::Extent3d {
+                width: 1,
+                height: 1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        })
+        .create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        })
 }
 
 impl ShadowMapTechnique {
@@ -428,6 +527,7 @@ impl ShadowMapTechnique {
                     count: None,
                 },
                 tex(5, wgpu::TextureSampleType::Float { filterable: false }),
+                tex(6, wgpu::TextureSampleType::Float { filterable: false }),
             ],
         });
         let module = crate::renderer::shader_module(
@@ -436,58 +536,49 @@ impl ShadowMapTechnique {
             &[include_str!("shadow_map.wgsl")],
         );
         let pipeline_layout = super::pipeline_layout(gpu, "shadow map", &layout);
-        let lookup = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("shadow map lookup"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
+        let fullscreen = |label: &str,
+                          fs: &str,
+                          format: wgpu::TextureFormat,
+                          depth: Option<wgpu::DepthStencilState>| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_fullscreen"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: Default::default(),
+                depth_stencil: depth,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets: &[Some(format.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let lookup = fullscreen(
+            "shadow map lookup",
+            "fs_lookup",
+            MASK_FORMAT,
+            Some(wgpu::DepthStencilState {
                 format: DEPTH_FORMAT,
                 depth_write_enabled: Some(false),
                 depth_compare: Some(wgpu::CompareFunction::Always),
                 stencil: Default::default(),
                 bias: Default::default(),
             }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_lookup"),
-                compilation_options: Default::default(),
-                targets: &[Some(MASK_FORMAT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let placeholder = |format| {
-            device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some("shadow map placeholder"),
-                    size: wgpu::Extent3d {
-                        width: 1,
-                        height: 1,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                    view_formats: &[],
-                })
-                .create_view(&wgpu::TextureViewDescriptor {
-                    dimension: Some(wgpu::TextureViewDimension::D2Array),
-                    ..Default::default()
-                })
-        };
+        );
+        let blur = fullscreen("shadow map blur", "fs_blur", MOMENT_FORMAT, None);
         ShadowMapTechnique {
             uniforms: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("shadow map uniforms"),
-                size: STRIDE * 6,
+                size: STRIDE * SLOTS,
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
@@ -498,13 +589,15 @@ impl ShadowMapTechnique {
                 compare: Some(wgpu::CompareFunction::LessEqual),
                 ..Default::default()
             }),
+            placeholder_bytes: placeholder(device, wgpu::TextureFormat::R8Unorm),
+            placeholder_depth: placeholder(device, wgpu::TextureFormat::Depth32Float),
+            placeholder_moments: placeholder(device, MOMENT_FORMAT),
             layout,
             pipeline_layout,
             module,
             depth_pipelines: HashMap::new(),
             lookup,
-            placeholder_bytes: placeholder(wgpu::TextureFormat::R8Unorm),
-            placeholder_depth: placeholder(wgpu::TextureFormat::Depth32Float),
+            blur,
             maps: None,
         }
     }
@@ -516,14 +609,19 @@ impl ShadowMapTechnique {
         cull: usize,
         bias: i32,
         slope: f32,
+        moments: bool,
     ) -> &wgpu::RenderPipeline {
-        let key = (format, cull, bias, slope.to_bits());
+        let key = (format, cull, bias, slope.to_bits(), moments);
         let (module, layout) = (&self.module, &self.pipeline_layout);
         self.depth_pipelines.entry(key).or_insert_with(|| {
-            let byte = format == 3;
-            let targets = [Some(wgpu::ColorTargetState::from(
-                wgpu::TextureFormat::R8Unorm,
-            ))];
+            let (entry, color) = if moments {
+                (Some("fs_depth_moments"), Some(MOMENT_FORMAT))
+            } else if format == 3 {
+                (Some("fs_depth_byte"), Some(wgpu::TextureFormat::R8Unorm))
+            } else {
+                (None, None)
+            };
+            let targets = [color.map(wgpu::ColorTargetState::from)];
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some("shadow map depth"),
                 layout: Some(layout),
@@ -549,9 +647,9 @@ impl ShadowMapTechnique {
                     },
                 }),
                 multisample: Default::default(),
-                fragment: byte.then_some(wgpu::FragmentState {
+                fragment: entry.map(|e| wgpu::FragmentState {
                     module,
-                    entry_point: Some("fs_depth_byte"),
+                    entry_point: Some(e),
                     compilation_options: Default::default(),
                     targets: &targets,
                 }),
@@ -567,12 +665,11 @@ impl ShadowMapTechnique {
         size: u32,
         layers: u32,
         format: usize,
+        moments: bool,
     ) -> Result<()> {
-        if self
-            .maps
-            .as_ref()
-            .is_some_and(|m| (m.size, m.layers, m.format) == (size, layers, format))
-        {
+        if self.maps.as_ref().is_some_and(|m| {
+            (m.size, m.layers, m.format, m.moments) == (size, layers, format, moments)
+        }) {
             return Ok(());
         }
         let max = gpu.max_texture_size();
@@ -598,8 +695,8 @@ impl ShadowMapTechnique {
                 view_formats: &[],
             })
         };
-        let layer_views = |t: &wgpu::Texture| -> Vec<wgpu::TextureView> {
-            (0..layers)
+        let views = |t: &wgpu::Texture| -> (Vec<wgpu::TextureView>, wgpu::TextureView) {
+            let layer_views = (0..layers)
                 .map(|i| {
                     t.create_view(&wgpu::TextureViewDescriptor {
                         dimension: Some(wgpu::TextureViewDimension::D2),
@@ -608,31 +705,78 @@ impl ShadowMapTechnique {
                         ..Default::default()
                     })
                 })
-                .collect()
-        };
-        let array = |t: &wgpu::Texture| {
-            t.create_view(&wgpu::TextureViewDescriptor {
+                .collect();
+            let array = t.create_view(&wgpu::TextureViewDescriptor {
                 dimension: Some(wgpu::TextureViewDimension::D2Array),
                 ..Default::default()
-            })
+            });
+            (layer_views, array)
         };
-        let depth = make(depth_format(format));
+        let (depth_layer_views, depth_array) = views(&make(depth_format(format)));
         let texels = size as u64 * size as u64 * layers as u64;
         let depth_bytes = [2u64, 4, 4, 2][format];
-        let byte = (format == 3).then(|| {
-            let t = make(wgpu::TextureFormat::R8Unorm);
-            (layer_views(&t), array(&t))
-        });
+        let byte = (format == 3).then(|| views(&make(wgpu::TextureFormat::R8Unorm)));
+        let moment = moments.then(|| [views(&make(MOMENT_FORMAT)), views(&make(MOMENT_FORMAT))]);
         self.maps = Some(Maps {
             size,
             layers,
             format,
-            depth_layer_views: layer_views(&depth),
-            depth_array: array(&depth),
+            moments,
+            depth_layer_views,
+            depth_array,
             byte,
-            bytes: texels * (depth_bytes + (format == 3) as u64),
+            moment,
+            bytes: texels * (depth_bytes + (format == 3) as u64 + if moments { 32 } else { 0 }),
         });
         Ok(())
+    }
+
+    /// The technique's bind group with the given depth, 8-bit and moment arrays.
+    fn bind_group(
+        &self,
+        ctx: &MaskContext,
+        depth: &wgpu::TextureView,
+        bytes: &wgpu::TextureView,
+        moments: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
+        let view = |binding, v| wgpu::BindGroupEntry {
+            binding,
+            resource: wgpu::BindingResource::TextureView(v),
+        };
+        ctx.gpu
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("shadow map"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: &self.uniforms,
+                            offset: 0,
+                            size: wgpu::BufferSize::new(
+                                std::mem::size_of::<ShadowMapUniform>() as u64
+                            ),
+                        }),
+                    },
+                    view(1, &ctx.frame.gbuffer_position_view),
+                    view(2, &ctx.frame.gbuffer_normal_view),
+                    view(3, depth),
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: wgpu::BindingResource::Sampler(&self.compare_sampler),
+                    },
+                    view(5, bytes),
+                    view(6, moments),
+                ],
+            })
+    }
+}
+
+fn clear_op(color: wgpu::Color) -> wgpu::Operations<wgpu::Color> {
+    wgpu::Operations {
+        load: wgpu::LoadOp::Clear(color),
+        store: wgpu::StoreOp::Store,
     }
 }
 
@@ -651,12 +795,19 @@ impl ShadowTechnique for ShadowMapTechnique {
         );
         let size = p.get_usize("size") as u32;
         let format = p.get_usize("format");
+        let filter = p.get_usize("filter");
+        let moments = filter >= FIRST_MOMENT_FILTER;
+        let blur = if moments {
+            p.get_usize("blur") as u32
+        } else {
+            0
+        };
         let normal_offset = match ctx.light.kind {
             LightType::Directional => p.get_f32("normal_offset_directional"),
             _ => p.get_f32("normal_offset_local"),
         };
         let layers = setup.faces.len() as u32;
-        self.ensure_maps(ctx.gpu, size, layers, format)?;
+        self.ensure_maps(ctx.gpu, size, layers, format, moments)?;
         let mut faces = [Mat4::IDENTITY; 6];
         faces[..setup.faces.len()].copy_from_slice(&setup.faces);
         let base = ShadowMapUniform {
@@ -666,7 +817,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 .position
                 .extend(if layers == 6 { 6.0 } else { 1.0 }),
             kernel: Vec4::new(
-                p.get_usize("filter") as f32,
+                filter as f32,
                 p.get_f32("samples"),
                 p.get_f32("radius"),
                 normal_offset,
@@ -685,17 +836,25 @@ impl ShadowTechnique for ShadowMapTechnique {
             ),
             depth: Vec4::new(setup.near, setup.far, (format == 3) as u32 as f32, 0.0),
             face: UVec4::ZERO,
-            _pad: Vec4::ZERO,
+            moments: Vec4::new(
+                p.get_f32("bleeding_reduction"),
+                p.get_f32("exponent"),
+                p.get_f32("exponent_negative"),
+                p.get_f32("moment_bias"),
+            ),
         };
-        let mut data = vec![0u8; (STRIDE * 6) as usize];
-        for f in 0..6usize {
-            let u = ShadowMapUniform {
-                face: UVec4::new(f as u32, 0, 0, 0),
-                ..base
-            };
-            data[f * STRIDE as usize
-                ..f * STRIDE as usize + std::mem::size_of::<ShadowMapUniform>()]
-                .copy_from_slice(bytemuck::bytes_of(&u));
+        // Slot 3f: face f's depth pass; 3f+1, 3f+2: its blur along x, y.
+        let mut data = vec![0u8; (STRIDE * SLOTS) as usize];
+        for f in 0..6u32 {
+            for axis in 0..3u32 {
+                let u = ShadowMapUniform {
+                    face: UVec4::new(f, axis.saturating_sub(1), blur, 0),
+                    ..base
+                };
+                let at = ((f * 3 + axis) as u64 * STRIDE) as usize;
+                data[at..at + std::mem::size_of::<ShadowMapUniform>()]
+                    .copy_from_slice(bytemuck::bytes_of(&u));
+            }
         }
         ctx.gpu.queue.write_buffer(&self.uniforms, 0, &data);
         let device = &ctx.gpu.device;
@@ -707,95 +866,42 @@ impl ShadowTechnique for ShadowMapTechnique {
                 p.get_usize("cull"),
                 depth_bias,
                 p.get_f32("slope_bias"),
+                moments,
             )
             .clone();
         let maps = self.maps.as_ref().expect("ensured above");
-        let byte_array = maps.byte.as_ref().map_or(&self.placeholder_bytes, |b| &b.1);
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("shadow map"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &self.uniforms,
-                        offset: 0,
-                        size: wgpu::BufferSize::new(std::mem::size_of::<ShadowMapUniform>() as u64),
-                    }),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&ctx.frame.gbuffer_position_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&ctx.frame.gbuffer_normal_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::TextureView(&maps.depth_array),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: wgpu::BindingResource::Sampler(&self.compare_sampler),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: wgpu::BindingResource::TextureView(byte_array),
-                },
-            ],
-        });
-        // A bind group without the maps for the depth pass (they are its targets).
-        let depth_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("shadow map depth pass"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &self.uniforms,
-                        offset: 0,
-                        size: wgpu::BufferSize::new(std::mem::size_of::<ShadowMapUniform>() as u64),
-                    }),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&ctx.frame.gbuffer_position_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&ctx.frame.gbuffer_normal_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::TextureView(&self.placeholder_depth),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: wgpu::BindingResource::Sampler(&self.compare_sampler),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: wgpu::BindingResource::TextureView(&self.placeholder_bytes),
-                },
-            ],
-        });
-        for face in 0..layers as usize {
-            let color = maps.byte.as_ref().map(|b| wgpu::RenderPassColorAttachment {
-                view: &b.0[face],
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
-                    store: wgpu::StoreOp::Store,
-                },
-            });
+        let slot = |f: u32, axis: u32| ((f * 3 + axis) as u64 * STRIDE) as u32;
+        // Bind groups: none of the maps while they are rendered; the moment
+        // maps as blur sources; everything for the lookup.
+        let render_group = self.bind_group(
+            ctx,
+            &self.placeholder_depth,
+            &self.placeholder_bytes,
+            &self.placeholder_moments,
+        );
+        for face in 0..layers {
+            let f = face as usize;
+            let color = match (&maps.moment, &maps.byte) {
+                (Some(m), _) => Some(wgpu::RenderPassColorAttachment {
+                    view: &m[0].0[f],
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: clear_op(wgpu::Color::WHITE),
+                }),
+                (None, Some(b)) => Some(wgpu::RenderPassColorAttachment {
+                    view: &b.0[f],
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: clear_op(wgpu::Color::WHITE),
+                }),
+                (None, None) => None,
+            };
             let colors = [color];
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("shadow map depth"),
                 color_attachments: if colors[0].is_some() { &colors } else { &[] },
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &maps.depth_layer_views[face],
+                    view: &maps.depth_layer_views[f],
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Clear(1.0),
                         store: wgpu::StoreOp::Store,
@@ -807,14 +913,48 @@ impl ShadowTechnique for ShadowMapTechnique {
             pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
             pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
-            pass.set_bind_group(2, &depth_bind_group, &[(face as u64 * STRIDE) as u32]);
+            pass.set_bind_group(2, &render_group, &[slot(face, 0)]);
             ctx.scene_gpu.draw_objects(&mut pass, |d| d.casts_shadow);
         }
+        if let (Some(m), true) = (&maps.moment, blur > 0) {
+            // A → B along x, B → A along y.
+            for (axis, src, dst) in [(1u32, 0usize, 1usize), (2, 1, 0)] {
+                let group = self.bind_group(
+                    ctx,
+                    &self.placeholder_depth,
+                    &self.placeholder_bytes,
+                    &m[src].1,
+                );
+                for face in 0..layers {
+                    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                        label: Some("shadow map blur"),
+                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                            view: &m[dst].0[face as usize],
+                            depth_slice: None,
+                            resolve_target: None,
+                            ops: clear_op(wgpu::Color::WHITE),
+                        })],
+                        ..Default::default()
+                    });
+                    pass.set_pipeline(&self.blur);
+                    pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
+                    pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+                    pass.set_bind_group(2, &group, &[slot(face, axis)]);
+                    pass.draw(0..3, 0..1);
+                }
+            }
+        }
+        let byte_array = maps.byte.as_ref().map_or(&self.placeholder_bytes, |b| &b.1);
+        let moment_array = maps
+            .moment
+            .as_ref()
+            .map_or(&self.placeholder_moments, |m| &m[0].1);
+        let lookup_group = self.bind_group(ctx, &maps.depth_array, byte_array, moment_array);
         let mut pass = super::mask_pass(encoder, ctx, "shadow map lookup");
         pass.set_pipeline(&self.lookup);
         pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
         pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
-        pass.set_bind_group(2, &bind_group, &[0]);
+        pass.set_bind_group(2, &lookup_group, &[0]);
         pass.draw(0..3, 0..1);
         Ok(())
     }

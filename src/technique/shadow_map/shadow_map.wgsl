@@ -19,8 +19,12 @@ struct ShadowMap {
     soft: vec4f,
     // x near, y far (to linearise perspective depth), z 1 = 8-bit map
     depth: vec4f,
-    // the face being rendered by the depth pass
+    // x face rendered by the depth pass (or blurred), y blur axis (0 x, 1 y),
+    // z blur radius (texels)
     face: vec4u,
+    // moments: x light-bleeding reduction, y exponent c (esm, evsm +),
+    // z exponent c− (evsm), w moment bias (msm)
+    moments: vec4f,
 };
 
 @group(2) @binding(0) var<uniform> sm: ShadowMap;
@@ -29,18 +33,80 @@ struct ShadowMap {
 @group(2) @binding(3) var depth_map: texture_depth_2d_array;
 @group(2) @binding(4) var compare_sampler: sampler_comparison;
 @group(2) @binding(5) var byte_map: texture_2d_array<f32>;
+@group(2) @binding(6) var moment_map: texture_2d_array<f32>;
+
+const FILTER_VSM: u32 = 6u;
+const FILTER_ESM: u32 = 7u;
+const FILTER_EVSM2: u32 = 8u;
+const FILTER_EVSM4: u32 = 9u;
+const FILTER_MSM: u32 = 10u;
 
 // ---- depth pass
 
 struct DepthOut {
     @builtin(position) clip: vec4f,
+    // depth linear in distance, 0 at near and 1 at far (moment maps)
+    @location(0) linear: f32,
 };
+
+// Linear depth in [0, 1] of a light-clip position.
+fn linear01(c: vec4f) -> f32 {
+    if sm.map.w > 0.5 {
+        return c.z;
+    }
+    return (c.w - sm.depth.x) / (sm.depth.y - sm.depth.x);
+}
 
 @vertex
 fn vs_depth(v: VertexIn) -> DepthOut {
     var o: DepthOut;
     o.clip = sm.faces[sm.face.x] * (objects[v.object].model * vec4f(v.position, 1.0));
+    o.linear = linear01(o.clip);
     return o;
+}
+
+// The moments each filter stores (Donnelly & Lauritzen 2006; Annen 2008;
+// Lauritzen & McCool 2008; Peters & Klein 2015).
+fn moments_of(z: f32) -> vec4f {
+    let kind = u32(sm.kernel.x);
+    let cp = sm.moments.y;
+    let cn = sm.moments.z;
+    switch kind {
+        case FILTER_VSM: {
+            return vec4f(z, z * z, 0.0, 0.0);
+        }
+        case FILTER_ESM: {
+            return vec4f(exp(cp * (z - 1.0)), 0.0, 0.0, 0.0);
+        }
+        case FILTER_EVSM2, FILTER_EVSM4: {
+            let p = exp(cp * (z - 1.0));
+            let n = -exp(-cn * z);
+            return vec4f(p, p * p, n, n * n);
+        }
+        default: {
+            let z2 = z * z;
+            return vec4f(z, z2, z2 * z, z2 * z2);
+        }
+    }
+}
+
+@fragment
+fn fs_depth_moments(i: DepthOut) -> @location(0) vec4f {
+    return moments_of(clamp(i.linear, 0.0, 1.0));
+}
+
+// Separable box blur of one moment layer along one axis.
+@fragment
+fn fs_blur(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    let r = i32(sm.face.z);
+    let axis = select(vec2i(1, 0), vec2i(0, 1), sm.face.y == 1u);
+    let size = i32(sm.map.x);
+    var sum = vec4f(0.0);
+    for (var k = -r; k <= r; k++) {
+        let t = clamp(vec2i(frag.xy) + axis * k, vec2i(0), vec2i(size - 1));
+        sum += textureLoad(moment_map, t, i32(sm.face.x), 0);
+    }
+    return sum / f32(2 * r + 1);
 }
 
 // The 8-bit preset stores the depth in an R8 colour target.
@@ -102,6 +168,91 @@ fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
     let a = mix(lit_at(b, face, z), lit_at(b + vec2i(1, 0), face, z), f.x);
     let c = mix(lit_at(b + vec2i(0, 1), face, z), lit_at(b + vec2i(1, 1), face, z), f.x);
     return mix(a, c, f.y);
+}
+
+fn moment_texel(t: vec2i, face: u32) -> vec4f {
+    let size = i32(sm.map.x);
+    return textureLoad(moment_map, clamp(t, vec2i(0), vec2i(size - 1)), i32(face), 0);
+}
+
+// Bilinear moments at uv (the map is 32-bit float, filtered by hand).
+fn moments_at(uv: vec2f, face: u32) -> vec4f {
+    let p = uv * sm.map.x - 0.5;
+    let b = vec2i(floor(p));
+    let f = fract(p);
+    let top = mix(moment_texel(b, face), moment_texel(b + vec2i(1, 0), face), f.x);
+    let bottom = mix(moment_texel(b + vec2i(0, 1), face), moment_texel(b + vec2i(1, 1), face), f.x);
+    return mix(top, bottom, f.y);
+}
+
+// Chebyshev's upper bound P(x ≥ t) ≤ σ² / (σ² + (t − μ)²), with light-bleeding
+// reduction (linstep from `amount` to 1).
+fn chebyshev(m: vec2f, t: f32, min_variance: f32) -> f32 {
+    if t <= m.x {
+        return 1.0;
+    }
+    let variance = max(m.y - m.x * m.x, min_variance);
+    let d = t - m.x;
+    let p = variance / (variance + d * d);
+    let amount = sm.moments.x;
+    return clamp((p - amount) / (1.0 - amount), 0.0, 1.0);
+}
+
+// Hamburger 4-moment shadow mapping (Peters & Klein 2015, algorithm 2).
+fn msm_hamburger(moments: vec4f, z: f32) -> f32 {
+    let b = mix(moments, vec4f(0.5), sm.moments.w);
+    let l32_d22 = -b.x * b.y + b.z;
+    let d22 = -b.x * b.x + b.y;
+    let squared_depth_variance = -b.y * b.y + b.w;
+    let d33_d22 = dot(vec2f(squared_depth_variance, -l32_d22), vec2f(d22, l32_d22));
+    let inv_d22 = 1.0 / d22;
+    let l32 = l32_d22 * inv_d22;
+    var c = vec3f(1.0, z, z * z);
+    c.y -= b.x;
+    c.z -= b.y + l32 * c.y;
+    c.y *= inv_d22;
+    c.z *= d22 / d33_d22;
+    c.y -= l32 * c.z;
+    c.x -= dot(c.yz, b.xy);
+    let p = c.y / c.z;
+    let q = c.x / c.z;
+    let r = sqrt(max(p * p * 0.25 - q, 0.0));
+    let z1 = -p * 0.5 - r;
+    let z2 = -p * 0.5 + r;
+    var sw = vec4f(0.0);
+    if z2 < z {
+        sw = vec4f(z1, z, 1.0, 1.0);
+    } else if z1 < z {
+        sw = vec4f(z, z1, 0.0, 1.0);
+    }
+    let quotient = (sw.x * z2 - b.x * (sw.x + z2) + b.y) / ((z2 - sw.y) * (z - z1));
+    return 1.0 - clamp(sw.z + sw.w * quotient, 0.0, 1.0);
+}
+
+// Visibility from filtered moments for receiver depth z (linear, [0, 1]).
+fn moment_visibility(m: vec4f, z: f32, kind: u32) -> f32 {
+    let cp = sm.moments.y;
+    let cn = sm.moments.z;
+    switch kind {
+        case FILTER_VSM: {
+            return chebyshev(m.xy, z, 1e-6);
+        }
+        case FILTER_ESM: {
+            return clamp(m.x * exp(-cp * (z - 1.0)), 0.0, 1.0);
+        }
+        case FILTER_EVSM2: {
+            let p = exp(cp * (z - 1.0));
+            return chebyshev(m.xy, p, 1e-6 * p * p * cp * cp);
+        }
+        case FILTER_EVSM4: {
+            let p = exp(cp * (z - 1.0));
+            let n = -exp(-cn * z);
+            return min(chebyshev(m.xy, p, 1e-6 * p * p * cp * cp), chebyshev(m.zw, n, 1e-6 * n * n * cn * cn));
+        }
+        default: {
+            return msm_hamburger(m, z);
+        }
+    }
 }
 
 // Interleaved gradient noise (Jimenez 2014): a per-pixel rotation.
@@ -177,6 +328,9 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     }
     let z = ndc.z;
     let kind = u32(sm.kernel.x);
+    if kind >= FILTER_VSM {
+        return vec4f(moment_visibility(moments_at(uv, face), linear01(c), kind));
+    }
     let count = max(u32(sm.kernel.y), 1u);
     let radius = sm.kernel.z;
     let phi = ign(frag.xy) * 6.2831853;
