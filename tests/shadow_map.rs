@@ -196,3 +196,32 @@ fn a_map_larger_than_the_device_allows_is_an_error() {
         "{e}"
     );
 }
+
+#[test]
+fn soft_shadows_from_an_area_light_match_the_reference() {
+    let mut scene = builtin::by_name("floating").unwrap().unwrap();
+    scene.lights = scene.light_preset("area").unwrap();
+    let out = tmpdir("soft");
+    let list =
+        shadowlab::measure::parse_technique_list("shadow-map:area,shadow-map:pcss,shadow-map:pcf")
+            .unwrap();
+    let reference = shadowlab::measure::parse_technique_list("raytraced:reference[samples=256]")
+        .unwrap()
+        .remove(0);
+    let rows = shadowlab::measure::compare::run(
+        gpu(),
+        &scene,
+        &scene.camera,
+        &scene.lights,
+        (320, 180),
+        &list,
+        &reference,
+        &out,
+    )
+    .unwrap();
+    let (area, pcss, hard) = (&rows[0].mask, &rows[1].mask, &rows[2].mask);
+    assert!(area.mean_abs_error <= 0.03, "area: {area:?}");
+    assert!(pcss.mean_abs_error <= 0.06, "pcss: {pcss:?}");
+    // Both soften the shadow: closer to the reference than a hard-edged map.
+    assert!(area.mean_abs_error < hard.mean_abs_error && pcss.mean_abs_error < hard.mean_abs_error);
+}

@@ -131,6 +131,16 @@ pub fn mask_pass<'e>(
     ctx: &MaskContext,
     label: &str,
 ) -> wgpu::RenderPass<'e> {
+    mask_pass_with(encoder, ctx, label, wgpu::LoadOp::Clear(wgpu::Color::WHITE))
+}
+
+/// [`mask_pass`] with a chosen load operation for the mask.
+pub fn mask_pass_with<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    ctx: &MaskContext,
+    label: &str,
+    load: wgpu::LoadOp<wgpu::Color>,
+) -> wgpu::RenderPass<'e> {
     encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),
         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -138,7 +148,7 @@ pub fn mask_pass<'e>(
             depth_slice: None,
             resolve_target: None,
             ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
+                load,
                 store: wgpu::StoreOp::Store,
             },
         })],

@@ -162,6 +162,18 @@ pub static FAMILY: Family = Family {
             16,
             "moment filters: separable box blur radius in texels (0 = none)",
         ),
+        ParamSpec::boolean(
+            "area",
+            false,
+            "lights with an area size: accumulate `area_maps` shadow maps rendered from stratified points of the area",
+        ),
+        ParamSpec::int(
+            "area_maps",
+            16,
+            1,
+            64,
+            "area: number of shadow maps (the documents use the 4 corners)",
+        ),
         ParamSpec::float(
             "bleeding_reduction",
             0.2,
@@ -250,6 +262,11 @@ pub static FAMILY: Family = Family {
             name: "msm",
             summary: "4-moment Hamburger shadow map",
             values: &[("filter", "msm"), ("size", "1024")],
+        },
+        Preset {
+            name: "area",
+            summary: "soft shadows: 16 maps from stratified points of the light's area, averaged",
+            values: &[("area", "true"), ("filter", "pcf2x2"), ("size", "1024")],
         },
         Preset {
             name: "8bit",
@@ -426,6 +443,46 @@ pub fn light_setup(
     }
 }
 
+/// Point lights standing in for an area light: `n` stratified points of its
+/// disk (sphere lights, facing `towards`) or rectangle (facing its
+/// direction); for directional lights, directions within its angular radius.
+pub fn area_samples(light: &Light, n: usize, towards: Vec3) -> Vec<Light> {
+    use crate::scene::LightArea;
+    use crate::technique::raytraced::{concentric_disk, stratified_square};
+    let Some(area) = light.area else {
+        return vec![*light];
+    };
+    stratified_square(n, || (0.5, 0.5))
+        .into_iter()
+        .map(|(a, b)| {
+            let ((u, v), (hu, hv)) = match area {
+                LightArea::Sphere { radius } => (concentric_disk(a, b), (radius, radius)),
+                LightArea::Rect { width, height } => ((a, b), (width * 0.5, height * 0.5)),
+            };
+            let mut l = *light;
+            l.area = None;
+            match light.kind {
+                LightType::Directional => {
+                    let d = light.direction.normalize();
+                    let t = d.any_orthonormal_vector();
+                    l.direction = (d + t * (u * hu) + d.cross(t) * (v * hv)).normalize();
+                }
+                _ => {
+                    let axis = match area {
+                        LightArea::Sphere { .. } => {
+                            (towards - light.position).normalize_or(Vec3::NEG_Y)
+                        }
+                        LightArea::Rect { .. } => light.direction.normalize_or(Vec3::NEG_Y),
+                    };
+                    let t = axis.any_orthonormal_vector();
+                    l.position += t * (u * hu) + axis.cross(t) * (v * hv);
+                }
+            }
+            l
+        })
+        .collect()
+}
+
 struct Maps {
     size: u32,
     layers: u32,
@@ -446,6 +503,8 @@ pub struct ShadowMapTechnique {
     module: wgpu::ShaderModule,
     depth_pipelines: HashMap<(usize, usize, i32, u32, bool), wgpu::RenderPipeline>,
     lookup: wgpu::RenderPipeline,
+    /// The lookup adding `constant × visibility` (area maps).
+    lookup_accumulate: wgpu::RenderPipeline,
     blur: wgpu::RenderPipeline,
     uniforms: wgpu::Buffer,
     compare_sampler: wgpu::Sampler,
@@ -454,6 +513,8 @@ pub struct ShadowMapTechnique {
     placeholder_depth: wgpu::TextureView,
     placeholder_moments: wgpu::TextureView,
     maps: Option<Maps>,
+    /// Shadow maps rendered per face last frame (area lights: several).
+    samples: usize,
 }
 
 /// Uniform slots: per face, the depth pass (and lookup), blur along x, blur along y.
@@ -538,7 +599,7 @@ impl ShadowMapTechnique {
         let pipeline_layout = super::pipeline_layout(gpu, "shadow map", &layout);
         let fullscreen = |label: &str,
                           fs: &str,
-                          format: wgpu::TextureFormat,
+                          target: wgpu::ColorTargetState,
                           depth: Option<wgpu::DepthStencilState>| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
@@ -556,25 +617,43 @@ impl ShadowMapTechnique {
                     module: &module,
                     entry_point: Some(fs),
                     compilation_options: Default::default(),
-                    targets: &[Some(format.into())],
+                    targets: &[Some(target.clone())],
                 }),
                 multiview_mask: None,
                 cache: None,
             })
         };
+        let mask_depth = Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(false),
+            depth_compare: Some(wgpu::CompareFunction::Always),
+            stencil: Default::default(),
+            bias: Default::default(),
+        });
         let lookup = fullscreen(
             "shadow map lookup",
             "fs_lookup",
-            MASK_FORMAT,
-            Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::Always),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
+            MASK_FORMAT.into(),
+            mask_depth.clone(),
         );
-        let blur = fullscreen("shadow map blur", "fs_blur", MOMENT_FORMAT, None);
+        let lookup_accumulate = fullscreen(
+            "shadow map lookup (accumulate)",
+            "fs_lookup",
+            wgpu::ColorTargetState {
+                format: MASK_FORMAT,
+                blend: Some(wgpu::BlendState {
+                    color: wgpu::BlendComponent {
+                        src_factor: wgpu::BlendFactor::Constant,
+                        dst_factor: wgpu::BlendFactor::One,
+                        operation: wgpu::BlendOperation::Add,
+                    },
+                    alpha: wgpu::BlendComponent::REPLACE,
+                }),
+                write_mask: wgpu::ColorWrites::RED,
+            },
+            mask_depth,
+        );
+        let blur = fullscreen("shadow map blur", "fs_blur", MOMENT_FORMAT.into(), None);
         ShadowMapTechnique {
             uniforms: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("shadow map uniforms"),
@@ -597,8 +676,10 @@ impl ShadowMapTechnique {
             module,
             depth_pipelines: HashMap::new(),
             lookup,
+            lookup_accumulate,
             blur,
             maps: None,
+            samples: 0,
         }
     }
 
@@ -784,15 +865,6 @@ impl ShadowTechnique for ShadowMapTechnique {
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
         let p = ctx.params;
         let aspect = ctx.frame.width as f32 / ctx.frame.height as f32;
-        let setup = light_setup(
-            ctx.light,
-            &ctx.scene_gpu.bounds,
-            ctx.camera,
-            aspect,
-            p.get_f32("near"),
-            p.get_f32("far"),
-            p.get_f32("fov"),
-        );
         let size = p.get_usize("size") as u32;
         let format = p.get_usize("format");
         let filter = p.get_usize("filter");
@@ -806,54 +878,98 @@ impl ShadowTechnique for ShadowMapTechnique {
             LightType::Directional => p.get_f32("normal_offset_directional"),
             _ => p.get_f32("normal_offset_local"),
         };
-        let layers = setup.faces.len() as u32;
-        self.ensure_maps(ctx.gpu, size, layers, format, moments)?;
-        let mut faces = [Mat4::IDENTITY; 6];
-        faces[..setup.faces.len()].copy_from_slice(&setup.faces);
-        let base = ShadowMapUniform {
-            faces,
-            light: ctx
-                .light
-                .position
-                .extend(if layers == 6 { 6.0 } else { 1.0 }),
-            kernel: Vec4::new(
-                filter as f32,
-                p.get_f32("samples"),
-                p.get_f32("radius"),
-                normal_offset,
-            ),
-            map: Vec4::new(
-                size as f32,
-                1.0 / size as f32,
-                setup.texel_scale / size as f32,
-                setup.orthographic as u32 as f32,
-            ),
-            soft: Vec4::new(
-                p.get_f32("light_size"),
-                p.get_f32("varwidth_scale"),
-                p.get_f32("varwidth_exponent"),
-                p.get_f32("blocker_search"),
-            ),
-            depth: Vec4::new(setup.near, setup.far, (format == 3) as u32 as f32, 0.0),
-            face: UVec4::ZERO,
-            moments: Vec4::new(
-                p.get_f32("bleeding_reduction"),
-                p.get_f32("exponent"),
-                p.get_f32("exponent_negative"),
-                p.get_f32("moment_bias"),
-            ),
+        // An area light with `area` on becomes several point samples.
+        let lights = if p.get_bool("area") && ctx.light.area.is_some() {
+            area_samples(
+                ctx.light,
+                p.get_usize("area_maps"),
+                ctx.scene_gpu.bounds.center(),
+            )
+        } else {
+            vec![*ctx.light]
         };
-        // Slot 3f: face f's depth pass; 3f+1, 3f+2: its blur along x, y.
-        let mut data = vec![0u8; (STRIDE * SLOTS) as usize];
-        for f in 0..6u32 {
-            for axis in 0..3u32 {
-                let u = ShadowMapUniform {
-                    face: UVec4::new(f, axis.saturating_sub(1), blur, 0),
-                    ..base
-                };
-                let at = ((f * 3 + axis) as u64 * STRIDE) as usize;
-                data[at..at + std::mem::size_of::<ShadowMapUniform>()]
-                    .copy_from_slice(bytemuck::bytes_of(&u));
+        let area_radius = match ctx.light.area {
+            Some(crate::scene::LightArea::Sphere { radius }) if lights.len() == 1 => radius,
+            Some(crate::scene::LightArea::Rect { width, height }) if lights.len() == 1 => {
+                width.max(height) * 0.5
+            }
+            _ => 0.0,
+        };
+        let setups: Vec<LightSetup> = lights
+            .iter()
+            .map(|l| {
+                light_setup(
+                    l,
+                    &ctx.scene_gpu.bounds,
+                    ctx.camera,
+                    aspect,
+                    p.get_f32("near"),
+                    p.get_f32("far"),
+                    p.get_f32("fov"),
+                )
+            })
+            .collect();
+        let layers = setups[0].faces.len() as u32;
+        self.ensure_maps(ctx.gpu, size, layers, format, moments)?;
+        // Slot (s·6 + f)·3 + k: sample s, face f; k = 0 depth pass and lookup, 1 and 2 blur along x and y.
+        let slots = (lights.len() * 18) as u64;
+        if self.uniforms.size() < slots * STRIDE {
+            self.uniforms = ctx.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("shadow map uniforms"),
+                size: slots * STRIDE,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+        }
+        let mut data = vec![0u8; (slots * STRIDE) as usize];
+        for (si, (light, setup)) in lights.iter().zip(&setups).enumerate() {
+            let mut faces = [Mat4::IDENTITY; 6];
+            faces[..setup.faces.len()].copy_from_slice(&setup.faces);
+            let base = ShadowMapUniform {
+                faces,
+                light: light.position.extend(if layers == 6 { 6.0 } else { 1.0 }),
+                kernel: Vec4::new(
+                    filter as f32,
+                    p.get_f32("samples"),
+                    p.get_f32("radius"),
+                    normal_offset,
+                ),
+                map: Vec4::new(
+                    size as f32,
+                    1.0 / size as f32,
+                    setup.texel_scale / size as f32,
+                    setup.orthographic as u32 as f32,
+                ),
+                soft: Vec4::new(
+                    p.get_f32("light_size"),
+                    p.get_f32("varwidth_scale"),
+                    p.get_f32("varwidth_exponent"),
+                    p.get_f32("blocker_search"),
+                ),
+                depth: Vec4::new(
+                    setup.near,
+                    setup.far,
+                    (format == 3) as u32 as f32,
+                    area_radius,
+                ),
+                face: UVec4::ZERO,
+                moments: Vec4::new(
+                    p.get_f32("bleeding_reduction"),
+                    p.get_f32("exponent"),
+                    p.get_f32("exponent_negative"),
+                    p.get_f32("moment_bias"),
+                ),
+            };
+            for f in 0..6u32 {
+                for k in 0..3u32 {
+                    let u = ShadowMapUniform {
+                        face: UVec4::new(f, k.saturating_sub(1), blur, 0),
+                        ..base
+                    };
+                    let at = (((si as u32 * 6 + f) * 3 + k) as u64 * STRIDE) as usize;
+                    data[at..at + std::mem::size_of::<ShadowMapUniform>()]
+                        .copy_from_slice(bytemuck::bytes_of(&u));
+                }
             }
         }
         ctx.gpu.queue.write_buffer(&self.uniforms, 0, &data);
@@ -870,7 +986,8 @@ impl ShadowTechnique for ShadowMapTechnique {
             )
             .clone();
         let maps = self.maps.as_ref().expect("ensured above");
-        let slot = |f: u32, axis: u32| ((f * 3 + axis) as u64 * STRIDE) as u32;
+        let slot =
+            |s: usize, f: u32, k: u32| ((((s as u32) * 6 + f) * 3 + k) as u64 * STRIDE) as u32;
         // Bind groups: none of the maps while they are rendered; the moment
         // maps as blur sources; everything for the lookup.
         let render_group = self.bind_group(
@@ -879,90 +996,116 @@ impl ShadowTechnique for ShadowMapTechnique {
             &self.placeholder_bytes,
             &self.placeholder_moments,
         );
-        for face in 0..layers {
-            let f = face as usize;
-            let color = match (&maps.moment, &maps.byte) {
-                (Some(m), _) => Some(wgpu::RenderPassColorAttachment {
-                    view: &m[0].0[f],
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: clear_op(wgpu::Color::WHITE),
-                }),
-                (None, Some(b)) => Some(wgpu::RenderPassColorAttachment {
-                    view: &b.0[f],
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: clear_op(wgpu::Color::WHITE),
-                }),
-                (None, None) => None,
-            };
-            let colors = [color];
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("shadow map depth"),
-                color_attachments: if colors[0].is_some() { &colors } else { &[] },
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &maps.depth_layer_views[f],
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                ..Default::default()
-            });
-            pass.set_pipeline(&pipeline);
-            pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
-            pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
-            pass.set_bind_group(2, &render_group, &[slot(face, 0)]);
-            ctx.scene_gpu.draw_objects(&mut pass, |d| d.casts_shadow);
-        }
-        if let (Some(m), true) = (&maps.moment, blur > 0) {
-            // A → B along x, B → A along y.
-            for (axis, src, dst) in [(1u32, 0usize, 1usize), (2, 1, 0)] {
-                let group = self.bind_group(
+        let blur_groups = maps.moment.as_ref().map(|m| {
+            [0, 1].map(|src| {
+                self.bind_group(
                     ctx,
                     &self.placeholder_depth,
                     &self.placeholder_bytes,
                     &m[src].1,
-                );
-                for face in 0..layers {
-                    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                        label: Some("shadow map blur"),
-                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                            view: &m[dst].0[face as usize],
-                            depth_slice: None,
-                            resolve_target: None,
-                            ops: clear_op(wgpu::Color::WHITE),
-                        })],
-                        ..Default::default()
-                    });
-                    pass.set_pipeline(&self.blur);
-                    pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
-                    pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
-                    pass.set_bind_group(2, &group, &[slot(face, axis)]);
-                    pass.draw(0..3, 0..1);
-                }
-            }
-        }
+                )
+            })
+        });
         let byte_array = maps.byte.as_ref().map_or(&self.placeholder_bytes, |b| &b.1);
         let moment_array = maps
             .moment
             .as_ref()
             .map_or(&self.placeholder_moments, |m| &m[0].1);
         let lookup_group = self.bind_group(ctx, &maps.depth_array, byte_array, moment_array);
-        let mut pass = super::mask_pass(encoder, ctx, "shadow map lookup");
-        pass.set_pipeline(&self.lookup);
-        pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
-        pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
-        pass.set_bind_group(2, &lookup_group, &[0]);
-        pass.draw(0..3, 0..1);
+        for si in 0..lights.len() {
+            for face in 0..layers {
+                let f = face as usize;
+                let color = match (&maps.moment, &maps.byte) {
+                    (Some(m), _) => Some(&m[0].0[f]),
+                    (None, Some(b)) => Some(&b.0[f]),
+                    (None, None) => None,
+                }
+                .map(|view| wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: clear_op(wgpu::Color::WHITE),
+                });
+                let colors = [color];
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("shadow map depth"),
+                    color_attachments: if colors[0].is_some() { &colors } else { &[] },
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &maps.depth_layer_views[f],
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    ..Default::default()
+                });
+                pass.set_pipeline(&pipeline);
+                pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
+                pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+                pass.set_bind_group(2, &render_group, &[slot(si, face, 0)]);
+                ctx.scene_gpu.draw_objects(&mut pass, |d| d.casts_shadow);
+            }
+            if let (Some(m), Some(groups), true) = (&maps.moment, &blur_groups, blur > 0) {
+                // A → B along x, B → A along y.
+                for (k, src, dst) in [(1u32, 0usize, 1usize), (2, 1, 0)] {
+                    for face in 0..layers {
+                        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                            label: Some("shadow map blur"),
+                            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                                view: &m[dst].0[face as usize],
+                                depth_slice: None,
+                                resolve_target: None,
+                                ops: clear_op(wgpu::Color::WHITE),
+                            })],
+                            ..Default::default()
+                        });
+                        pass.set_pipeline(&self.blur);
+                        pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
+                        pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+                        pass.set_bind_group(2, &groups[src], &[slot(si, face, k)]);
+                        pass.draw(0..3, 0..1);
+                    }
+                }
+            }
+            // One sample writes the mask; several add 1/N each onto a cleared mask.
+            let (load, accumulate) = match (lights.len(), si) {
+                (1, _) => (wgpu::LoadOp::Clear(wgpu::Color::WHITE), false),
+                (_, 0) => (wgpu::LoadOp::Clear(wgpu::Color::BLACK), true),
+                _ => (wgpu::LoadOp::Load, true),
+            };
+            let mut pass = super::mask_pass_with(encoder, ctx, "shadow map lookup", load);
+            if accumulate {
+                pass.set_pipeline(&self.lookup_accumulate);
+                let w = 1.0 / lights.len() as f64;
+                pass.set_blend_constant(wgpu::Color {
+                    r: w,
+                    g: w,
+                    b: w,
+                    a: w,
+                });
+            } else {
+                pass.set_pipeline(&self.lookup);
+            }
+            pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
+            pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+            pass.set_bind_group(2, &lookup_group, &[slot(si, 0, 0)]);
+            pass.draw(0..3, 0..1);
+        }
+        self.samples = lights.len();
         Ok(())
     }
 
     fn counters(&self) -> Vec<(&'static str, f64)> {
         self.maps
             .as_ref()
-            .map(|m| vec![("map_size", m.size as f64), ("faces", m.layers as f64)])
+            .map(|m| {
+                vec![
+                    ("map_size", m.size as f64),
+                    ("faces", m.layers as f64),
+                    ("maps_per_face", self.samples as f64),
+                ]
+            })
             .unwrap_or_default()
     }
 

@@ -17,7 +17,8 @@ struct ShadowMap {
     // x light size (texels at unit depth ratio, pcss), y variable-width scale,
     // z variable-width exponent, w blocker-search radius (texels)
     soft: vec4f,
-    // x near, y far (to linearise perspective depth), z 1 = 8-bit map
+    // x near, y far (to linearise perspective depth), z 1 = 8-bit map,
+    // w area-light radius for pcss (0 = use soft.x)
     depth: vec4f,
     // x face rendered by the depth pass (or blurred), y blur axis (0 x, 1 y),
     // z blur radius (texels)
@@ -286,6 +287,17 @@ fn pcf_grid(uv: vec2f, face: u32, z: f32, radius_texels: f32, k: u32) -> f32 {
     return sum / f32(k * k);
 }
 
+// Half-width in texels of the penumbra that a blocker at linear depth db
+// casts on a receiver at dr from an area light of radius sm.depth.w (world
+// units; for directional lights the tangent of the angular radius): the
+// segment from the receiver to the light's rim, seen from the light centre.
+fn penumbra_texels(dr: f32, db: f32) -> f32 {
+    if sm.map.w > 0.5 {
+        return sm.depth.w * (dr - db) * (sm.depth.y - sm.depth.x) / sm.map.z;
+    }
+    return sm.depth.w * (dr - db) / (dr * max(db, 1e-4)) / sm.map.z;
+}
+
 // Mean linear depth of the blockers (stored < z) in a disk, and their count.
 fn blockers(uv: vec2f, face: u32, z: f32, radius_texels: f32, n: u32, phi: f32) -> vec2f {
     var sum = 0.0;
@@ -350,12 +362,21 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         }
         case 4u: {
             // PCSS (Fernando 2005): blocker search, then a penumbra
-            // w = (d_receiver − d_blocker) / d_blocker · light size.
-            let b = blockers(uv, face, z, sm.soft.w, 16u, phi);
+            // w = (d_receiver − d_blocker) / d_blocker · light size; from the
+            // light's own area when it has one.
+            let dr = linear_depth(z);
+            let physical = sm.depth.w > 0.0;
+            var search = sm.soft.w;
+            if physical {
+                search = clamp(penumbra_texels(dr, select(sm.depth.x, 0.0, sm.map.w > 0.5)), 1.0, 64.0);
+            }
+            let b = blockers(uv, face, z, search, 16u, phi);
             if b.y > 0.0 {
-                let dr = linear_depth(z);
-                let w = max((dr - b.x) / max(b.x, 1e-4) * sm.soft.x, 0.5);
-                v = pcf_disk(uv, face, z, min(w, 64.0), count * count, phi);
+                var w = (dr - b.x) / max(b.x, 1e-4) * sm.soft.x;
+                if physical {
+                    w = penumbra_texels(dr, b.x);
+                }
+                v = pcf_disk(uv, face, z, clamp(w, 0.5, 64.0), count * count, phi);
             }
         }
         default: {
