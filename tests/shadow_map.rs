@@ -19,7 +19,13 @@ fn texture_matrix_maps_a_known_point_to_its_texel_and_depth() {
         max: Vec3::splat(1.0),
     };
     let cam = Camera::new(Vec3::new(0.0, 3.0, 8.0), Vec3::ZERO);
-    let s = light_setup(&light, &bounds, &cam, 1.0, 1.0, 10.0, 90.0);
+    let fp = shadowlab::technique::shadow_map::FrustumParams {
+        near: 1.0,
+        far: 10.0,
+        fov_deg: 90.0,
+        paraboloid: false,
+    };
+    let s = light_setup(&light, &bounds, &cam, 1.0, &fp);
     let t = bias_matrix() * s.faces[0] * Vec4::new(0.0, 0.0, 0.0, 1.0);
     let t = t / t.w;
     assert!((t.x - 0.5).abs() < 1e-6 && (t.y - 0.5).abs() < 1e-6, "{t}");
@@ -224,4 +230,21 @@ fn soft_shadows_from_an_area_light_match_the_reference() {
     assert!(pcss.mean_abs_error <= 0.06, "pcss: {pcss:?}");
     // Both soften the shadow: closer to the reference than a hard-edged map.
     assert!(area.mean_abs_error < hard.mean_abs_error && pcss.mean_abs_error < hard.mean_abs_error);
+}
+
+#[test]
+fn point_light_in_the_room_cube_and_dual_paraboloid() {
+    let scene = builtin::by_name("room").unwrap().unwrap();
+    for omni in ["cube", "dual-paraboloid"] {
+        let row = compare(
+            &scene,
+            &format!("shadow-map:hard[size=1024,omni={omni}]"),
+            (320, 180),
+        );
+        assert!(row.mask.reference_shadowed_pct > 1.0);
+        assert!(row.mask.all.total_pct <= 2.0, "{omni}: {:?}", row.mask);
+    }
+    // A filtered lookup on the paraboloid maps stays within the bar too.
+    let spot = compare(&scene, "shadow-map:pcf[omni=dual-paraboloid]", (160, 90));
+    assert!(spot.mask.all.total_pct <= 2.0);
 }

@@ -99,6 +99,12 @@ pub static FAMILY: Family = Family {
             2,
             "faces culled in the depth pass; back or front culling leaks light through open meshes (bunny, teapot)",
         ),
+        ParamSpec::choice(
+            "omni",
+            &["cube", "dual-paraboloid"],
+            0,
+            "point lights: six 90° faces (cube) or two paraboloid hemispheres (Brabec 2002; distorts large triangles)",
+        ),
         ParamSpec::float(
             "near",
             0.0,
@@ -297,6 +303,8 @@ pub struct LightSetup {
     pub near: f32,
     pub far: f32,
     pub orthographic: bool,
+    /// `faces` are the two hemispheres' view matrices of a dual paraboloid.
+    pub paraboloid: bool,
     /// World size of a texel at unit distance (perspective) or anywhere (orthographic), for a 1-texel map.
     pub texel_scale: f32,
 }
@@ -341,6 +349,16 @@ pub fn cube_views(pos: Vec3) -> [Mat4; 6] {
     ]
 }
 
+/// The user's choices for the light frustum (0 = fitted).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FrustumParams {
+    pub near: f32,
+    pub far: f32,
+    pub fov_deg: f32,
+    /// Point lights: two paraboloid hemispheres instead of six faces.
+    pub paraboloid: bool,
+}
+
 /// Light matrices: spot (perspective over the cone), point (six faces),
 /// directional (orthographic around the scene, its xy clipped to the
 /// camera's view of the scene).
@@ -349,10 +367,14 @@ pub fn light_setup(
     scene_bounds: &Aabb,
     camera: &Camera,
     aspect: f32,
-    near: f32,
-    far: f32,
-    fov_deg: f32,
+    fp: &FrustumParams,
 ) -> LightSetup {
+    let FrustumParams {
+        near,
+        far,
+        fov_deg,
+        paraboloid,
+    } = *fp;
     use glam::camera::rh::proj::directx::{orthographic, perspective};
     match light.kind {
         LightType::Spot => {
@@ -373,7 +395,21 @@ pub fn light_setup(
                 near: n,
                 far: f,
                 orthographic: false,
+                paraboloid: false,
                 texel_scale: 2.0 * (fov * 0.5).tan(),
+            }
+        }
+        LightType::Point if paraboloid => {
+            let (n, f) = near_far(light.position, scene_bounds, near, far);
+            let v = |d: Vec3| glam::camera::rh::view::look_to_mat4(light.position, d, Vec3::Z);
+            LightSetup {
+                faces: vec![v(Vec3::NEG_Y), v(Vec3::Y)],
+                near: n,
+                far: f,
+                orthographic: false,
+                paraboloid: true,
+                // At the centre of a hemisphere, uv changes by 1/2 per radian.
+                texel_scale: 4.0,
             }
         }
         LightType::Point => {
@@ -387,6 +423,7 @@ pub fn light_setup(
                 near: n,
                 far: f,
                 orthographic: false,
+                paraboloid: false,
                 texel_scale: 2.0,
             }
         }
@@ -437,6 +474,7 @@ pub fn light_setup(
                 near: n.max(0.0),
                 far: f,
                 orthographic: true,
+                paraboloid: false,
                 texel_scale: 2.0 * half,
             }
         }
@@ -483,6 +521,17 @@ pub fn area_samples(light: &Light, n: usize, towards: Vec3) -> Vec<Light> {
         .collect()
 }
 
+/// What a depth-pass pipeline depends on.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+struct DepthPassKey {
+    format: usize,
+    cull: usize,
+    bias: i32,
+    slope_bits: u32,
+    moments: bool,
+    paraboloid: bool,
+}
+
 struct Maps {
     size: u32,
     layers: u32,
@@ -501,7 +550,7 @@ pub struct ShadowMapTechnique {
     layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
-    depth_pipelines: HashMap<(usize, usize, i32, u32, bool), wgpu::RenderPipeline>,
+    depth_pipelines: HashMap<DepthPassKey, wgpu::RenderPipeline>,
     lookup: wgpu::RenderPipeline,
     /// The lookup adding `constant × visibility` (area maps).
     lookup_accumulate: wgpu::RenderPipeline,
@@ -686,19 +735,25 @@ impl ShadowMapTechnique {
     fn depth_pipeline(
         &mut self,
         device: &wgpu::Device,
-        format: usize,
-        cull: usize,
-        bias: i32,
-        slope: f32,
-        moments: bool,
+        key: DepthPassKey,
     ) -> &wgpu::RenderPipeline {
-        let key = (format, cull, bias, slope.to_bits(), moments);
+        let DepthPassKey {
+            format,
+            cull,
+            bias,
+            slope_bits,
+            moments,
+            paraboloid,
+        } = key;
+        let slope = f32::from_bits(slope_bits);
         let (module, layout) = (&self.module, &self.pipeline_layout);
         self.depth_pipelines.entry(key).or_insert_with(|| {
             let (entry, color) = if moments {
                 (Some("fs_depth_moments"), Some(MOMENT_FORMAT))
             } else if format == 3 {
                 (Some("fs_depth_byte"), Some(wgpu::TextureFormat::R8Unorm))
+            } else if paraboloid {
+                (Some("fs_depth_paraboloid"), None)
             } else {
                 (None, None)
             };
@@ -732,7 +787,7 @@ impl ShadowMapTechnique {
                     module,
                     entry_point: Some(e),
                     compilation_options: Default::default(),
-                    targets: &targets,
+                    targets: if targets[0].is_some() { &targets } else { &[] },
                 }),
                 multiview_mask: None,
                 cache: None,
@@ -895,6 +950,12 @@ impl ShadowTechnique for ShadowMapTechnique {
             }
             _ => 0.0,
         };
+        let frustum_params = FrustumParams {
+            near: p.get_f32("near"),
+            far: p.get_f32("far"),
+            fov_deg: p.get_f32("fov"),
+            paraboloid: p.get_usize("omni") == 1,
+        };
         let setups: Vec<LightSetup> = lights
             .iter()
             .map(|l| {
@@ -903,9 +964,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     &ctx.scene_gpu.bounds,
                     ctx.camera,
                     aspect,
-                    p.get_f32("near"),
-                    p.get_f32("far"),
-                    p.get_f32("fov"),
+                    &frustum_params,
                 )
             })
             .collect();
@@ -927,7 +986,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             faces[..setup.faces.len()].copy_from_slice(&setup.faces);
             let base = ShadowMapUniform {
                 faces,
-                light: light.position.extend(if layers == 6 { 6.0 } else { 1.0 }),
+                light: light.position.extend(layers as f32),
                 kernel: Vec4::new(
                     filter as f32,
                     p.get_f32("samples"),
@@ -938,7 +997,11 @@ impl ShadowTechnique for ShadowMapTechnique {
                     size as f32,
                     1.0 / size as f32,
                     setup.texel_scale / size as f32,
-                    setup.orthographic as u32 as f32,
+                    if setup.paraboloid {
+                        2.0
+                    } else {
+                        setup.orthographic as u32 as f32
+                    },
                 ),
                 soft: Vec4::new(
                     p.get_f32("light_size"),
@@ -975,16 +1038,15 @@ impl ShadowTechnique for ShadowMapTechnique {
         ctx.gpu.queue.write_buffer(&self.uniforms, 0, &data);
         let device = &ctx.gpu.device;
         let depth_bias = p.get("depth_bias").round().min(i32::MAX as f64) as i32;
-        let pipeline = self
-            .depth_pipeline(
-                device,
-                format,
-                p.get_usize("cull"),
-                depth_bias,
-                p.get_f32("slope_bias"),
-                moments,
-            )
-            .clone();
+        let key = DepthPassKey {
+            format,
+            cull: p.get_usize("cull"),
+            bias: depth_bias,
+            slope_bits: p.get_f32("slope_bias").to_bits(),
+            moments,
+            paraboloid: frustum_params.paraboloid,
+        };
+        let pipeline = self.depth_pipeline(device, key).clone();
         let maps = self.maps.as_ref().expect("ensured above");
         let slot =
             |s: usize, f: u32, k: u32| ((((s as u32) * 6 + f) * 3 + k) as u64 * STRIDE) as u32;

@@ -5,14 +5,16 @@
 struct ShadowMap {
     // world → light clip, one per face (1 for spot/directional, 6 for point)
     faces: array<mat4x4f, 6>,
-    // xyz light position, w face count (1 or 6)
+    // xyz light position, w faces: 1, 6 (cube) or 2 (dual paraboloid, whose
+    // `faces` are the two hemispheres' view matrices)
     light: vec4f,
     // x filter (0 hard, 1 pcf 2×2, 2 pcf grid, 3 pcf disk, 4 pcss, 5 variable width),
     // y samples per side (grid) or count (disk), z filter radius (texels),
     // w normal offset (texels)
     kernel: vec4f,
     // x map size, y 1/size, z world size of a texel at unit distance
-    // (perspective) or of any texel (orthographic), w 1 = orthographic
+    // (perspective, paraboloid) or of any texel (orthographic),
+    // w projection: 0 perspective, 1 orthographic, 2 dual paraboloid
     map: vec4f,
     // x light size (texels at unit depth ratio, pcss), y variable-width scale,
     // z variable-width exponent, w blocker-search radius (texels)
@@ -46,6 +48,8 @@ const FILTER_MSM: u32 = 10u;
 
 struct DepthOut {
     @builtin(position) clip: vec4f,
+    // dual paraboloid: the cosine to the hemisphere's axis (< 0 behind it)
+    @location(1) hemisphere: f32,
     // depth linear in distance, 0 at near and 1 at far (moment maps)
     @location(0) linear: f32,
 };
@@ -53,17 +57,48 @@ struct DepthOut {
 // Linear depth in [0, 1] of a light-clip position.
 fn linear01(c: vec4f) -> f32 {
     if sm.map.w > 0.5 {
-        return c.z;
+        return c.z; // orthographic, or the paraboloid's linear depth
     }
     return (c.w - sm.depth.x) / (sm.depth.y - sm.depth.x);
+}
+
+fn is_paraboloid() -> bool {
+    return sm.map.w > 1.5;
+}
+
+// Dual-paraboloid projection (Brabec et al. 2002) of a world point for
+// hemisphere `face`: xy = n.xy / (1 + n_forward), z = linear depth, w = 1;
+// returns the forward cosine in `hemisphere`.
+fn paraboloid(world: vec4f, face: u32) -> vec4f {
+    let p = (sm.faces[face] * world).xyz;
+    let d = length(p);
+    let n = p / max(d, 1e-6);
+    let forward = -n.z;
+    return vec4f(n.xy / (1.0 + max(forward, -0.999)), (d - sm.depth.x) / (sm.depth.y - sm.depth.x), 1.0);
 }
 
 @vertex
 fn vs_depth(v: VertexIn) -> DepthOut {
     var o: DepthOut;
-    o.clip = sm.faces[sm.face.x] * (objects[v.object].model * vec4f(v.position, 1.0));
+    let world = objects[v.object].model * vec4f(v.position, 1.0);
+    o.hemisphere = 1.0;
+    if is_paraboloid() {
+        o.clip = paraboloid(world, sm.face.x);
+        let p = (sm.faces[sm.face.x] * world).xyz;
+        o.hemisphere = -p.z / max(length(p), 1e-6);
+    } else {
+        o.clip = sm.faces[sm.face.x] * world;
+    }
     o.linear = linear01(o.clip);
     return o;
+}
+
+// Depth-only pass of a dual paraboloid: drop what lies behind the hemisphere.
+@fragment
+fn fs_depth_paraboloid(i: DepthOut) {
+    if i.hemisphere < 0.0 {
+        discard;
+    }
 }
 
 // The moments each filter stores (Donnelly & Lauritzen 2006; Annen 2008;
@@ -93,6 +128,9 @@ fn moments_of(z: f32) -> vec4f {
 
 @fragment
 fn fs_depth_moments(i: DepthOut) -> @location(0) vec4f {
+    if i.hemisphere < 0.0 {
+        discard;
+    }
     return moments_of(clamp(i.linear, 0.0, 1.0));
 }
 
@@ -113,6 +151,9 @@ fn fs_blur(@builtin(position) frag: vec4f) -> @location(0) vec4f {
 // The 8-bit preset stores the depth in an R8 colour target.
 @fragment
 fn fs_depth_byte(i: DepthOut) -> @location(0) vec4f {
+    if i.hemisphere < 0.0 {
+        discard;
+    }
     return vec4f(i.clip.z);
 }
 
@@ -122,6 +163,9 @@ fn fs_depth_byte(i: DepthOut) -> @location(0) vec4f {
 fn face_of(p: vec3f) -> u32 {
     if sm.light.w < 1.5 {
         return 0u;
+    }
+    if sm.light.w < 2.5 {
+        return select(1u, 0u, (sm.faces[0] * vec4f(p, 1.0)).z <= 0.0);
     }
     let d = p - sm.light.xyz;
     let a = abs(d);
@@ -135,6 +179,9 @@ fn face_of(p: vec3f) -> u32 {
 }
 
 fn linear_depth(z: f32) -> f32 {
+    if is_paraboloid() {
+        return sm.depth.x + z * (sm.depth.y - sm.depth.x);
+    }
     if sm.map.w > 0.5 {
         return z;
     }
@@ -292,7 +339,7 @@ fn pcf_grid(uv: vec2f, face: u32, z: f32, radius_texels: f32, k: u32) -> f32 {
 // units; for directional lights the tangent of the angular radius): the
 // segment from the receiver to the light's rim, seen from the light centre.
 fn penumbra_texels(dr: f32, db: f32) -> f32 {
-    if sm.map.w > 0.5 {
+    if sm.map.w > 0.5 && !is_paraboloid() {
         return sm.depth.w * (dr - db) * (sm.depth.y - sm.depth.x) / sm.map.z;
     }
     return sm.depth.w * (dr - db) / (dr * max(db, 1e-4)) / sm.map.z;
@@ -325,11 +372,14 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     // number of shadow-map texels (their world size grows with distance for
     // perspective maps).
     var texel_world = sm.map.z;
-    if sm.map.w < 0.5 {
+    if sm.map.w < 0.5 || is_paraboloid() {
         texel_world = sm.map.z * length(g.xyz - sm.light.xyz);
     }
     let p = g.xyz + n * sm.kernel.w * texel_world;
-    let c = sm.faces[face] * vec4f(p, 1.0);
+    var c = sm.faces[face] * vec4f(p, 1.0);
+    if is_paraboloid() {
+        c = paraboloid(vec4f(p, 1.0), face);
+    }
     if c.w <= 0.0 {
         return vec4f(1.0);
     }
@@ -368,7 +418,7 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
             let physical = sm.depth.w > 0.0;
             var search = sm.soft.w;
             if physical {
-                search = clamp(penumbra_texels(dr, select(sm.depth.x, 0.0, sm.map.w > 0.5)), 1.0, 64.0);
+                search = clamp(penumbra_texels(dr, select(sm.depth.x, 0.0, sm.map.w > 0.5 && !is_paraboloid())), 1.0, 64.0);
             }
             let b = blockers(uv, face, z, search, 16u, phi);
             if b.y > 0.0 {
