@@ -72,6 +72,9 @@ pub struct ViewCmdArgs {
     /// background thread); with --frames, exit once it is shown.
     #[arg(long)]
     pub heatmap: bool,
+    /// Start with the technique debug views on (light frusta, depth map).
+    #[arg(long)]
+    pub debug_views: bool,
 }
 
 #[derive(Args)]
@@ -327,6 +330,7 @@ pub fn run(cli: Cli) -> Result<()> {
                 frames: a.frames,
                 vsync: !a.no_vsync,
                 heatmap: a.heatmap,
+                debug_views: a.debug_views,
             })
         }
     }

@@ -196,6 +196,25 @@ fn malformed_files_fail_with_file_line_and_exit_2() {
 }
 
 #[test]
+fn no_adapter_names_the_driver_package_and_exits_2() {
+    // No DX12 adapter exists on Linux: the same path as a machine without a Vulkan driver.
+    if cfg!(target_os = "linux") {
+        let o = shadowlab(&[
+            "render",
+            "--backend",
+            "dx12",
+            "--size",
+            "16x16",
+            "--out",
+            tmpdir("noadapter").to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(2));
+        assert!(stderr(&o).contains("mesa-vulkan-drivers"), "{}", stderr(&o));
+        assert!(!stderr(&o).contains("panicked"));
+    }
+}
+
+#[test]
 fn degenerate_triangles_are_skipped_and_counted() {
     let dir = tmpdir("degenerate");
     let p = write(

@@ -52,24 +52,64 @@ fn viewer_screenshot_shows_scene_and_panel() {
         .filter(|&(x, y)| img.get_pixel(x, y)[0] > 150)
         .count();
     assert!(text > 200, "the panel shows no text ({text} light pixels)");
-    // The scene: the red sphere and the checker floor on the right.
+    // The scene: the checker floor (light and dark squares) and the golden
+    // torus on the right, which the heatmap window (top left of the view)
+    // does not cover.
     let right: Vec<_> = (0..450)
-        .flat_map(|y| (400..800).map(move |x| (x, y)))
+        .flat_map(|y| (560..800).map(move |x| (x, y)))
         .map(|(x, y)| *img.get_pixel(x, y))
         .collect();
-    let red = right
+    let grey = |p: &&image::Rgba<u8>, lo: u8, hi: u8| {
+        p[0] >= lo && p[0] <= hi && p[0].abs_diff(p[2]) < 12 && p[0].abs_diff(p[1]) < 12
+    };
+    let light_floor = right.iter().filter(|p| grey(p, 150, 255)).count();
+    let dark_floor = right.iter().filter(|p| grey(p, 70, 149)).count();
+    let gold = right
         .iter()
-        .filter(|p| p[0] > 120 && p[1] < 80 && p[2] < 80)
-        .count();
-    let light_floor = right
-        .iter()
-        .filter(|p| p[0] > 150 && p[0].abs_diff(p[2]) < 12)
+        .filter(|p| p[0] > 120 && p[1] > 80 && p[2] < 90 && p[0] > p[2] + 60)
         .count();
     assert!(
-        red > 200 && light_floor > 5000,
-        "scene not visible: {red} red, {light_floor} floor pixels"
+        light_floor > 3000 && dark_floor > 3000 && gold > 200,
+        "scene not visible: {light_floor} light and {dark_floor} dark floor pixels, {gold} gold pixels"
     );
     let j: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("view.json")).unwrap()).unwrap();
     assert_eq!(j["techniques"][0]["id"], "planar:default");
+}
+
+#[test]
+fn viewer_shows_the_technique_debug_views() {
+    let dir = tmpdir("viewer-debug");
+    let o = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1024x768x24"])
+        .arg(env!("CARGO_BIN_EXE_shadowlab"))
+        .args([
+            "view",
+            "--scene",
+            "room",
+            "--light",
+            "spot",
+            "--technique",
+            "shadow-map:hard",
+            "--size",
+            "640x360",
+            "--frames",
+            "3",
+            "--debug-views",
+            "--screenshot",
+        ])
+        .arg(dir.join("debug.png"))
+        .output()
+        .expect("xvfb-run");
+    assert!(o.status.success(), "viewer failed: {}", stderr(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("debug views: 1 image(s)"), "{stdout}");
+    // The spot light's frustum is drawn in yellow over the scene.
+    let img = image::open(dir.join("debug.png")).unwrap().to_rgba8();
+    // Line colour (1, 0.85, 0.2) linear is about (255, 238, 124) in sRGB.
+    let yellow = img
+        .pixels()
+        .filter(|p| p[0] > 220 && p[1] > 200 && p[2] > 90 && p[2] < 160)
+        .count();
+    assert!(yellow > 100, "no frustum lines ({yellow} yellow pixels)");
 }

@@ -6,6 +6,7 @@
 //! frame only writes one uniform buffer and records passes.
 
 mod icons;
+mod lines;
 mod textures;
 
 use crate::gpu::GpuContext;
@@ -343,6 +344,7 @@ pub struct Renderer {
     gbuffer_pipelines: [wgpu::RenderPipeline; 2],
     lit_pipelines: [wgpu::RenderPipeline; 2],
     icons: icons::LightIcons,
+    lines: lines::LineRenderer,
     sampler: wgpu::Sampler,
     timer: Option<GpuTimer>,
 }
@@ -590,6 +592,7 @@ impl Renderer {
             gbuffer_pipelines: [gbuffer_pipeline(false), gbuffer_pipeline(true)],
             lit_pipelines: [lit_pipeline(false), lit_pipeline(true)],
             icons: icons::LightIcons::new(device, &frame_layout),
+            lines: lines::LineRenderer::new(device, &frame_layout),
             frame_layout,
             object_layout,
             material_layout,
@@ -597,6 +600,16 @@ impl Renderer {
             sampler,
             timer: gpu.timestamps.then(|| GpuTimer::new(device)),
         }
+    }
+
+    /// Draws debug lines over the frame's colour image (after [`Self::render`]).
+    pub fn draw_lines(
+        &self,
+        gpu: &GpuContext,
+        frame: &FrameResources,
+        lines: &[crate::technique::DebugLine],
+    ) {
+        self.lines.draw(gpu, frame, lines);
     }
 
     /// Uploads a scene: meshes, object table, materials and textures.

@@ -49,6 +49,75 @@ pub trait ShadowTechnique: Send {
     fn resource_bytes(&self) -> u64 {
         0
     }
+
+    /// Asks the technique to prepare its debug views in the next frames.
+    fn enable_debug(&mut self, _on: bool) {}
+
+    /// The debug views of the last frame: world-space lines (light frusta,
+    /// silhouettes, volumes) and small images (a depth map).
+    fn debug_views(&self, _gpu: &GpuContext) -> Result<DebugViews> {
+        Ok(DebugViews::default())
+    }
+}
+
+/// A world-space line segment of a debug view (RGBA colour).
+#[derive(Clone, Copy, Debug)]
+pub struct DebugLine {
+    pub a: glam::Vec3,
+    pub b: glam::Vec3,
+    pub color: [f32; 4],
+}
+
+/// An RGBA8 image of a debug view.
+#[derive(Clone, Debug)]
+pub struct DebugImage {
+    pub label: String,
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<u8>,
+}
+
+/// What a technique shows in the viewer's debug views.
+#[derive(Clone, Debug, Default)]
+pub struct DebugViews {
+    pub lines: Vec<DebugLine>,
+    pub images: Vec<DebugImage>,
+}
+
+/// The 12 edges of the frustum of a view-projection matrix ([0,1] depth).
+pub fn frustum_lines(view_proj: glam::Mat4, color: [f32; 4]) -> Vec<DebugLine> {
+    let inv = view_proj.inverse();
+    let corner = |i: usize| {
+        let p = inv
+            * glam::Vec4::new(
+                if i & 1 == 0 { -1.0 } else { 1.0 },
+                if i & 2 == 0 { -1.0 } else { 1.0 },
+                if i & 4 == 0 { 0.0 } else { 1.0 },
+                1.0,
+            );
+        p.truncate() / p.w
+    };
+    [
+        (0, 1),
+        (2, 3),
+        (0, 2),
+        (1, 3),
+        (4, 5),
+        (6, 7),
+        (4, 6),
+        (5, 7),
+        (0, 4),
+        (1, 5),
+        (2, 6),
+        (3, 7),
+    ]
+    .iter()
+    .map(|&(a, b)| DebugLine {
+        a: corner(a),
+        b: corner(b),
+        color,
+    })
+    .collect()
 }
 
 /// A named set of parameter values of a family.

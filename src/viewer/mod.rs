@@ -35,6 +35,8 @@ pub struct ViewerOptions {
     /// Compute the error heatmap of light 1 at start-up (with `frames`, the
     /// viewer waits for it before it exits).
     pub heatmap: bool,
+    /// Start with the technique debug views on.
+    pub debug_views: bool,
 }
 
 /// The composited window image (also what screenshots read) holds sRGB-encoded
@@ -306,6 +308,12 @@ pub struct ViewerState {
     pub screenshot_requested: bool,
     /// Left edge of the 3D view in physical pixels (the width of the panel).
     pub view_left: u32,
+    /// Show the selected light's technique debug views (frusta, depth map).
+    pub show_debug: bool,
+    /// Whether the technique instances were told to prepare them.
+    debug_enabled: bool,
+    /// The technique's debug images as egui textures.
+    pub debug_images: Vec<(String, egui::TextureHandle)>,
     pub pending_scene: Option<String>,
     pub message: Option<String>,
 }
@@ -357,6 +365,9 @@ pub fn run(options: ViewerOptions) -> Result<()> {
             heatmap_job: None,
             screenshot_requested: false,
             view_left: 0,
+            show_debug: options.debug_views,
+            debug_enabled: false,
+            debug_images: vec![],
             pending_scene: None,
             message: None,
         },
@@ -568,6 +579,13 @@ impl App {
                 texture: t,
             });
         }
+        if self.state.show_debug != self.state.debug_enabled {
+            for t in &mut scene.techniques {
+                t.technique.enable_debug(self.state.show_debug);
+            }
+            self.state.debug_enabled = self.state.show_debug;
+            self.state.debug_images.clear();
+        }
         let frame = gfx.frame.as_mut().expect("created above");
         let nl = scene.lights.len();
         let result = gfx.gpu.checked("rendering", || {
@@ -590,6 +608,33 @@ impl App {
                 }
                 self.state.last_timings = Some(t);
                 self.state.error = None;
+                if self.state.show_debug {
+                    let li = self.state.selected_light.min(nl.max(1) - 1);
+                    match scene.techniques[li].technique.debug_views(&gfx.gpu) {
+                        Ok(views) => {
+                            gfx.renderer.draw_lines(&gfx.gpu, frame, &views.lines);
+                            self.state.debug_images = views
+                                .images
+                                .into_iter()
+                                .map(|im| {
+                                    let img = egui::ColorImage::from_rgba_unmultiplied(
+                                        [im.width as usize, im.height as usize],
+                                        &im.rgba,
+                                    );
+                                    (
+                                        im.label,
+                                        gfx.egui_ctx.load_texture(
+                                            "technique debug",
+                                            img,
+                                            egui::TextureOptions::LINEAR,
+                                        ),
+                                    )
+                                })
+                                .collect();
+                        }
+                        Err(e) => self.state.error = Some(format!("{e:#}")),
+                    }
+                }
             }
             Err(e) => self.state.error = Some(format!("{e:#}")),
         }
@@ -779,6 +824,9 @@ impl App {
         }
         if self.frames_rendered > 3 {
             self.intervals.push(interval);
+        }
+        if done && self.state.show_debug {
+            println!("debug views: {} image(s)", self.state.debug_images.len());
         }
         if done {
             if !self.intervals.is_empty() {

@@ -362,7 +362,8 @@ fn debug_panel(
             );
         }
     });
-    ui.label("Depth maps, light frusta and shadow volumes appear here with the techniques that have them.");
+    ui.checkbox(&mut state.show_debug, "technique debug views")
+        .on_hover_text("what the selected light's technique offers: light frusta as lines, its depth map, volumes and silhouettes");
     if state.heatmap_job.is_some() {
         ui.horizontal(|ui| {
             ui.spinner();
@@ -434,6 +435,14 @@ pub fn build(
             .show(&ctx, |ui| {
                 ui.label(HELP);
             });
+    }
+    if state.show_debug && !state.debug_images.is_empty() {
+        egui::Window::new("Technique debug views").show(&ctx, |ui| {
+            for (label, texture) in &state.debug_images {
+                ui.label(label);
+                ui.image((texture.id(), texture.size_vec2()));
+            }
+        });
     }
     let mut close = false;
     if let Some(h) = &state.heatmap {

@@ -564,6 +564,12 @@ pub struct ShadowMapTechnique {
     maps: Option<Maps>,
     /// Shadow maps rendered per face last frame (area lights: several).
     samples: usize,
+    /// Debug views: a 256² picture of face 0 and the last light matrices.
+    debug: Option<wgpu::Texture>,
+    debug_pipeline: wgpu::RenderPipeline,
+    last_faces: Vec<Mat4>,
+    last_paraboloid: bool,
+    want_debug: bool,
 }
 
 /// Uniform slots: per face, the depth pass (and lookup), blur along x, blur along y.
@@ -703,6 +709,12 @@ impl ShadowMapTechnique {
             mask_depth,
         );
         let blur = fullscreen("shadow map blur", "fs_blur", MOMENT_FORMAT.into(), None);
+        let debug_pipeline = fullscreen(
+            "shadow map debug",
+            "fs_debug_map",
+            wgpu::TextureFormat::Rgba8Unorm.into(),
+            None,
+        );
         ShadowMapTechnique {
             uniforms: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("shadow map uniforms"),
@@ -729,6 +741,11 @@ impl ShadowMapTechnique {
             blur,
             maps: None,
             samples: 0,
+            debug: None,
+            debug_pipeline,
+            last_faces: vec![],
+            last_paraboloid: false,
+            want_debug: false,
         }
     }
 
@@ -919,6 +936,22 @@ fn clear_op(color: wgpu::Color) -> wgpu::Operations<wgpu::Color> {
 impl ShadowTechnique for ShadowMapTechnique {
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
         let p = ctx.params;
+        if self.want_debug && self.debug.is_none() {
+            self.debug = Some(ctx.gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("shadow map debug"),
+                size: wgpu::Extent3d {
+                    width: 256,
+                    height: 256,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba8Unorm,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            }));
+        }
         let aspect = ctx.frame.width as f32 / ctx.frame.height as f32;
         let size = p.get_usize("size") as u32;
         let format = p.get_usize("format");
@@ -1154,8 +1187,54 @@ impl ShadowTechnique for ShadowMapTechnique {
             pass.set_bind_group(2, &lookup_group, &[slot(si, 0, 0)]);
             pass.draw(0..3, 0..1);
         }
+        if let Some(t) = &self.debug {
+            // Face 0 of the (last) map, for the viewer.
+            let view = t.create_view(&Default::default());
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shadow map debug"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: clear_op(wgpu::Color::BLACK),
+                })],
+                ..Default::default()
+            });
+            pass.set_pipeline(&self.debug_pipeline);
+            pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
+            pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+            pass.set_bind_group(2, &lookup_group, &[slot(lights.len() - 1, 0, 0)]);
+            pass.draw(0..3, 0..1);
+        }
         self.samples = lights.len();
+        self.last_faces = setups.iter().flat_map(|s| s.faces.clone()).collect();
+        self.last_paraboloid = frustum_params.paraboloid && ctx.light.kind == LightType::Point;
         Ok(())
+    }
+
+    fn enable_debug(&mut self, on: bool) {
+        self.debug = None;
+        self.want_debug = on;
+    }
+
+    fn debug_views(&self, gpu: &crate::gpu::GpuContext) -> Result<super::DebugViews> {
+        let mut views = super::DebugViews::default();
+        if !self.last_paraboloid {
+            for m in &self.last_faces {
+                views
+                    .lines
+                    .extend(super::frustum_lines(*m, [1.0, 0.85, 0.2, 1.0]));
+            }
+        }
+        if let Some(t) = &self.debug {
+            views.images.push(super::DebugImage {
+                label: "shadow map (face 0, linear depth)".into(),
+                width: t.width(),
+                height: t.height(),
+                rgba: gpu.read_texture(t, 0, 4)?,
+            });
+        }
+        Ok(views)
     }
 
     fn counters(&self) -> Vec<(&'static str, f64)> {

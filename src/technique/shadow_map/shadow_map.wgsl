@@ -440,3 +440,27 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     }
     return vec4f(v);
 }
+
+// Debug view: face 0 of the map as grey (near dark, far light), in linear depth.
+@fragment
+fn fs_debug_map(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    let uv = frag.xy / 256.0;
+    let t = vec2i(uv * sm.map.x);
+    var d: f32;
+    if u32(sm.kernel.x) >= FILTER_VSM {
+        d = moment_texel(t, 0u).x;
+        if u32(sm.kernel.x) == FILTER_ESM || u32(sm.kernel.x) == FILTER_EVSM2 || u32(sm.kernel.x) == FILTER_EVSM4 {
+            d = 1.0 + log(max(d, 1e-30)) / sm.moments.y;
+        }
+    } else {
+        let z = stored(t, 0u);
+        d = (linear_depth(z) - sm.depth.x) / (sm.depth.y - sm.depth.x);
+        if sm.map.w > 0.5 && !is_paraboloid() {
+            d = z;
+        }
+        if is_paraboloid() {
+            d = z;
+        }
+    }
+    return vec4f(vec3f(clamp(d, 0.0, 1.0)), 1.0);
+}
