@@ -103,11 +103,7 @@ impl LightIcons {
             layout: &layout,
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
-                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &uniforms,
-                    offset: 0,
-                    size: wgpu::BufferSize::new(std::mem::size_of::<IconUniform>() as u64),
-                }),
+                resource: crate::renderer::dynamic_uniform::<IconUniform>(&uniforms),
             }],
         });
         let module = super::shader_module(device, "icons", &[include_str!("icons.wgsl")]);

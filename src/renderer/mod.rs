@@ -349,7 +349,17 @@ pub struct Renderer {
     timer: Option<GpuTimer>,
 }
 
-fn uniform_entry(
+/// A binding of one `T` at a dynamic offset of `buffer`.
+pub fn dynamic_uniform<T>(buffer: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+        buffer,
+        offset: 0,
+        size: wgpu::BufferSize::new(std::mem::size_of::<T>() as u64),
+    })
+}
+
+/// Layout entry of a uniform buffer (optionally with a dynamic offset).
+pub fn uniform_entry(
     binding: u32,
     visibility: wgpu::ShaderStages,
     dynamic: bool,

@@ -191,16 +191,7 @@ impl PlanarShadows {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("planar"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: true,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                crate::renderer::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
                 super::gbuffer_entry(1),
                 super::gbuffer_entry(2),
             ],
@@ -354,37 +345,31 @@ impl ShadowTechnique for PlanarShadows {
         ctx.gpu
             .queue
             .write_buffer(&self.uniforms, 0, bytemuck::cast_slice(&uniforms));
-        let bind_group =
-            ctx.gpu
-                .device
-                .create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("planar"),
-                    layout: &self.layout,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                                buffer: &self.uniforms,
-                                offset: 0,
-                                size: wgpu::BufferSize::new(
-                                    std::mem::size_of::<PlanarUniform>() as u64
-                                ),
-                            }),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 1,
-                            resource: wgpu::BindingResource::TextureView(
-                                &ctx.frame.gbuffer_position_view,
-                            ),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: wgpu::BindingResource::TextureView(
-                                &ctx.frame.gbuffer_normal_view,
-                            ),
-                        },
-                    ],
-                });
+        let bind_group = ctx
+            .gpu
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("planar"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: crate::renderer::dynamic_uniform::<PlanarUniform>(&self.uniforms),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(
+                            &ctx.frame.gbuffer_position_view,
+                        ),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::TextureView(
+                            &ctx.frame.gbuffer_normal_view,
+                        ),
+                    },
+                ],
+            });
         let stencil = ctx.params.get_bool("stencil");
         let mut pass = super::mask_pass(encoder, ctx, "planar");
         pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);

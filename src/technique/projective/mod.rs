@@ -96,16 +96,7 @@ impl ProjectiveShadows {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("projective"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: true,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                crate::renderer::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
                 super::gbuffer_entry(1),
                 super::gbuffer_entry(2),
                 super::gbuffer_entry(3),
@@ -322,11 +313,7 @@ impl ShadowTechnique for ProjectiveShadows {
                     entries: &[
                         wgpu::BindGroupEntry {
                             binding: 0,
-                            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                                buffer: ubuf,
-                                offset: 0,
-                                size: wgpu::BufferSize::new(stride as u64),
-                            }),
+                            resource: crate::renderer::dynamic_uniform::<ProjectorUniform>(ubuf),
                         },
                         wgpu::BindGroupEntry {
                             binding: 1,

@@ -623,16 +623,7 @@ impl ShadowMapTechnique {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadow map"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: true,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                crate::renderer::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
                 super::gbuffer_entry(1),
                 super::gbuffer_entry(2),
                 tex(3, wgpu::TextureSampleType::Depth),
@@ -904,13 +895,9 @@ impl ShadowMapTechnique {
                 entries: &[
                     wgpu::BindGroupEntry {
                         binding: 0,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &self.uniforms,
-                            offset: 0,
-                            size: wgpu::BufferSize::new(
-                                std::mem::size_of::<ShadowMapUniform>() as u64
-                            ),
-                        }),
+                        resource: crate::renderer::dynamic_uniform::<ShadowMapUniform>(
+                            &self.uniforms,
+                        ),
                     },
                     view(1, &ctx.frame.gbuffer_position_view),
                     view(2, &ctx.frame.gbuffer_normal_view),
