@@ -248,3 +248,39 @@ fn point_light_in_the_room_cube_and_dual_paraboloid() {
     let spot = compare(&scene, "shadow-map:pcf[omni=dual-paraboloid]", (160, 90));
     assert!(spot.mask.all.total_pct <= 2.0);
 }
+
+#[test]
+fn debug_views_show_frusta_the_map_and_texels_per_pixel() {
+    let mut scene = builtin::by_name("floating").unwrap().unwrap();
+    scene.lights = scene.light_preset("sun").unwrap();
+    let gpu = gpu();
+    let choice = shadowlab::technique::resolve("shadow-map:hard").unwrap();
+    let mut hf = shadowlab::frame::HeadlessFrame::new(gpu, &scene, &[choice], 160, 90).unwrap();
+    hf.techniques[0].technique.enable_debug(true);
+    hf.render(
+        gpu,
+        &scene,
+        &scene.camera,
+        &scene.lights,
+        &Default::default(),
+    )
+    .unwrap();
+    let views = hf.techniques[0].technique.debug_views(gpu).unwrap();
+    // A directional light: one box, twelve edges.
+    assert_eq!(views.lines.len(), 12);
+    assert_eq!(views.images.len(), 3);
+    let (map, projection, texels) = (&views.images[0], &views.images[1], &views.images[2]);
+    assert_eq!((map.width, map.height), (256, 256));
+    assert_eq!((projection.width, projection.height), (160, 90));
+    // The map holds nearer casters (darker) than the far floor.
+    let greys: std::collections::HashSet<u8> =
+        map.rgba.chunks_exact(4).map(|p| p[0] / 16).collect();
+    assert!(greys.len() > 3, "{greys:?}");
+    // Texels per pixel are coloured on the geometry: green-to-red or green-to-blue.
+    let coloured = texels
+        .rgba
+        .chunks_exact(4)
+        .filter(|p| p[1] > 0 || p[0] > 0 || p[2] > 0)
+        .count();
+    assert!(coloured > 160 * 90 / 3, "{coloured}");
+}

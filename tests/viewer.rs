@@ -103,7 +103,7 @@ fn viewer_shows_the_technique_debug_views() {
         .expect("xvfb-run");
     assert!(o.status.success(), "viewer failed: {}", stderr(&o));
     let stdout = String::from_utf8_lossy(&o.stdout);
-    assert!(stdout.contains("debug views: 1 image(s)"), "{stdout}");
+    assert!(stdout.contains("debug views: 3 image(s)"), "{stdout}");
     // The spot light's frustum is drawn in yellow over the scene.
     let img = image::open(dir.join("debug.png")).unwrap().to_rgba8();
     // Line colour (1, 0.85, 0.2) linear is about (255, 238, 124) in sRGB.

@@ -437,12 +437,17 @@ pub fn build(
             });
     }
     if state.show_debug && !state.debug_images.is_empty() {
-        egui::Window::new("Technique debug views").show(&ctx, |ui| {
-            for (label, texture) in &state.debug_images {
-                ui.label(label);
-                ui.image((texture.id(), texture.size_vec2()));
-            }
-        });
+        egui::Window::new("Technique debug views")
+            .default_height(680.0)
+            .show(&ctx, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    for (label, texture) in &state.debug_images {
+                        ui.label(label);
+                        let size = texture.size_vec2();
+                        ui.image((texture.id(), size * (320.0 / size.x).min(1.0)));
+                    }
+                });
+            });
     }
     let mut close = false;
     if let Some(h) = &state.heatmap {

@@ -567,6 +567,9 @@ pub struct ShadowMapTechnique {
     /// Debug views: a 256² picture of face 0 and the last light matrices.
     debug: Option<wgpu::Texture>,
     debug_pipeline: wgpu::RenderPipeline,
+    /// Frame-sized debug views: the map projected onto the scene, texels per pixel.
+    debug_frame: Option<[wgpu::Texture; 2]>,
+    debug_frame_pipeline: wgpu::RenderPipeline,
     last_faces: Vec<Mat4>,
     last_paraboloid: bool,
     want_debug: bool,
@@ -700,6 +703,30 @@ impl ShadowMapTechnique {
             mask_depth,
         );
         let blur = fullscreen("shadow map blur", "fs_blur", MOMENT_FORMAT.into(), None);
+        let debug_frame_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("shadow map debug frame"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_debug_frame"),
+                compilation_options: Default::default(),
+                targets: &[
+                    Some(wgpu::TextureFormat::Rgba8Unorm.into()),
+                    Some(wgpu::TextureFormat::Rgba8Unorm.into()),
+                ],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
         let debug_pipeline = fullscreen(
             "shadow map debug",
             "fs_debug_map",
@@ -734,6 +761,8 @@ impl ShadowMapTechnique {
             samples: 0,
             debug: None,
             debug_pipeline,
+            debug_frame: None,
+            debug_frame_pipeline,
             last_faces: vec![],
             last_paraboloid: false,
             want_debug: false,
@@ -1192,6 +1221,56 @@ impl ShadowTechnique for ShadowMapTechnique {
             pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
             pass.set_bind_group(2, &lookup_group, &[slot(lights.len() - 1, 0, 0)]);
             pass.draw(0..3, 0..1);
+            drop(pass);
+            // The frame-sized views, (re)made at the frame's size.
+            let (w, h) = (ctx.frame.width, ctx.frame.height);
+            if self
+                .debug_frame
+                .as_ref()
+                .is_none_or(|t| (t[0].width(), t[0].height()) != (w, h))
+            {
+                self.debug_frame = Some([0, 1].map(|_| {
+                    ctx.gpu.device.create_texture(&wgpu::TextureDescriptor {
+                        label: Some("shadow map debug frame"),
+                        size: wgpu::Extent3d {
+                            width: w,
+                            height: h,
+                            depth_or_array_layers: 1,
+                        },
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format: wgpu::TextureFormat::Rgba8Unorm,
+                        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                            | wgpu::TextureUsages::COPY_SRC,
+                        view_formats: &[],
+                    })
+                }));
+            }
+            let views = self
+                .debug_frame
+                .as_ref()
+                .expect("made above")
+                .each_ref()
+                .map(|t| t.create_view(&Default::default()));
+            let attachments = views.each_ref().map(|v| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view: v,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: clear_op(wgpu::Color::BLACK),
+                })
+            });
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shadow map debug frame"),
+                color_attachments: &attachments,
+                ..Default::default()
+            });
+            pass.set_pipeline(&self.debug_frame_pipeline);
+            pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
+            pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+            pass.set_bind_group(2, &lookup_group, &[slot(lights.len() - 1, 0, 0)]);
+            pass.draw(0..3, 0..1);
         }
         self.samples = lights.len();
         self.last_faces = setups.iter().flat_map(|s| s.faces.clone()).collect();
@@ -1201,6 +1280,7 @@ impl ShadowTechnique for ShadowMapTechnique {
 
     fn enable_debug(&mut self, on: bool) {
         self.debug = None;
+        self.debug_frame = None;
         self.want_debug = on;
     }
 
@@ -1220,6 +1300,25 @@ impl ShadowTechnique for ShadowMapTechnique {
                 height: t.height(),
                 rgba: gpu.read_texture(t, 0, 4)?,
             });
+        }
+        if let Some([projection, texels]) = &self.debug_frame {
+            for (t, label) in [
+                (
+                    projection,
+                    "map projected onto the scene (red: outside the map)",
+                ),
+                (
+                    texels,
+                    "shadow-map texels per pixel (blue < 1/4: aliasing, green 1, red > 4)",
+                ),
+            ] {
+                views.images.push(super::DebugImage {
+                    label: label.into(),
+                    width: t.width(),
+                    height: t.height(),
+                    rgba: gpu.read_texture(t, 0, 4)?,
+                });
+            }
         }
         Ok(views)
     }

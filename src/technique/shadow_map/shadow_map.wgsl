@@ -464,3 +464,39 @@ fn fs_debug_map(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     }
     return vec4f(vec3f(clamp(d, 0.0, 1.0)), 1.0);
 }
+
+struct DebugFrame {
+    // The map's stored depth where each pixel projects (grey; red outside the map).
+    @location(0) projection: vec4f,
+    // Shadow-map texels per screen pixel (SEEDS §5's aliasing measure
+    // d = ds·rs/ri·cosα/cosβ, measured with screen derivatives), log2-coloured:
+    // blue < 1/4 (undersampled: aliasing), green 1, red > 4 (oversampled).
+    @location(1) texels: vec4f,
+};
+
+@fragment
+fn fs_debug_frame(@builtin(position) frag: vec4f) -> DebugFrame {
+    let g = textureLoad(gbuffer_position, vec2i(frag.xy), 0);
+    let face = face_of(g.xyz);
+    var c = sm.faces[face] * vec4f(g.xyz, 1.0);
+    if is_paraboloid() {
+        c = paraboloid(vec4f(g.xyz, 1.0), face);
+    }
+    let w = select(c.w, 1e-6, abs(c.w) < 1e-6);
+    let ndc = c.xyz / w;
+    let uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    // Derivatives first, in uniform control flow.
+    let texel = uv * sm.map.x;
+    let footprint = max(length(dpdx(texel)), length(dpdy(texel)));
+    var o: DebugFrame;
+    let inside = g.w > 0.5 && c.w > 0.0 && all(uv >= vec2f(0.0)) && all(uv <= vec2f(1.0));
+    var d = stored(vec2i(floor(texel)), face);
+    if sm.map.w < 0.5 {
+        d = (linear_depth(d) - sm.depth.x) / (sm.depth.y - sm.depth.x);
+    }
+    o.projection = select(vec4f(0.5, 0.0, 0.0, 1.0), vec4f(vec3f(d), 1.0), inside);
+    let t = clamp(log2(max(footprint, 1e-6)) / 2.0, -1.0, 1.0);
+    let colour = select(mix(vec3f(0.0, 1.0, 0.0), vec3f(1.0, 0.0, 0.0), t), mix(vec3f(0.0, 1.0, 0.0), vec3f(0.0, 0.2, 1.0), -t), t < 0.0);
+    o.texels = select(vec4f(0.0, 0.0, 0.0, 1.0), vec4f(colour, 1.0), inside);
+    return o;
+}
