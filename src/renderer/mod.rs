@@ -452,7 +452,8 @@ pub fn clear_mask(encoder: &mut wgpu::CommandEncoder, target: &wgpu::TextureView
     });
 }
 
-fn texture_2d(
+/// A single-mip 2D texture (array when `layers` > 1).
+pub fn texture_2d(
     device: &wgpu::Device,
     label: &str,
     w: u32,

@@ -174,22 +174,16 @@ impl ProjectiveShadows {
             multiview_mask: None,
             cache: None,
         });
-        let placeholder = device
-            .create_texture(&wgpu::TextureDescriptor {
-                label: Some("projective placeholder"),
-                size: wgpu::Extent3d {
-                    width: 1,
-                    height: 1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: TEXTURE_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-            .create_view(&Default::default());
+        let placeholder = crate::renderer::texture_2d(
+            device,
+            "projective placeholder",
+            1,
+            1,
+            1,
+            TEXTURE_FORMAT,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        )
+        .create_view(&Default::default());
         ProjectiveShadows {
             placeholder,
             layout,
@@ -209,21 +203,7 @@ impl ProjectiveShadows {
         }
         let device = &ctx.gpu.device;
         let texture = |format, usage| {
-            device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some("projective"),
-                    size: wgpu::Extent3d {
-                        width: size,
-                        height: size,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage,
-                    view_formats: &[],
-                })
+            crate::renderer::texture_2d(device, "projective", size, size, 1, format, usage)
                 .create_view(&Default::default())
         };
         use wgpu::TextureUsages as U;

@@ -589,25 +589,19 @@ fn depth_format(i: usize) -> wgpu::TextureFormat {
 }
 
 fn placeholder(device: &wgpu::Device, format: wgpu::TextureFormat) -> wgpu::TextureView {
-    device
-        .create_texture(&wgpu::TextureDescriptor {
-            label: Some("shadow map placeholder"),
-            size: wgpu::Extent3d {
-                width: 1,
-                height: 1,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        })
-        .create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        })
+    crate::renderer::texture_2d(
+        device,
+        "shadow map placeholder",
+        1,
+        1,
+        1,
+        format,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    )
+    .create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    })
 }
 
 impl ShadowMapTechnique {
@@ -852,21 +846,15 @@ impl ShadowMapTechnique {
             );
         }
         let make = |f: wgpu::TextureFormat| {
-            gpu.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("shadow map"),
-                size: wgpu::Extent3d {
-                    width: size,
-                    height: size,
-                    depth_or_array_layers: layers,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: f,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                    | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
+            crate::renderer::texture_2d(
+                &gpu.device,
+                "shadow map",
+                size,
+                size,
+                layers,
+                f,
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            )
         };
         let views = |t: &wgpu::Texture| -> (Vec<wgpu::TextureView>, wgpu::TextureView) {
             let layer_views = (0..layers)
@@ -953,20 +941,15 @@ impl ShadowTechnique for ShadowMapTechnique {
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
         let p = ctx.params;
         if self.want_debug && self.debug.is_none() {
-            self.debug = Some(ctx.gpu.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("shadow map debug"),
-                size: wgpu::Extent3d {
-                    width: 256,
-                    height: 256,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba8Unorm,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            }));
+            self.debug = Some(crate::renderer::texture_2d(
+                &ctx.gpu.device,
+                "shadow map debug",
+                256,
+                256,
+                1,
+                wgpu::TextureFormat::Rgba8Unorm,
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            ));
         }
         let aspect = ctx.frame.width as f32 / ctx.frame.height as f32;
         let size = p.get_usize("size") as u32;
@@ -1230,21 +1213,15 @@ impl ShadowTechnique for ShadowMapTechnique {
                 .is_none_or(|t| (t[0].width(), t[0].height()) != (w, h))
             {
                 self.debug_frame = Some([0, 1].map(|_| {
-                    ctx.gpu.device.create_texture(&wgpu::TextureDescriptor {
-                        label: Some("shadow map debug frame"),
-                        size: wgpu::Extent3d {
-                            width: w,
-                            height: h,
-                            depth_or_array_layers: 1,
-                        },
-                        mip_level_count: 1,
-                        sample_count: 1,
-                        dimension: wgpu::TextureDimension::D2,
-                        format: wgpu::TextureFormat::Rgba8Unorm,
-                        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                            | wgpu::TextureUsages::COPY_SRC,
-                        view_formats: &[],
-                    })
+                    crate::renderer::texture_2d(
+                        &ctx.gpu.device,
+                        "shadow map debug frame",
+                        w,
+                        h,
+                        1,
+                        wgpu::TextureFormat::Rgba8Unorm,
+                        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                    )
                 }));
             }
             let views = self
