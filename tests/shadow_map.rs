@@ -165,6 +165,45 @@ fn eight_bit_depth_shows_acne_that_d32f_does_not() {
 }
 
 #[test]
+fn receiver_plane_depth_bias_removes_acne_that_a_constant_bias_leaves() {
+    // The sun grazes the floor; with only a constant bias of 32 steps, PCF
+    // taps half a texel away fall behind the sloped receiver.
+    let scene = squares_over_floor(
+        &[(Vec3::new(0.0, 1.0, 0.0), 0.7)],
+        Light::directional(Vec3::new(1.0, -0.35, 0.3), 1.0),
+        false,
+    );
+    let bare = "normal_offset_directional=0,slope_bias=0,depth_bias=32";
+    let without = compare(&scene, &format!("shadow-map:pcf[{bare}]"), (200, 200));
+    let with = compare(
+        &scene,
+        &format!("shadow-map:pcf[{bare},receiver_plane=true]"),
+        (200, 200),
+    );
+    assert!(
+        without.mask.interior.false_shadow_pct > 5.0,
+        "{:?}",
+        without.mask
+    );
+    assert!(with.mask.interior.false_shadow_pct < 0.1, "{:?}", with.mask);
+}
+
+#[test]
+fn the_maps_and_floor_stages_render_maps_but_write_a_lit_mask() {
+    let scene = squares_over_floor(
+        &[(Vec3::new(0.0, 1.0, 0.0), 0.7)],
+        Light::point(Vec3::new(0.4, 5.0, -0.3), 1.0),
+        false,
+    );
+    let full = mask_of(&scene, "shadow-map", &[], 64, 64);
+    assert!(full.iter().any(|&v| v < 0.5));
+    for stage in ["maps", "floor"] {
+        let m = mask_of(&scene, "shadow-map", &[&format!("stage={stage}")], 64, 64);
+        assert!(m.iter().all(|&v| v == 1.0), "{stage}");
+    }
+}
+
+#[test]
 fn a_map_larger_than_the_device_allows_is_an_error() {
     let scene = builtin::by_name("floating").unwrap().unwrap();
     let gpu = gpu();

@@ -93,6 +93,11 @@ pub static FAMILY: Family = Family {
             0.1,
             "point and spot lights: lookup point moved along the geometric normal, in shadow-map texels at the point's distance",
         ),
+        ParamSpec::boolean(
+            "receiver_plane",
+            false,
+            "receiver-plane depth bias (Isidoro 2006): each tap compares against the receiver's plane at the tap, from screen derivatives of the light-space position",
+        ),
         ParamSpec::choice(
             "cull",
             &["back", "front", "none"],
@@ -211,6 +216,12 @@ pub static FAMILY: Family = Family {
             0.01,
             1e-5,
             "msm: moment bias α towards (0.5, 0.5, 0.5, 0.5)",
+        ),
+        ParamSpec::choice(
+            "stage",
+            &["full", "maps", "floor"],
+            0,
+            "full: maps and lookup; maps: the shadow-map pass alone (mask = 1); floor: a bare depth-only render of the same casters into the same map (position-only, no bias, no colour; mask = 1), what a shadow map cannot beat",
         ),
     ],
     presets: &[
@@ -551,6 +562,8 @@ pub struct ShadowMapTechnique {
     pipeline_layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
     depth_pipelines: HashMap<DepthPassKey, wgpu::RenderPipeline>,
+    /// `stage=floor`: bare depth-only pipelines per depth format.
+    floor_pipelines: HashMap<wgpu::TextureFormat, wgpu::RenderPipeline>,
     lookup: wgpu::RenderPipeline,
     /// The lookup adding `constant × visibility` (area maps).
     lookup_accumulate: wgpu::RenderPipeline,
@@ -748,6 +761,7 @@ impl ShadowMapTechnique {
             pipeline_layout,
             module,
             depth_pipelines: HashMap::new(),
+            floor_pipelines: HashMap::new(),
             lookup,
             lookup_accumulate,
             blur,
@@ -820,6 +834,40 @@ impl ShadowMapTechnique {
                     compilation_options: Default::default(),
                     targets: if targets[0].is_some() { &targets } else { &[] },
                 }),
+                multiview_mask: None,
+                cache: None,
+            })
+        })
+    }
+
+    /// The floor of `stage=floor`: positions transformed by the face matrix,
+    /// depth test and write, nothing else.
+    fn floor_pipeline(
+        &mut self,
+        device: &wgpu::Device,
+        format: wgpu::TextureFormat,
+    ) -> &wgpu::RenderPipeline {
+        let (module, layout) = (&self.module, &self.pipeline_layout);
+        self.floor_pipelines.entry(format).or_insert_with(|| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("shadow map floor"),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some("vs_floor"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(VERTEX_LAYOUT)],
+                },
+                primitive: Default::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: None,
                 multiview_mask: None,
                 cache: None,
             })
@@ -1058,7 +1106,12 @@ impl ShadowTechnique for ShadowMapTechnique {
             for f in 0..6u32 {
                 for k in 0..3u32 {
                     let u = ShadowMapUniform {
-                        face: UVec4::new(f, k.saturating_sub(1), blur, 0),
+                        face: UVec4::new(
+                            f,
+                            k.saturating_sub(1),
+                            blur,
+                            p.get_bool("receiver_plane") as u32,
+                        ),
                         ..base
                     };
                     let at = (((si as u32 * 6 + f) * 3 + k) as u64 * STRIDE) as usize;
@@ -1078,7 +1131,13 @@ impl ShadowTechnique for ShadowMapTechnique {
             moments,
             paraboloid: frustum_params.paraboloid,
         };
-        let pipeline = self.depth_pipeline(device, key).clone();
+        let stage = p.get_usize("stage");
+        let floor = stage == 2;
+        let pipeline = if floor {
+            self.floor_pipeline(device, depth_format(format)).clone()
+        } else {
+            self.depth_pipeline(device, key).clone()
+        };
         let maps = self.maps.as_ref().expect("ensured above");
         let slot =
             |s: usize, f: u32, k: u32| ((((s as u32) * 6 + f) * 3 + k) as u64 * STRIDE) as u32;
@@ -1109,10 +1168,10 @@ impl ShadowTechnique for ShadowMapTechnique {
         for si in 0..lights.len() {
             for face in 0..layers {
                 let f = face as usize;
-                let color = match (&maps.moment, &maps.byte) {
-                    (Some(m), _) => Some(&m[0].0[f]),
-                    (None, Some(b)) => Some(&b.0[f]),
-                    (None, None) => None,
+                let color = match (&maps.moment, &maps.byte, floor) {
+                    (_, _, true) | (None, None, _) => None,
+                    (Some(m), _, _) => Some(&m[0].0[f]),
+                    (None, Some(b), _) => Some(&b.0[f]),
                 }
                 .map(|view| wgpu::RenderPassColorAttachment {
                     view,
@@ -1140,7 +1199,8 @@ impl ShadowTechnique for ShadowMapTechnique {
                 pass.set_bind_group(2, &render_group, &[slot(si, face, 0)]);
                 ctx.scene_gpu.draw_objects(&mut pass, |d| d.casts_shadow);
             }
-            if let (Some(m), Some(groups), true) = (&maps.moment, &blur_groups, blur > 0) {
+            if let (Some(m), Some(groups), true) = (&maps.moment, &blur_groups, blur > 0 && !floor)
+            {
                 // A → B along x, B → A along y.
                 for (k, src, dst) in [(1u32, 0usize, 1usize), (2, 1, 0)] {
                     for face in 0..layers {
@@ -1161,6 +1221,10 @@ impl ShadowTechnique for ShadowMapTechnique {
                         pass.draw(0..3, 0..1);
                     }
                 }
+            }
+            if stage != 0 {
+                crate::renderer::clear_mask(encoder, ctx.target, 1.0);
+                continue;
             }
             // One sample writes the mask; several add 1/N each onto a cleared mask.
             let (load, accumulate) = match (lights.len(), si) {

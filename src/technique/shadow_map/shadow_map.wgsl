@@ -23,7 +23,7 @@ struct ShadowMap {
     // w area-light radius for pcss (0 = use soft.x)
     depth: vec4f,
     // x face rendered by the depth pass (or blurred), y blur axis (0 x, 1 y),
-    // z blur radius (texels)
+    // z blur radius (texels), w 1 = receiver-plane depth bias
     face: vec4u,
     // moments: x light-bleeding reduction, y exponent c (esm, evsm +),
     // z exponent c− (evsm), w moment bias (msm)
@@ -91,6 +91,16 @@ fn vs_depth(v: VertexIn) -> DepthOut {
     }
     o.linear = linear01(o.clip);
     return o;
+}
+
+// The floor: a bare depth-only transform (no varyings, no fragment stage).
+@vertex
+fn vs_floor(v: VertexIn) -> @builtin(position) vec4f {
+    let world = objects[v.object].model * vec4f(v.position, 1.0);
+    if is_paraboloid() {
+        return paraboloid(world, sm.face.x);
+    }
+    return sm.faces[sm.face.x] * world;
 }
 
 // Depth-only pass of a dual paraboloid: drop what lies behind the hemisphere.
@@ -198,6 +208,31 @@ fn stored(texel: vec2i, face: u32) -> f32 {
         return textureLoad(byte_map, t, i32(face), 0).r;
     }
     return textureLoad(depth_map, t, i32(face), 0);
+}
+
+// Receiver-plane depth bias (Isidoro 2006): d(depth)/d(uv) of the receiver's
+// plane, and the uv it was measured at; taps compare against that plane.
+var<private> rp_gradient: vec2f;
+var<private> rp_origin: vec2f;
+
+// d(depth)/d(uv) from the screen derivatives of (u, v, depth): solve
+// [du/dx dv/dx; du/dy dv/dy] · g = [dz/dx; dz/dy]. Must run in uniform
+// control flow; 0 when off or degenerate (silhouettes, face seams), and
+// clamped so that a derivative across an edge cannot swing a tap far.
+fn receiver_plane(t: vec3f) -> vec2f {
+    let dx = dpdx(t);
+    let dy = dpdy(t);
+    let det = dx.x * dy.y - dx.y * dy.x;
+    let g = vec2f(dy.y * dx.z - dx.y * dy.z, dx.x * dy.z - dy.x * dx.z) / det;
+    if sm.face.w == 0u || abs(det) < 1e-20 || any(g != g) {
+        return vec2f(0.0);
+    }
+    return clamp(g, vec2f(-4.0), vec2f(4.0));
+}
+
+// The receiver depth to compare at a tap's uv.
+fn tap_z(z: f32, uv: vec2f) -> f32 {
+    return z + dot(uv - rp_origin, rp_gradient);
 }
 
 // 1 where the receiver depth z is not behind the stored depth.
@@ -318,7 +353,8 @@ fn vogel(i: u32, n: u32, phi: f32) -> vec2f {
 fn pcf_disk(uv: vec2f, face: u32, z: f32, radius_texels: f32, n: u32, phi: f32) -> f32 {
     var sum = 0.0;
     for (var i = 0u; i < n; i++) {
-        sum += pcf2x2(uv + vogel(i, n, phi) * radius_texels * sm.map.y, face, z);
+        let t = uv + vogel(i, n, phi) * radius_texels * sm.map.y;
+        sum += pcf2x2(t, face, tap_z(z, t));
     }
     return sum / f32(n);
 }
@@ -328,7 +364,8 @@ fn pcf_grid(uv: vec2f, face: u32, z: f32, radius_texels: f32, k: u32) -> f32 {
     for (var y = 0u; y < k; y++) {
         for (var x = 0u; x < k; x++) {
             let o = (vec2f(f32(x), f32(y)) + 0.5) / f32(k) * 2.0 - 1.0;
-            sum += pcf2x2(uv + o * radius_texels * sm.map.y, face, z);
+            let t = uv + o * radius_texels * sm.map.y;
+            sum += pcf2x2(t, face, tap_z(z, t));
         }
     }
     return sum / f32(k * k);
@@ -350,9 +387,9 @@ fn blockers(uv: vec2f, face: u32, z: f32, radius_texels: f32, n: u32, phi: f32) 
     var sum = 0.0;
     var count = 0.0;
     for (var i = 0u; i < n; i++) {
-        let t = vec2i(floor((uv + vogel(i, n, phi) * radius_texels * sm.map.y) * sm.map.x));
-        let d = stored(t, face);
-        if d < z {
+        let tap = uv + vogel(i, n, phi) * radius_texels * sm.map.y;
+        let d = stored(vec2i(floor(tap * sm.map.x)), face);
+        if d < tap_z(z, tap) {
             sum += linear_depth(d);
             count += 1.0;
         }
@@ -363,9 +400,6 @@ fn blockers(uv: vec2f, face: u32, z: f32, radius_texels: f32, n: u32, phi: f32) 
 @fragment
 fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let g = textureLoad(gbuffer_position, vec2i(frag.xy), 0);
-    if g.w < 0.5 {
-        return vec4f(1.0);
-    }
     let n = normalize(textureLoad(gbuffer_normal, vec2i(frag.xy), 0).xyz);
     let face = face_of(g.xyz);
     // Normal offset: move the lookup point along the geometric normal by a
@@ -380,15 +414,23 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     if is_paraboloid() {
         c = paraboloid(vec4f(p, 1.0), face);
     }
+    let ndc = c.xyz / select(c.w, 1e-6, abs(c.w) < 1e-6);
+    let uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    rp_gradient = receiver_plane(vec3f(uv, ndc.z));
+    rp_origin = uv;
+    if g.w < 0.5 {
+        return vec4f(1.0);
+    }
     if c.w <= 0.0 {
         return vec4f(1.0);
     }
-    let ndc = c.xyz / c.w;
-    let uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
     if any(uv < vec2f(0.0)) || any(uv > vec2f(1.0)) || ndc.z > 1.0 || ndc.z < 0.0 {
         return vec4f(1.0); // outside the map counts as lit
     }
-    let z = ndc.z;
+    // With the receiver plane, a 2×2 comparison still sees texels up to one
+    // texel away at a single depth: take off that slope (Isidoro's
+    // fractional sampling error), capped.
+    let z = ndc.z - min(2.0 * dot(vec2f(sm.map.y), abs(rp_gradient)), 0.01);
     let kind = u32(sm.kernel.x);
     if kind >= FILTER_VSM {
         return vec4f(moment_visibility(moments_at(uv, face), linear01(c), kind));
@@ -399,7 +441,8 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     var v = 1.0;
     switch kind {
         case 0u: {
-            v = lit_at(vec2i(floor(uv * sm.map.x)), face, z);
+            let t = floor(uv * sm.map.x);
+            v = lit_at(vec2i(t), face, tap_z(ndc.z, (t + 0.5) * sm.map.y));
         }
         case 1u: {
             v = pcf2x2(uv, face, z);
