@@ -212,6 +212,16 @@ impl GpuContext {
             },
         );
         self.queue.submit([enc.finish()]);
+        let data = self.read_buffer(&buffer)?;
+        let mut out = Vec::with_capacity((unpadded * h) as usize);
+        for row in data.chunks(padded as usize) {
+            out.extend_from_slice(&row[..unpadded as usize]);
+        }
+        Ok(out)
+    }
+
+    /// Waits for the GPU and returns the contents of a `MAP_READ` buffer.
+    pub fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
         let slice = buffer.slice(..);
         let (tx, rx) = std::sync::mpsc::channel();
         slice.map_async(wgpu::MapMode::Read, move |r| {
@@ -219,12 +229,7 @@ impl GpuContext {
         });
         self.device.poll(wgpu::PollType::wait_indefinitely())?;
         rx.recv()??;
-        let data = slice.get_mapped_range()?;
-        let mut out = Vec::with_capacity((unpadded * h) as usize);
-        for row in data.chunks(padded as usize) {
-            out.extend_from_slice(&row[..unpadded as usize]);
-        }
-        drop(data);
+        let out = slice.get_mapped_range()?.to_vec();
         buffer.unmap();
         Ok(out)
     }

@@ -927,15 +927,12 @@ impl Renderer {
             l.validate()?;
         }
         let t0 = Instant::now();
-        let compose: Vec<Compose> = techniques
-            .iter()
-            .map(|t| Compose::of(&t.choice.params))
-            .collect();
+        let needs = TechniqueNeeds::of(techniques);
         frame.uniform = frame_uniform(
             scene,
             camera,
             lights,
-            &compose,
+            &needs,
             settings,
             frame.width,
             frame.height,
@@ -1008,6 +1005,9 @@ impl Renderer {
         stamp(&mut enc, 3);
         gpu.queue.submit([enc.finish()]);
         gpu.wait_idle()?;
+        for inst in techniques.iter_mut().take(lights.len()) {
+            inst.technique.after_frame(gpu)?;
+        }
         let t2 = Instant::now();
 
         let bg = settings.background.unwrap_or(scene.background);
@@ -1130,23 +1130,51 @@ fn color_attachment(
     }
 }
 
+/// What the lights' techniques ask of the frame.
+#[derive(Clone, Debug, Default)]
+pub struct TechniqueNeeds {
+    /// Per light: how its mask is composed.
+    pub compose: Vec<Compose>,
+    /// Some technique needs the far plane at infinity (shadow volumes).
+    pub infinite_far_plane: bool,
+}
+
+impl TechniqueNeeds {
+    pub fn of(techniques: &[TechniqueInstance]) -> TechniqueNeeds {
+        TechniqueNeeds {
+            compose: techniques
+                .iter()
+                .map(|t| Compose::of(&t.choice.params))
+                .collect(),
+            infinite_far_plane: techniques
+                .iter()
+                .any(|t| t.technique.infinite_far_plane(&t.choice.params)),
+        }
+    }
+}
+
 /// The frame uniform for a camera and lights (each with its mask's compose
 /// mode) at a frame size.
 pub fn frame_uniform(
     scene: &Scene,
     camera: &Camera,
     lights: &[Light],
-    compose: &[Compose],
+    needs: &TechniqueNeeds,
     settings: &RenderSettings,
     width: u32,
     height: u32,
 ) -> FrameUniform {
     let view = camera.view();
-    let proj = camera.projection(width as f32 / height as f32);
+    let aspect = width as f32 / height as f32;
+    let proj = if needs.infinite_far_plane {
+        camera.projection_infinite(aspect)
+    } else {
+        camera.projection(aspect)
+    };
     let view_proj = proj * view;
     let mut gl = [LightGpu::default(); MAX_LIGHTS];
     for (i, (g, l)) in gl.iter_mut().zip(lights).enumerate() {
-        *g = LightGpu::from_light(l, compose.get(i).copied().unwrap_or(Compose::Relight));
+        *g = LightGpu::from_light(l, needs.compose.get(i).copied().unwrap_or(Compose::Relight));
     }
     FrameUniform {
         view_proj,

@@ -510,6 +510,10 @@ impl Light {
     }
 }
 
+/// How far below 1 points at infinity land with
+/// [`Camera::projection_infinite`]: 2^-20, sixteen steps of a 24-bit depth buffer.
+pub const INFINITE_FAR_EPSILON: f32 = 1.0 / (1u32 << 20) as f32;
+
 /// A perspective camera.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Camera {
@@ -547,6 +551,20 @@ impl Camera {
             self.far,
         )
     }
+    /// [`Camera::projection`] with the far plane at infinity, re-derived for
+    /// [0,1] depth: with clip z = a·z_e + b and w = −z_e (z_e < 0 in front),
+    /// z_ndc = −a − b/z_e; z_ndc(−near) = 0 gives b = a·near, and z_ndc → −a
+    /// as z_e → −∞. Taking −a = 1 − [`INFINITE_FAR_EPSILON`] keeps points at
+    /// infinity (w = 0 in, e.g. shadow-volume extrusions) inside the clip
+    /// volume and in front of the cleared depth 1 despite rounding.
+    pub fn projection_infinite(&self, aspect: f32) -> Mat4 {
+        let mut m = self.projection(aspect);
+        let a = -(1.0 - INFINITE_FAR_EPSILON);
+        m.z_axis.z = a;
+        m.w_axis.z = a * self.near;
+        m
+    }
+
     pub fn validate(&self) -> Result<()> {
         if !(self.eye.is_finite() && self.target.is_finite() && self.up.is_finite()) {
             bail!("camera has a non-finite vector");

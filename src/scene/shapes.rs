@@ -98,11 +98,22 @@ pub fn cuboid(size: Vec3) -> Mesh {
     cuboid_subdivided(size, 1)
 }
 
-/// UV sphere of radius `r`.
+/// The angle of a periodic grid parameter: u = 1 lands exactly on u = 0
+/// (sin 2π is not 0 in f32), so that seams weld.
+fn turn(u: f32) -> f32 {
+    if u >= 1.0 { 0.0 } else { u * TAU }
+}
+
+/// UV sphere of radius `r`; the seam and the poles weld exactly.
 pub fn sphere(r: f32, segments: u32, rings: u32) -> Mesh {
     let s = |u: f32, v: f32| {
-        let (th, ph) = (u * TAU, v * PI);
-        Vec3::new(-ph.sin() * th.cos(), ph.cos(), ph.sin() * th.sin())
+        let th = turn(u);
+        let (sin_ph, cos_ph) = match v {
+            v if v <= 0.0 => (0.0, 1.0),
+            v if v >= 1.0 => (0.0, -1.0),
+            v => (v * PI).sin_cos(),
+        };
+        Vec3::new(-sin_ph * th.cos(), cos_ph, sin_ph * th.sin())
     };
     grid("sphere", segments, rings, |u, v| s(u, v) * r, Some(&s))
 }
@@ -110,11 +121,11 @@ pub fn sphere(r: f32, segments: u32, rings: u32) -> Mesh {
 /// Torus in the xz plane: major radius `big_r`, tube radius `r`.
 pub fn torus(big_r: f32, r: f32, segments: u32, sides: u32) -> Mesh {
     let n = |u: f32, v: f32| {
-        let (a, b) = (u * TAU, v * TAU);
+        let (a, b) = (turn(u), turn(v));
         Vec3::new(a.cos() * b.cos(), b.sin(), a.sin() * b.cos())
     };
     let p = |u: f32, v: f32| {
-        let a = u * TAU;
+        let a = turn(u);
         Vec3::new(a.cos(), 0.0, a.sin()) * big_r + n(u, v) * r
     };
     grid("torus", segments, sides, p, Some(&n))
@@ -130,7 +141,7 @@ pub fn lathe(name: &str, profile: &[Vec2], segments: u32) -> Mesh {
         n,
         |u, v| {
             let k = ((v * n as f32).round() as usize).min(profile.len() - 1);
-            let a = u * TAU;
+            let a = turn(u);
             Vec3::new(a.cos() * profile[k].x, profile[k].y, a.sin() * profile[k].x)
         },
         None,

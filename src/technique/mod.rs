@@ -11,6 +11,7 @@ pub mod planar;
 pub mod projective;
 pub mod raytraced;
 pub mod shadow_map;
+pub mod shadow_volume;
 
 use crate::gpu::GpuContext;
 use crate::renderer::{FrameResources, SceneGpu};
@@ -38,6 +39,18 @@ pub trait ShadowTechnique: Send {
     /// Records (or performs) the work that writes the light's visibility mask
     /// into `ctx.target`. Every pixel of the target must be written.
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()>;
+
+    /// True when the frame must use a projection with the far plane at
+    /// infinity ([`crate::scene::Camera::projection_infinite`]).
+    fn infinite_far_plane(&self, _params: &ParamValues) -> bool {
+        false
+    }
+
+    /// Called once the GPU has finished this frame's masks: read back
+    /// statistics for [`ShadowTechnique::counters`].
+    fn after_frame(&mut self, _gpu: &GpuContext) -> Result<()> {
+        Ok(())
+    }
 
     /// Technique-specific counters of the last frame (name, value).
     fn counters(&self) -> Vec<(&'static str, f64)> {
@@ -144,6 +157,7 @@ pub static FAMILIES: &[&Family] = &[
     &planar::FAMILY,
     &projective::FAMILY,
     &shadow_map::FAMILY,
+    &shadow_volume::FAMILY,
 ];
 
 /// Identifies a scene's geometry and flags cheaply (object transforms,

@@ -92,6 +92,25 @@ impl ParamSpec {
         }
     }
 
+    /// Shadow darkness of the techniques that mark shadowed pixels with a
+    /// constant (planar, shadow volumes): the mask value there is 1 − darkening.
+    pub const DARKENING: ParamSpec = ParamSpec::float(
+        "darkening",
+        1.0,
+        0.0,
+        1.0,
+        0.05,
+        "shadow darkness: 0 invisible … 1 black (mask value 1 − darkening)",
+    );
+
+    /// How the lighting pass uses the mask ([`crate::renderer::Compose`]).
+    pub const COMPOSE: ParamSpec = ParamSpec::choice(
+        "compose",
+        &["relight", "darken"],
+        0,
+        "relight: ambient + masked direct light (an ambient pass, lit where the shadow test passes); darken: the lit image times the mask (one lit pass and a darkening pass, the documents' way)",
+    );
+
     /// Parses a textual value (`1.5`, `true`, a choice name) for this
     /// parameter, checking the range.
     pub fn parse(&self, text: &str) -> Result<f64> {

@@ -20,14 +20,7 @@ pub static FAMILY: Family = Family {
     id: "planar",
     summary: "projected planar shadows: casters flattened onto receiver planes by the shadow matrix",
     params: &[
-        ParamSpec::float(
-            "darkening",
-            1.0,
-            0.0,
-            1.0,
-            0.05,
-            "shadow darkness: 0 invisible … 1 black (mask value 1 − darkening)",
-        ),
+        ParamSpec::DARKENING,
         ParamSpec::float(
             "depth_offset",
             32.0,
@@ -41,12 +34,7 @@ pub static FAMILY: Family = Family {
             true,
             "stencil-tag each receiver plane (id = index + 1): each pixel darkens once and shadows stay on the plane; off shows double darkening and spill",
         ),
-        ParamSpec::choice(
-            "compose",
-            &["relight", "darken"],
-            0,
-            "relight: ambient + masked direct light; darken: the lit image times the mask (the documents' way)",
-        ),
+        ParamSpec::COMPOSE,
     ],
     presets: &[
         Preset {

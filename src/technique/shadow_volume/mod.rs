@@ -1,0 +1,1216 @@
+//! `shadow-volume`: stencil shadow volumes (Crow 1977; Heidmann 1991;
+//! Everitt & Kilgard 2002; SEEDS §4, 000 §3, 001 §4). Each caster's
+//! silhouette edges, found with the light in object space (`P·L > 0` is a
+//! lit face), are extruded away from the light — to infinity as w = 0
+//! vertices, or by a finite length — and capped with the lit faces (light
+//! cap) and their extrusion (dark cap). The volumes are counted in the
+//! frame's stencil buffer against the prepass depth: z-pass (front faces +1,
+//! back faces −1 where the depth test passes; wrong when the camera is in a
+//! shadow), z-fail (Carmack's reverse: back +1, front −1 where it fails;
+//! needs caps and a far plane at infinity or depth clamp) or `auto` (z-fail
+//! only for casters whose volume can contain part of the near-plane
+//! rectangle). Meshes that are not closed can extrude every triangle's own
+//! volume instead (`silhouette=triangles`). Where the count is not 0 the mask
+//! is 1 − darkening.
+//!
+//! Geometry: [`adjacency`] welds and builds the edge table once per scene;
+//! [`silhouette`] decides per caster and extrudes on the CPU; the compute
+//! shader in `extrude.wgsl` writes the same index lists on the GPU, drawn
+//! with draw-indexed-indirect.
+
+pub mod adjacency;
+pub mod silhouette;
+
+use super::{DebugLine, Family, MaskContext, ParamSpec, Preset, ShadowTechnique};
+use crate::gpu::GpuContext;
+use crate::renderer::{DEPTH_FORMAT, MASK_FORMAT};
+use crate::scene::{Light, LightType, Scene};
+use adjacency::Adjacency;
+use anyhow::{Result, bail};
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3, Vec4};
+use silhouette::{CasterPlan, VolumeKind, VolumeMesh};
+use std::collections::HashMap;
+
+const METHODS: &[&str] = &["zpass", "zfail", "auto"];
+
+pub static FAMILY: Family = Family {
+    id: "shadow-volume",
+    summary: "stencil shadow volumes: silhouettes extruded away from the light, counted in the stencil buffer (exact hard shadows)",
+    params: &[
+        ParamSpec::choice(
+            "method",
+            METHODS,
+            2,
+            "zpass: count volume faces in front of each pixel (fails when the camera is in a shadow); zfail: count those behind (Carmack's reverse; caps needed); auto: z-fail only for casters whose volume can contain part of the near-plane rectangle",
+        ),
+        ParamSpec::choice(
+            "silhouette",
+            &["auto", "edges", "triangles"],
+            0,
+            "edges: side quads on silhouette edges (exact for closed meshes); triangles: every triangle extrudes its own closed volume (exact for any mesh, more fill); auto: edges for closed meshes, triangles for the others (reported in the log)",
+        ),
+        ParamSpec::choice(
+            "extrusion",
+            &["gpu", "cpu"],
+            0,
+            "gpu: a compute shader finds silhouettes and writes the volumes into an index buffer drawn with draw-indirect; cpu: the same on the CPU (rayon), uploaded every frame",
+        ),
+        ParamSpec::float(
+            "length",
+            0.0,
+            0.0,
+            100000.0,
+            0.5,
+            "extrusion length in world units; 0 extrudes to infinity (w = 0)",
+        ),
+        ParamSpec::choice(
+            "far_plane",
+            &["infinite", "depth-clamp"],
+            0,
+            "how volumes extruded to infinity escape far-plane clipping: a projection with the far plane at infinity, or depth clamping (unclipped_depth; falls back to infinite where the adapter lacks it)",
+        ),
+        ParamSpec::choice(
+            "stencil",
+            &["two-sided", "two-pass"],
+            0,
+            "two-sided: both faces in one draw with wrapping increment/decrement; two-pass: front and back faces in two draws with saturating operations",
+        ),
+        ParamSpec::boolean(
+            "scissor",
+            true,
+            "restrict the stencil work to the screen rectangle of an attenuated light's range",
+        ),
+        ParamSpec::boolean(
+            "cull_casters",
+            true,
+            "skip casters whose volume cannot touch the view frustum",
+        ),
+        ParamSpec::DARKENING,
+        ParamSpec::COMPOSE,
+    ],
+    presets: &[
+        Preset {
+            name: "auto",
+            summary: "hybrid: z-fail only where a volume can contain the near plane; per-triangle volumes for meshes that are not closed; GPU extrusion",
+            values: &[],
+        },
+        Preset {
+            name: "zpass",
+            summary: "z-pass counting (fails with the camera inside a shadow)",
+            values: &[("method", "zpass")],
+        },
+        Preset {
+            name: "zfail",
+            summary: "z-fail counting (Carmack's reverse) with caps",
+            values: &[("method", "zfail")],
+        },
+        Preset {
+            name: "edges",
+            summary: "silhouette volumes for every mesh, closed or not (z-fail): shows what open meshes get wrong",
+            values: &[("method", "zfail"), ("silhouette", "edges")],
+        },
+        Preset {
+            name: "triangles",
+            summary: "every triangle extrudes its own volume: exact for open and non-manifold meshes",
+            values: &[("silhouette", "triangles")],
+        },
+        Preset {
+            name: "cpu",
+            summary: "auto with CPU silhouettes and extrusion",
+            values: &[("extrusion", "cpu")],
+        },
+        Preset {
+            name: "darken",
+            summary: "the documents' look: one lit pass, shadows darkened to half",
+            values: &[("compose", "darken"), ("darkening", "0.5")],
+        },
+    ],
+    create: |gpu| Ok(Box::new(ShadowVolumeRenderer::new(gpu))),
+};
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct VolumeUniform {
+    light: Vec4,
+    extrusion: Vec4,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ExtrudeParams {
+    edge_count: u32,
+    face_count: u32,
+    dark_cap: u32,
+    _pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct CasterGpu {
+    light: Vec4,
+    kind: u32,
+    zfail: u32,
+    caps: u32,
+    _pad: u32,
+}
+
+/// `draw_indexed_indirect` arguments.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Default)]
+struct IndirectArgs {
+    index_count: u32,
+    instance_count: u32,
+    first_index: u32,
+    base_vertex: i32,
+    first_instance: u32,
+}
+
+/// The indirect arguments of the z-pass and z-fail lists and the
+/// silhouette counter (`Args` in extrude.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Default)]
+struct Args {
+    lists: [IndirectArgs; 2],
+    silhouette_edges: u32,
+}
+
+/// Offset of the z-fail list's arguments.
+const ZFAIL_ARGS: u64 = std::mem::size_of::<IndirectArgs>() as u64;
+
+const ARGS_SIZE: u64 = std::mem::size_of::<Args>() as u64;
+/// Readback layout: the arguments, then the pipeline-statistics result.
+const STATS_OFFSET: u64 = 48;
+
+/// What a volume pipeline depends on.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+struct VolumeKey {
+    zfail: bool,
+    /// 0: two-sided, one draw; 1 and 2: the increment and decrement draws.
+    pass: u8,
+    unclipped: bool,
+}
+
+/// Per-scene GPU copies of the welded caster geometry.
+struct Geometry {
+    fingerprint: u64,
+    mesh: VolumeMesh,
+    positions: wgpu::Buffer,
+    faces: wgpu::Buffer,
+    edges: wgpu::Buffer,
+    casters: wgpu::Buffer,
+    /// Casters whose mesh is not closed were reported in the log.
+    reported_open: bool,
+}
+
+/// Statistics of the last frame.
+#[derive(Clone, Copy, Debug, Default)]
+struct Stats {
+    silhouette_edges: u32,
+    volume_triangles: u32,
+    fragments: Option<u64>,
+    skipped: usize,
+    zpass: usize,
+    zfail: usize,
+    per_triangle: usize,
+}
+
+pub struct ShadowVolumeRenderer {
+    layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
+    volume_pipelines: HashMap<VolumeKey, wgpu::RenderPipeline>,
+    shadow_pipeline: wgpu::RenderPipeline,
+    debug_scene_pipeline: wgpu::RenderPipeline,
+    debug_volume_pipelines: HashMap<bool, wgpu::RenderPipeline>,
+    extrude_layout: wgpu::BindGroupLayout,
+    extrude_edges: wgpu::ComputePipeline,
+    extrude_faces: wgpu::ComputePipeline,
+    uniform: wgpu::Buffer,
+    extrude_params: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    args: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    statistics: Option<(wgpu::QuerySet, wgpu::Buffer)>,
+    depth_clamp: bool,
+    adjacency: Option<(u64, Vec<Option<Adjacency>>)>,
+    geometry: Option<Geometry>,
+    stats: Stats,
+    /// Statistics were recorded this frame and await [`ShadowTechnique::after_frame`].
+    pending: bool,
+    want_debug: bool,
+    debug: Option<wgpu::Texture>,
+    silhouette_lines: Vec<DebugLine>,
+}
+
+fn storage_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    read_only: bool,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn buffer(
+    device: &wgpu::Device,
+    label: &str,
+    size: u64,
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16).next_multiple_of(4),
+        usage,
+        mapped_at_creation: false,
+    })
+}
+
+fn buffer_with(
+    gpu: &GpuContext,
+    label: &str,
+    data: &[u8],
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    let b = buffer(
+        &gpu.device,
+        label,
+        data.len() as u64,
+        usage | wgpu::BufferUsages::COPY_DST,
+    );
+    gpu.queue.write_buffer(&b, 0, data);
+    b
+}
+
+/// The stencil operations of one volume pipeline.
+fn stencil_state(key: VolumeKey) -> (wgpu::StencilState, Option<wgpu::Face>) {
+    use wgpu::StencilOperation as Op;
+    let face = |depth_fail_op, pass_op| wgpu::StencilFaceState {
+        compare: wgpu::CompareFunction::Always,
+        fail_op: Op::Keep,
+        depth_fail_op,
+        pass_op,
+    };
+    // The operation on the counted event: depth pass (z-pass) or fail (z-fail).
+    let on = |op| {
+        if key.zfail {
+            face(op, Op::Keep)
+        } else {
+            face(Op::Keep, op)
+        }
+    };
+    // z-pass counts entries through front faces, z-fail exits through back faces.
+    let (increment_face, decrement_face) = if key.zfail {
+        (wgpu::Face::Back, wgpu::Face::Front)
+    } else {
+        (wgpu::Face::Front, wgpu::Face::Back)
+    };
+    let (front, back, cull) = match key.pass {
+        0 => {
+            let (inc, dec) = (on(Op::IncrementWrap), on(Op::DecrementWrap));
+            if key.zfail {
+                (dec, inc, None)
+            } else {
+                (inc, dec, None)
+            }
+        }
+        // Increments first so that saturation at 0 cannot lose a count.
+        1 => (
+            on(Op::IncrementClamp),
+            on(Op::IncrementClamp),
+            Some(decrement_face),
+        ),
+        _ => (
+            on(Op::DecrementClamp),
+            on(Op::DecrementClamp),
+            Some(increment_face),
+        ),
+    };
+    (
+        wgpu::StencilState {
+            front,
+            back,
+            read_mask: 0xff,
+            write_mask: 0xff,
+        },
+        cull,
+    )
+}
+
+/// Screen rectangle (x, y, w, h) in pixels that a light's range sphere can
+/// cover; `None` when it is off screen, the whole frame when unbounded or
+/// when the sphere reaches behind the camera.
+pub fn range_scissor(light: &Light, view_proj: Mat4, width: u32, height: u32) -> Option<[u32; 4]> {
+    let full = Some([0, 0, width, height]);
+    if light.kind == LightType::Directional || light.range <= 0.0 {
+        return full;
+    }
+    let r = Vec3::splat(light.range);
+    let corners =
+        crate::scene::Aabb::from_points([light.position - r, light.position + r]).corners();
+    let mut lo = glam::Vec2::splat(f32::INFINITY);
+    let mut hi = glam::Vec2::splat(f32::NEG_INFINITY);
+    for c in corners {
+        let p = view_proj * c.extend(1.0);
+        if p.w <= 1e-6 {
+            return full;
+        }
+        let ndc = p.truncate().truncate() / p.w;
+        lo = lo.min(ndc);
+        hi = hi.max(ndc);
+    }
+    let to_px = |x: f32, size: u32| ((x.clamp(-1.0, 1.0) * 0.5 + 0.5) * size as f32) as u32;
+    let (x0, x1) = (
+        to_px(lo.x, width),
+        to_px(hi.x, width).saturating_add(1).min(width),
+    );
+    // NDC y up, pixels down.
+    let (y0, y1) = (
+        to_px(-hi.y, height),
+        to_px(-lo.y, height).saturating_add(1).min(height),
+    );
+    if hi.x < -1.0 || lo.x > 1.0 || hi.y < -1.0 || lo.y > 1.0 || x1 <= x0 || y1 <= y0 {
+        return None;
+    }
+    Some([x0, y0, x1 - x0, y1 - y0])
+}
+
+impl ShadowVolumeRenderer {
+    pub fn new(gpu: &GpuContext) -> ShadowVolumeRenderer {
+        let device = &gpu.device;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shadow volume"),
+            entries: &[
+                crate::renderer::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, false),
+                storage_entry(1, wgpu::ShaderStages::VERTEX, true),
+                super::gbuffer_entry(2),
+            ],
+        });
+        let module =
+            crate::renderer::shader_module(device, "shadow volume", &[include_str!("volume.wgsl")]);
+        let pipeline_layout = super::pipeline_layout(gpu, "shadow volume", &layout);
+        let fullscreen =
+            |label: &str, fs: &str, target: wgpu::ColorTargetState, stencil: wgpu::StencilState| {
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_fullscreen"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: Default::default(),
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH_FORMAT,
+                        depth_write_enabled: Some(false),
+                        depth_compare: Some(wgpu::CompareFunction::Always),
+                        stencil,
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(fs),
+                        compilation_options: Default::default(),
+                        targets: &[Some(target)],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+            };
+        let not_zero = wgpu::StencilFaceState {
+            compare: wgpu::CompareFunction::NotEqual,
+            ..wgpu::StencilFaceState::IGNORE
+        };
+        let shadow_pipeline = fullscreen(
+            "shadow volume: stencil to mask",
+            "fs_shadow",
+            MASK_FORMAT.into(),
+            wgpu::StencilState {
+                front: not_zero,
+                back: not_zero,
+                read_mask: 0xff,
+                write_mask: 0,
+            },
+        );
+        let debug_scene_pipeline = fullscreen(
+            "shadow volume debug: scene",
+            "fs_debug_scene",
+            wgpu::TextureFormat::Rgba8Unorm.into(),
+            Default::default(),
+        );
+        let extrude_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shadow volume extrusion"),
+            entries: &[
+                crate::renderer::uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
+                storage_entry(1, wgpu::ShaderStages::COMPUTE, true),
+                storage_entry(2, wgpu::ShaderStages::COMPUTE, true),
+                storage_entry(3, wgpu::ShaderStages::COMPUTE, true),
+                storage_entry(4, wgpu::ShaderStages::COMPUTE, false),
+                storage_entry(5, wgpu::ShaderStages::COMPUTE, false),
+            ],
+        });
+        let extrude_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("shadow volume extrusion"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("extrude.wgsl").into()),
+        });
+        let extrude_pipeline_layout =
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("shadow volume extrusion"),
+                bind_group_layouts: &[Some(&extrude_layout)],
+                immediate_size: 0,
+            });
+        let compute = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&extrude_pipeline_layout),
+                module: &extrude_module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let usage_args = wgpu::BufferUsages::INDIRECT
+            | wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC;
+        let statistics = gpu.pipeline_statistics.then(|| {
+            (
+                device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("shadow volume fragments"),
+                    ty: wgpu::QueryType::PipelineStatistics(
+                        wgpu::PipelineStatisticsTypes::FRAGMENT_SHADER_INVOCATIONS,
+                    ),
+                    count: 1,
+                }),
+                buffer(
+                    device,
+                    "shadow volume statistics",
+                    8,
+                    wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                ),
+            )
+        });
+        ShadowVolumeRenderer {
+            extrude_edges: compute("cs_edges"),
+            extrude_faces: compute("cs_faces"),
+            extrude_layout,
+            uniform: buffer(
+                device,
+                "shadow volume uniform",
+                std::mem::size_of::<VolumeUniform>() as u64,
+                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            ),
+            extrude_params: buffer(
+                device,
+                "shadow volume extrusion params",
+                std::mem::size_of::<ExtrudeParams>() as u64,
+                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            ),
+            indices: buffer(device, "shadow volume indices", 16, index_usage()),
+            args: buffer(device, "shadow volume indirect args", ARGS_SIZE, usage_args),
+            readback: buffer(
+                device,
+                "shadow volume readback",
+                STATS_OFFSET + 8,
+                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            ),
+            statistics,
+            depth_clamp: gpu.depth_clamp,
+            layout,
+            pipeline_layout,
+            module,
+            volume_pipelines: HashMap::new(),
+            shadow_pipeline,
+            debug_scene_pipeline,
+            debug_volume_pipelines: HashMap::new(),
+            adjacency: None,
+            geometry: None,
+            stats: Stats::default(),
+            pending: false,
+            want_debug: false,
+            debug: None,
+            silhouette_lines: vec![],
+        }
+    }
+
+    fn volume_pipeline(&mut self, device: &wgpu::Device, key: VolumeKey) -> &wgpu::RenderPipeline {
+        let (module, layout) = (&self.module, &self.pipeline_layout);
+        self.volume_pipelines.entry(key).or_insert_with(|| {
+            let (stencil, cull_mode) = stencil_state(key);
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("shadow volume"),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some("vs_volume"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState {
+                    cull_mode,
+                    unclipped_depth: key.unclipped,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil,
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some("fs_volume"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: MASK_FORMAT,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::empty(),
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        })
+    }
+
+    fn debug_volume_pipeline(
+        &mut self,
+        device: &wgpu::Device,
+        unclipped: bool,
+    ) -> &wgpu::RenderPipeline {
+        let (module, layout) = (&self.module, &self.pipeline_layout);
+        self.debug_volume_pipelines
+            .entry(unclipped)
+            .or_insert_with(|| {
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("shadow volume debug: volumes"),
+                    layout: Some(layout),
+                    vertex: wgpu::VertexState {
+                        module,
+                        entry_point: Some("vs_volume"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        unclipped_depth: unclipped,
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH_FORMAT,
+                        depth_write_enabled: Some(false),
+                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module,
+                        entry_point: Some("fs_debug_volume"),
+                        compilation_options: Default::default(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format: wgpu::TextureFormat::Rgba8Unorm,
+                            blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+            })
+    }
+
+    /// Welds and uploads the casters of `scene` when it changed.
+    fn ensure_geometry(&mut self, gpu: &GpuContext, scene: &Scene) {
+        let key = super::scene_fingerprint(scene);
+        if self.geometry.as_ref().is_some_and(|g| g.fingerprint == key) {
+            return;
+        }
+        if self.adjacency.as_ref().is_none_or(|(k, _)| *k != key) {
+            let t = std::time::Instant::now();
+            let used: Vec<bool> = (0..scene.meshes.len())
+                .map(|m| {
+                    scene
+                        .objects
+                        .iter()
+                        .any(|o| o.mesh == m && o.casts_shadow && !o.shadow_plane)
+                })
+                .collect();
+            let adjacency: Vec<Option<Adjacency>> = {
+                use rayon::prelude::*;
+                scene
+                    .meshes
+                    .par_iter()
+                    .zip(&used)
+                    .map(|(m, &u)| u.then(|| Adjacency::of(m)))
+                    .collect()
+            };
+            for (m, a) in scene.meshes.iter().zip(&adjacency) {
+                if let Some(a) = a {
+                    log::info!("shadow-volume: mesh '{}': {}", m.name, a.summary());
+                }
+            }
+            log::info!(
+                "shadow-volume: adjacency of {} meshes in {:.1} ms",
+                adjacency.iter().flatten().count(),
+                t.elapsed().as_secs_f64() * 1e3
+            );
+            self.adjacency = Some((key, adjacency));
+        }
+        let mesh = VolumeMesh::new(scene, &self.adjacency.as_ref().expect("built above").1);
+        let storage = wgpu::BufferUsages::STORAGE;
+        self.geometry = Some(Geometry {
+            fingerprint: key,
+            positions: buffer_with(
+                gpu,
+                "shadow volume positions",
+                bytemuck::cast_slice(&mesh.positions),
+                storage,
+            ),
+            faces: buffer_with(
+                gpu,
+                "shadow volume faces",
+                bytemuck::cast_slice(&mesh.faces),
+                storage,
+            ),
+            edges: buffer_with(
+                gpu,
+                "shadow volume edges",
+                bytemuck::cast_slice(&mesh.edges),
+                storage,
+            ),
+            casters: buffer(
+                &gpu.device,
+                "shadow volume casters",
+                (mesh.casters.len() * std::mem::size_of::<CasterGpu>()) as u64,
+                storage | wgpu::BufferUsages::COPY_DST,
+            ),
+            mesh,
+            reported_open: false,
+        });
+    }
+
+    /// Decides, per caster, whether and how its volume is drawn.
+    fn plan(&mut self, ctx: &MaskContext) -> Vec<CasterPlan> {
+        let p = ctx.params;
+        let method = p.get_usize("method");
+        let silhouette = p.get_usize("silhouette");
+        let cull = p.get_bool("cull_casters");
+        let geometry = self.geometry.as_mut().expect("ensured");
+        let view_proj = ctx.frame.uniform.view_proj;
+        let frustum = silhouette::frustum_planes(view_proj);
+        let light = ctx.light.homogeneous();
+        let inv = ctx.frame.uniform.inv_view_proj;
+        let near = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)].map(|(x, y)| {
+            let c = inv * Vec4::new(x, y, 0.0, 1.0);
+            c.truncate() / c.w
+        });
+        let region = silhouette::near_clip_region(near, light);
+        let mut report = vec![];
+        let plans = geometry
+            .mesh
+            .casters
+            .iter()
+            .map(|c| {
+                let object_light = c.model.inverse() * light;
+                let touches =
+                    !cull || silhouette::volume_may_touch(&frustum, &c.world_bounds, light);
+                let kind = match silhouette {
+                    _ if !touches => VolumeKind::Skip,
+                    0 if !c.closed => {
+                        report.push(c.object);
+                        VolumeKind::Triangles
+                    }
+                    0 | 1 => VolumeKind::Silhouette,
+                    _ => VolumeKind::Triangles,
+                };
+                let zfail = match method {
+                    0 => false,
+                    1 => true,
+                    _ => region
+                        .as_ref()
+                        .is_none_or(|r| silhouette::meets(r, &c.world_bounds)),
+                };
+                CasterPlan {
+                    kind,
+                    zfail,
+                    light: object_light,
+                }
+            })
+            .collect();
+        if !geometry.reported_open && !report.is_empty() {
+            let names: Vec<&str> = report
+                .iter()
+                .map(|&o| ctx.scene.objects[o].name.as_str())
+                .collect();
+            log::info!(
+                "shadow-volume: {} not closed (open or inconsistently wound edges): per-triangle volumes for {}",
+                if names.len() == 1 {
+                    "1 caster is"
+                } else {
+                    "some casters are"
+                },
+                names.join(", ")
+            );
+            geometry.reported_open = true;
+        }
+        plans
+    }
+}
+
+fn entry(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: b.as_entire_binding(),
+    }
+}
+
+fn index_usage() -> wgpu::BufferUsages {
+    wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST
+}
+
+impl ShadowTechnique for ShadowVolumeRenderer {
+    fn infinite_far_plane(&self, params: &super::ParamValues) -> bool {
+        params.get_f32("length") <= 0.0 && (params.get_usize("far_plane") == 0 || !self.depth_clamp)
+    }
+
+    fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        let p = ctx.params;
+        let gpu = ctx.gpu;
+        self.ensure_geometry(gpu, ctx.scene);
+        let plans = self.plan(ctx);
+        let length = p.get_f32("length");
+        let dark_cap = !(ctx.light.kind == LightType::Directional && length <= 0.0);
+        let unclipped = length <= 0.0 && p.get_usize("far_plane") == 1 && self.depth_clamp;
+        let geometry = self.geometry.as_ref().expect("ensured");
+        let vm = &geometry.mesh;
+        // The two lists' regions of the index buffer.
+        let mut bounds = [0usize; 2];
+        for (c, plan) in vm.casters.iter().zip(&plans) {
+            bounds[plan.zfail as usize] += plan.index_bound(c, dark_cap);
+        }
+        let gpu_extrusion = p.get_usize("extrusion") == 0;
+        let needed = ((bounds[0] + bounds[1]) * 4) as u64;
+        let limits = gpu.device.limits();
+        let max = if gpu_extrusion {
+            limits
+                .max_storage_buffer_binding_size
+                .min(limits.max_buffer_size)
+        } else {
+            limits.max_buffer_size
+        };
+        if needed > max {
+            bail!(
+                "shadow-volume: the volumes may need {needed} bytes of indices, more than the device allows ({max}){}",
+                if gpu_extrusion {
+                    "; try --set extrusion=cpu"
+                } else {
+                    ""
+                }
+            );
+        }
+        if self.indices.size() < needed {
+            self.indices = buffer(
+                &gpu.device,
+                "shadow volume indices",
+                needed.next_power_of_two().min(max),
+                index_usage(),
+            );
+        }
+        let mut args = Args::default();
+        for (i, list) in args.lists.iter_mut().enumerate() {
+            list.instance_count = 1;
+            list.first_index = if i == 0 { 0 } else { bounds[0] as u32 };
+        }
+        self.stats = Stats {
+            skipped: plans.iter().filter(|p| p.kind == VolumeKind::Skip).count(),
+            zpass: plans
+                .iter()
+                .filter(|p| p.kind != VolumeKind::Skip && !p.zfail)
+                .count(),
+            zfail: plans
+                .iter()
+                .filter(|p| p.kind != VolumeKind::Skip && p.zfail)
+                .count(),
+            per_triangle: plans
+                .iter()
+                .filter(|p| p.kind == VolumeKind::Triangles)
+                .count(),
+            ..Default::default()
+        };
+        if gpu_extrusion {
+            let casters: Vec<CasterGpu> = plans
+                .iter()
+                .map(|p| CasterGpu {
+                    light: p.light,
+                    kind: match p.kind {
+                        VolumeKind::Skip => 0,
+                        VolumeKind::Silhouette => 1,
+                        VolumeKind::Triangles => 2,
+                    },
+                    zfail: p.zfail as u32,
+                    caps: p.caps() as u32,
+                    _pad: 0,
+                })
+                .collect();
+            gpu.queue
+                .write_buffer(&geometry.casters, 0, bytemuck::cast_slice(&casters));
+            gpu.queue
+                .write_buffer(&self.args, 0, bytemuck::bytes_of(&args));
+            let params = ExtrudeParams {
+                edge_count: vm.edges.len() as u32,
+                face_count: vm.faces.len() as u32,
+                dark_cap: dark_cap as u32,
+                _pad: 0,
+            };
+            gpu.queue
+                .write_buffer(&self.extrude_params, 0, bytemuck::bytes_of(&params));
+            let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("shadow volume extrusion"),
+                layout: &self.extrude_layout,
+                entries: &[
+                    entry(0, &self.extrude_params),
+                    entry(1, &geometry.faces),
+                    entry(2, &geometry.edges),
+                    entry(3, &geometry.casters),
+                    entry(4, &self.indices),
+                    entry(5, &self.args),
+                ],
+            });
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("shadow volume extrusion"),
+                timestamp_writes: None,
+            });
+            pass.set_bind_group(0, &group, &[]);
+            for (pipeline, n) in [
+                (&self.extrude_edges, vm.edges.len()),
+                (&self.extrude_faces, vm.faces.len()),
+            ] {
+                let groups = n.div_ceil(64) as u32;
+                if groups > 0 {
+                    pass.set_pipeline(pipeline);
+                    pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
+                }
+            }
+        } else {
+            let (lists, silhouettes) = silhouette::volumes_counted(vm, &plans, dark_cap);
+            for (i, list) in lists.iter().enumerate() {
+                args.lists[i].index_count = list.len() as u32;
+                gpu.queue.write_buffer(
+                    &self.indices,
+                    args.lists[i].first_index as u64 * 4,
+                    bytemuck::cast_slice(list),
+                );
+            }
+            args.silhouette_edges = silhouettes as u32;
+            gpu.queue
+                .write_buffer(&self.args, 0, bytemuck::bytes_of(&args));
+        }
+        if self.want_debug {
+            self.silhouette_lines = silhouette_lines(vm, &plans);
+        }
+
+        // Count in the stencil, then write the mask where the count is not 0.
+        let world_light = match ctx.light.kind {
+            LightType::Directional => ctx.light.direction.normalize().extend(0.0),
+            _ => ctx.light.position.extend(1.0),
+        };
+        let uniform = VolumeUniform {
+            light: world_light,
+            extrusion: Vec4::new(length, 1.0 - p.get_f32("darkening"), 0.0, 0.0),
+        };
+        gpu.queue
+            .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shadow volume"),
+            layout: &self.layout,
+            entries: &[
+                entry(0, &self.uniform),
+                entry(1, &geometry.positions),
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&ctx.frame.gbuffer_normal_view),
+                },
+            ],
+        });
+        let two_pass = p.get_usize("stencil") == 1;
+        let mut draws = vec![];
+        for zfail in [false, true] {
+            for pass in if two_pass { &[1u8, 2][..] } else { &[0u8][..] } {
+                let key = VolumeKey {
+                    zfail,
+                    pass: *pass,
+                    unclipped,
+                };
+                draws.push((self.volume_pipeline(&gpu.device, key).clone(), zfail));
+            }
+        }
+        let scissor = if p.get_bool("scissor") {
+            range_scissor(
+                ctx.light,
+                ctx.frame.uniform.view_proj,
+                ctx.frame.width,
+                ctx.frame.height,
+            )
+        } else {
+            Some([0, 0, ctx.frame.width, ctx.frame.height])
+        };
+        {
+            let mut pass = super::mask_pass(encoder, ctx, "shadow volumes");
+            if let Some([x, y, w, h]) = scissor {
+                pass.set_scissor_rect(x, y, w, h);
+                pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
+                pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+                pass.set_bind_group(2, &group, &[]);
+                pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+                if let Some((set, _)) = &self.statistics {
+                    pass.begin_pipeline_statistics_query(set, 0);
+                }
+                for (pipeline, zfail) in &draws {
+                    pass.set_pipeline(pipeline);
+                    let offset = if *zfail { ZFAIL_ARGS } else { 0 };
+                    pass.draw_indexed_indirect(&self.args, offset);
+                }
+                if self.statistics.is_some() {
+                    pass.end_pipeline_statistics_query();
+                }
+                pass.set_pipeline(&self.shadow_pipeline);
+                pass.set_stencil_reference(0);
+                pass.draw(0..3, 0..1);
+            }
+        }
+        if let Some((set, resolve)) = &self.statistics {
+            encoder.resolve_query_set(set, 0..1, resolve, 0);
+            encoder.copy_buffer_to_buffer(resolve, 0, &self.readback, STATS_OFFSET, 8);
+        }
+        encoder.copy_buffer_to_buffer(&self.args, 0, &self.readback, 0, ARGS_SIZE);
+        self.pending = true;
+
+        if self.want_debug {
+            let (w, h) = (ctx.frame.width, ctx.frame.height);
+            if self
+                .debug
+                .as_ref()
+                .is_none_or(|t| (t.width(), t.height()) != (w, h))
+            {
+                self.debug = Some(crate::renderer::texture_2d(
+                    &gpu.device,
+                    "shadow volume debug",
+                    w,
+                    h,
+                    1,
+                    wgpu::TextureFormat::Rgba8Unorm,
+                    wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                ));
+            }
+            let volume_pipeline = self.debug_volume_pipeline(&gpu.device, unclipped).clone();
+            let view = self
+                .debug
+                .as_ref()
+                .expect("made above")
+                .create_view(&Default::default());
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shadow volume debug"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &ctx.frame.depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
+            pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+            pass.set_bind_group(2, &group, &[]);
+            pass.set_pipeline(&self.debug_scene_pipeline);
+            pass.draw(0..3, 0..1);
+            pass.set_pipeline(&volume_pipeline);
+            pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed_indirect(&self.args, 0);
+            pass.draw_indexed_indirect(&self.args, ZFAIL_ARGS);
+        }
+        Ok(())
+    }
+
+    fn after_frame(&mut self, gpu: &GpuContext) -> Result<()> {
+        if !std::mem::take(&mut self.pending) {
+            return Ok(());
+        }
+        let data = gpu.read_buffer(&self.readback)?;
+        let args: Args = bytemuck::pod_read_unaligned(&data[..ARGS_SIZE as usize]);
+        self.stats.silhouette_edges = args.silhouette_edges;
+        self.stats.volume_triangles = (args.lists[0].index_count + args.lists[1].index_count) / 3;
+        self.stats.fragments = self.statistics.as_ref().map(|_| {
+            bytemuck::pod_read_unaligned::<u64>(
+                &data[STATS_OFFSET as usize..STATS_OFFSET as usize + 8],
+            )
+        });
+        Ok(())
+    }
+
+    fn counters(&self) -> Vec<(&'static str, f64)> {
+        let s = &self.stats;
+        let mut c = vec![
+            ("silhouette_edges", s.silhouette_edges as f64),
+            ("volume_triangles", s.volume_triangles as f64),
+            ("casters_zpass", s.zpass as f64),
+            ("casters_zfail", s.zfail as f64),
+            ("casters_per_triangle", s.per_triangle as f64),
+            ("casters_culled", s.skipped as f64),
+        ];
+        if let Some(f) = s.fragments {
+            c.push(("volume_fragments", f as f64));
+        }
+        c
+    }
+
+    fn resource_bytes(&self) -> u64 {
+        self.indices.size()
+            + self.geometry.as_ref().map_or(0, |g| {
+                g.positions.size() + g.faces.size() + g.edges.size() + g.casters.size()
+            })
+    }
+
+    fn enable_debug(&mut self, on: bool) {
+        self.want_debug = on;
+        self.debug = None;
+        self.silhouette_lines.clear();
+    }
+
+    fn debug_views(&self, gpu: &GpuContext) -> Result<super::DebugViews> {
+        let mut views = super::DebugViews {
+            lines: self.silhouette_lines.clone(),
+            images: vec![],
+        };
+        if let Some(t) = &self.debug {
+            views.images.push(super::DebugImage {
+                label: "shadow volumes (translucent red) over the scene".into(),
+                width: t.width(),
+                height: t.height(),
+                rgba: gpu.read_texture(t, 0, 4)?,
+            });
+        }
+        Ok(views)
+    }
+}
+
+/// World-space silhouette edges of the silhouette casters, for the debug view.
+fn silhouette_lines(vm: &VolumeMesh, plans: &[CasterPlan]) -> Vec<DebugLine> {
+    let mut lines = vec![];
+    for (c, plan) in vm.casters.iter().zip(plans) {
+        if plan.kind != VolumeKind::Silhouette {
+            continue;
+        }
+        let lit = |f: u32| vm.faces[f as usize].plane.dot(plan.light) > 0.0;
+        let world = |v: u32| {
+            c.model
+                .transform_point3(vm.positions[v as usize].truncate())
+        };
+        for e in &vm.edges[c.edges.clone()] {
+            if e.multiplicity(lit) != 0 {
+                lines.push(DebugLine {
+                    a: world(e.a),
+                    b: world(e.b),
+                    color: [0.2, 1.0, 0.3, 1.0],
+                });
+            }
+        }
+    }
+    lines
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scissor_of_a_light_range_in_front_of_the_camera() {
+        let cam = crate::scene::Camera::new(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO);
+        let vp = cam.projection(1.0) * cam.view();
+        let mut l = Light::point(Vec3::ZERO, 1.0);
+        assert_eq!(
+            range_scissor(&l, vp, 100, 100),
+            Some([0, 0, 100, 100]),
+            "unbounded"
+        );
+        l.range = 1.0;
+        let [x, y, w, h] = range_scissor(&l, vp, 100, 100).unwrap();
+        assert!(
+            x > 20 && y > 20 && w < 60 && h < 60 && w > 5,
+            "{x} {y} {w} {h}"
+        );
+        assert!(x + w / 2 >= 48 && x + w / 2 <= 52, "centred");
+        l.position = Vec3::new(100.0, 0.0, 0.0);
+        assert_eq!(range_scissor(&l, vp, 100, 100), None, "off screen");
+        l.position = Vec3::new(0.0, 0.0, 10.5);
+        assert_eq!(
+            range_scissor(&l, vp, 100, 100),
+            Some([0, 0, 100, 100]),
+            "around the camera"
+        );
+    }
+
+    #[test]
+    fn stencil_operations_count_entries_and_exits() {
+        use wgpu::StencilOperation as Op;
+        let (s, cull) = stencil_state(VolumeKey {
+            zfail: false,
+            pass: 0,
+            unclipped: false,
+        });
+        assert_eq!(
+            (s.front.pass_op, s.back.pass_op, cull),
+            (Op::IncrementWrap, Op::DecrementWrap, None)
+        );
+        let (s, _) = stencil_state(VolumeKey {
+            zfail: true,
+            pass: 0,
+            unclipped: false,
+        });
+        assert_eq!(
+            (s.front.depth_fail_op, s.back.depth_fail_op),
+            (Op::DecrementWrap, Op::IncrementWrap)
+        );
+        // Two passes: back faces increment first for z-fail (front culled).
+        let (s, cull) = stencil_state(VolumeKey {
+            zfail: true,
+            pass: 1,
+            unclipped: false,
+        });
+        assert_eq!(
+            (s.back.depth_fail_op, cull),
+            (Op::IncrementClamp, Some(wgpu::Face::Front))
+        );
+        let (s, cull) = stencil_state(VolumeKey {
+            zfail: false,
+            pass: 2,
+            unclipped: false,
+        });
+        assert_eq!(
+            (s.back.pass_op, cull),
+            (Op::DecrementClamp, Some(wgpu::Face::Front))
+        );
+    }
+}
