@@ -55,3 +55,37 @@ fn bad_cameras_are_rejected() {
     c = Camera::new(Vec3::new(f32::NAN, 0.0, 1.0), Vec3::ZERO);
     assert!(c.validate().is_err());
 }
+
+#[test]
+fn the_infinite_projection_keeps_points_at_infinity_inside_the_depth_range() {
+    let cam = shadowlab::scene::Camera::new(Vec3::new(1.0, 2.0, 3.0), Vec3::ZERO);
+    let (finite, infinite) = (cam.projection(1.5), cam.projection_infinite(1.5));
+    // Same x and y; the near plane still maps to 0.
+    assert_eq!(finite.x_axis, infinite.x_axis);
+    assert_eq!(finite.y_axis, infinite.y_axis);
+    let near = infinite * glam::Vec4::new(0.0, 0.0, -cam.near, 1.0);
+    assert!((near.z / near.w).abs() < 1e-6);
+    // Directions (w = 0) in front of the camera: depth 1 − 2^-20, inside [0, 1).
+    let view = cam.view();
+    for d in [
+        Vec3::new(0.0, 0.0, -1.0),
+        Vec3::new(0.3, -0.2, -1.0),
+        (Vec3::ZERO - cam.eye).normalize(),
+    ] {
+        let c = infinite * view * d.extend(0.0);
+        assert!(c.w > 0.0);
+        let z = c.z / c.w;
+        assert!(z < 1.0 && z >= 1.0 - 2e-6, "{z}");
+    }
+    // Far points approach that depth from below, monotonically.
+    let mut last = 0.0;
+    for dist in [1.0f32, 10.0, 1e3, 1e6] {
+        let c = infinite * glam::Vec4::new(0.0, 0.0, -dist, 1.0);
+        let z = c.z / c.w;
+        assert!(
+            z > last && z < 1.0 - shadowlab::scene::INFINITE_FAR_EPSILON * 0.99,
+            "{dist}: {z}"
+        );
+        last = z;
+    }
+}

@@ -26,21 +26,22 @@ pub struct Edge {
 }
 
 impl Edge {
-    /// The edge's silhouette multiplicity: Σ over lit faces of +1 when the
-    /// face runs `a → b`, −1 when it runs `b → a`. A closed, consistently
-    /// wound edge gives 0 when both or neither face is lit and ±1 on the
-    /// silhouette; an open edge of a lit face gives ±1 (an open edge counts
-    /// as a silhouette). The side quad is extruded |m| times along
-    /// `a → b` when m > 0, `b → a` when m < 0.
-    pub fn multiplicity(&self, lit: impl Fn(u32) -> bool) -> i32 {
+    /// The edge's multiplicity: Σ over its faces of `weight(face)` times +1
+    /// when the face runs `a → b`, −1 when it runs `b → a`. With weight 1
+    /// for lit faces and 0 for the others it is the silhouette multiplicity:
+    /// a closed, consistently wound edge gives 0 when both or neither face
+    /// is lit and ±1 on the silhouette, an open edge of a lit face ±1 (an
+    /// open edge counts as a silhouette). The side quad is extruded |m|
+    /// times along `a → b` when m > 0, `b → a` when m < 0.
+    pub fn multiplicity(&self, weight: impl Fn(u32) -> i32) -> i32 {
         self.faces
             .iter()
-            .filter(|&&f| f != NO_FACE && lit(f >> 1))
-            .map(|&f| if f & 1 == 0 { 1 } else { -1 })
+            .filter(|&&f| f != NO_FACE)
+            .map(|&f| if f & 1 == 0 { 1 } else { -1 } * weight(f >> 1))
             .sum()
     }
 
-    /// The largest |multiplicity| any lighting can give.
+    /// The largest |multiplicity| that weights in {0, 1} can give.
     pub fn max_multiplicity(&self) -> u32 {
         match self.faces {
             [f, NO_FACE] | [NO_FACE, f] if f != NO_FACE => 1,
@@ -225,17 +226,19 @@ mod tests {
             b: 1,
             faces: [0 << 1, 1 << 1 | 1],
         };
-        assert_eq!(e.multiplicity(|_| true), 0);
-        assert_eq!(e.multiplicity(|f| f == 0), 1);
-        assert_eq!(e.multiplicity(|f| f == 1), -1);
+        assert_eq!(e.multiplicity(|_| 1), 0);
+        assert_eq!(e.multiplicity(|f| (f == 0) as i32), 1);
+        assert_eq!(e.multiplicity(|f| (f == 1) as i32), -1);
+        // Per-triangle weights (lit +1, unlit −1): a silhouette doubles.
+        assert_eq!(e.multiplicity(|f| if f == 0 { 1 } else { -1 }), 2);
         assert_eq!(e.max_multiplicity(), 1);
         let open = Edge {
             a: 0,
             b: 1,
             faces: [3 << 1 | 1, NO_FACE],
         };
-        assert_eq!(open.multiplicity(|_| true), -1);
-        assert_eq!(open.multiplicity(|_| false), 0);
+        assert_eq!(open.multiplicity(|_| 1), -1);
+        assert_eq!(open.multiplicity(|_| 0), 0);
     }
 
     #[test]

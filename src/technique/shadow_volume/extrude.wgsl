@@ -82,28 +82,35 @@ fn quad(at: u32, u: u32, v: u32) {
     indices[at + 5u] = 2u * v + 1u;
 }
 
-// Light cap, then dark cap when asked; returns the indices written.
-fn caps(at: u32, t: vec3u) -> u32 {
+// Light cap, then the dark cap when asked.
+fn caps(at: u32, t: vec3u) {
     indices[at] = 2u * t.x;
     indices[at + 1u] = 2u * t.y;
     indices[at + 2u] = 2u * t.z;
-    if params.dark_cap == 0u {
-        return 3u;
+    if params.dark_cap == 1u {
+        indices[at + 3u] = 2u * t.x + 1u;
+        indices[at + 4u] = 2u * t.z + 1u;
+        indices[at + 5u] = 2u * t.y + 1u;
     }
-    indices[at + 3u] = 2u * t.x + 1u;
-    indices[at + 4u] = 2u * t.z + 1u;
-    indices[at + 5u] = 2u * t.y + 1u;
-    return 6u;
 }
 
-fn use_sign(f: u32, light: vec4f) -> i32 {
-    if f == NO_FACE || !lit(f >> 1u, light) {
+// A face use's term of the edge multiplicity: its direction along the
+// edge times its weight (silhouette: lit 1, unlit 0; per-triangle: lit 1,
+// unlit −1, the unlit triangle's volume being turned to face the light).
+fn use_term(f: u32, light: vec4f, kind: u32) -> i32 {
+    if f == NO_FACE {
         return 0;
     }
-    return select(1, -1, (f & 1u) == 1u);
+    var weight = 0;
+    if lit(f >> 1u, light) {
+        weight = 1;
+    } else if kind == 2u {
+        weight = -1;
+    }
+    return select(weight, -weight, (f & 1u) == 1u);
 }
 
-// One thread per edge record of a silhouette caster: |m| side quads.
+// One thread per edge record: |m| side quads.
 @compute @workgroup_size(64)
 fn cs_edges(@builtin(global_invocation_id) id: vec3u) {
     let e = id.x + id.y * 65535u * 64u;
@@ -112,14 +119,16 @@ fn cs_edges(@builtin(global_invocation_id) id: vec3u) {
     }
     let edge = edges[e];
     let caster = casters[faces[edge.f0 >> 1u].caster];
-    if caster.kind != 1u {
+    if caster.kind == 0u {
         return;
     }
-    let m = use_sign(edge.f0, caster.light) + use_sign(edge.f1, caster.light);
+    let m = use_term(edge.f0, caster.light, caster.kind) + use_term(edge.f1, caster.light, caster.kind);
     if m == 0 {
         return;
     }
-    atomicAdd(&args.silhouette_edges, 1u);
+    if caster.kind == 1u {
+        atomicAdd(&args.silhouette_edges, 1u);
+    }
     let n = u32(abs(m));
     let at = reserve(caster.zfail == 1u, 6u * n);
     for (var k = 0u; k < n; k++) {
@@ -132,7 +141,7 @@ fn cs_edges(@builtin(global_invocation_id) id: vec3u) {
 }
 
 // One thread per face: caps of lit faces (silhouette casters counted with
-// z-fail), or the face's own closed volume (per-triangle casters).
+// z-fail), or of every face turned to face the light (per-triangle casters).
 @compute @workgroup_size(64)
 fn cs_faces(@builtin(global_invocation_id) id: vec3u) {
     let f = id.x + id.y * 65535u * 64u;
@@ -146,11 +155,6 @@ fn cs_faces(@builtin(global_invocation_id) id: vec3u) {
     if caster.kind == 1u && caster.caps == 1u && is_lit {
         caps(reserve(caster.zfail == 1u, cap_size), face.v);
     } else if caster.kind == 2u {
-        let t = select(face.v.xzy, face.v, is_lit);
-        let at = reserve(caster.zfail == 1u, cap_size + 18u);
-        let c = caps(at, t);
-        quad(at + c, t.x, t.y);
-        quad(at + c + 6u, t.y, t.z);
-        quad(at + c + 12u, t.z, t.x);
+        caps(reserve(caster.zfail == 1u, cap_size), select(face.v.xzy, face.v, is_lit));
     }
 }

@@ -701,6 +701,167 @@ impl ShadowVolumeRenderer {
         });
     }
 
+    /// Writes the volumes of `plans` into the index buffer and the
+    /// indirect arguments: on the GPU (records the extrusion compute pass)
+    /// or on the CPU (uploads).
+    fn extrude(
+        &mut self,
+        gpu: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        plans: &[CasterPlan],
+        dark_cap: bool,
+        gpu_extrusion: bool,
+    ) -> Result<()> {
+        let geometry = self.geometry.as_ref().expect("ensured");
+        let vm = &geometry.mesh;
+        // The two lists' regions of the index buffer.
+        let mut bounds = [0usize; 2];
+        for (c, plan) in vm.casters.iter().zip(plans) {
+            bounds[plan.zfail as usize] += plan.index_bound(c, dark_cap);
+        }
+        let needed = ((bounds[0] + bounds[1]) * 4) as u64;
+        let limits = gpu.device.limits();
+        let max = if gpu_extrusion {
+            limits
+                .max_storage_buffer_binding_size
+                .min(limits.max_buffer_size)
+        } else {
+            limits.max_buffer_size
+        };
+        if needed > max {
+            bail!(
+                "shadow-volume: the volumes may need {needed} bytes of indices, more than the device allows ({max}){}",
+                if gpu_extrusion {
+                    "; try --set extrusion=cpu"
+                } else {
+                    ""
+                }
+            );
+        }
+        if self.indices.size() < needed {
+            self.indices = buffer(
+                &gpu.device,
+                "shadow volume indices",
+                needed.next_power_of_two().min(max),
+                index_usage(),
+            );
+        }
+        let mut args = Args::default();
+        for (i, list) in args.lists.iter_mut().enumerate() {
+            list.instance_count = 1;
+            list.first_index = if i == 0 { 0 } else { bounds[0] as u32 };
+        }
+        if gpu_extrusion {
+            let casters: Vec<CasterGpu> = plans
+                .iter()
+                .map(|p| CasterGpu {
+                    light: p.light,
+                    kind: match p.kind {
+                        VolumeKind::Skip => 0,
+                        VolumeKind::Silhouette => 1,
+                        VolumeKind::Triangles => 2,
+                    },
+                    zfail: p.zfail as u32,
+                    caps: p.caps() as u32,
+                    _pad: 0,
+                })
+                .collect();
+            gpu.queue
+                .write_buffer(&geometry.casters, 0, bytemuck::cast_slice(&casters));
+            gpu.queue
+                .write_buffer(&self.args, 0, bytemuck::bytes_of(&args));
+            let params = ExtrudeParams {
+                edge_count: vm.edges.len() as u32,
+                face_count: vm.faces.len() as u32,
+                dark_cap: dark_cap as u32,
+                _pad: 0,
+            };
+            gpu.queue
+                .write_buffer(&self.extrude_params, 0, bytemuck::bytes_of(&params));
+            let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("shadow volume extrusion"),
+                layout: &self.extrude_layout,
+                entries: &[
+                    entry(0, &self.extrude_params),
+                    entry(1, &geometry.faces),
+                    entry(2, &geometry.edges),
+                    entry(3, &geometry.casters),
+                    entry(4, &self.indices),
+                    entry(5, &self.args),
+                ],
+            });
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("shadow volume extrusion"),
+                timestamp_writes: None,
+            });
+            pass.set_bind_group(0, &group, &[]);
+            for (pipeline, n) in [
+                (&self.extrude_edges, vm.edges.len()),
+                (&self.extrude_faces, vm.faces.len()),
+            ] {
+                let groups = n.div_ceil(64) as u32;
+                if groups > 0 {
+                    pass.set_pipeline(pipeline);
+                    pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
+                }
+            }
+        } else {
+            let (lists, silhouettes) = silhouette::volumes_counted(vm, plans, dark_cap);
+            for (i, list) in lists.iter().enumerate() {
+                args.lists[i].index_count = list.len() as u32;
+                gpu.queue.write_buffer(
+                    &self.indices,
+                    args.lists[i].first_index as u64 * 4,
+                    bytemuck::cast_slice(list),
+                );
+            }
+            args.silhouette_edges = silhouettes as u32;
+            gpu.queue
+                .write_buffer(&self.args, 0, bytemuck::bytes_of(&args));
+        }
+        Ok(())
+    }
+
+    /// The welded casters of `scene` (built on first use).
+    pub fn volume_mesh(&mut self, gpu: &GpuContext, scene: &Scene) -> &VolumeMesh {
+        self.ensure_geometry(gpu, scene);
+        &self.geometry.as_ref().expect("ensured").mesh
+    }
+
+    /// Extrudes the volumes of `plans` like a frame does and reads them back:
+    /// the z-pass and z-fail index lists and the silhouette edge count.
+    pub fn volumes_read_back(
+        &mut self,
+        gpu: &GpuContext,
+        scene: &Scene,
+        plans: &[CasterPlan],
+        dark_cap: bool,
+        gpu_extrusion: bool,
+    ) -> Result<([Vec<u32>; 2], u32)> {
+        self.ensure_geometry(gpu, scene);
+        gpu.checked("shadow volume read-back", || {
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            self.extrude(gpu, &mut encoder, plans, dark_cap, gpu_extrusion)?;
+            let copy = buffer(
+                &gpu.device,
+                "shadow volume index readback",
+                self.indices.size(),
+                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            );
+            encoder.copy_buffer_to_buffer(&self.indices, 0, &copy, 0, self.indices.size());
+            encoder.copy_buffer_to_buffer(&self.args, 0, &self.readback, 0, ARGS_SIZE);
+            gpu.queue.submit([encoder.finish()]);
+            let indices: Vec<u32> = bytemuck::cast_slice(&gpu.read_buffer(&copy)?).to_vec();
+            let args: Args = bytemuck::pod_read_unaligned(
+                &gpu.read_buffer(&self.readback)?[..ARGS_SIZE as usize],
+            );
+            let lists = args.lists.map(|l| {
+                indices[l.first_index as usize..(l.first_index + l.index_count) as usize].to_vec()
+            });
+            Ok((lists, args.silhouette_edges))
+        })
+    }
+
     /// Decides, per caster, whether and how its volume is drawn.
     fn plan(&mut self, ctx: &MaskContext) -> Vec<CasterPlan> {
         let p = ctx.params;
@@ -777,7 +938,10 @@ fn entry(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
 }
 
 fn index_usage() -> wgpu::BufferUsages {
-    wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST
+    wgpu::BufferUsages::INDEX
+        | wgpu::BufferUsages::STORAGE
+        | wgpu::BufferUsages::COPY_DST
+        | wgpu::BufferUsages::COPY_SRC
 }
 
 impl ShadowTechnique for ShadowVolumeRenderer {
@@ -793,46 +957,13 @@ impl ShadowTechnique for ShadowVolumeRenderer {
         let length = p.get_f32("length");
         let dark_cap = !(ctx.light.kind == LightType::Directional && length <= 0.0);
         let unclipped = length <= 0.0 && p.get_usize("far_plane") == 1 && self.depth_clamp;
-        let geometry = self.geometry.as_ref().expect("ensured");
-        let vm = &geometry.mesh;
-        // The two lists' regions of the index buffer.
-        let mut bounds = [0usize; 2];
-        for (c, plan) in vm.casters.iter().zip(&plans) {
-            bounds[plan.zfail as usize] += plan.index_bound(c, dark_cap);
-        }
-        let gpu_extrusion = p.get_usize("extrusion") == 0;
-        let needed = ((bounds[0] + bounds[1]) * 4) as u64;
-        let limits = gpu.device.limits();
-        let max = if gpu_extrusion {
-            limits
-                .max_storage_buffer_binding_size
-                .min(limits.max_buffer_size)
-        } else {
-            limits.max_buffer_size
-        };
-        if needed > max {
-            bail!(
-                "shadow-volume: the volumes may need {needed} bytes of indices, more than the device allows ({max}){}",
-                if gpu_extrusion {
-                    "; try --set extrusion=cpu"
-                } else {
-                    ""
-                }
-            );
-        }
-        if self.indices.size() < needed {
-            self.indices = buffer(
-                &gpu.device,
-                "shadow volume indices",
-                needed.next_power_of_two().min(max),
-                index_usage(),
-            );
-        }
-        let mut args = Args::default();
-        for (i, list) in args.lists.iter_mut().enumerate() {
-            list.instance_count = 1;
-            list.first_index = if i == 0 { 0 } else { bounds[0] as u32 };
-        }
+        self.extrude(
+            gpu,
+            encoder,
+            &plans,
+            dark_cap,
+            p.get_usize("extrusion") == 0,
+        )?;
         self.stats = Stats {
             skipped: plans.iter().filter(|p| p.kind == VolumeKind::Skip).count(),
             zpass: plans
@@ -849,74 +980,8 @@ impl ShadowTechnique for ShadowVolumeRenderer {
                 .count(),
             ..Default::default()
         };
-        if gpu_extrusion {
-            let casters: Vec<CasterGpu> = plans
-                .iter()
-                .map(|p| CasterGpu {
-                    light: p.light,
-                    kind: match p.kind {
-                        VolumeKind::Skip => 0,
-                        VolumeKind::Silhouette => 1,
-                        VolumeKind::Triangles => 2,
-                    },
-                    zfail: p.zfail as u32,
-                    caps: p.caps() as u32,
-                    _pad: 0,
-                })
-                .collect();
-            gpu.queue
-                .write_buffer(&geometry.casters, 0, bytemuck::cast_slice(&casters));
-            gpu.queue
-                .write_buffer(&self.args, 0, bytemuck::bytes_of(&args));
-            let params = ExtrudeParams {
-                edge_count: vm.edges.len() as u32,
-                face_count: vm.faces.len() as u32,
-                dark_cap: dark_cap as u32,
-                _pad: 0,
-            };
-            gpu.queue
-                .write_buffer(&self.extrude_params, 0, bytemuck::bytes_of(&params));
-            let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("shadow volume extrusion"),
-                layout: &self.extrude_layout,
-                entries: &[
-                    entry(0, &self.extrude_params),
-                    entry(1, &geometry.faces),
-                    entry(2, &geometry.edges),
-                    entry(3, &geometry.casters),
-                    entry(4, &self.indices),
-                    entry(5, &self.args),
-                ],
-            });
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("shadow volume extrusion"),
-                timestamp_writes: None,
-            });
-            pass.set_bind_group(0, &group, &[]);
-            for (pipeline, n) in [
-                (&self.extrude_edges, vm.edges.len()),
-                (&self.extrude_faces, vm.faces.len()),
-            ] {
-                let groups = n.div_ceil(64) as u32;
-                if groups > 0 {
-                    pass.set_pipeline(pipeline);
-                    pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
-                }
-            }
-        } else {
-            let (lists, silhouettes) = silhouette::volumes_counted(vm, &plans, dark_cap);
-            for (i, list) in lists.iter().enumerate() {
-                args.lists[i].index_count = list.len() as u32;
-                gpu.queue.write_buffer(
-                    &self.indices,
-                    args.lists[i].first_index as u64 * 4,
-                    bytemuck::cast_slice(list),
-                );
-            }
-            args.silhouette_edges = silhouettes as u32;
-            gpu.queue
-                .write_buffer(&self.args, 0, bytemuck::bytes_of(&args));
-        }
+        let geometry = self.geometry.as_ref().expect("ensured");
+        let vm = &geometry.mesh;
         if self.want_debug {
             self.silhouette_lines = silhouette_lines(vm, &plans);
         }
@@ -1123,7 +1188,7 @@ fn silhouette_lines(vm: &VolumeMesh, plans: &[CasterPlan]) -> Vec<DebugLine> {
         if plan.kind != VolumeKind::Silhouette {
             continue;
         }
-        let lit = |f: u32| vm.faces[f as usize].plane.dot(plan.light) > 0.0;
+        let lit = |f: u32| (vm.faces[f as usize].plane.dot(plan.light) > 0.0) as i32;
         let world = |v: u32| {
             c.model
                 .transform_point3(vm.positions[v as usize].truncate())

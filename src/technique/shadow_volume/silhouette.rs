@@ -103,7 +103,11 @@ pub enum VolumeKind {
     Skip,
     /// Side quads on silhouette edges (+ caps when counted with z-fail).
     Silhouette,
-    /// Every triangle's own closed volume (open or non-manifold meshes).
+    /// Every triangle's own closed volume, unlit triangles turned to face
+    /// the light (exact for any triangle soup); the side quads in which
+    /// neighbouring triangles' volumes cancel are left out, which changes
+    /// no stencil count and avoids rasterising the same sliver twice with
+    /// opposite windings (where coverage rules can differ).
     Triangles,
 }
 
@@ -130,7 +134,7 @@ impl CasterPlan {
         match self.kind {
             VolumeKind::Skip => 0,
             VolumeKind::Silhouette => c.side_bound + if self.caps() { cap * faces } else { 0 },
-            VolumeKind::Triangles => (cap + 18) * faces,
+            VolumeKind::Triangles => 12 * c.edges.len() + cap * faces,
         }
     }
 }
@@ -242,37 +246,33 @@ pub fn caster_volume(
     dark_cap: bool,
 ) -> (Vec<u32>, usize) {
     let lit = |f: u32| vm.faces[f as usize].plane.dot(plan.light) > 0.0;
+    let weight = |f: u32| match (plan.kind, lit(f)) {
+        (_, true) => 1,
+        (VolumeKind::Triangles, false) => -1,
+        _ => 0,
+    };
     let mut out = vec![];
     let mut silhouettes = 0;
-    match plan.kind {
-        VolumeKind::Skip => {}
-        VolumeKind::Silhouette => {
-            for e in &vm.edges[c.edges.clone()] {
-                let m = e.multiplicity(lit);
-                if m != 0 {
-                    silhouettes += 1;
-                }
-                let (u, v) = if m > 0 { (e.a, e.b) } else { (e.b, e.a) };
-                for _ in 0..m.unsigned_abs() {
-                    quad(&mut out, u, v);
-                }
-            }
-            if plan.caps() {
-                for f in c.faces.clone() {
-                    if lit(f as u32) {
-                        caps(&mut out, vm.faces[f].v, dark_cap);
-                    }
-                }
-            }
+    if plan.kind == VolumeKind::Skip {
+        return (out, 0);
+    }
+    for e in &vm.edges[c.edges.clone()] {
+        let m = e.multiplicity(weight);
+        if m != 0 && plan.kind == VolumeKind::Silhouette {
+            silhouettes += 1;
         }
-        VolumeKind::Triangles => {
-            for f in c.faces.clone() {
-                let [i, j, k] = vm.faces[f].v;
-                let t = if lit(f as u32) { [i, j, k] } else { [i, k, j] };
-                caps(&mut out, t, dark_cap);
-                for e in 0..3 {
-                    quad(&mut out, t[e], t[(e + 1) % 3]);
-                }
+        let (u, v) = if m > 0 { (e.a, e.b) } else { (e.b, e.a) };
+        for _ in 0..m.unsigned_abs() {
+            quad(&mut out, u, v);
+        }
+    }
+    if plan.caps() {
+        for f in c.faces.clone() {
+            let [i, j, k] = vm.faces[f].v;
+            match (plan.kind, lit(f as u32)) {
+                (_, true) => caps(&mut out, [i, j, k], dark_cap),
+                (VolumeKind::Triangles, false) => caps(&mut out, [i, k, j], dark_cap),
+                _ => {}
             }
         }
     }

@@ -1,0 +1,204 @@
+//! Stencil shadow volumes: CPU and GPU extrusion agree, masks match the
+//! ray-traced reference, z-pass shows its known failure.
+
+mod common;
+use common::*;
+use glam::Vec3;
+use shadowlab::scene::{Light, LightType, Scene, builtin};
+use shadowlab::technique::shadow_volume::ShadowVolumeRenderer;
+use shadowlab::technique::shadow_volume::silhouette::{CasterPlan, VolumeKind};
+
+/// A built-in scene seen from a camera preset under a light preset.
+fn preset(scene: &str, camera: &str, light: &str) -> Scene {
+    let mut s = builtin::by_name(scene).unwrap().unwrap();
+    s.camera = s.camera_preset(camera).unwrap();
+    s.lights = s.light_preset(light).unwrap();
+    s
+}
+
+/// Triangles of an index list, each rotated to start at its smallest
+/// index (orientation kept), sorted.
+fn canonical(list: &[u32]) -> Vec<[u32; 3]> {
+    let mut t: Vec<[u32; 3]> = list
+        .chunks_exact(3)
+        .map(|t| {
+            let k = (0..3).min_by_key(|&k| t[k]).unwrap();
+            [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+        })
+        .collect();
+    t.sort_unstable();
+    t
+}
+
+#[test]
+fn cpu_and_gpu_extrusion_give_the_same_volumes() {
+    let gpu = gpu();
+    for (name, light) in [
+        ("room", "point"),
+        ("room", "sun"),
+        ("floating", "spot"),
+        ("bunny", "sun"),
+        ("teapot", "point"),
+    ] {
+        let scene = preset(name, "default", light);
+        let l = scene.lights[0];
+        let mut r = ShadowVolumeRenderer::new(gpu);
+        let casters = r.volume_mesh(gpu, &scene).casters.clone();
+        for (kind, zfail) in [
+            (VolumeKind::Silhouette, false),
+            (VolumeKind::Silhouette, true),
+            (VolumeKind::Triangles, true),
+        ] {
+            let plans: Vec<CasterPlan> = casters
+                .iter()
+                .map(|c| CasterPlan {
+                    kind,
+                    zfail,
+                    light: c.model.inverse() * l.homogeneous(),
+                })
+                .collect();
+            let dark_cap = l.kind != LightType::Directional;
+            let (cpu, cpu_edges) = r
+                .volumes_read_back(gpu, &scene, &plans, dark_cap, false)
+                .unwrap();
+            let (on_gpu, gpu_edges) = r
+                .volumes_read_back(gpu, &scene, &plans, dark_cap, true)
+                .unwrap();
+            let what = format!("{name}/{light} {kind:?} zfail={zfail}");
+            assert_eq!(cpu_edges, gpu_edges, "{what}: silhouette edges");
+            if kind == VolumeKind::Silhouette {
+                assert!(cpu_edges > 0, "{what}");
+            }
+            let list = zfail as usize;
+            assert!(!cpu[list].is_empty() && cpu[1 - list].is_empty(), "{what}");
+            assert_eq!(
+                canonical(&cpu[list]),
+                canonical(&on_gpu[list]),
+                "{what}: triangles"
+            );
+        }
+    }
+}
+
+#[test]
+fn every_preset_and_variant_matches_the_reference_on_squares_over_a_plane() {
+    for light in [
+        Light::point(Vec3::new(0.4, 5.0, -0.3), 1.0),
+        Light::spot(Vec3::new(1.0, 5.0, 1.0), Vec3::ZERO, 1.0, 30.0, 40.0),
+        Light::directional(Vec3::new(0.3, -1.0, 0.2), 1.0),
+    ] {
+        let scene = squares_over_floor(
+            &[
+                (Vec3::new(0.0, 1.0, 0.0), 0.7),
+                (Vec3::new(1.2, 2.0, 0.5), 0.5),
+            ],
+            light,
+            false,
+        );
+        for id in [
+            "shadow-volume:auto",
+            "shadow-volume:zpass",
+            "shadow-volume:zfail",
+            "shadow-volume:triangles",
+            "shadow-volume:cpu",
+            "shadow-volume:zfail[stencil=two-pass]",
+            "shadow-volume:zpass[stencil=two-pass]",
+            "shadow-volume:zfail[far_plane=depth-clamp]",
+            "shadow-volume:zfail[length=40]",
+            "shadow-volume:auto[scissor=false,cull_casters=false]",
+        ] {
+            let row = compare(&scene, id, (200, 200));
+            let m = &row.mask;
+            assert!(m.reference_shadowed_pct > 2.0, "{id}");
+            assert!(m.all.total_pct <= 0.05, "{id} {:?}: {m:?}", light.kind);
+        }
+    }
+}
+
+#[test]
+fn zpass_fails_with_the_camera_in_a_shadow_and_zfail_does_not() {
+    for light in ["sun", "point"] {
+        let scene = preset("columns", "in-shadow", light);
+        let zpass = compare(&scene, "shadow-volume:zpass", (320, 180));
+        assert!(
+            zpass.mask.all.total_pct > 10.0,
+            "{light}: z-pass should fail here: {:?}",
+            zpass.mask
+        );
+        for id in ["shadow-volume:zfail", "shadow-volume:auto"] {
+            let row = compare(&scene, id, (320, 180));
+            assert!(row.mask.reference_shadowed_pct > 10.0);
+            assert!(
+                row.mask.all.total_pct <= 0.05,
+                "{light} {id}: {:?}",
+                row.mask
+            );
+        }
+        // From outside every volume z-pass is exact too.
+        let outside = preset("columns", "default", light);
+        let row = compare(&outside, "shadow-volume:zpass", (320, 180));
+        assert!(row.mask.all.total_pct <= 0.05, "{light}: {:?}", row.mask);
+    }
+}
+
+#[test]
+fn a_point_light_inside_the_room() {
+    let scene = preset("room", "default", "point");
+    for id in ["shadow-volume:auto", "shadow-volume:zfail"] {
+        let row = compare(&scene, id, (320, 180));
+        assert!(row.mask.reference_shadowed_pct > 1.0);
+        assert!(row.mask.all.total_pct <= 0.05, "{id}: {:?}", row.mask);
+    }
+}
+
+#[test]
+fn open_meshes_need_per_triangle_volumes() {
+    let scene = preset("teapot", "default", "point");
+    let triangles = compare(&scene, "shadow-volume:triangles", (320, 180));
+    assert!(triangles.mask.all.total_pct <= 0.05, "{:?}", triangles.mask);
+    // Silhouette volumes of the open teapot miss the shadow seen through its opening.
+    let edges = compare(&scene, "shadow-volume:edges", (320, 180));
+    assert!(edges.mask.all.false_lit_pct > 0.2, "{:?}", edges.mask);
+}
+
+#[test]
+fn statistics_and_debug_views() {
+    let scene = preset("floating", "default", "point");
+    let gpu = gpu();
+    let mut counters = vec![];
+    for id in ["shadow-volume:zfail", "shadow-volume:zfail[extrusion=cpu]"] {
+        let choice = shadowlab::measure::parse_technique_list(id)
+            .unwrap()
+            .remove(0);
+        let mut hf = shadowlab::frame::HeadlessFrame::new(gpu, &scene, &[choice], 160, 90).unwrap();
+        hf.techniques[0].technique.enable_debug(true);
+        hf.render(
+            gpu,
+            &scene,
+            &scene.camera,
+            &scene.lights,
+            &Default::default(),
+        )
+        .unwrap();
+        let t = &hf.techniques[0].technique;
+        let c: std::collections::HashMap<&str, f64> = t.counters().into_iter().collect();
+        assert!(c["silhouette_edges"] > 10.0, "{c:?}");
+        assert!(c["volume_triangles"] > c["silhouette_edges"], "{c:?}");
+        if gpu.pipeline_statistics {
+            assert!(c["volume_fragments"] > 0.0, "{c:?}");
+        }
+        let views = t.debug_views(gpu).unwrap();
+        // One line per silhouette edge (the open floor has per-triangle volumes).
+        assert_eq!(views.lines.len() as f64, c["silhouette_edges"]);
+        let image = &views.images[0];
+        assert_eq!((image.width, image.height), (160, 90));
+        let red = image
+            .rgba
+            .chunks_exact(4)
+            .filter(|p| p[0] as i32 > p[1] as i32 + 20)
+            .count();
+        assert!(red > 100, "{red} reddish pixels");
+        counters.push((c["silhouette_edges"], c["volume_triangles"]));
+    }
+    assert_eq!(counters[0], counters[1], "GPU and CPU statistics");
+}
