@@ -32,7 +32,7 @@ pub static FAMILY: Family = Family {
         ),
         ParamSpec::float(
             "offset_ulps",
-            512.0,
+            64.0,
             1.0,
             65536.0,
             1.0,

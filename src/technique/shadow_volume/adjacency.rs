@@ -60,8 +60,8 @@ pub struct Adjacency {
     /// point are dropped.
     pub triangles: Vec<[u32; 3]>,
     /// Plane of each triangle, `(n, −n·a)` with `n = (b − a) × (c − a)`
-    /// (not normalised): `plane · (L, 1) > 0` when a point light at L sees
-    /// its front.
+    /// normalised, shared by all faces of a flat region:
+    /// `plane · (L, 1) > 0` when a point light at L sees its front.
     pub planes: Vec<Vec4>,
     pub edges: Vec<Edge>,
     /// Edges used by one face.
@@ -190,7 +190,61 @@ impl Adjacency {
                 });
             }
         }
+        adjacency.share_coplanar_planes();
         adjacency
+    }
+
+    /// Gives every face of a flat region (faces joined by edges whose
+    /// planes agree within rounding) one plane: that of the region's largest
+    /// face, normalised. Rounding in the vertices would otherwise light a
+    /// grazing wall's triangles inconsistently and put silhouettes inside
+    /// it.
+    fn share_coplanar_planes(&mut self) {
+        let n = self.triangles.len();
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn root(parent: &mut [u32], mut i: u32) -> u32 {
+            while parent[i as usize] != i {
+                parent[i as usize] = parent[parent[i as usize] as usize];
+                i = parent[i as usize];
+            }
+            i
+        }
+        let unit = |p: Vec4| {
+            let p = p.as_dvec4();
+            p / p.truncate().length().max(f64::MIN_POSITIVE)
+        };
+        let scale = self
+            .positions
+            .iter()
+            .fold(0.0f32, |m, p| m.max(p.abs().max_element()))
+            .max(1e-6) as f64;
+        for e in &self.edges {
+            let [f, g] = e.faces;
+            if f == NO_FACE || g == NO_FACE || (f & 1) == (g & 1) {
+                continue;
+            }
+            let (f, g) = (f >> 1, g >> 1);
+            let (pf, pg) = (unit(self.planes[f as usize]), unit(self.planes[g as usize]));
+            if pf.truncate().dot(pg.truncate()) > 1.0 - 1e-9 && (pf.w - pg.w).abs() < 1e-6 * scale {
+                let (a, b) = (root(&mut parent, f), root(&mut parent, g));
+                parent[a.max(b) as usize] = a.min(b);
+            }
+        }
+        let area = |p: Vec4| p.truncate().length_squared();
+        let mut best: Vec<u32> = (0..n as u32).collect();
+        for f in 0..n as u32 {
+            let r = root(&mut parent, f) as usize;
+            if area(self.planes[f as usize]) > area(self.planes[best[r] as usize]) {
+                best[r] = f;
+            }
+        }
+        let shared: Vec<Vec4> = (0..n)
+            .map(|f| {
+                let r = root(&mut parent, f as u32) as usize;
+                unit(self.planes[best[r] as usize]).as_vec4()
+            })
+            .collect();
+        self.planes = shared;
     }
 }
 
@@ -293,6 +347,29 @@ mod tests {
         ] {
             let a = Adjacency::of(&m);
             assert!(a.is_closed(), "{}: {}", m.name, a.summary());
+        }
+    }
+
+    #[test]
+    fn the_faces_of_a_flat_region_share_one_plane() {
+        // A subdivided box moved far from the origin: rounding tilts its
+        // triangles' own planes slightly; each side must still light as one.
+        let mut m = Mesh::default();
+        m.append(
+            &shapes::cuboid_subdivided(Vec3::new(1.3, 9.7, 1.1), 8),
+            glam::Mat4::from_translation(Vec3::new(27.3, 4.85, -31.7)),
+        );
+        let a = Adjacency::of(&m);
+        let mut distinct: Vec<[u32; 4]> = a
+            .planes
+            .iter()
+            .map(|p| p.to_array().map(f32::to_bits))
+            .collect();
+        distinct.sort_unstable();
+        distinct.dedup();
+        assert_eq!(distinct.len(), 6);
+        for p in &a.planes {
+            assert!((p.truncate().length() - 1.0).abs() < 1e-6);
         }
     }
 }

@@ -233,6 +233,7 @@ pub struct ShadowVolumeRenderer {
     readback: wgpu::Buffer,
     statistics: Option<(wgpu::QuerySet, wgpu::Buffer)>,
     depth_clamp: bool,
+    warned_no_depth_clamp: bool,
     adjacency: Option<(u64, Vec<Option<Adjacency>>)>,
     geometry: Option<Geometry>,
     stats: Stats,
@@ -526,6 +527,7 @@ impl ShadowVolumeRenderer {
             ),
             statistics,
             depth_clamp: gpu.depth_clamp,
+            warned_no_depth_clamp: false,
             layout,
             pipeline_layout,
             module,
@@ -956,7 +958,16 @@ impl ShadowTechnique for ShadowVolumeRenderer {
         let plans = self.plan(ctx);
         let length = p.get_f32("length");
         let dark_cap = !(ctx.light.kind == LightType::Directional && length <= 0.0);
-        let unclipped = length <= 0.0 && p.get_usize("far_plane") == 1 && self.depth_clamp;
+        let clamp_asked = length <= 0.0 && p.get_usize("far_plane") == 1;
+        if clamp_asked
+            && !self.depth_clamp
+            && !std::mem::replace(&mut self.warned_no_depth_clamp, true)
+        {
+            log::warn!(
+                "shadow-volume: the adapter has no depth clamp (DEPTH_CLIP_CONTROL); using the far plane at infinity"
+            );
+        }
+        let unclipped = clamp_asked && self.depth_clamp;
         self.extrude(
             gpu,
             encoder,
