@@ -590,10 +590,14 @@ pub fn city() -> Scene {
         let m = s.add_mesh(row);
         s.add_object(&format!("Buildings{i}"), m, facade, Mat4::IDENTITY);
     }
+    // Near planes suited to the scale: depth precision of a 24-bit buffer
+    // goes as distance² / near, and the stencil techniques compare volume
+    // depths against it at every shadow boundary.
     s.camera_presets = vec![
         (
             "default".into(),
             Camera {
+                near: 0.5,
                 far: 300.0,
                 ..Camera::new(Vec3::new(30.0, 28.0, 48.0), Vec3::new(0.0, 0.0, 0.0))
             },
@@ -601,6 +605,7 @@ pub fn city() -> Scene {
         (
             "street".into(),
             Camera {
+                near: 0.5,
                 far: 300.0,
                 ..Camera::new(Vec3::new(1.0, 1.7, 30.0), Vec3::new(0.0, 3.0, 0.0))
             },
