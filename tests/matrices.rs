@@ -75,7 +75,7 @@ fn the_infinite_projection_keeps_points_at_infinity_inside_the_depth_range() {
         let c = infinite * view * d.extend(0.0);
         assert!(c.w > 0.0);
         let z = c.z / c.w;
-        assert!(z < 1.0 && z >= 1.0 - 2e-6, "{z}");
+        assert!((1.0 - 2e-6..1.0).contains(&z), "{z}");
     }
     // Far points approach that depth from below, monotonically.
     let mut last = 0.0;

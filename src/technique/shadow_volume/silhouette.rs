@@ -364,7 +364,7 @@ mod tests {
             let [_, idx] = volumes(&vm, &[plan], true);
             let pos = |i: u32| {
                 let p = vm.positions[(i / 2) as usize].truncate();
-                if i % 2 == 0 {
+                if i.is_multiple_of(2) {
                     p
                 } else {
                     p + (p - light.truncate()) * 3.0
