@@ -338,6 +338,21 @@ mod tests {
     }
 
     #[test]
+    fn a_flat_shaded_sphere_with_split_normals_welds_closed() {
+        let mut m = shapes::sphere(0.7, 24, 12);
+        m.unweld_flat();
+        assert_eq!(
+            m.positions.len(),
+            m.indices.len(),
+            "every triangle has its own vertices"
+        );
+        let a = Adjacency::of(&m);
+        assert!(a.positions.len() < m.positions.len() / 4);
+        assert!(a.is_closed(), "{}", a.summary());
+        assert_eq!((a.open_edges, a.non_manifold_edges), (0, 0));
+    }
+
+    #[test]
     fn round_shapes_with_seams_and_poles_weld_closed() {
         for m in [
             shapes::sphere(0.7, 32, 16),
