@@ -293,17 +293,7 @@ fn debug_views_show_frusta_the_map_and_texels_per_pixel() {
     let mut scene = builtin::by_name("floating").unwrap().unwrap();
     scene.lights = scene.light_preset("sun").unwrap();
     let gpu = gpu();
-    let choice = shadowlab::technique::resolve("shadow-map:hard").unwrap();
-    let mut hf = shadowlab::frame::HeadlessFrame::new(gpu, &scene, &[choice], 160, 90).unwrap();
-    hf.techniques[0].technique.enable_debug(true);
-    hf.render(
-        gpu,
-        &scene,
-        &scene.camera,
-        &scene.lights,
-        &Default::default(),
-    )
-    .unwrap();
+    let hf = frame_with_debug_views(&scene, "shadow-map:hard", 160, 90);
     let views = hf.techniques[0].technique.debug_views(gpu).unwrap();
     // A directional light: one box, twelve edges.
     assert_eq!(views.lines.len(), 12);

@@ -167,19 +167,7 @@ fn statistics_and_debug_views() {
     let gpu = gpu();
     let mut counters = vec![];
     for id in ["shadow-volume:zfail", "shadow-volume:zfail[extrusion=cpu]"] {
-        let choice = shadowlab::measure::parse_technique_list(id)
-            .unwrap()
-            .remove(0);
-        let mut hf = shadowlab::frame::HeadlessFrame::new(gpu, &scene, &[choice], 160, 90).unwrap();
-        hf.techniques[0].technique.enable_debug(true);
-        hf.render(
-            gpu,
-            &scene,
-            &scene.camera,
-            &scene.lights,
-            &Default::default(),
-        )
-        .unwrap();
+        let hf = frame_with_debug_views(&scene, id, 160, 90);
         let t = &hf.techniques[0].technique;
         let c: std::collections::HashMap<&str, f64> = t.counters().into_iter().collect();
         assert!(c["silhouette_edges"] > 10.0, "{c:?}");

@@ -207,6 +207,52 @@ pub fn pipeline_layout(
         })
 }
 
+/// Depth-stencil state of a pass over the frame's depth: read only,
+/// compare Always, with `stencil` (default: untouched).
+pub fn frame_depth_read(stencil: wgpu::StencilState) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: crate::renderer::DEPTH_FORMAT,
+        depth_write_enabled: Some(false),
+        depth_compare: Some(wgpu::CompareFunction::Always),
+        stencil,
+        bias: Default::default(),
+    }
+}
+
+/// A full-screen pipeline (`vs_fullscreen` of common.wgsl, one triangle)
+/// running `fs` of `module` into `targets`.
+pub fn fullscreen_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    fs: &str,
+    targets: &[Option<wgpu::ColorTargetState>],
+    depth_stencil: Option<wgpu::DepthStencilState>,
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_fullscreen"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(fs),
+            compilation_options: Default::default(),
+            targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 /// Begins a render pass on the light's mask layer, cleared to 1 (lit), with
 /// the frame's depth (read) and a cleared stencil.
 pub fn mask_pass<'e>(
@@ -224,10 +270,23 @@ pub fn mask_pass_with<'e>(
     label: &str,
     load: wgpu::LoadOp<wgpu::Color>,
 ) -> wgpu::RenderPass<'e> {
+    pass_over_frame_depth(encoder, ctx, label, ctx.target, load, true)
+}
+
+/// A render pass into `view` over the frame's depth (loaded and kept),
+/// its stencil cleared to 0 when `clear_stencil`, else not attached.
+pub fn pass_over_frame_depth<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    ctx: &MaskContext,
+    label: &str,
+    view: &wgpu::TextureView,
+    load: wgpu::LoadOp<wgpu::Color>,
+    clear_stencil: bool,
+) -> wgpu::RenderPass<'e> {
     encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),
         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: ctx.target,
+            view,
             depth_slice: None,
             resolve_target: None,
             ops: wgpu::Operations {
@@ -241,7 +300,7 @@ pub fn mask_pass_with<'e>(
                 load: wgpu::LoadOp::Load,
                 store: wgpu::StoreOp::Store,
             }),
-            stencil_ops: Some(wgpu::Operations {
+            stencil_ops: clear_stencil.then_some(wgpu::Operations {
                 load: wgpu::LoadOp::Clear(0),
                 store: wgpu::StoreOp::Store,
             }),

@@ -32,6 +32,26 @@ pub fn render(scene: &Scene, technique_id: &str, w: u32, h: u32) -> FrameImages 
     frame::read_back(gpu, &hf.frame, scene.lights.len()).unwrap()
 }
 
+/// One frame of `technique` (an id with optional `[k=v]` settings) with
+/// its debug views enabled, rendered from the scene's camera and lights.
+pub fn frame_with_debug_views(scene: &Scene, technique: &str, w: u32, h: u32) -> HeadlessFrame {
+    let gpu = gpu();
+    let choice = shadowlab::measure::parse_technique_list(technique)
+        .unwrap()
+        .remove(0);
+    let mut hf = HeadlessFrame::new(gpu, scene, &[choice], w, h).unwrap();
+    hf.techniques[0].technique.enable_debug(true);
+    hf.render(
+        gpu,
+        scene,
+        &scene.camera,
+        &scene.lights,
+        &Default::default(),
+    )
+    .unwrap();
+    hf
+}
+
 /// Runs the `shadowlab` binary.
 pub fn shadowlab(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_shadowlab"))

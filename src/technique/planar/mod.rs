@@ -238,19 +238,13 @@ impl PlanarShadows {
             "vs_fullscreen",
             "fs_tag",
             &[],
-            wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::Always),
-                stencil: stencil(
-                    stencil_face(
-                        wgpu::CompareFunction::Always,
-                        wgpu::StencilOperation::Replace,
-                    ),
-                    0xff,
+            super::frame_depth_read(stencil(
+                stencil_face(
+                    wgpu::CompareFunction::Always,
+                    wgpu::StencilOperation::Replace,
                 ),
-                bias: Default::default(),
-            },
+                0xff,
+            )),
             wgpu::ColorTargetState {
                 format: MASK_FORMAT,
                 blend: None,

@@ -9,7 +9,7 @@
 
 use super::light_space::{LightFrustum, fit_bounds};
 use super::{Family, MaskContext, ParamSpec, Preset, ShadowTechnique};
-use crate::renderer::{DEPTH_FORMAT, MASK_FORMAT, VERTEX_LAYOUT};
+use crate::renderer::{MASK_FORMAT, VERTEX_LAYOUT};
 use anyhow::{Result, bail};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec4};
@@ -135,45 +135,27 @@ impl ProjectiveShadows {
             multiview_mask: None,
             cache: None,
         });
-        let project_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("projective project"),
-            layout: Some(&pl),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::Always),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_project"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: MASK_FORMAT,
-                    // Multiply: several casters combine.
-                    blend: Some(wgpu::BlendState {
-                        color: wgpu::BlendComponent {
-                            src_factor: wgpu::BlendFactor::Zero,
-                            dst_factor: wgpu::BlendFactor::Src,
-                            operation: wgpu::BlendOperation::Add,
-                        },
-                        alpha: wgpu::BlendComponent::REPLACE,
-                    }),
-                    write_mask: wgpu::ColorWrites::RED,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let project_pipeline = super::fullscreen_pipeline(
+            device,
+            "projective project",
+            &pl,
+            &module,
+            "fs_project",
+            &[Some(wgpu::ColorTargetState {
+                format: MASK_FORMAT,
+                // Multiply: several casters combine.
+                blend: Some(wgpu::BlendState {
+                    color: wgpu::BlendComponent {
+                        src_factor: wgpu::BlendFactor::Zero,
+                        dst_factor: wgpu::BlendFactor::Src,
+                        operation: wgpu::BlendOperation::Add,
+                    },
+                    alpha: wgpu::BlendComponent::REPLACE,
+                }),
+                write_mask: wgpu::ColorWrites::RED,
+            })],
+            Some(super::frame_depth_read(Default::default())),
+        );
         let placeholder = crate::renderer::texture_2d(
             device,
             "projective placeholder",

@@ -9,7 +9,7 @@
 //! rotated Vogel disk, PCSS, or the documents' variable-width PCF.
 
 use super::{Family, MaskContext, ParamSpec, Preset, ShadowTechnique};
-use crate::renderer::{DEPTH_FORMAT, MASK_FORMAT, VERTEX_LAYOUT};
+use crate::renderer::{MASK_FORMAT, VERTEX_LAYOUT};
 use crate::scene::{Aabb, Camera, Light, LightType};
 use anyhow::{Result, bail};
 use bytemuck::{Pod, Zeroable};
@@ -657,35 +657,17 @@ impl ShadowMapTechnique {
                           fs: &str,
                           target: wgpu::ColorTargetState,
                           depth: Option<wgpu::DepthStencilState>| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_fullscreen"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: Default::default(),
-                depth_stencil: depth,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(fs),
-                    compilation_options: Default::default(),
-                    targets: &[Some(target.clone())],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            super::fullscreen_pipeline(
+                device,
+                label,
+                &pipeline_layout,
+                &module,
+                fs,
+                &[Some(target)],
+                depth,
+            )
         };
-        let mask_depth = Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(false),
-            depth_compare: Some(wgpu::CompareFunction::Always),
-            stencil: Default::default(),
-            bias: Default::default(),
-        });
+        let mask_depth = Some(super::frame_depth_read(Default::default()));
         let lookup = fullscreen(
             "shadow map lookup",
             "fs_lookup",
@@ -710,30 +692,18 @@ impl ShadowMapTechnique {
             mask_depth,
         );
         let blur = fullscreen("shadow map blur", "fs_blur", MOMENT_FORMAT.into(), None);
-        let debug_frame_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("shadow map debug frame"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_debug_frame"),
-                compilation_options: Default::default(),
-                targets: &[
-                    Some(wgpu::TextureFormat::Rgba8Unorm.into()),
-                    Some(wgpu::TextureFormat::Rgba8Unorm.into()),
-                ],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let debug_frame_pipeline = super::fullscreen_pipeline(
+            device,
+            "shadow map debug frame",
+            &pipeline_layout,
+            &module,
+            "fs_debug_frame",
+            &[
+                Some(wgpu::TextureFormat::Rgba8Unorm.into()),
+                Some(wgpu::TextureFormat::Rgba8Unorm.into()),
+            ],
+            None,
+        );
         let debug_pipeline = fullscreen(
             "shadow map debug",
             "fs_debug_map",

@@ -400,33 +400,15 @@ impl ShadowVolumeRenderer {
         let pipeline_layout = super::pipeline_layout(gpu, "shadow volume", &layout);
         let fullscreen =
             |label: &str, fs: &str, target: wgpu::ColorTargetState, stencil: wgpu::StencilState| {
-                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(&pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("vs_fullscreen"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    primitive: Default::default(),
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: DEPTH_FORMAT,
-                        depth_write_enabled: Some(false),
-                        depth_compare: Some(wgpu::CompareFunction::Always),
-                        stencil,
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some(fs),
-                        compilation_options: Default::default(),
-                        targets: &[Some(target)],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
+                super::fullscreen_pipeline(
+                    device,
+                    label,
+                    &pipeline_layout,
+                    &module,
+                    fs,
+                    &[Some(target)],
+                    Some(super::frame_depth_read(stencil)),
+                )
             };
         let not_zero = wgpu::StencilFaceState {
             compare: wgpu::CompareFunction::NotEqual,
@@ -1096,27 +1078,14 @@ impl ShadowTechnique for ShadowVolumeRenderer {
                 .as_ref()
                 .expect("made above")
                 .create_view(&Default::default());
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("shadow volume debug"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &ctx.frame.depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                ..Default::default()
-            });
+            let mut pass = super::pass_over_frame_depth(
+                encoder,
+                ctx,
+                "shadow volume debug",
+                &view,
+                wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                false,
+            );
             pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
             pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
             pass.set_bind_group(2, &group, &[]);
