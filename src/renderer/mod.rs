@@ -376,6 +376,24 @@ pub fn uniform_entry(
     }
 }
 
+/// Layout entry of a storage buffer.
+pub fn storage_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    read_only: bool,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
 fn texture_entry(
     binding: u32,
     dim: wgpu::TextureViewDimension,
@@ -403,16 +421,11 @@ pub fn shared_layouts(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::Bi
     });
     let objects = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("objects"),
-        entries: &[wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: true },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        }],
+        entries: &[storage_entry(
+            0,
+            wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
+            true,
+        )],
     });
     (frame, objects)
 }

@@ -1193,7 +1193,6 @@ impl ShadowTechnique for ShadowMapTechnique {
                 }
             }
             if stage != 0 {
-                crate::renderer::clear_mask(encoder, ctx.target, 1.0);
                 continue;
             }
             // One sample writes the mask; several add 1/N each onto a cleared mask.
@@ -1219,6 +1218,10 @@ impl ShadowTechnique for ShadowMapTechnique {
             pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
             pass.set_bind_group(2, &lookup_group, &[slot(si, 0, 0)]);
             pass.draw(0..3, 0..1);
+        }
+        if stage != 0 {
+            // The maps alone: no lookup, a lit mask.
+            crate::renderer::clear_mask(encoder, ctx.target, 1.0);
         }
         if let Some(t) = &self.debug {
             // Face 0 of the (last) map, for the viewer.

@@ -244,23 +244,6 @@ pub struct ShadowVolumeRenderer {
     silhouette_lines: Vec<DebugLine>,
 }
 
-fn storage_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    read_only: bool,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
 fn buffer(
     device: &wgpu::Device,
     label: &str,
@@ -275,20 +258,23 @@ fn buffer(
     })
 }
 
+/// A buffer holding `data`, zero-padded to the 16 bytes a binding needs
+/// (an empty scene has no casters).
 fn buffer_with(
     gpu: &GpuContext,
     label: &str,
     data: &[u8],
     usage: wgpu::BufferUsages,
 ) -> wgpu::Buffer {
-    let b = buffer(
-        &gpu.device,
-        label,
-        data.len() as u64,
-        usage | wgpu::BufferUsages::COPY_DST,
-    );
-    gpu.queue.write_buffer(&b, 0, data);
-    b
+    use wgpu::util::DeviceExt;
+    let mut contents = data.to_vec();
+    contents.resize(data.len().max(16), 0);
+    gpu.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: &contents,
+            usage,
+        })
 }
 
 /// The stencil operations of one volume pipeline.
@@ -391,7 +377,7 @@ impl ShadowVolumeRenderer {
             label: Some("shadow volume"),
             entries: &[
                 crate::renderer::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, false),
-                storage_entry(1, wgpu::ShaderStages::VERTEX, true),
+                crate::renderer::storage_entry(1, wgpu::ShaderStages::VERTEX, true),
                 super::gbuffer_entry(2),
             ],
         });
@@ -435,11 +421,11 @@ impl ShadowVolumeRenderer {
             label: Some("shadow volume extrusion"),
             entries: &[
                 crate::renderer::uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
-                storage_entry(1, wgpu::ShaderStages::COMPUTE, true),
-                storage_entry(2, wgpu::ShaderStages::COMPUTE, true),
-                storage_entry(3, wgpu::ShaderStages::COMPUTE, true),
-                storage_entry(4, wgpu::ShaderStages::COMPUTE, false),
-                storage_entry(5, wgpu::ShaderStages::COMPUTE, false),
+                crate::renderer::storage_entry(1, wgpu::ShaderStages::COMPUTE, true),
+                crate::renderer::storage_entry(2, wgpu::ShaderStages::COMPUTE, true),
+                crate::renderer::storage_entry(3, wgpu::ShaderStages::COMPUTE, true),
+                crate::renderer::storage_entry(4, wgpu::ShaderStages::COMPUTE, false),
+                crate::renderer::storage_entry(5, wgpu::ShaderStages::COMPUTE, false),
             ],
         });
         let extrude_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -790,7 +776,7 @@ impl ShadowVolumeRenderer {
                 }
             }
         } else {
-            let (lists, silhouettes) = silhouette::volumes_counted(vm, plans, dark_cap);
+            let (lists, silhouettes) = silhouette::volumes(vm, plans, dark_cap);
             for (i, list) in lists.iter().enumerate() {
                 args.lists[i].index_count = list.len() as u32;
                 gpu.queue.write_buffer(
@@ -1168,20 +1154,15 @@ fn silhouette_lines(vm: &VolumeMesh, plans: &[CasterPlan]) -> Vec<DebugLine> {
         if plan.kind != VolumeKind::Silhouette {
             continue;
         }
-        let lit = |f: u32| (vm.faces[f as usize].plane.dot(plan.light) > 0.0) as i32;
         let world = |v: u32| {
             c.model
                 .transform_point3(vm.positions[v as usize].truncate())
         };
-        for e in &vm.edges[c.edges.clone()] {
-            if e.multiplicity(lit) != 0 {
-                lines.push(DebugLine {
-                    a: world(e.a),
-                    b: world(e.b),
-                    color: [0.2, 1.0, 0.3, 1.0],
-                });
-            }
-        }
+        lines.extend(plan.extruded_edges(vm, c).map(|(e, _)| DebugLine {
+            a: world(e.a),
+            b: world(e.b),
+            color: [0.2, 1.0, 0.3, 1.0],
+        }));
     }
     lines
 }

@@ -122,9 +122,47 @@ pub struct CasterPlan {
 
 impl CasterPlan {
     /// Light and dark caps are needed to count a volume with z-fail; a
-    /// per-triangle volume always has them (it must be closed on its own).
+    /// per-triangle volume always has them (it must be closed on its own);
+    /// a skipped caster has none.
     pub fn caps(&self) -> bool {
-        self.kind == VolumeKind::Triangles || self.zfail
+        match self.kind {
+            VolumeKind::Skip => false,
+            VolumeKind::Silhouette => self.zfail,
+            VolumeKind::Triangles => true,
+        }
+    }
+
+    /// True where face `f` faces the light (`P·L > 0`).
+    pub fn lit(&self, vm: &VolumeMesh, f: u32) -> bool {
+        vm.faces[f as usize].plane.dot(self.light) > 0.0
+    }
+
+    /// Face `f`'s weight in the edge multiplicity: 1 when lit; when unlit,
+    /// 0 for silhouettes and −1 for per-triangle volumes (turned to face the
+    /// light).
+    fn weight(&self, vm: &VolumeMesh, f: u32) -> i32 {
+        match (self.kind, self.lit(vm, f)) {
+            (_, true) => 1,
+            (VolumeKind::Triangles, false) => -1,
+            _ => 0,
+        }
+    }
+
+    /// The caster's edges that get side quads, with their multiplicity.
+    pub fn extruded_edges<'a>(
+        &'a self,
+        vm: &'a VolumeMesh,
+        c: &Caster,
+    ) -> impl Iterator<Item = (&'a Edge, i32)> + 'a {
+        let edges = if self.kind == VolumeKind::Skip {
+            &vm.edges[..0]
+        } else {
+            &vm.edges[c.edges.clone()]
+        };
+        edges
+            .iter()
+            .map(|e| (e, e.multiplicity(|f| self.weight(vm, f))))
+            .filter(|&(_, m)| m != 0)
     }
 
     /// Largest index count this caster's volume can take.
@@ -245,20 +283,10 @@ pub fn caster_volume(
     plan: &CasterPlan,
     dark_cap: bool,
 ) -> (Vec<u32>, usize) {
-    let lit = |f: u32| vm.faces[f as usize].plane.dot(plan.light) > 0.0;
-    let weight = |f: u32| match (plan.kind, lit(f)) {
-        (_, true) => 1,
-        (VolumeKind::Triangles, false) => -1,
-        _ => 0,
-    };
     let mut out = vec![];
     let mut silhouettes = 0;
-    if plan.kind == VolumeKind::Skip {
-        return (out, 0);
-    }
-    for e in &vm.edges[c.edges.clone()] {
-        let m = e.multiplicity(weight);
-        if m != 0 && plan.kind == VolumeKind::Silhouette {
+    for (e, m) in plan.extruded_edges(vm, c) {
+        if plan.kind == VolumeKind::Silhouette {
             silhouettes += 1;
         }
         let (u, v) = if m > 0 { (e.a, e.b) } else { (e.b, e.a) };
@@ -269,7 +297,7 @@ pub fn caster_volume(
     if plan.caps() {
         for f in c.faces.clone() {
             let [i, j, k] = vm.faces[f].v;
-            match (plan.kind, lit(f as u32)) {
+            match (plan.kind, plan.lit(vm, f as u32)) {
                 (_, true) => caps(&mut out, [i, j, k], dark_cap),
                 (VolumeKind::Triangles, false) => caps(&mut out, [i, k, j], dark_cap),
                 _ => {}
@@ -281,16 +309,7 @@ pub fn caster_volume(
 
 /// The CPU extrusion: z-pass and z-fail index lists and the silhouette edge
 /// count, casters in parallel.
-pub fn volumes(vm: &VolumeMesh, plans: &[CasterPlan], dark_cap: bool) -> [Vec<u32>; 2] {
-    volumes_counted(vm, plans, dark_cap).0
-}
-
-/// [`volumes`] with the silhouette edge count.
-pub fn volumes_counted(
-    vm: &VolumeMesh,
-    plans: &[CasterPlan],
-    dark_cap: bool,
-) -> ([Vec<u32>; 2], usize) {
+pub fn volumes(vm: &VolumeMesh, plans: &[CasterPlan], dark_cap: bool) -> ([Vec<u32>; 2], usize) {
     let parts: Vec<(Vec<u32>, usize)> = vm
         .casters
         .par_iter()
@@ -330,7 +349,7 @@ mod tests {
             zfail: false,
             light: Vec4::new(0.0, 10.0, 0.0, 1.0),
         };
-        let ([zpass, zfail], silhouettes) = volumes_counted(&vm, &[plan], true);
+        let ([zpass, zfail], silhouettes) = volumes(&vm, &[plan], true);
         // Only the top face is lit: its 4 edges (2 triangles) are the silhouette.
         assert_eq!(silhouettes, 4);
         assert_eq!(zpass.len(), 4 * 6);
@@ -339,7 +358,7 @@ mod tests {
             zfail: true,
             ..plan
         };
-        let [_, zfail] = volumes(&vm, &[zfail_plan], true);
+        let ([_, zfail], _) = volumes(&vm, &[zfail_plan], true);
         assert_eq!(
             zfail.len(),
             4 * 6 + 2 * 6,
@@ -361,7 +380,7 @@ mod tests {
                 zfail: true,
                 light,
             };
-            let [_, idx] = volumes(&vm, &[plan], true);
+            let ([_, idx], _) = volumes(&vm, &[plan], true);
             let pos = |i: u32| {
                 let p = vm.positions[(i / 2) as usize].truncate();
                 if i.is_multiple_of(2) {
