@@ -180,6 +180,12 @@ pub struct ViewArgs {
     /// Do not draw the light icons.
     #[arg(long)]
     pub no_icons: bool,
+    /// GPU memory budget in MiB: a frame or a technique's shadow resources
+    /// (maps × faces × format × moments) that would take more are refused
+    /// with an error before anything is allocated.
+    #[arg(long, value_name = "MIB", default_value_t = crate::gpu::DEFAULT_MEMORY_BUDGET_MIB,
+          value_parser = clap::value_parser!(u64).range(1..=(1u64 << 24)))]
+    pub memory_budget: u64,
 }
 
 #[derive(Args)]
@@ -279,6 +285,13 @@ impl ViewArgs {
         Ok((scene, camera, lights))
     }
 
+    /// A headless GPU context on the chosen backend with the memory budget.
+    pub fn gpu(&self) -> Result<GpuContext> {
+        let mut gpu = GpuContext::new(self.backend.as_deref())?;
+        gpu.memory_budget = self.memory_budget << 20;
+        Ok(gpu)
+    }
+
     pub fn settings(&self) -> RenderSettings {
         RenderSettings {
             shading: self.shading,
@@ -291,9 +304,10 @@ impl ViewArgs {
     }
 }
 
-/// Resolves a technique id and applies `--set` values.
+/// Resolves a technique id (with optional `[key=value,...]`) and applies
+/// `--set` values.
 pub fn technique_choice(id: &str, set: &[String]) -> Result<TechniqueChoice> {
-    let mut c = technique::resolve(id)?;
+    let mut c = technique::parse_choice(id)?;
     technique::apply_settings(&mut c.params, set)?;
     Ok(c)
 }
@@ -419,7 +433,7 @@ fn compare(a: CompareArgs) -> Result<()> {
     let [reference] = reference.as_slice() else {
         bail!("--reference takes one technique, got '{}'", a.reference);
     };
-    let gpu = GpuContext::new(a.view.backend.as_deref())?;
+    let gpu = a.view.gpu()?;
     let rows = measure::compare::run(
         &gpu,
         &scene,
@@ -453,7 +467,7 @@ fn compare(a: CompareArgs) -> Result<()> {
 fn bench(a: BenchArgs) -> Result<()> {
     let (scene, camera, lights) = a.view.resolve()?;
     let techniques = measure::parse_technique_list(&a.techniques)?;
-    let gpu = GpuContext::new(a.view.backend.as_deref())?;
+    let gpu = a.view.gpu()?;
     let rows = measure::bench::run(
         &gpu,
         &scene,
@@ -489,7 +503,7 @@ fn render(a: RenderArgs) -> Result<()> {
     let (scene, camera, lights) = a.view.resolve()?;
     let choice = technique_choice(&a.technique, &a.set)?;
     let t_scene = t0.elapsed();
-    let gpu = GpuContext::new(a.view.backend.as_deref())?;
+    let gpu = a.view.gpu()?;
     let t_gpu = t0.elapsed() - t_scene;
     let (w, h) = a.view.size;
     let choices = vec![choice; lights.len().max(1)];

@@ -16,6 +16,12 @@ pub struct NoAdapter {
     pub backends: String,
 }
 
+/// Default of `--memory-budget`: the most GPU memory, in MiB, that one
+/// frame's targets or one technique instance's shadow resources may take.
+/// wgpu cannot query a device's memory; 4 GiB fits every GPU we target and
+/// a 24 GiB machine running lavapipe.
+pub const DEFAULT_MEMORY_BUDGET_MIB: u64 = 4096;
+
 pub struct GpuContext {
     pub instance: wgpu::Instance,
     pub adapter: wgpu::Adapter,
@@ -28,6 +34,11 @@ pub struct GpuContext {
     pub pipeline_statistics: bool,
     /// `unclipped_depth` (depth clamp) is available.
     pub depth_clamp: bool,
+    /// Bytes one frame's targets or one technique instance's resources may
+    /// take ([`GpuContext::check_allocation`]); `--memory-budget` sets it.
+    pub memory_budget: u64,
+    /// Set by the device-lost callback: why the device was lost.
+    lost: std::sync::Arc<std::sync::Mutex<Option<String>>>,
 }
 
 /// Parses a backend name as accepted by `--backend`.
@@ -87,16 +98,36 @@ impl GpuContext {
 
     /// Runs `f` inside validation and out-of-memory error scopes and turns
     /// a captured wgpu error into an `Err` naming `what`.
+    /// A lost device (driver reset, GPU removed, or destroyed) is an error
+    /// too, before and after `f`.
     pub fn checked<T>(&self, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+        self.check_not_lost(what)?;
         let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let r = f();
         let v = pollster::block_on(validation.pop());
         let o = pollster::block_on(oom.pop());
-        if let Some(e) = v.or(o) {
+        self.check_not_lost(what)?;
+        if let Some(e) = o {
+            bail!(
+                "{what}: the GPU is out of memory ({e}); choose smaller sizes or a lower --memory-budget"
+            );
+        }
+        if let Some(e) = v {
             bail!("{what}: {e}");
         }
         r
+    }
+
+    /// An error once the device has been lost.
+    pub fn check_not_lost(&self, what: &str) -> Result<()> {
+        let lost = self.lost.lock().map(|l| l.clone()).unwrap_or(None);
+        match lost {
+            Some(why) => bail!(
+                "{what}: the GPU device was lost ({why}); restart shadowlab (a driver reset or a removed GPU causes this)"
+            ),
+            None => Ok(()),
+        }
     }
 
     /// Creates the context on `instance`, with an adapter that can present to
@@ -133,6 +164,14 @@ impl GpuContext {
         device.on_uncaptured_error(std::sync::Arc::new(|e: wgpu::Error| {
             log::error!("wgpu: {e}");
         }));
+        let lost = std::sync::Arc::new(std::sync::Mutex::new(None));
+        let lost_writer = lost.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            log::error!("GPU device lost ({reason:?}): {message}");
+            if let Ok(mut l) = lost_writer.lock() {
+                *l = Some(format!("{reason:?}: {message}"));
+            }
+        });
         log::info!(
             "adapter: {} ({:?}, {:?}, driver {} {})",
             info.name,
@@ -147,6 +186,8 @@ impl GpuContext {
             ),
             pipeline_statistics: features.contains(wgpu::Features::PIPELINE_STATISTICS_QUERY),
             depth_clamp: features.contains(wgpu::Features::DEPTH_CLIP_CONTROL),
+            memory_budget: DEFAULT_MEMORY_BUDGET_MIB << 20,
+            lost,
             instance,
             adapter,
             device,
@@ -161,6 +202,40 @@ impl GpuContext {
             "{} ({:?}, {:?})",
             self.info.name, self.info.device_type, self.info.backend
         )
+    }
+
+    /// Refuses, before anything is allocated, a set of `layers` square or
+    /// rectangular 2D textures of `width × height` texels taking `bytes` in
+    /// all, when a side or the layer count exceeds the device's limits or the
+    /// bytes exceed the memory budget. `what` names the resource and the
+    /// parameter that sets its size.
+    pub fn check_allocation(
+        &self,
+        what: &str,
+        (width, height, layers): (u32, u32, u32),
+        bytes: u64,
+    ) -> Result<()> {
+        let limits = self.device.limits();
+        let max = limits.max_texture_dimension_2d;
+        if width > max || height > max {
+            bail!(
+                "{what}: {width}x{height} texels exceed the device's largest texture ({max}x{max})"
+            );
+        }
+        if layers > limits.max_texture_array_layers {
+            bail!(
+                "{what}: {layers} layers exceed the device's limit of {}",
+                limits.max_texture_array_layers
+            );
+        }
+        if bytes > self.memory_budget {
+            bail!(
+                "{what}: needs {:.1} MiB, more than the memory budget of {} MiB (raise it with --memory-budget MIB, or choose a smaller size)",
+                bytes as f64 / (1u64 << 20) as f64,
+                self.memory_budget >> 20
+            );
+        }
+        Ok(())
     }
 
     /// Largest 2D texture side the device allows.

@@ -166,11 +166,34 @@ fn a_scene_without_casters_is_fully_lit() {
     assert!(mask.iter().all(|&v| v == 1.0));
 }
 
+/// Reads a CSV file written by `compare` or `bench` into header → values rows.
+fn read_csv(path: &std::path::Path) -> Vec<std::collections::HashMap<String, String>> {
+    let mut r = csv::Reader::from_path(path).unwrap();
+    let header = r.headers().unwrap().clone();
+    r.records()
+        .map(|rec| {
+            let rec = rec.unwrap();
+            header
+                .iter()
+                .zip(rec.iter())
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect()
+        })
+        .collect()
+}
+
+fn num(row: &std::collections::HashMap<String, String>, key: &str) -> f64 {
+    row[key]
+        .parse()
+        .unwrap_or_else(|_| panic!("{key} = '{}'", row[key]))
+}
+
 #[test]
 fn compare_none_reports_the_reference_shadow_as_false_lit() {
     let scene = shadowlab::scene::builtin::by_name("room").unwrap().unwrap();
     let out = tmpdir("compare");
-    let none = measure::parse_technique_list("none").unwrap();
+    // The second label has commas inside brackets: the CSV must quote it.
+    let list = measure::parse_technique_list("none,raytraced[samples=64,offset_ulps=100]").unwrap();
     let reference = technique::resolve("raytraced").unwrap();
     let rows = measure::compare::run(
         gpu(),
@@ -178,12 +201,12 @@ fn compare_none_reports_the_reference_shadow_as_false_lit() {
         &scene.camera,
         &scene.lights,
         (160, 90),
-        &none,
+        &list,
         &reference,
         &out,
     )
     .unwrap();
-    assert_eq!(rows.len(), 1);
+    assert_eq!(rows.len(), 2);
     let m = &rows[0].mask;
     assert!(
         m.reference_shadowed_pct > 1.0,
@@ -192,20 +215,42 @@ fn compare_none_reports_the_reference_shadow_as_false_lit() {
     );
     assert_eq!(m.all.false_shadow_pct, 0.0);
     assert!((m.all.false_lit_pct - m.reference_shadowed_pct).abs() < 1e-9);
-    assert!(rows[0].flip.mean > 0.0);
+    assert!((m.all.total_pct - m.edge.total_pct - m.interior.total_pct).abs() < 1e-9);
+    assert!(m.mean_abs_error > 0.0 && rows[0].flip.mean > 0.0);
+    // The reference against itself (hard light: samples do not matter, a
+    // larger offset moves few pixels): almost no mismatch.
+    let r = &rows[1].mask;
+    assert!(r.all.total_pct < 0.05 * m.all.total_pct, "{r:?}");
     for f in [
         "quality.md",
-        "quality.csv",
-        "quality.json",
         "heatmap-none_default.png",
         "none_default.png",
         "reference/image.png",
     ] {
         assert!(out.join(f).exists(), "{f}");
     }
+    // The CSV and JSON carry the same numbers as the rows.
+    let csv = read_csv(&out.join("quality.csv"));
+    assert_eq!(csv.len(), 2);
+    assert_eq!(csv[0]["technique"], "none:default");
+    assert_eq!(
+        csv[1]["technique"],
+        "raytraced:default[samples=64,offset_ulps=100]"
+    );
+    for (c, row) in csv.iter().zip(&rows) {
+        assert_eq!(
+            num(c, "considered_pixels") as usize,
+            row.mask.considered_pixels
+        );
+        assert!((num(c, "false_lit_pct") - row.mask.all.false_lit_pct).abs() < 1e-4);
+        assert!((num(c, "total_pct") - row.mask.all.total_pct).abs() < 1e-4);
+        assert!((num(c, "mean_abs_error") - row.mask.mean_abs_error).abs() < 1e-5);
+    }
     let j: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("quality.json")).unwrap()).unwrap();
     assert_eq!(j["rows"][0]["technique"], "none:default");
+    let json_total = j["rows"][0]["mask"]["all"]["total_pct"].as_f64().unwrap();
+    assert!((json_total - m.all.total_pct).abs() < 1e-9, "{json_total}");
 }
 
 #[test]
@@ -214,7 +259,7 @@ fn bench_writes_ratios_to_none() {
         .unwrap()
         .unwrap();
     let out = tmpdir("bench");
-    let list = measure::parse_technique_list("raytraced").unwrap();
+    let list = measure::parse_technique_list("raytraced,shadow-map[size=256,filter=hard]").unwrap();
     let rows = measure::bench::run(
         gpu(),
         &scene,
@@ -227,17 +272,55 @@ fn bench_writes_ratios_to_none() {
         &out,
     )
     .unwrap();
-    assert_eq!(rows.len(), 2, "none is added");
+    assert_eq!(rows.len(), 3, "none is added");
     assert_eq!(rows[0].technique, "none:default");
-    assert!((rows[0].ratio_to_none - 1.0).abs() < 1e-12);
-    assert!(rows[1].frame_ms.median > 0.0 && rows[1].shadow_resource_bytes > 0);
-    assert!(
-        rows[1]
-            .counters
-            .iter()
-            .any(|(k, v)| k == "rays" && *v > 0.0)
-    );
-    for f in ["bench.md", "bench.csv", "bench.json"] {
-        assert!(out.join(f).exists(), "{f}");
+    let none = rows[0].frame_ms.median;
+    for r in &rows {
+        let f = &r.frame_ms;
+        assert!(0.0 < f.p5 && f.p5 <= f.median && f.median <= f.p95, "{r:?}");
+        assert!(r.masks_ms.median <= f.median, "{r:?}");
+        assert!(
+            (r.ratio_to_none - f.median / none).abs() < 1e-12,
+            "{}: ratio {} vs {} / {none}",
+            r.technique,
+            r.ratio_to_none,
+            f.median
+        );
+        assert_eq!(r.triangles_drawn, scene.triangle_count());
     }
+    // One shadow ray per covered pixel for the hard light.
+    let rays = rows[1]
+        .counters
+        .iter()
+        .find(|(k, _)| k == "rays")
+        .map(|(_, v)| *v)
+        .unwrap();
+    assert!(rays > 0.3 * 96.0 * 54.0 && rays <= 96.0 * 54.0, "{rays}");
+    assert!(rows[1].shadow_resource_bytes > 0);
+    // One 256² d24 map per face of the point light's cube (or one map).
+    assert!(
+        rows[2].shadow_resource_bytes % (256 * 256 * 4) == 0 && rows[2].shadow_resource_bytes > 0,
+        "{}",
+        rows[2].shadow_resource_bytes
+    );
+    assert!(out.join("bench.md").exists());
+    let csv = read_csv(&out.join("bench.csv"));
+    assert_eq!(csv.len(), 3);
+    assert_eq!(csv[2]["technique"], "shadow-map:pcf[filter=hard,size=256]");
+    for (c, r) in csv.iter().zip(&rows) {
+        assert_eq!(c["technique"], r.technique);
+        assert!((num(c, "frame_ms_median") - r.frame_ms.median).abs() < 1e-3);
+        assert!((num(c, "ratio_to_none") - r.ratio_to_none).abs() < 1e-4);
+        assert_eq!(
+            num(c, "shadow_resource_bytes") as u64,
+            r.shadow_resource_bytes
+        );
+    }
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("bench.json")).unwrap()).unwrap();
+    assert_eq!(j["rows"].as_array().unwrap().len(), 3);
+    assert_eq!(
+        j["rows"][1]["ratio_to_none"].as_f64().unwrap(),
+        rows[1].ratio_to_none
+    );
 }

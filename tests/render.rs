@@ -45,15 +45,19 @@ fn every_builtin_scene_renders_a_non_trivial_image() {
     }
 }
 
-/// Compares against `tests/golden/NAME.png`; set SHADOWLAB_BLESS=1 to
-/// rewrite the golden files.
+/// Compares against `tests/golden/NAME.png`. With SHADOWLAB_BLESS=1 it
+/// rewrites the golden file and then fails, so that a blessing run never
+/// counts as a pass.
 fn check_golden(name: &str, rgba: &[u8], w: u32, h: u32) {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/golden/{name}.png"));
     if std::env::var_os("SHADOWLAB_BLESS").is_some() {
         std::fs::create_dir_all(path.parent().unwrap()).unwrap();
         image::save_buffer(&path, rgba, w, h, image::ExtendedColorType::Rgba8).unwrap();
-        return;
+        panic!(
+            "blessed {}; run again without SHADOWLAB_BLESS to test",
+            path.display()
+        );
     }
     let golden = image::open(&path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -81,6 +85,31 @@ fn golden_images_match() {
         let img = render(&scene, "none", 256, 144);
         check_golden(name, &img.color, 256, 144);
     }
+}
+
+/// One golden image per technique family (its default preset) on `room`
+/// under the spot light, where every family draws a visible shadow.
+#[test]
+fn golden_images_of_every_family_match() {
+    let mut scene = builtin::by_name("room").unwrap().unwrap();
+    scene.lights = scene.light_preset("spot").unwrap();
+    let mut blessed = vec![];
+    for family in shadowlab::technique::FAMILIES {
+        let img = render(&scene, family.id, 256, 144);
+        if family.id != "none" {
+            let shadowed = img.masks[0]
+                .iter()
+                .zip(&img.coverage)
+                .filter(|&(&v, &c)| c && v < 0.5)
+                .count();
+            assert!(shadowed > 100, "{}: {shadowed} shadowed pixels", family.id);
+        }
+        let name = format!("room-spot-{}", family.id);
+        if std::panic::catch_unwind(|| check_golden(&name, &img.color, 256, 144)).is_err() {
+            blessed.push(name);
+        }
+    }
+    assert!(blessed.is_empty(), "golden images differ: {blessed:?}");
 }
 
 #[test]
@@ -157,7 +186,7 @@ fn render_writes_image_masks_and_frame_json() {
 }
 
 #[test]
-fn shading_modes_differ_and_culling_toggles() {
+fn shading_modes_differ() {
     let out = tmpdir("shading");
     let mut images = vec![];
     for mode in ["flat", "gouraud", "pixel"] {
@@ -184,4 +213,115 @@ fn shading_modes_differ_and_culling_toggles() {
         images[1], images[2],
         "Gouraud and per-pixel shading give the same image"
     );
+    // Flat shading is constant per triangle: the sphere shows far fewer
+    // distinct colours than per-pixel shading does.
+    let (flat, pixel) = (
+        distinct_colours(images[0].as_raw()),
+        distinct_colours(images[2].as_raw()),
+    );
+    assert!(flat < pixel, "flat {flat} vs per-pixel {pixel} colours");
+}
+
+/// A single upward-facing square seen from below: back-face culling hides
+/// it (the frame shows the background), `--no-cull` draws it.
+#[test]
+fn back_face_culling_toggles() {
+    let dir = tmpdir("culling");
+    let scene = dir.join("under.toml");
+    std::fs::write(
+        &scene,
+        "[[model]]\nshape = \"plane\"\nsize = [4.0, 4.0]\n\
+         [[light]]\ntype = \"point\"\nposition = [0.0, -3.0, 0.5]\n\
+         [camera]\neye = [0.0, -3.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\nup = [0.0, 0.0, 1.0]\n",
+    )
+    .unwrap();
+    let centre = |extra: &[&str]| {
+        let out = dir.join(format!("o{}", extra.len()));
+        let mut args = vec![
+            "render",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--size",
+            "32x32",
+            "--background",
+            "1,0,0",
+            "--no-icons",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = shadowlab(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let img = image::open(out.join("image.png")).unwrap().to_rgba8();
+        let p = img.get_pixel(16, 16).0;
+        (p[0], p[1], p[2])
+    };
+    assert_eq!(centre(&[]), (255, 0, 0), "culled: the background shows");
+    let (r, g, b) = centre(&["--no-cull"]);
+    assert!(
+        g > 0 && b > 0 && (r, g, b) != (255, 0, 0),
+        "drawn: {r} {g} {b}"
+    );
+}
+
+/// Removes what legitimately varies between runs: timings.
+fn without_timings(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(m) => {
+            m.retain(|k, _| !(k.ends_with("_ms") || k.ends_with("per_second")));
+            m.values_mut().for_each(without_timings);
+        }
+        serde_json::Value::Array(a) => a.iter_mut().for_each(without_timings),
+        _ => {}
+    }
+}
+
+/// The same command twice gives bit-identical images and masks and the same
+/// frame.json apart from timings, for a technique of every family.
+#[test]
+fn the_same_command_gives_bit_identical_output() {
+    let out = tmpdir("determinism");
+    for technique in [
+        "raytraced",
+        "planar",
+        "projective",
+        "shadow-map:pcss",
+        "shadow-volume",
+    ] {
+        let run = |k: usize| {
+            let d = out.join(format!("{}-{k}", technique.replace(':', "_")));
+            let o = shadowlab(&[
+                "render",
+                "--scene",
+                "floating",
+                "--light",
+                "spot",
+                "--technique",
+                technique,
+                "--size",
+                "96x54",
+                "--out",
+                d.to_str().unwrap(),
+            ]);
+            assert!(o.status.success(), "{technique}: {}", stderr(&o));
+            let mut j: serde_json::Value =
+                serde_json::from_slice(&std::fs::read(d.join("frame.json")).unwrap()).unwrap();
+            without_timings(&mut j);
+            (
+                std::fs::read(d.join("visibility-0.png")).unwrap(),
+                std::fs::read(d.join("image.png")).unwrap(),
+                j,
+            )
+        };
+        let (a, b) = (run(0), run(1));
+        assert!(a.0 == b.0, "{technique}: masks differ between runs");
+        assert!(a.1 == b.1, "{technique}: images differ between runs");
+        assert_eq!(a.2, b.2, "{technique}: frame.json differs between runs");
+        // Not a trivially lit mask.
+        let mask = image::load_from_memory(&a.0).unwrap().to_luma16();
+        assert!(
+            mask.pixels().any(|p| p[0] < 32768),
+            "{technique}: no shadow"
+        );
+    }
 }

@@ -3,8 +3,8 @@
 
 mod common;
 use common::*;
-use glam::Vec3;
-use shadowlab::scene::{Light, LightType, Scene, builtin};
+use glam::{Mat4, Vec3};
+use shadowlab::scene::{Camera, Light, LightType, Material, Scene, builtin, shapes};
 use shadowlab::technique::shadow_volume::ShadowVolumeRenderer;
 use shadowlab::technique::shadow_volume::silhouette::{CasterPlan, VolumeKind};
 
@@ -189,4 +189,70 @@ fn statistics_and_debug_views() {
         counters.push((c["silhouette_edges"], c["volume_triangles"]));
     }
     assert_eq!(counters[0], counters[1], "GPU and CPU statistics");
+}
+
+/// A box and, above it, a mirrored box (scale x = −1.2): their shadows
+/// overlap on the floor. Mirroring turns the mesh's triangles clockwise; if
+/// its volume were extruded from them as they are, its stencil counts would
+/// run the other way and cancel the lower box's (+1 − 1 = 0: false lit).
+#[test]
+fn mirrored_casters_count_the_same_way_as_the_others() {
+    let mut s = Scene::new("mirror");
+    let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
+    let floor = s.add_mesh(shapes::plane(20.0, 20.0, 4));
+    s.add_object("Floor", floor, grey, Mat4::IDENTITY);
+    let cube = s.add_mesh(shapes::cuboid(Vec3::ONE));
+    s.add_object(
+        "Box",
+        cube,
+        grey,
+        Mat4::from_translation(Vec3::new(0.0, 1.0, 0.0)),
+    );
+    s.add_object(
+        "Mirrored",
+        cube,
+        grey,
+        Mat4::from_translation(Vec3::new(0.3, 2.5, 0.2))
+            * Mat4::from_scale(Vec3::new(-1.2, 1.0, 1.0)),
+    );
+    s.lights = vec![Light::directional(Vec3::new(0.2, -1.0, 0.1), 1.0)];
+    s.camera = Camera::new(Vec3::new(0.0, 9.0, 7.0), Vec3::ZERO);
+    s.finalize().unwrap();
+    assert!(s.objects[2].winding_reversed && !s.objects[1].winding_reversed);
+    // Finalising again keeps the reversal (idempotent).
+    s.finalize().unwrap();
+    assert!(s.objects[2].winding_reversed);
+    assert_ne!(s.objects[2].mesh, s.objects[1].mesh);
+    for id in [
+        "shadow-volume:zpass",
+        "shadow-volume:zfail",
+        "shadow-volume:edges",
+        "shadow-volume:cpu",
+    ] {
+        let row = compare(&s, id, (200, 150));
+        let m = &row.mask;
+        assert!(m.reference_shadowed_pct > 2.0, "{id}: {m:?}");
+        assert!(m.all.total_pct <= 0.05, "{id}: {m:?}");
+    }
+}
+
+/// A zero scale has no inverse: its normals and volumes are undefined, so
+/// the scene is refused with an error naming the object.
+#[test]
+fn singular_transforms_are_refused() {
+    let mut s = Scene::new("flat");
+    let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
+    let cube = s.add_mesh(shapes::cuboid(Vec3::ONE));
+    s.add_object(
+        "Squashed",
+        cube,
+        grey,
+        Mat4::from_scale(Vec3::new(1.0, 0.0, 1.0)),
+    );
+    s.lights = vec![Light::point(Vec3::new(0.0, 3.0, 0.0), 1.0)];
+    let e = s.finalize().unwrap_err().to_string();
+    assert!(
+        e.contains("object 'Squashed' has a singular transform"),
+        "{e}"
+    );
 }

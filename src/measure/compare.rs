@@ -194,40 +194,61 @@ pub fn run(
         out.join("quality.json"),
         serde_json::to_string_pretty(&serde_json::json!({"meta": meta, "rows": rows}))?,
     )?;
-    std::fs::write(out.join("quality.csv"), csv(&rows))?;
+    write_csv(&out.join("quality.csv"), &rows)?;
     std::fs::write(out.join("quality.md"), markdown(scene, &meta, &rows))?;
     Ok(rows)
 }
 
-fn csv(rows: &[QualityRow]) -> String {
-    let mut s = String::from(
-        "technique,light,considered_pixels,reference_shadowed_pct,false_shadow_pct,false_lit_pct,total_pct,edge_false_shadow_pct,edge_false_lit_pct,interior_false_shadow_pct,interior_false_lit_pct,mean_abs_error,rms_error,flip_mean,flip_p95,flip_p99,frame_ms\n",
-    );
+/// `quality.csv` (through the `csv` crate, which quotes labels such as
+/// `x[a=1,b=2]`).
+fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
+    let mut w =
+        csv::Writer::from_path(path).with_context(|| format!("writing {}", path.display()))?;
+    w.write_record([
+        "technique",
+        "light",
+        "considered_pixels",
+        "reference_shadowed_pct",
+        "false_shadow_pct",
+        "false_lit_pct",
+        "total_pct",
+        "edge_false_shadow_pct",
+        "edge_false_lit_pct",
+        "interior_false_shadow_pct",
+        "interior_false_lit_pct",
+        "mean_abs_error",
+        "rms_error",
+        "flip_mean",
+        "flip_p95",
+        "flip_p99",
+        "frame_ms",
+    ])?;
     for r in rows {
         let m = &r.mask;
-        let _ = writeln!(
-            s,
-            "{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5},{:.5},{:.5},{:.2}",
-            r.technique,
-            r.light,
-            m.considered_pixels,
-            m.reference_shadowed_pct,
-            m.all.false_shadow_pct,
-            m.all.false_lit_pct,
-            m.all.total_pct,
-            m.edge.false_shadow_pct,
-            m.edge.false_lit_pct,
-            m.interior.false_shadow_pct,
-            m.interior.false_lit_pct,
-            m.mean_abs_error,
-            m.rms_error,
-            r.flip.mean,
-            r.flip.p95,
-            r.flip.p99,
-            r.frame_ms
-        );
+        let pct = |v: f64| format!("{v:.4}");
+        let err = |v: f64| format!("{v:.5}");
+        w.write_record([
+            r.technique.clone(),
+            r.light.to_string(),
+            m.considered_pixels.to_string(),
+            pct(m.reference_shadowed_pct),
+            pct(m.all.false_shadow_pct),
+            pct(m.all.false_lit_pct),
+            pct(m.all.total_pct),
+            pct(m.edge.false_shadow_pct),
+            pct(m.edge.false_lit_pct),
+            pct(m.interior.false_shadow_pct),
+            pct(m.interior.false_lit_pct),
+            err(m.mean_abs_error),
+            err(m.rms_error),
+            err(r.flip.mean as f64),
+            err(r.flip.p95 as f64),
+            err(r.flip.p99 as f64),
+            format!("{:.2}", r.frame_ms),
+        ])?;
     }
-    s
+    w.flush()?;
+    Ok(())
 }
 
 fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[QualityRow]) -> String {

@@ -6,7 +6,7 @@ pub mod compare;
 pub mod quality;
 
 use crate::technique::{self, FAMILIES, TechniqueChoice};
-use anyhow::{Result, anyhow, bail};
+use anyhow::{Result, bail};
 
 /// Parses a technique list: `all`, or comma-separated ids, each optionally
 /// with parameter values in brackets: `none,raytraced:reference[samples=64]`.
@@ -47,26 +47,10 @@ pub fn parse_technique_list(spec: &str) -> Result<Vec<TechniqueChoice>> {
     items
         .into_iter()
         .map(|item| {
-            let item = item.trim();
-            if item.is_empty() {
+            if item.trim().is_empty() {
                 bail!("empty entry in technique list '{spec}'");
             }
-            let (id, params) = match item.split_once('[') {
-                Some((id, rest)) => (
-                    id,
-                    rest.strip_suffix(']')
-                        .ok_or_else(|| anyhow!("expected ']' at the end of '{item}'"))?,
-                ),
-                None => (item, ""),
-            };
-            let mut c = technique::resolve(id)?;
-            let sets: Vec<String> = params
-                .split(',')
-                .filter(|s| !s.trim().is_empty())
-                .map(String::from)
-                .collect();
-            technique::apply_settings(&mut c.params, &sets)?;
-            Ok(c)
+            technique::parse_choice(item)
         })
         .collect()
 }
@@ -113,7 +97,7 @@ mod tests {
         let l =
             parse_technique_list("none, raytraced:reference[samples=64,offset_ulps=100]").unwrap();
         assert_eq!(l.len(), 2);
-        assert_eq!(l[1].params.get("samples"), 64.0);
+        assert_eq!(l[1].params.get("samples").unwrap(), 64.0);
         assert_eq!(
             choice_label(&l[1]),
             "raytraced:reference[samples=64,offset_ulps=100]"

@@ -801,6 +801,13 @@ impl Renderer {
                 "frame size {width}x{height} is outside 1..={max} (the device's largest texture)"
             );
         }
+        // Depth, G-buffer position and normal, the mask layers and colour.
+        let bytes_per_pixel = 4 + 16 + 8 + 2 * MAX_LIGHTS as u64 + 4;
+        gpu.check_allocation(
+            &format!("frame {width}x{height}"),
+            (width, height, MAX_LIGHTS as u32),
+            width as u64 * height as u64 * bytes_per_pixel,
+        )?;
         let device = &gpu.device;
         use wgpu::TextureUsages as U;
         let depth = texture_2d(
@@ -940,7 +947,7 @@ impl Renderer {
             l.validate()?;
         }
         let t0 = Instant::now();
-        let needs = TechniqueNeeds::of(techniques);
+        let needs = TechniqueNeeds::of(techniques)?;
         frame.uniform = frame_uniform(
             scene,
             camera,
@@ -1153,16 +1160,18 @@ pub struct TechniqueNeeds {
 }
 
 impl TechniqueNeeds {
-    pub fn of(techniques: &[TechniqueInstance]) -> TechniqueNeeds {
-        TechniqueNeeds {
+    pub fn of(techniques: &[TechniqueInstance]) -> Result<TechniqueNeeds> {
+        let mut infinite_far_plane = false;
+        for t in techniques {
+            infinite_far_plane |= t.technique.infinite_far_plane(&t.choice.params)?;
+        }
+        Ok(TechniqueNeeds {
             compose: techniques
                 .iter()
                 .map(|t| Compose::of(&t.choice.params))
                 .collect(),
-            infinite_far_plane: techniques
-                .iter()
-                .any(|t| t.technique.infinite_far_plane(&t.choice.params)),
-        }
+            infinite_far_plane,
+        })
     }
 }
 

@@ -107,7 +107,9 @@ fn vs_lit(v: VertexIn) -> LitOut {
     o.world_pos = (obj.model * vec4f(v.position, 1.0)).xyz;
     o.normal = normalize((obj.normal_matrix * vec4f(v.normal, 0.0)).xyz);
     o.uv = v.uv;
-    o.tangent = vec4f(normalize((obj.model * vec4f(v.tangent.xyz, 0.0)).xyz), v.tangent.w);
+    // A mirroring model matrix flips cross(n, t): flip the handedness with it.
+    let mirror = sign(determinant(mat3x3f(obj.model[0].xyz, obj.model[1].xyz, obj.model[2].xyz)));
+    o.tangent = vec4f(normalize((obj.model * vec4f(v.tangent.xyz, 0.0)).xyz), v.tangent.w * mirror);
     o.local_pos = v.position;
     o.object = v.object;
     if frame.settings.x == 1u {

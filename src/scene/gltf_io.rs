@@ -63,12 +63,105 @@ fn to_rgba(img: &gltf::image::Data) -> Result<image::RgbaImage> {
     image::RgbaImage::from_raw(img.width, img.height, rgba).ok_or_else(|| anyhow!("bad image size"))
 }
 
+/// Checks that the node graph is a forest, as glTF 2.0 requires (§ 3.5.4
+/// "Scenes"): no node is its own descendant, no node has two parents, and
+/// no scene root is another node's child. Checked here rather than trusted
+/// to the importer: a cycle would make the traversal below run forever and
+/// shared children would multiply objects.
+fn check_node_forest(file: &str, doc: &gltf::Document) -> Result<()> {
+    let n = doc.nodes().len();
+    let mut parent: Vec<Option<usize>> = vec![None; n];
+    for node in doc.nodes() {
+        for child in node.children() {
+            let c = child.index();
+            if c == node.index() {
+                bail!("{file}: node {c} is its own child (a cycle in the node hierarchy)");
+            }
+            if let Some(p) = parent[c] {
+                bail!(
+                    "{file}: node {c} is a child of both node {p} and node {} (glTF nodes form trees; shared children are not allowed)",
+                    node.index()
+                );
+            }
+            parent[c] = Some(node.index());
+        }
+    }
+    // With one parent each, a cycle is a loop of parent links that never
+    // reaches a root: follow them, marking nodes known to reach a root.
+    let mut reaches_root = vec![false; n];
+    let mut walked_from = vec![usize::MAX; n];
+    for start in 0..n {
+        let mut path: Vec<usize> = vec![];
+        let mut at = start;
+        while !reaches_root[at] {
+            if walked_from[at] == start {
+                let first = path.iter().position(|&i: &usize| i == at).unwrap_or(0);
+                let cycle: Vec<String> = path[first..].iter().map(|i| i.to_string()).collect();
+                bail!(
+                    "{file}: the node hierarchy has a cycle: node {} (each the child of the next)",
+                    cycle.join(" -> node ")
+                );
+            }
+            walked_from[at] = start;
+            path.push(at);
+            match parent[at] {
+                Some(p) => at = p,
+                None => break,
+            }
+        }
+        for i in path {
+            reaches_root[i] = true;
+        }
+    }
+    for scene in doc.scenes() {
+        for root in scene.nodes() {
+            if let Some(p) = parent[root.index()] {
+                bail!(
+                    "{file}: scene {} lists node {} as a root, but it is a child of node {p}",
+                    scene.index(),
+                    root.index()
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Checks, before the importer reads them, that every buffer and image a
+/// glTF file names by URI (other than `data:` URIs) is a regular file: the
+/// importer reads whatever a URI names, and `/dev/zero` or a FIFO would never
+/// end.
+fn check_external_files(file: &str, path: &Path) -> Result<()> {
+    let gltf = gltf::Gltf::open(path).map_err(|e| anyhow!("{file}: {e}"))?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let buffers = gltf.buffers().map(|b| match b.source() {
+        gltf::buffer::Source::Uri(u) => Some(("buffer", b.index(), u)),
+        gltf::buffer::Source::Bin => None,
+    });
+    let images = gltf.images().map(|i| match i.source() {
+        gltf::image::Source::Uri { uri, .. } => Some(("image", i.index(), uri)),
+        gltf::image::Source::View { .. } => None,
+    });
+    for (what, index, uri) in buffers.chain(images).flatten() {
+        if uri.starts_with("data:") {
+            continue;
+        }
+        let target = dir.join(uri);
+        if target.exists() && !target.is_file() {
+            bail!("{file}: {what} {index}: '{uri}' is not a regular file",);
+        }
+    }
+    Ok(())
+}
+
 /// Loads a `.gltf` or `.glb` file. Node transforms are baked into each
 /// object's transform; lights come from KHR_lights_punctual, the camera from
 /// the first camera node.
 pub fn load_scene(path: &Path) -> Result<Scene> {
     let file = path.display().to_string();
+    check_external_files(&file, path)?;
     let (doc, buffers, images) = gltf::import(path).map_err(|e| anyhow!("{file}: {e}"))?;
+    check_node_forest(&file, &doc)?;
     let mut scene = Scene::new(path.file_stem().and_then(|s| s.to_str()).unwrap_or("gltf"));
     scene.source = file.clone();
     let mut tex_map = std::collections::HashMap::new();

@@ -8,7 +8,7 @@ pub mod obj;
 pub mod shapes;
 pub mod toml_scene;
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -137,12 +137,34 @@ impl Mesh {
         let flipped: Vec<Vec3> = self.normals.iter().map(|&v| -v).collect();
         self.normals.extend(flipped);
         self.uvs.extend_from_within(..);
+        // The back copy's normal is flipped; flipping the handedness keeps
+        // its bitangent `cross(n, t)·w` and so its normal map the same.
+        let back_tangents: Vec<Vec4> = self
+            .tangents
+            .iter()
+            .map(|t| t.truncate().extend(-t.w))
+            .collect();
+        self.tangents.extend(back_tangents);
         let back: Vec<u32> = self
             .indices
             .chunks_exact(3)
             .flat_map(|t| [t[0] + n, t[2] + n, t[1] + n])
             .collect();
         self.indices.extend(back);
+    }
+
+    /// The same surface with every triangle's winding reversed (normals and
+    /// tangents kept). Placed by a mirroring transform (negative
+    /// determinant), it is wound counter-clockwise seen from outside again,
+    /// as culling and shadow-volume counting assume; the scene shader flips
+    /// the tangent handedness by the sign of the determinant.
+    pub fn with_reversed_winding(&self) -> Mesh {
+        let mut m = self.clone();
+        for t in m.indices.chunks_exact_mut(3) {
+            t.swap(1, 2);
+        }
+        m.name = format!("{} (mirrored)", self.name);
+        m
     }
 
     pub fn bounds(&self) -> Aabb {
@@ -288,6 +310,33 @@ pub struct Procedural {
     pub octaves: u32,
 }
 
+/// Most Perlin octaves a procedural texture may sum: each costs one noise
+/// evaluation per pixel, and beyond 16 the finest octave is far below a
+/// pixel at any scale the scenes use.
+pub const MAX_OCTAVES: u32 = 16;
+
+impl Procedural {
+    /// Checks colours, scale and octave count.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.color_a.is_finite() && self.color_b.is_finite()) {
+            bail!("procedural texture has a non-finite colour");
+        }
+        if !(self.scale.is_finite() && self.scale > 0.0) {
+            bail!(
+                "procedural texture scale must be a positive finite number, got {}",
+                self.scale
+            );
+        }
+        if !(1..=MAX_OCTAVES).contains(&self.octaves) {
+            bail!(
+                "procedural texture octaves must be in 1..={MAX_OCTAVES}, got {}",
+                self.octaves
+            );
+        }
+        Ok(())
+    }
+}
+
 /// A decoded RGBA8 image used as a diffuse texture or a normal map.
 #[derive(Clone, Debug)]
 pub struct Texture {
@@ -333,6 +382,46 @@ impl Default for Material {
 }
 
 impl Material {
+    /// Checks coefficients, texture references (against `textures`
+    /// loaded textures) and the procedural texture.
+    pub fn validate(&self, textures: usize) -> Result<()> {
+        let what = |e: anyhow::Error| e.context(format!("material '{}'", self.name));
+        let colours = [("ka", self.ka), ("kd", self.kd), ("ks", self.ks)];
+        for (field, c) in colours {
+            if !(c.is_finite() && c.min_element() >= 0.0) {
+                return Err(what(anyhow::anyhow!(
+                    "{field} must be finite and non-negative, got {c}"
+                )));
+            }
+        }
+        if !(0.0..=1000.0).contains(&self.shininess) {
+            return Err(what(anyhow::anyhow!(
+                "shininess must be in 0..=1000, got {}",
+                self.shininess
+            )));
+        }
+        if !(self.uv_scale.is_finite() && self.uv_scale > 0.0) {
+            return Err(what(anyhow::anyhow!(
+                "uv_scale must be a positive finite number, got {}",
+                self.uv_scale
+            )));
+        }
+        for (field, t) in [
+            ("diffuse texture", self.diffuse_texture),
+            ("normal map", self.normal_map),
+        ] {
+            if let Some(i) = t.filter(|&i| i >= textures) {
+                return Err(what(anyhow::anyhow!(
+                    "{field} index {i} out of range ({textures} textures)"
+                )));
+            }
+        }
+        if let Some(p) = &self.procedural {
+            p.validate().map_err(what)?;
+        }
+        Ok(())
+    }
+
     pub fn color(name: &str, kd: Vec3) -> Material {
         Material {
             name: name.into(),
@@ -355,6 +444,9 @@ pub struct Object {
     /// Defines a receiving plane for planar shadows (from its first
     /// triangle); such objects are not drawn.
     pub shadow_plane: bool,
+    /// True once [`Scene::finalize`] has pointed a mirroring object (negative
+    /// determinant) at a winding-reversed copy of its mesh.
+    pub winding_reversed: bool,
 }
 
 impl Object {
@@ -370,6 +462,7 @@ impl Object {
             casts_shadow: !name.ends_with("NS") && !shadow_plane,
             receives_shadow: true,
             shadow_plane,
+            winding_reversed: false,
         }
     }
 }
@@ -492,6 +585,27 @@ impl Light {
         if !ok {
             bail!("light has a non-finite field: {self:?}");
         }
+        if self.color.min_element() < 0.0 || self.intensity < 0.0 || self.range < 0.0 {
+            bail!(
+                "light colour, intensity and range must be non-negative (colour {}, intensity {}, range {})",
+                self.color,
+                self.intensity,
+                self.range
+            );
+        }
+        match self.area {
+            Some(LightArea::Sphere { radius }) if !(radius.is_finite() && radius > 0.0) => bail!(
+                "light area radius must be a positive finite number, got {radius} (leave the area out for a hard light)"
+            ),
+            Some(LightArea::Rect { width, height })
+                if !(width.is_finite() && width > 0.0 && height.is_finite() && height > 0.0) =>
+            {
+                bail!(
+                    "light area size must be two positive finite numbers, got {width} x {height} (leave the area out for a hard light)"
+                )
+            }
+            _ => {}
+        }
         if self.kind != LightType::Point && self.direction.length_squared() < 1e-12 {
             bail!("{:?} light needs a non-zero direction", self.kind);
         }
@@ -610,6 +724,9 @@ pub struct Scene {
     pub ambient: Vec3,
     /// Where the scene came from (a built-in name or a file).
     pub source: String,
+    /// Hash of every mesh's positions and indices, taken by
+    /// [`Scene::finalize`] (call it again after changing meshes).
+    pub geometry_hash: u64,
 }
 
 impl Scene {
@@ -627,6 +744,7 @@ impl Scene {
             background: Vec3::new(0.05, 0.06, 0.08),
             ambient: Vec3::splat(0.15),
             source: name.into(),
+            geometry_hash: 0,
         }
     }
 
@@ -657,18 +775,63 @@ impl Scene {
                 );
             }
         }
-        for o in &self.objects {
+        for m in &self.materials {
+            m.validate(self.textures.len())?;
+        }
+        let mut reversed: std::collections::HashMap<usize, usize> = Default::default();
+        for i in 0..self.objects.len() {
+            let o = &self.objects[i];
             if !o.transform.is_finite() {
                 bail!("object '{}' has a non-finite transform", o.name);
             }
             if o.mesh >= self.meshes.len() || o.material >= self.materials.len() {
                 bail!("object '{}' references a missing mesh or material", o.name);
             }
+            let det = glam::Mat3::from_mat4(o.transform).determinant();
+            if det == 0.0 || !det.is_finite() || !o.transform.inverse().is_finite() {
+                bail!(
+                    "object '{}' has a singular transform (determinant {det}: a zero scale flattens it, so its normals and shadow volumes are undefined)",
+                    o.name
+                );
+            }
+            // A mirroring transform turns counter-clockwise triangles
+            // clockwise: draw a winding-reversed copy instead (once).
+            if (det < 0.0) != o.winding_reversed {
+                let mesh = o.mesh;
+                let copy = match reversed.get(&mesh) {
+                    Some(&c) => c,
+                    None => {
+                        let c = self.add_mesh(self.meshes[mesh].with_reversed_winding());
+                        reversed.insert(mesh, c);
+                        c
+                    }
+                };
+                let o = &mut self.objects[i];
+                o.mesh = copy;
+                o.winding_reversed = !o.winding_reversed;
+                log::debug!("object '{}': mirrored transform, winding reversed", o.name);
+            }
         }
-        for l in &self.lights {
-            l.validate()?;
+        for (i, l) in self.lights.iter().enumerate() {
+            l.validate().with_context(|| format!("light {i}"))?;
+        }
+        for (name, lights) in &self.light_presets {
+            for (i, l) in lights.iter().enumerate() {
+                l.validate()
+                    .with_context(|| format!("light preset '{name}', light {i}"))?;
+            }
         }
         self.camera.validate()?;
+        self.geometry_hash = {
+            use std::hash::Hasher;
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            for m in &self.meshes {
+                h.write_usize(m.positions.len());
+                h.write(bytemuck::cast_slice(&m.positions));
+                h.write(bytemuck::cast_slice(&m.indices));
+            }
+            h.finish()
+        };
         if self.camera_presets.is_empty() {
             self.camera_presets.push(("default".into(), self.camera));
         }
@@ -780,6 +943,26 @@ pub fn load(name_or_path: &str) -> Result<Scene> {
 
 /// Loads a scene file by extension.
 pub fn load_file(path: &Path) -> Result<Scene> {
+    load_file_included(path, &[])
+}
+
+/// [`load_file`] for a file that scene files `includes` (outermost first)
+/// include: an error names the chain when `path` is already on it.
+pub fn load_file_included(path: &Path, includes: &[PathBuf]) -> Result<Scene> {
+    let canonical = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
+    if includes.contains(&canonical) {
+        let chain: Vec<String> = includes
+            .iter()
+            .chain([&canonical])
+            .map(|p| p.display().to_string())
+            .collect();
+        bail!(
+            "scene files include each other in a cycle: {}",
+            chain.join(" -> ")
+        );
+    }
+    let includes: Vec<PathBuf> = includes.iter().cloned().chain([canonical]).collect();
+    let includes = includes.as_slice();
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -788,14 +971,16 @@ pub fn load_file(path: &Path) -> Result<Scene> {
     let mut scene = match ext.as_str() {
         "obj" => obj::load_scene(path)?,
         "gltf" | "glb" => gltf_io::load_scene(path)?,
-        "toml" => toml_scene::load(path)?,
+        "toml" => toml_scene::load(path, includes)?,
         _ => bail!(
             "{}: unknown scene format '.{}' (valid: .obj, .gltf, .glb, .toml)",
             path.display(),
             ext
         ),
     };
-    scene.finalize()?;
+    scene
+        .finalize()
+        .with_context(|| path.display().to_string())?;
     Ok(scene)
 }
 
@@ -818,5 +1003,94 @@ pub fn frame_scene_defaults(scene: &mut Scene) {
         scene
             .lights
             .push(Light::point(c + Vec3::new(-0.5, 1.5, 0.7) * r, 1.0));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn one_box() -> Scene {
+        let mut s = Scene::new("t");
+        let m = s.add_material(Material::default());
+        let mesh = s.add_mesh(shapes::cuboid(Vec3::ONE));
+        s.add_object("Box", mesh, m, Mat4::IDENTITY);
+        s.lights = vec![Light::point(Vec3::new(0.0, 3.0, 0.0), 1.0)];
+        s
+    }
+
+    #[test]
+    fn double_sided_meshes_keep_a_tangent_per_vertex() {
+        let mut m = shapes::plane(2.0, 2.0, 2);
+        m.finalize().unwrap();
+        let n = m.positions.len();
+        m.make_double_sided();
+        assert_eq!(m.tangents.len(), 2 * n);
+        assert_eq!(m.normals.len(), 2 * n);
+        // Same tangent, opposite handedness on the back copy.
+        assert_eq!(m.tangents[n].truncate(), m.tangents[0].truncate());
+        assert_eq!(m.tangents[n].w, -m.tangents[0].w);
+    }
+
+    #[test]
+    fn materials_are_validated() {
+        let mut s = one_box();
+        s.materials[0].diffuse_texture = Some(3);
+        let e = format!("{:#}", s.finalize().unwrap_err());
+        assert!(
+            e.contains("diffuse texture index 3 out of range (0 textures)"),
+            "{e}"
+        );
+        let mut s = one_box();
+        s.materials[0].procedural = Some(Procedural {
+            kind: ProceduralKind::Marble,
+            color_a: Vec3::ONE,
+            color_b: Vec3::ZERO,
+            scale: 1.0,
+            octaves: 1000,
+        });
+        let e = format!("{:#}", s.finalize().unwrap_err());
+        assert!(e.contains("octaves must be in 1..=16, got 1000"), "{e}");
+        let mut s = one_box();
+        s.materials[0].kd = Vec3::new(f32::NAN, 0.0, 0.0);
+        assert!(s.finalize().is_err());
+    }
+
+    #[test]
+    fn lights_with_bad_areas_or_negative_values_are_refused() {
+        for area in [
+            LightArea::Sphere { radius: -1.0 },
+            LightArea::Sphere { radius: f32::NAN },
+            LightArea::Sphere {
+                radius: f32::INFINITY,
+            },
+            LightArea::Rect {
+                width: 1.0,
+                height: 0.0,
+            },
+        ] {
+            let mut l = Light::point(Vec3::Y, 1.0);
+            l.area = Some(area);
+            assert!(l.validate().is_err(), "{area:?}");
+        }
+        let mut l = Light::point(Vec3::Y, 1.0);
+        l.intensity = -1.0;
+        assert!(l.validate().is_err());
+        l.intensity = 1.0;
+        l.area = Some(LightArea::Sphere { radius: 0.2 });
+        l.validate().unwrap();
+    }
+
+    #[test]
+    fn geometry_hash_follows_the_vertices() {
+        let mut s = one_box();
+        s.finalize().unwrap();
+        let before = s.geometry_hash;
+        s.finalize().unwrap();
+        assert_eq!(s.geometry_hash, before, "same geometry, same hash");
+        // Same counts, one vertex moved.
+        s.meshes[0].positions[0].x += 0.25;
+        s.finalize().unwrap();
+        assert_ne!(s.geometry_hash, before);
     }
 }

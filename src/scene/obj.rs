@@ -194,50 +194,53 @@ pub fn parse_single_mesh(name: &str, text: &str) -> Result<Mesh> {
     Ok(out)
 }
 
-fn load_texture(dir: &Path, file: &str, srgb: bool, scene: &mut Scene) -> Option<usize> {
+/// Loads a texture named by an MTL file. A missing file falls back to the
+/// flat material colour with a warning; a file that is there but cannot be
+/// decoded (corrupt, truncated, larger than the image decoder's 512 MiB
+/// limit) is an error naming it.
+fn load_texture(dir: &Path, file: &str, srgb: bool, scene: &mut Scene) -> Result<Option<usize>> {
     let path = dir.join(file.replace('\\', "/"));
-    match image::open(&path) {
-        Ok(img) => {
-            scene.textures.push(Texture {
-                name: file.to_string(),
-                image: img.to_rgba8(),
-                srgb,
-                source: Some(path),
-            });
-            Some(scene.textures.len() - 1)
-        }
-        Err(e) => {
-            log::warn!(
-                "texture {}: {e}; using the flat material colour",
-                path.display()
-            );
-            None
-        }
+    if !path.is_file() {
+        log::warn!(
+            "texture {}: not found; using the flat material colour",
+            path.display()
+        );
+        return Ok(None);
     }
+    let img = image::ImageReader::open(&path)
+        .and_then(|r| r.with_guessed_format())
+        .map_err(anyhow::Error::from)
+        .and_then(|r| r.decode().map_err(anyhow::Error::from))
+        .with_context(|| format!("texture {}: cannot decode", path.display()))?;
+    scene.textures.push(Texture {
+        name: file.to_string(),
+        image: img.to_rgba8(),
+        srgb,
+        source: Some(path),
+    });
+    Ok(Some(scene.textures.len() - 1))
 }
 
-fn to_material(dir: &Path, m: &tobj::Material, scene: &mut Scene) -> Material {
+fn to_material(dir: &Path, m: &tobj::Material, scene: &mut Scene) -> Result<Material> {
     let v = |c: Option<[f32; 3]>, d: Vec3| c.map(Vec3::from).unwrap_or(d);
     let base = Material::default();
     let kd = v(m.diffuse, base.kd);
-    Material {
+    let texture = |f: &Option<String>, srgb, scene: &mut Scene| match f.as_deref() {
+        Some(f) => load_texture(dir, f, srgb, scene),
+        None => Ok(None),
+    };
+    Ok(Material {
         name: m.name.clone(),
         ka: v(m.ambient, kd),
         kd,
         ks: v(m.specular, base.ks),
         shininess: m.shininess.unwrap_or(base.shininess).clamp(0.0, 1000.0),
         alpha: m.dissolve.unwrap_or(1.0),
-        diffuse_texture: m
-            .diffuse_texture
-            .as_deref()
-            .and_then(|f| load_texture(dir, f, true, scene)),
-        normal_map: m
-            .normal_texture
-            .as_deref()
-            .and_then(|f| load_texture(dir, f, false, scene)),
+        diffuse_texture: texture(&m.diffuse_texture, true, scene)?,
+        normal_map: texture(&m.normal_texture, false, scene)?,
         procedural: None,
         uv_scale: 1.0,
-    }
+    })
 }
 
 /// Loads an OBJ file (and its MTL libraries) as a scene: one object per OBJ
@@ -285,7 +288,7 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
     };
     let mut mat_index: HashMap<usize, usize> = HashMap::new();
     for (i, m) in materials.iter().enumerate() {
-        let mat = to_material(&dir, m, &mut scene);
+        let mat = to_material(&dir, m, &mut scene).with_context(|| file.clone())?;
         mat_index.insert(i, scene.add_material(mat));
     }
     let default_mat = scene.add_material(Material::default());

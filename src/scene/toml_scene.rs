@@ -26,7 +26,7 @@ use super::{Camera, Light, LightArea, LightType, Material, Mesh, Scene, shapes};
 use anyhow::{Context, Result, anyhow, bail};
 use glam::{EulerRot, Mat4, Quat, Vec3};
 use serde::Deserialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -94,6 +94,9 @@ struct CameraEntry {
 }
 
 fn shape_mesh(shape: &str, size: &[f32]) -> Result<Mesh> {
+    if let Some(bad) = size.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
+        bail!("`size` values must be positive finite numbers, got {bad}");
+    }
     let s = |i: usize, d: f32| size.get(i).copied().unwrap_or(d);
     Ok(match shape {
         "plane" => shapes::plane(s(0, 10.0), s(1, s(0, 10.0)), 8),
@@ -105,7 +108,9 @@ fn shape_mesh(shape: &str, size: &[f32]) -> Result<Mesh> {
 }
 
 /// Loads a TOML scene file; errors name the file and the line/field.
-pub fn load(path: &Path) -> Result<Scene> {
+/// `includes` are the scene files that include this one, outermost first
+/// (see [`super::load_file_included`]), so that include cycles are errors.
+pub fn load(path: &Path, includes: &[PathBuf]) -> Result<Scene> {
     let file = path.display().to_string();
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {file}"))?;
     let f: SceneFile = toml::from_str(&text).map_err(|e| anyhow!("{file}: {e}"))?;
@@ -116,6 +121,11 @@ pub fn load(path: &Path) -> Result<Scene> {
             .unwrap_or_else(|| path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene")),
     );
     scene.source = file.clone();
+    for (field, c) in [("background", f.background), ("ambient", f.ambient)] {
+        if c.is_some_and(|c| !Vec3::from(c).is_finite() || Vec3::from(c).min_element() < 0.0) {
+            bail!("{file}: `{field}` must be three finite non-negative numbers");
+        }
+    }
     if let Some(b) = f.background {
         scene.background = b.into();
     }
@@ -129,6 +139,17 @@ pub fn load(path: &Path) -> Result<Scene> {
             Some(Scale::Uniform(s)) => Vec3::splat(s),
             Some(Scale::Axes(a)) => a.into(),
         };
+        if !scale.is_finite() || scale.cmpeq(Vec3::ZERO).any() {
+            bail!(
+                "{}",
+                ctx(&format!(
+                    "`scale` must be finite and non-zero on every axis, got {scale} (a zero scale flattens the model)"
+                ))
+            );
+        }
+        if !(Vec3::from(m.translate).is_finite() && Vec3::from(m.rotate_deg).is_finite()) {
+            bail!("{}", ctx("`translate` and `rotate_deg` must be finite"));
+        }
         let r = m.rotate_deg.map(f32::to_radians);
         let placement = Mat4::from_scale_rotation_translation(
             scale,
@@ -138,7 +159,8 @@ pub fn load(path: &Path) -> Result<Scene> {
         let first_object = scene.objects.len();
         match (&m.path, &m.shape) {
             (Some(p), None) => {
-                let sub = super::load_file(&dir.join(p)).with_context(|| ctx("loading model"))?;
+                let sub = super::load_file_included(&dir.join(p), includes)
+                    .with_context(|| ctx("loading model"))?;
                 let (mesh_off, mat_off, tex_off) = (
                     scene.meshes.len(),
                     scene.materials.len(),

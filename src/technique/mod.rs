@@ -16,7 +16,7 @@ pub mod shadow_volume;
 use crate::gpu::GpuContext;
 use crate::renderer::{FrameResources, SceneGpu};
 use crate::scene::{Light, Scene};
-use anyhow::{Result, anyhow};
+use anyhow::{Context, Result, anyhow};
 pub use params::{ParamKind, ParamSpec, ParamValues};
 
 /// Everything a technique may read while writing one light's mask.
@@ -42,8 +42,8 @@ pub trait ShadowTechnique: Send {
 
     /// True when the frame must use a projection with the far plane at
     /// infinity ([`crate::scene::Camera::projection_infinite`]).
-    fn infinite_far_plane(&self, _params: &ParamValues) -> bool {
-        false
+    fn infinite_far_plane(&self, _params: &ParamValues) -> Result<bool> {
+        Ok(false)
     }
 
     /// Called once the GPU has finished this frame's masks: read back
@@ -160,19 +160,19 @@ pub static FAMILIES: &[&Family] = &[
     &shadow_volume::FAMILY,
 ];
 
-/// Identifies a scene's geometry and flags cheaply (object transforms,
-/// flags, mesh sizes), so that per-scene data is rebuilt only on change.
+/// Identifies a scene's geometry and flags (object transforms and flags,
+/// and the hash of every mesh's positions and indices that
+/// [`Scene::finalize`] takes), so that per-scene data — adjacency, BVHs,
+/// receiver planes — is rebuilt exactly when it changes.
 pub fn scene_fingerprint(scene: &Scene) -> u64 {
     use std::hash::{Hash, Hasher};
     let mut h = std::collections::hash_map::DefaultHasher::new();
-    scene.source.hash(&mut h);
+    (&scene.source, scene.geometry_hash).hash(&mut h);
     for o in &scene.objects {
         (o.casts_shadow, o.receives_shadow, o.shadow_plane, o.mesh).hash(&mut h);
         for f in o.transform.to_cols_array() {
             f.to_bits().hash(&mut h);
         }
-        let m = &scene.meshes[o.mesh];
-        (m.positions.len(), m.indices.len()).hash(&mut h);
     }
     h.finish()
 }
@@ -368,6 +368,31 @@ pub fn resolve(id: &str) -> Result<TechniqueChoice> {
     })
 }
 
+/// Parses one technique with optional parameter values in brackets,
+/// `family[:preset][key=value,...]`, e.g. `raytraced:reference[samples=64]`.
+pub fn parse_choice(spec: &str) -> Result<TechniqueChoice> {
+    let item = spec.trim();
+    let (id, params) = match item.split_once('[') {
+        Some((id, rest)) => (
+            id,
+            rest.strip_suffix(']')
+                .ok_or_else(|| anyhow!("expected ']' at the end of '{item}'"))?,
+        ),
+        None => (item, ""),
+    };
+    if params.contains(['[', ']']) {
+        anyhow::bail!("unbalanced brackets in '{item}'");
+    }
+    let mut c = resolve(id)?;
+    let sets: Vec<String> = params
+        .split(',')
+        .filter(|s| !s.trim().is_empty())
+        .map(String::from)
+        .collect();
+    apply_settings(&mut c.params, &sets).with_context(|| format!("in '{item}'"))?;
+    Ok(c)
+}
+
 /// Parses `key=value` settings and applies them to `params`.
 pub fn apply_settings(params: &mut ParamValues, settings: &[String]) -> Result<()> {
     for s in settings {
@@ -411,6 +436,28 @@ mod tests {
                 assert!(!s.doc.is_empty());
             }
         }
+    }
+
+    #[test]
+    fn the_fingerprint_changes_when_vertices_do() {
+        let mut s = crate::scene::builtin::by_name("floating").unwrap().unwrap();
+        let before = scene_fingerprint(&s);
+        assert_eq!(scene_fingerprint(&s), before);
+        // Same source, objects, transforms and vertex counts: only a vertex moves.
+        s.meshes[0].positions[0].y += 0.5;
+        s.finalize().unwrap();
+        assert_ne!(scene_fingerprint(&s), before);
+    }
+
+    #[test]
+    fn technique_specs_parse_with_bracketed_values() {
+        let c = parse_choice("raytraced:reference[samples=64]").unwrap();
+        assert_eq!(c.id(), "raytraced:reference");
+        assert_eq!(c.params.get("samples").unwrap(), 64.0);
+        let e = format!("{:#}", parse_choice("raytraced[nope=1]").err().unwrap());
+        assert!(e.contains("unknown parameter 'nope'"), "{e}");
+        assert!(parse_choice("raytraced[samples=2]]").is_err());
+        assert!(parse_choice("raytraced[[samples=2]").is_err());
     }
 
     #[test]

@@ -215,19 +215,19 @@ impl ParamValues {
         Ok(())
     }
 
-    pub fn get(&self, name: &str) -> f64 {
-        self.index(name)
-            .map(|i| self.values[i])
-            .unwrap_or_else(|e| panic!("{e}"))
+    /// The value of `name`; an error (not a panic) for a name that is not
+    /// in the table.
+    pub fn get(&self, name: &str) -> Result<f64> {
+        self.index(name).map(|i| self.values[i])
     }
-    pub fn get_f32(&self, name: &str) -> f32 {
-        self.get(name) as f32
+    pub fn get_f32(&self, name: &str) -> Result<f32> {
+        self.get(name).map(|v| v as f32)
     }
-    pub fn get_bool(&self, name: &str) -> bool {
-        self.get(name) != 0.0
+    pub fn get_bool(&self, name: &str) -> Result<bool> {
+        self.get(name).map(|v| v != 0.0)
     }
-    pub fn get_usize(&self, name: &str) -> usize {
-        self.get(name) as usize
+    pub fn get_usize(&self, name: &str) -> Result<usize> {
+        self.get(name).map(|v| v as usize)
     }
 
     /// `name → formatted value`, for frame.json.
@@ -265,7 +265,7 @@ mod tests {
     fn parse_checks_type_and_range() {
         let mut p = ParamValues::defaults(SPECS);
         p.set("bias", "0.25").unwrap();
-        assert_eq!(p.get("bias"), 0.25);
+        assert_eq!(p.get("bias").unwrap(), 0.25);
         assert!(
             p.set("bias", "2")
                 .unwrap_err()
@@ -275,13 +275,16 @@ mod tests {
         assert!(p.set("bias", "NaN").is_err());
         assert!(p.set("size", "1.5").is_err());
         p.set("stencil", "false").unwrap();
-        assert!(!p.get_bool("stencil"));
+        assert!(!p.get_bool("stencil").unwrap());
         p.set("mode", "darken").unwrap();
-        assert_eq!(p.get_usize("mode"), 1);
+        assert_eq!(p.get_usize("mode").unwrap(), 1);
         let e = p.set("mode", "blend").unwrap_err().to_string();
         assert!(e.contains("relight, darken"), "{e}");
         let e = p.set("nope", "1").unwrap_err().to_string();
         assert!(e.contains("valid: bias, size, stencil, mode"), "{e}");
+        let e = p.get("nope").unwrap_err().to_string();
+        assert!(e.contains("unknown parameter 'nope'"), "{e}");
+        assert!(p.get_f32("Bias").is_err() && p.get_usize("").is_err());
     }
 
     #[test]

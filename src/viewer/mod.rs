@@ -337,11 +337,18 @@ struct App {
     /// Seconds between redraws, after the first frames.
     intervals: Vec<f64>,
     exit_error: Option<anyhow::Error>,
+    /// The scene, camera, lights and technique, loaded and checked before
+    /// a window opens (bad input fails fast, with or without a display).
+    preloaded: Option<(Scene, Camera, Vec<Light>, TechniqueChoice)>,
 }
 
 /// Runs the viewer until the window closes (or `--frames` frames with `--screenshot`).
 pub fn run(options: ViewerOptions) -> Result<()> {
     let started = Instant::now();
+    let (scene, camera, lights) = options.view.resolve()?;
+    let mut choice = technique::parse_choice(&options.technique)?;
+    technique::apply_settings(&mut choice.params, &options.set)?;
+    let preloaded = Some((scene, camera, lights, choice));
     let event_loop = EventLoop::new().map_err(|e| anyhow!("cannot open a window (no display? set DISPLAY or WAYLAND_DISPLAY, or run under xvfb-run): {e}"))?;
     let scene_name = options.view.scene.clone();
     let mut app = App {
@@ -386,6 +393,7 @@ pub fn run(options: ViewerOptions) -> Result<()> {
         heatmap_reported: false,
         intervals: vec![],
         exit_error: None,
+        preloaded,
     };
     event_loop
         .run_app(&mut app)
@@ -419,7 +427,8 @@ impl App {
         let surface = instance
             .create_surface(window.clone())
             .context("creating the window surface")?;
-        let gpu = GpuContext::with_instance(instance, backends, Some(&surface))?;
+        let mut gpu = GpuContext::with_instance(instance, backends, Some(&surface))?;
+        gpu.memory_budget = self.options.view.memory_budget << 20;
         let size = window.inner_size();
         let mut config = surface
             .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
@@ -431,9 +440,10 @@ impl App {
         config.present_mode = present_mode(self.state.vsync);
         surface.configure(&gpu.device, &config);
         let renderer = Renderer::new(&gpu);
-        let (scene, camera, lights) = self.options.view.resolve()?;
-        let mut choice = technique::resolve(&self.options.technique)?;
-        technique::apply_settings(&mut choice.params, &self.options.set)?;
+        let (scene, camera, lights, choice) = self
+            .preloaded
+            .take()
+            .ok_or_else(|| anyhow!("the viewer's window was created twice"))?;
         self.scene = Some(SceneState::load(
             &gpu, &renderer, scene, camera, lights, &choice,
         )?);
@@ -907,7 +917,7 @@ fn heatmap_job(
 ) -> Result<(egui::ColorImage, String), String> {
     let (w, h) = (data.width, data.height);
     let (pos, nrm, mask, color) = (&data.positions, &data.normals, &data.mask, &data.color);
-    use crate::technique::raytraced::{CasterBvh, mask_from_gbuffer};
+    use crate::technique::raytraced::{CasterBvh, ReferenceSettings, mask_from_gbuffer};
     let positions: &[[f32; 4]] = bytemuck::cast_slice(pos);
     let normals: Vec<glam::Vec3> = bytemuck::cast_slice::<u8, [half::f16; 4]>(nrm)
         .iter()
@@ -918,8 +928,15 @@ fn heatmap_job(
         .map(|v| v.to_f32())
         .collect();
     let bvh = CasterBvh::for_scene(scene, None);
-    let samples = if light.area.is_some() { 256 } else { 1 };
-    let reference = mask_from_gbuffer(&bvh, light, positions, &normals, samples, 512.0);
+    let settings = ReferenceSettings::defaults();
+    let reference = mask_from_gbuffer(
+        &bvh,
+        light,
+        positions,
+        &normals,
+        settings.samples_for(light),
+        settings.offset_ulps,
+    );
     let considered: Vec<bool> = positions
         .iter()
         .zip(bytemuck::cast_slice::<u8, [half::f16; 4]>(nrm))
@@ -1102,5 +1119,95 @@ impl ApplicationHandler for App {
         if let Some(gfx) = &self.gfx {
             gfx.window.request_redraw();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Material, shapes};
+    use crate::technique::raytraced::{CasterBvh, ReferenceSettings, mask_from_gbuffer};
+    use glam::{Mat4, Vec3};
+
+    /// A floor at y = 30 and a box whose top edge, under a sun 3° above the
+    /// horizon, casts a shadow boundary onto the floor; a one-row G-buffer
+    /// of floor points across that boundary, 0.5 mm apart.
+    fn grazing_boundary() -> (Scene, Light, Vec<[f32; 4]>, Vec<Vec3>) {
+        let mut s = Scene::new("grazing");
+        let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
+        let floor = s.add_mesh(shapes::plane(20.0, 20.0, 2));
+        s.add_object(
+            "Floor",
+            floor,
+            grey,
+            Mat4::from_translation(Vec3::new(0.0, 30.0, 0.0)),
+        );
+        let cube = s.add_mesh(shapes::cuboid(Vec3::new(0.2, 0.1, 4.0)));
+        s.add_object(
+            "Box",
+            cube,
+            grey,
+            Mat4::from_translation(Vec3::new(0.0, 30.0, 0.0)),
+        );
+        let angle = 3f32.to_radians();
+        let light = Light::directional(Vec3::new(angle.cos(), -angle.sin(), 0.0), 1.0);
+        s.lights = vec![light];
+        s.finalize().unwrap();
+        // The box's top edge at x = 0.1, height 0.05: the boundary lies
+        // 0.05 / tan 3° past it.
+        let boundary = 0.1 + 0.05 / angle.tan();
+        let positions: Vec<[f32; 4]> = (0..400)
+            .map(|i| [boundary - 0.1 + i as f32 * 0.0005, 30.0, 0.0, 1.0])
+            .collect();
+        let normals = vec![Vec3::Y; positions.len()];
+        (s, light, positions, normals)
+    }
+
+    /// The heatmap measures a technique against the reference as `compare`
+    /// does, with the reference's own ray offset: the ray-traced mask itself
+    /// shows no error, although a different offset (the 512 ULPs once
+    /// hard-coded here) moves this boundary by several samples.
+    #[test]
+    fn the_heatmap_uses_the_reference_settings() {
+        let (scene, light, positions, normals) = grazing_boundary();
+        let bvh = CasterBvh::for_scene(&scene, None);
+        let settings = ReferenceSettings::defaults();
+        let mask = mask_from_gbuffer(&bvh, &light, &positions, &normals, 1, settings.offset_ulps);
+        let other = mask_from_gbuffer(&bvh, &light, &positions, &normals, 1, 512.0);
+        let moved = mask.iter().zip(&other).filter(|(a, b)| a != b).count();
+        assert!(moved >= 5, "a 512-ULP offset moves {moved} samples");
+        assert!(mask.iter().any(|&v| v == 0.0) && mask.iter().any(|&v| v == 1.0));
+        let f16s = |v: &[f32]| -> Vec<u8> {
+            v.iter()
+                .flat_map(|x| half::f16::from_f32(*x).to_le_bytes())
+                .collect()
+        };
+        let data = FrameData {
+            width: positions.len(),
+            height: 1,
+            positions: bytemuck::cast_slice(&positions).to_vec(),
+            normals: f16s(
+                &normals
+                    .iter()
+                    .flat_map(|n| [n.x, n.y, n.z, 1.0])
+                    .collect::<Vec<_>>(),
+            ),
+            mask: f16s(&mask),
+            color: vec![128; positions.len() * 4],
+        };
+        let (_, summary) = heatmap_job(&scene, &light, &data).unwrap();
+        assert!(
+            summary.starts_with("false shadow 0.000 %, false lit 0.000 %"),
+            "{summary}"
+        );
+        let data = FrameData {
+            mask: f16s(&other),
+            ..data
+        };
+        let (_, summary) = heatmap_job(&scene, &light, &data).unwrap();
+        assert!(
+            !summary.starts_with("false shadow 0.000 %, false lit 0.000 %"),
+            "{summary}"
+        );
     }
 }

@@ -304,8 +304,8 @@ impl ShadowTechnique for PlanarShadows {
         let planes = &self.planes.as_ref().expect("set above").1;
         let l = ctx.light.homogeneous();
         let tol = ctx.scene_gpu.bounds.size().length().max(1e-3) * 1e-4;
-        let vis = 1.0 - ctx.params.get_f32("darkening");
-        let offset = ctx.params.get_f32("depth_offset") / (1u32 << 20) as f32;
+        let vis = 1.0 - ctx.params.get_f32("darkening")?;
+        let offset = ctx.params.get_f32("depth_offset")? / (1u32 << 20) as f32;
         // Orient each plane towards the light; skip planes the light lies in or behind.
         let uniforms: Vec<PlanarUniform> = planes
             .iter()
@@ -352,7 +352,7 @@ impl ShadowTechnique for PlanarShadows {
                     },
                 ],
             });
-        let stencil = ctx.params.get_bool("stencil");
+        let stencil = ctx.params.get_bool("stencil")?;
         let mut pass = super::mask_pass(encoder, ctx, "planar");
         pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
         pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);

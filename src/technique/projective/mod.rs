@@ -10,7 +10,7 @@
 use super::light_space::{LightFrustum, fit_bounds};
 use super::{Family, MaskContext, ParamSpec, Preset, ShadowTechnique};
 use crate::renderer::{MASK_FORMAT, VERTEX_LAYOUT};
-use anyhow::{Result, bail};
+use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec4};
 
@@ -179,27 +179,42 @@ impl ProjectiveShadows {
     }
 
     fn make_projectors(&mut self, ctx: &MaskContext, size: u32) -> Result<()> {
-        let max = ctx.gpu.max_texture_size();
-        if size > max {
-            bail!("projective: texture size {size} exceeds the device's largest texture ({max})");
-        }
+        let casters = ctx
+            .scene_gpu
+            .draws
+            .iter()
+            .filter(|d| d.casts_shadow && !d.shadow_plane)
+            .count() as u64;
+        ctx.gpu.check_allocation(
+            &format!(
+                "projective: {casters} caster texture(s) of {size}x{size} (--set size=N; largest texture {})",
+                ctx.gpu.max_texture_size()
+            ),
+            (size, size, 1),
+            casters * size as u64 * size as u64 * (1 + 4),
+        )?;
+        // Free the old textures first; keep the new ones only once created.
+        self.projectors.clear();
+        self.made_for = None;
         let device = &ctx.gpu.device;
         let texture = |format, usage| {
             crate::renderer::texture_2d(device, "projective", size, size, 1, format, usage)
                 .create_view(&Default::default())
         };
         use wgpu::TextureUsages as U;
-        self.projectors = ctx
-            .scene_gpu
-            .draws
-            .iter()
-            .filter(|d| d.casts_shadow && !d.shadow_plane)
-            .map(|d| Projector {
-                object: d.object,
-                color: texture(TEXTURE_FORMAT, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING),
-                depth: texture(PROJECTOR_DEPTH, U::RENDER_ATTACHMENT),
-            })
-            .collect();
+        self.projectors = ctx.gpu.checked("allocating the projective textures", || {
+            Ok(ctx
+                .scene_gpu
+                .draws
+                .iter()
+                .filter(|d| d.casts_shadow && !d.shadow_plane)
+                .map(|d| Projector {
+                    object: d.object,
+                    color: texture(TEXTURE_FORMAT, U::RENDER_ATTACHMENT | U::TEXTURE_BINDING),
+                    depth: texture(PROJECTOR_DEPTH, U::RENDER_ATTACHMENT),
+                })
+                .collect())
+        })?;
         let n = self.projectors.len().max(1);
         self.uniforms = Some(device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("projectors"),
@@ -214,14 +229,15 @@ impl ProjectiveShadows {
 
 impl ShadowTechnique for ProjectiveShadows {
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        let size = ctx.params.get_usize("size") as u32;
+        let size = ctx.params.get_usize("size")? as u32;
         let key = (super::scene_fingerprint(ctx.scene), size);
         if self.made_for != Some(key) {
             self.make_projectors(ctx, size)?;
             self.made_for = Some(key);
         }
-        let margin = ctx.params.get_f32("margin");
-        let depth_mode = ctx.params.get_bool("depth_in_alpha");
+        let margin = ctx.params.get_f32("margin")?;
+        let depth_mode = ctx.params.get_bool("depth_in_alpha")?;
+        let alpha_bias = ctx.params.get_f32("alpha_bias")?;
         // One frustum per caster; casters that contain a local light are skipped.
         let frusta: Vec<Option<LightFrustum>> = self
             .projectors
@@ -251,7 +267,7 @@ impl ShadowTechnique for ProjectiveShadows {
                     params: Vec4::new(
                         f.near,
                         f.far,
-                        ctx.params.get_f32("alpha_bias"),
+                        alpha_bias,
                         depth_mode as u32 as f32,
                     ),
                     info: UVec4::new(p.object, size, 0, 0),

@@ -8,7 +8,7 @@
 //! Method for Avoiding Self-Intersection", Ray Tracing Gems ch. 6), so the
 //! offset scales with the magnitude of the position.
 
-use super::{Family, MaskContext, ParamSpec, Preset, ShadowTechnique};
+use super::{Family, MaskContext, ParamSpec, ParamValues, Preset, ShadowTechnique};
 use crate::scene::{Light, LightArea, LightType, Scene};
 use anyhow::Result;
 use glam::Vec3;
@@ -53,6 +53,38 @@ pub static FAMILY: Family = Family {
     ],
     create: |_| Ok(Box::new(RayTraced::default())),
 };
+
+/// The reference's settings, read from its parameter table.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReferenceSettings {
+    /// Shadow rays per pixel for area lights.
+    pub samples: usize,
+    /// Ray-origin offset in float ULPs of the position.
+    pub offset_ulps: f32,
+}
+
+impl ReferenceSettings {
+    pub fn from_params(p: &ParamValues) -> Result<Self> {
+        Ok(ReferenceSettings {
+            samples: p.get_usize("samples")?,
+            offset_ulps: p.get_f32("offset_ulps")?,
+        })
+    }
+    /// The defaults of the family's table (`raytraced:default`), which the
+    /// viewer's heatmap uses so that it agrees with `compare`.
+    pub fn defaults() -> Self {
+        Self::from_params(&ParamValues::defaults(FAMILY.params))
+            .expect("the raytraced table has samples and offset_ulps")
+    }
+    /// Rays per pixel for `light`: one for a hard light.
+    pub fn samples_for(&self, light: &Light) -> usize {
+        if light.area.is_some() {
+            self.samples
+        } else {
+            1
+        }
+    }
+}
 
 /// BVH over the world-space triangles of a scene's shadow casters.
 pub struct CasterBvh {
@@ -116,6 +148,9 @@ impl CasterBvh {
     /// up to distance `tmax`.
     pub fn unoccluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
         let Some(bvh) = &self.bvh else { return true };
+        // obvhs' traversal misses hits when a direction component is −0.0
+        // (a sun along (0, −1, 0) gives the ray (−0, 1, −0)): use +0.0.
+        let dir = Vec3::select(dir.cmpeq(Vec3::ZERO), Vec3::ZERO, dir);
         let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
         bvh.ray_traverse_miss(ray, |r, id| {
             self.triangles[bvh.primitive_indices[id] as usize].intersect(r)
@@ -161,20 +196,34 @@ fn basis(n: Vec3) -> (Vec3, Vec3) {
     (t, n.cross(t))
 }
 
-/// Stratified points in [−1,1]², `n` of them on a ⌈√n⌉ grid (row-major,
-/// truncated to n), jittered by `jitter` in [0,1)² per sample.
+/// `n` stratified points in [−1,1]², one in each of n strata of equal area:
+/// r = round(√n) rows, row j holding c_j = ⌊n/r⌋ or ⌈n/r⌉ cells and of
+/// height c_j/n, so every cell (width 1/c_j) covers 1/n of the square and
+/// no part of the square is left without samples when n is not a square
+/// (n = k² gives the k×k grid). Row-major; each point is jittered inside its
+/// cell by `jitter` in [0,1)².
 pub fn stratified_square(n: usize, mut jitter: impl FnMut() -> (f32, f32)) -> Vec<(f32, f32)> {
-    let k = (n as f32).sqrt().ceil() as usize;
-    (0..n)
-        .map(|i| {
+    if n == 0 {
+        return vec![];
+    }
+    let rows = ((n as f64).sqrt().round() as usize).max(1);
+    let mut out = Vec::with_capacity(n);
+    let mut start = 0;
+    for j in 0..rows {
+        let cols = n / rows + usize::from(j < n % rows);
+        for i in 0..cols {
             let (jx, jy) = jitter();
-            let (x, y) = ((i % k) as f32 + jx, (i / k) as f32 + jy);
-            (
-                2.0 * x / k as f32 - 1.0,
-                2.0 * y / (n.div_ceil(k)) as f32 - 1.0,
-            )
-        })
-        .collect()
+            let x = 2.0 * (i as f32 + jx) / cols as f32 - 1.0;
+            let y = if n.is_multiple_of(rows) {
+                2.0 * (j as f32 + jy) / rows as f32 - 1.0
+            } else {
+                2.0 * (start as f32 + jy * cols as f32) / n as f32 - 1.0
+            };
+            out.push((x, y));
+        }
+        start += cols;
+    }
+    out
 }
 
 /// Shirley–Chiu concentric map of [−1,1]² onto the unit disk (keeps
@@ -321,11 +370,8 @@ impl ShadowTechnique for RayTraced {
             .iter()
             .map(|n| Vec3::new(n[0].to_f32(), n[1].to_f32(), n[2].to_f32()).normalize_or_zero())
             .collect();
-        let samples = if ctx.light.area.is_some() {
-            ctx.params.get_usize("samples")
-        } else {
-            1
-        };
+        let settings = ReferenceSettings::from_params(ctx.params)?;
+        let samples = settings.samples_for(ctx.light);
         let t = Instant::now();
         let mask = mask_from_gbuffer(
             &bvh,
@@ -333,7 +379,7 @@ impl ShadowTechnique for RayTraced {
             positions,
             &normals,
             samples,
-            ctx.params.get_f32("offset_ulps"),
+            settings.offset_ulps,
         );
         self.trace_ms = t.elapsed().as_secs_f64() * 1e3;
         self.rays = positions.iter().filter(|p| p[3] >= 0.5).count() as f64 * samples as f64;
@@ -380,6 +426,25 @@ mod tests {
     }
 
     #[test]
+    fn negative_zero_direction_components_still_hit() {
+        let mut s = Scene::new("slab");
+        let m = s.add_material(crate::scene::Material::default());
+        let cube = s.add_mesh(crate::scene::shapes::cuboid(Vec3::new(0.2, 0.1, 4.0)));
+        s.add_object("Box", cube, m, glam::Mat4::IDENTITY);
+        s.finalize().unwrap();
+        let bvh = CasterBvh::build(&s);
+        let origin = Vec3::new(0.5, 0.0, 0.0);
+        for z in [0.0f32, -0.0] {
+            let dir = Vec3::new(-0.9986295, 0.05233596, z);
+            assert!(!bvh.unoccluded(origin, dir, f32::INFINITY), "z = {z:?}");
+        }
+        // A sun straight down: the ray towards it is (−0, 1, −0).
+        let above = Vec3::new(0.0, -1.0, 0.0);
+        let light = Light::directional(Vec3::new(0.0, -1.0, 0.0), 1.0);
+        assert_eq!(visibility(&bvh, &light, above, Vec3::Y, 1, 64.0, 0), 0.0);
+    }
+
+    #[test]
     fn stratified_samples_cover_each_cell_once() {
         let pts = stratified_square(16, || (0.5, 0.5));
         let mut cells: Vec<(i32, i32)> = pts
@@ -389,6 +454,28 @@ mod tests {
         cells.sort();
         cells.dedup();
         assert_eq!(cells.len(), 16);
+        // Not a square: every sample kept, one per stratum of area 1/n, and
+        // the strata tile the square (no region without samples).
+        for n in [2usize, 3, 5, 7, 12, 17, 30] {
+            let pts = stratified_square(n, || (0.5, 0.5));
+            assert_eq!(pts.len(), n);
+            let lo = stratified_square(n, || (0.0, 0.0));
+            let hi = stratified_square(n, || (1.0, 1.0));
+            let area: f32 = lo
+                .iter()
+                .zip(&hi)
+                .map(|(a, b)| (b.0 - a.0) * (b.1 - a.1) / 4.0)
+                .sum();
+            assert!((area - 1.0).abs() < 1e-5, "n = {n}: strata cover {area}");
+            for ((a, b), p) in lo.iter().zip(&hi).zip(&pts) {
+                assert!(
+                    ((b.0 - a.0) * (b.1 - a.1) / 4.0 - 1.0 / n as f32).abs() <= 1e-5,
+                    "n = {n}"
+                );
+                assert!(a.0 <= p.0 && p.0 <= b.0 && a.1 <= p.1 && p.1 <= b.1);
+                assert!(a.0 >= -1.0 && a.1 >= -1.0 && b.0 <= 1.0 + 1e-6 && b.1 <= 1.0 + 1e-6);
+            }
+        }
         for (a, b) in [(1.0, 0.0), (0.0, 1.0), (-1.0, -1.0), (0.3, -0.7)] {
             let (x, y) = concentric_disk(a, b);
             assert!(x * x + y * y <= 1.0 + 1e-5);

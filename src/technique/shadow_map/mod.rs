@@ -11,7 +11,7 @@
 use super::{Family, MaskContext, ParamSpec, Preset, ShadowTechnique};
 use crate::renderer::{MASK_FORMAT, VERTEX_LAYOUT};
 use crate::scene::{Aabb, Camera, Light, LightType};
-use anyhow::{Result, bail};
+use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec3, Vec4};
 use std::collections::HashMap;
@@ -857,12 +857,19 @@ impl ShadowMapTechnique {
         }) {
             return Ok(());
         }
-        let max = gpu.max_texture_size();
-        if size > max {
-            bail!(
-                "shadow-map: size {size} exceeds the device's largest texture ({max}); choose --set size=N with N ≤ {max}"
-            );
-        }
+        let texels = size as u64 * size as u64 * layers as u64;
+        let depth_bytes = [2u64, 4, 4, 2][format];
+        let bytes = texels * (depth_bytes + (format == 3) as u64 + if moments { 32 } else { 0 });
+        gpu.check_allocation(
+            &format!(
+                "shadow-map: {layers} map(s) of {size}x{size} (--set size=N; largest texture {})",
+                gpu.max_texture_size()
+            ),
+            (size, size, layers),
+            bytes,
+        )?;
+        // Free the old maps first; keep the new ones only once created.
+        self.maps = None;
         let make = |f: wgpu::TextureFormat| {
             crate::renderer::texture_2d(
                 &gpu.device,
@@ -891,22 +898,24 @@ impl ShadowMapTechnique {
             });
             (layer_views, array)
         };
-        let (depth_layer_views, depth_array) = views(&make(depth_format(format)));
-        let texels = size as u64 * size as u64 * layers as u64;
-        let depth_bytes = [2u64, 4, 4, 2][format];
-        let byte = (format == 3).then(|| views(&make(wgpu::TextureFormat::R8Unorm)));
-        let moment = moments.then(|| [views(&make(MOMENT_FORMAT)), views(&make(MOMENT_FORMAT))]);
-        self.maps = Some(Maps {
-            size,
-            layers,
-            format,
-            moments,
-            depth_layer_views,
-            depth_array,
-            byte,
-            moment,
-            bytes: texels * (depth_bytes + (format == 3) as u64 + if moments { 32 } else { 0 }),
-        });
+        let maps = gpu.checked("allocating the shadow maps", || {
+            let (depth_layer_views, depth_array) = views(&make(depth_format(format)));
+            let byte = (format == 3).then(|| views(&make(wgpu::TextureFormat::R8Unorm)));
+            let moment =
+                moments.then(|| [views(&make(MOMENT_FORMAT)), views(&make(MOMENT_FORMAT))]);
+            Ok(Maps {
+                size,
+                layers,
+                format,
+                moments,
+                depth_layer_views,
+                depth_array,
+                byte,
+                moment,
+                bytes,
+            })
+        })?;
+        self.maps = Some(maps);
         Ok(())
     }
 
@@ -970,24 +979,24 @@ impl ShadowTechnique for ShadowMapTechnique {
             ));
         }
         let aspect = ctx.frame.width as f32 / ctx.frame.height as f32;
-        let size = p.get_usize("size") as u32;
-        let format = p.get_usize("format");
-        let filter = p.get_usize("filter");
+        let size = p.get_usize("size")? as u32;
+        let format = p.get_usize("format")?;
+        let filter = p.get_usize("filter")?;
         let moments = filter >= FIRST_MOMENT_FILTER;
         let blur = if moments {
-            p.get_usize("blur") as u32
+            p.get_usize("blur")? as u32
         } else {
             0
         };
         let normal_offset = match ctx.light.kind {
-            LightType::Directional => p.get_f32("normal_offset_directional"),
-            _ => p.get_f32("normal_offset_local"),
+            LightType::Directional => p.get_f32("normal_offset_directional")?,
+            _ => p.get_f32("normal_offset_local")?,
         };
         // An area light with `area` on becomes several point samples.
-        let lights = if p.get_bool("area") && ctx.light.area.is_some() {
+        let lights = if p.get_bool("area")? && ctx.light.area.is_some() {
             area_samples(
                 ctx.light,
-                p.get_usize("area_maps"),
+                p.get_usize("area_maps")?,
                 ctx.scene_gpu.bounds.center(),
             )
         } else {
@@ -1001,10 +1010,10 @@ impl ShadowTechnique for ShadowMapTechnique {
             _ => 0.0,
         };
         let frustum_params = FrustumParams {
-            near: p.get_f32("near"),
-            far: p.get_f32("far"),
-            fov_deg: p.get_f32("fov"),
-            paraboloid: p.get_usize("omni") == 1,
+            near: p.get_f32("near")?,
+            far: p.get_f32("far")?,
+            fov_deg: p.get_f32("fov")?,
+            paraboloid: p.get_usize("omni")? == 1,
         };
         let setups: Vec<LightSetup> = lights
             .iter()
@@ -1039,8 +1048,8 @@ impl ShadowTechnique for ShadowMapTechnique {
                 light: light.position.extend(layers as f32),
                 kernel: Vec4::new(
                     filter as f32,
-                    p.get_f32("samples"),
-                    p.get_f32("radius"),
+                    p.get_f32("samples")?,
+                    p.get_f32("radius")?,
                     normal_offset,
                 ),
                 map: Vec4::new(
@@ -1054,10 +1063,10 @@ impl ShadowTechnique for ShadowMapTechnique {
                     },
                 ),
                 soft: Vec4::new(
-                    p.get_f32("light_size"),
-                    p.get_f32("varwidth_scale"),
-                    p.get_f32("varwidth_exponent"),
-                    p.get_f32("blocker_search"),
+                    p.get_f32("light_size")?,
+                    p.get_f32("varwidth_scale")?,
+                    p.get_f32("varwidth_exponent")?,
+                    p.get_f32("blocker_search")?,
                 ),
                 depth: Vec4::new(
                     setup.near,
@@ -1067,10 +1076,10 @@ impl ShadowTechnique for ShadowMapTechnique {
                 ),
                 face: UVec4::ZERO,
                 moments: Vec4::new(
-                    p.get_f32("bleeding_reduction"),
-                    p.get_f32("exponent"),
-                    p.get_f32("exponent_negative"),
-                    p.get_f32("moment_bias"),
+                    p.get_f32("bleeding_reduction")?,
+                    p.get_f32("exponent")?,
+                    p.get_f32("exponent_negative")?,
+                    p.get_f32("moment_bias")?,
                 ),
             };
             for f in 0..6u32 {
@@ -1080,7 +1089,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                             f,
                             k.saturating_sub(1),
                             blur,
-                            p.get_bool("receiver_plane") as u32,
+                            p.get_bool("receiver_plane")? as u32,
                         ),
                         ..base
                     };
@@ -1092,16 +1101,16 @@ impl ShadowTechnique for ShadowMapTechnique {
         }
         ctx.gpu.queue.write_buffer(&self.uniforms, 0, &data);
         let device = &ctx.gpu.device;
-        let depth_bias = p.get("depth_bias").round().min(i32::MAX as f64) as i32;
+        let depth_bias = p.get("depth_bias")?.round().min(i32::MAX as f64) as i32;
         let key = DepthPassKey {
             format,
-            cull: p.get_usize("cull"),
+            cull: p.get_usize("cull")?,
             bias: depth_bias,
-            slope_bits: p.get_f32("slope_bias").to_bits(),
+            slope_bits: p.get_f32("slope_bias")?.to_bits(),
             moments,
             paraboloid: frustum_params.paraboloid,
         };
-        let stage = p.get_usize("stage");
+        let stage = p.get_usize("stage")?;
         let floor = stage == 2;
         let pipeline = if floor {
             self.floor_pipeline(device, depth_format(format)).clone()

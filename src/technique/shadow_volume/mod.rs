@@ -833,11 +833,11 @@ impl ShadowVolumeRenderer {
     }
 
     /// Decides, per caster, whether and how its volume is drawn.
-    fn plan(&mut self, ctx: &MaskContext) -> Vec<CasterPlan> {
+    fn plan(&mut self, ctx: &MaskContext) -> Result<Vec<CasterPlan>> {
         let p = ctx.params;
-        let method = p.get_usize("method");
-        let silhouette = p.get_usize("silhouette");
-        let cull = p.get_bool("cull_casters");
+        let method = p.get_usize("method")?;
+        let silhouette = p.get_usize("silhouette")?;
+        let cull = p.get_bool("cull_casters")?;
         let geometry = self.geometry.as_mut().expect("ensured");
         let view_proj = ctx.frame.uniform.view_proj;
         let frustum = silhouette::frustum_planes(view_proj);
@@ -896,7 +896,7 @@ impl ShadowVolumeRenderer {
             );
             geometry.reported_open = true;
         }
-        plans
+        Ok(plans)
     }
 }
 
@@ -915,18 +915,19 @@ fn index_usage() -> wgpu::BufferUsages {
 }
 
 impl ShadowTechnique for ShadowVolumeRenderer {
-    fn infinite_far_plane(&self, params: &super::ParamValues) -> bool {
-        params.get_f32("length") <= 0.0 && (params.get_usize("far_plane") == 0 || !self.depth_clamp)
+    fn infinite_far_plane(&self, params: &super::ParamValues) -> Result<bool> {
+        Ok(params.get_f32("length")? <= 0.0
+            && (params.get_usize("far_plane")? == 0 || !self.depth_clamp))
     }
 
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
         let p = ctx.params;
         let gpu = ctx.gpu;
         self.ensure_geometry(gpu, ctx.scene);
-        let plans = self.plan(ctx);
-        let length = p.get_f32("length");
+        let plans = self.plan(ctx)?;
+        let length = p.get_f32("length")?;
         let dark_cap = !(ctx.light.kind == LightType::Directional && length <= 0.0);
-        let clamp_asked = length <= 0.0 && p.get_usize("far_plane") == 1;
+        let clamp_asked = length <= 0.0 && p.get_usize("far_plane")? == 1;
         if clamp_asked
             && !self.depth_clamp
             && !std::mem::replace(&mut self.warned_no_depth_clamp, true)
@@ -941,7 +942,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
             encoder,
             &plans,
             dark_cap,
-            p.get_usize("extrusion") == 0,
+            p.get_usize("extrusion")? == 0,
         )?;
         self.stats = Stats {
             skipped: plans.iter().filter(|p| p.kind == VolumeKind::Skip).count(),
@@ -972,7 +973,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
         };
         let uniform = VolumeUniform {
             light: world_light,
-            extrusion: Vec4::new(length, 1.0 - p.get_f32("darkening"), 0.0, 0.0),
+            extrusion: Vec4::new(length, 1.0 - p.get_f32("darkening")?, 0.0, 0.0),
         };
         gpu.queue
             .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
@@ -988,7 +989,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
                 },
             ],
         });
-        let two_pass = p.get_usize("stencil") == 1;
+        let two_pass = p.get_usize("stencil")? == 1;
         let mut draws = vec![];
         for zfail in [false, true] {
             for pass in if two_pass { &[1u8, 2][..] } else { &[0u8][..] } {
@@ -1000,7 +1001,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
                 draws.push((self.volume_pipeline(&gpu.device, key).clone(), zfail));
             }
         }
-        let scissor = if p.get_bool("scissor") {
+        let scissor = if p.get_bool("scissor")? {
             range_scissor(
                 ctx.light,
                 ctx.frame.uniform.view_proj,
