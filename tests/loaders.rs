@@ -156,7 +156,12 @@ fn malformed_files_fail_with_file_line_and_exit_2() {
         (
             "bad.gltf",
             "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [ {\"mesh\": 5} ]",
-            "bad.gltf",
+            "bad.gltf: EOF while parsing an object at line 1 column 52",
+        ),
+        (
+            "badindex.gltf",
+            "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [ {\"mesh\": 5} ]}",
+            "badindex.gltf: invalid glTF: nodes[0].mesh: Index out of bounds",
         ),
     ];
     for (name, text, expect) in cases {

@@ -216,7 +216,7 @@ fn mirrored_casters_count_the_same_way_as_the_others() {
             * Mat4::from_scale(Vec3::new(-1.2, 1.0, 1.0)),
     );
     s.lights = vec![Light::directional(Vec3::new(0.2, -1.0, 0.1), 1.0)];
-    s.camera = Camera::new(Vec3::new(0.0, 9.0, 7.0), Vec3::ZERO);
+    s.camera = Camera::new(Vec3::new(0.5, 5.0, 3.5), Vec3::new(0.5, 0.0, 0.0));
     s.finalize().unwrap();
     assert!(s.objects[2].winding_reversed && !s.objects[1].winding_reversed);
     // Finalising again keeps the reversal (idempotent).

@@ -131,8 +131,8 @@ fn check_node_forest(file: &str, doc: &gltf::Document) -> Result<()> {
 /// glTF file names by URI (other than `data:` URIs) is a regular file: the
 /// importer reads whatever a URI names, and `/dev/zero` or a FIFO would never
 /// end.
-fn check_external_files(file: &str, path: &Path) -> Result<()> {
-    let gltf = gltf::Gltf::open(path).map_err(|e| anyhow!("{file}: {e}"))?;
+fn check_external_files(file: &str, path: &Path, bytes: &[u8]) -> Result<()> {
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| anyhow!("{file}: {e}"))?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let buffers = gltf.buffers().map(|b| match b.source() {
         gltf::buffer::Source::Uri(u) => Some(("buffer", b.index(), u)),
@@ -147,8 +147,86 @@ fn check_external_files(file: &str, path: &Path) -> Result<()> {
             continue;
         }
         let target = dir.join(uri);
-        if target.exists() && !target.is_file() {
-            bail!("{file}: {what} {index}: '{uri}' is not a regular file",);
+        if !target.exists() {
+            bail!("{file}: {what} {index}: '{uri}' not found");
+        }
+        if !target.is_file() {
+            bail!("{file}: {what} {index}: '{uri}' is not a regular file");
+        }
+    }
+    Ok(())
+}
+
+/// Checks a binary glTF's header and chunk lengths against the file, so
+/// that a truncated or inconsistent file gets a message that says which.
+fn check_glb_layout(file: &str, bytes: &[u8]) -> Result<()> {
+    let word = |at: usize| -> Option<usize> {
+        let b = bytes.get(at..at + 4)?;
+        Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+    };
+    let (Some(version), Some(length)) = (word(4), word(8)) else {
+        bail!("{file}: GLB header truncated ({} bytes)", bytes.len());
+    };
+    if version != 2 {
+        bail!("{file}: GLB version {version} (only 2 is supported)");
+    }
+    if length != bytes.len() {
+        bail!(
+            "{file}: GLB header declares {length} bytes but the file has {}",
+            bytes.len()
+        );
+    }
+    let mut at = 12;
+    let mut chunk = 0;
+    while at < bytes.len() {
+        let Some(len) = word(at) else {
+            bail!("{file}: GLB chunk {chunk} header truncated at byte {at}");
+        };
+        if at + 8 + len > bytes.len() {
+            bail!(
+                "{file}: GLB chunk {chunk} declares {len} bytes at byte {at}, past the end of the file ({} bytes)",
+                bytes.len()
+            );
+        }
+        at += 8 + len;
+        chunk += 1;
+    }
+    Ok(())
+}
+
+/// Checks that every accessor's elements lie inside its buffer view and
+/// every view inside its buffer (the importer's reader would otherwise
+/// return nothing, and the message would blame a missing attribute).
+fn check_accessors(file: &str, doc: &gltf::Document, buffers: &[gltf::buffer::Data]) -> Result<()> {
+    for view in doc.views() {
+        let have = buffers.get(view.buffer().index()).map_or(0, |b| b.len());
+        if view.offset() + view.length() > have {
+            bail!(
+                "{file}: buffer view {}: bytes {}..{} past the end of buffer {} ({have} bytes)",
+                view.index(),
+                view.offset(),
+                view.offset() + view.length(),
+                view.buffer().index()
+            );
+        }
+    }
+    for a in doc.accessors() {
+        let Some(view) = a.view() else { continue };
+        let stride = view.stride().unwrap_or(a.size());
+        let need = match a.count() {
+            0 => 0,
+            n => a.offset() + stride * (n - 1) + a.size(),
+        };
+        if need > view.length() {
+            bail!(
+                "{file}: accessor {}: {} elements of {} bytes (stride {stride}, offset {}) need {need} bytes, buffer view {} has {}",
+                a.index(),
+                a.count(),
+                a.size(),
+                a.offset(),
+                view.index(),
+                view.length()
+            );
         }
     }
     Ok(())
@@ -159,9 +237,14 @@ fn check_external_files(file: &str, path: &Path) -> Result<()> {
 /// the first camera node.
 pub fn load_scene(path: &Path) -> Result<Scene> {
     let file = path.display().to_string();
-    check_external_files(&file, path)?;
+    let bytes = std::fs::read(path).with_context(|| format!("reading {file}"))?;
+    if bytes.starts_with(b"glTF") {
+        check_glb_layout(&file, &bytes)?;
+    }
+    check_external_files(&file, path, &bytes)?;
     let (doc, buffers, images) = gltf::import(path).map_err(|e| anyhow!("{file}: {e}"))?;
     check_node_forest(&file, &doc)?;
+    check_accessors(&file, &doc, &buffers)?;
     let mut scene = Scene::new(path.file_stem().and_then(|s| s.to_str()).unwrap_or("gltf"));
     scene.source = file.clone();
     let mut tex_map = std::collections::HashMap::new();

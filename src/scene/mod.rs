@@ -981,6 +981,12 @@ pub fn load_file_included(path: &Path, includes: &[PathBuf]) -> Result<Scene> {
     scene
         .finalize()
         .with_context(|| path.display().to_string())?;
+    if scene.triangle_count() == 0 {
+        bail!(
+            "{}: no triangles to draw (every triangle is degenerate, or every object is a shadow plane)",
+            path.display()
+        );
+    }
     Ok(scene)
 }
 

@@ -376,7 +376,7 @@ pub fn parse_choice(spec: &str) -> Result<TechniqueChoice> {
         Some((id, rest)) => (
             id,
             rest.strip_suffix(']')
-                .ok_or_else(|| anyhow!("expected ']' at the end of '{item}'"))?,
+                .ok_or_else(|| anyhow!("unbalanced '[' in '{item}' (expected ']' at the end)"))?,
         ),
         None => (item, ""),
     };

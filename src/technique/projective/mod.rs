@@ -264,12 +264,7 @@ impl ShadowTechnique for ProjectiveShadows {
                     view_proj: f.view_proj(),
                     view: f.view,
                     texture: f.texture_matrix(),
-                    params: Vec4::new(
-                        f.near,
-                        f.far,
-                        alpha_bias,
-                        depth_mode as u32 as f32,
-                    ),
+                    params: Vec4::new(f.near, f.far, alpha_bias, depth_mode as u32 as f32),
                     info: UVec4::new(p.object, size, 0, 0),
                     _pad: [Vec4::ZERO; 2],
                 }

@@ -64,11 +64,17 @@ impl VolumeMesh {
             let id = f32::from_bits(object as u32);
             vm.positions
                 .extend(a.positions.iter().map(|p| p.extend(id)));
+            // A mirrored object draws a winding-reversed copy of its mesh
+            // (see `Object::winding_reversed`), whose winding planes point
+            // inwards in object space: negated, they point outwards again,
+            // so `P·L > 0` still means lit, and the lit faces' (reversed)
+            // windings are counter-clockwise in world space.
+            let facing = if o.winding_reversed { -1.0 } else { 1.0 };
             vm.faces
                 .extend(a.triangles.iter().zip(&a.planes).map(|(t, &plane)| Face {
                     v: t.map(|i| i + v0),
                     caster,
-                    plane,
+                    plane: plane * facing,
                 }));
             let face = |f: u32| {
                 if f == NO_FACE {
