@@ -77,80 +77,73 @@ fn run_bounded(args: &[String]) -> (Option<i32>, String, f64) {
 fn command_lines(case: &Case, out: &Path) -> Vec<Vec<String>> {
     let path = corpus_dir().join(&case.file).display().to_string();
     let o = |name: &str| out.join(name).display().to_string();
-    let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
-    let small = ["--size", "32x18"];
+    let line = |parts: &[&str]| -> Vec<String> {
+        parts
+            .iter()
+            .chain(&["--size", "32x18"])
+            .map(|x| x.to_string())
+            .collect()
+    };
     match case.kind.as_str() {
-        "scene" => vec![
-            [
-                &["render", "--scene", &path, "--out", &o("render")][..],
-                &small,
+        "scene" => {
+            let (render, compare, bench) = (o("render"), o("compare"), o("bench"));
+            let export: Vec<String> = ["export", "--scene", &path, "--out", &o("export.gltf")]
+                .iter()
+                .map(|x| x.to_string())
+                .collect();
+            vec![
+                line(&["render", "--scene", &path, "--out", &render]),
+                line(&["compare", "--scene", &path, "--out", &compare]),
+                line(&["bench", "--scene", &path, "--frames", "1", "--out", &bench]),
+                export,
+                line(&["view", "--scene", &path, "--frames", "1"]),
             ]
-            .concat(),
-            [
-                &["compare", "--scene", &path, "--out", &o("compare")][..],
-                &small,
-            ]
-            .concat(),
-            [
-                &[
-                    "bench",
-                    "--scene",
-                    &path,
-                    "--frames",
-                    "1",
-                    "--out",
-                    &o("bench"),
-                ][..],
-                &small,
-            ]
-            .concat(),
-            vec!["export", "--scene", &path, "--out", &o("export.gltf")],
-            [&["view", "--scene", &path, "--frames", "1"][..], &small].concat(),
-        ]
-        .iter()
-        .map(|v| s(v))
-        .collect(),
+        }
         "params" => {
             let spec = std::fs::read_to_string(corpus_dir().join(&case.file)).unwrap();
             let spec = spec.trim();
-            let scene = ["--scene", "floating"];
+            let (render, compare, bench) = (o("render"), o("compare"), o("bench"));
+            let scene = "floating";
             vec![
-                [
-                    &["render", "--technique", spec, "--out", &o("render")][..],
-                    &scene,
-                    &small,
-                ]
-                .concat(),
-                [
-                    &["compare", "--techniques", spec, "--out", &o("compare")][..],
-                    &scene,
-                    &small,
-                ]
-                .concat(),
-                [
-                    &[
-                        "bench",
-                        "--techniques",
-                        spec,
-                        "--frames",
-                        "1",
-                        "--out",
-                        &o("bench"),
-                    ][..],
-                    &scene,
-                    &small,
-                ]
-                .concat(),
-                [
-                    &["view", "--technique", spec, "--frames", "1"][..],
-                    &scene,
-                    &small,
-                ]
-                .concat(),
+                line(&[
+                    "render",
+                    "--scene",
+                    scene,
+                    "--technique",
+                    spec,
+                    "--out",
+                    &render,
+                ]),
+                line(&[
+                    "compare",
+                    "--scene",
+                    scene,
+                    "--techniques",
+                    spec,
+                    "--out",
+                    &compare,
+                ]),
+                line(&[
+                    "bench",
+                    "--scene",
+                    scene,
+                    "--techniques",
+                    spec,
+                    "--frames",
+                    "1",
+                    "--out",
+                    &bench,
+                ]),
+                line(&[
+                    "view",
+                    "--scene",
+                    scene,
+                    "--technique",
+                    spec,
+                    "--frames",
+                    "1",
+                ]),
             ]
-            .iter()
-            .map(|v| s(v))
-            .collect()
         }
         k => panic!("{}: unknown kind '{k}'", case.file),
     }

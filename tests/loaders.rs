@@ -156,7 +156,7 @@ fn malformed_files_fail_with_file_line_and_exit_2() {
         (
             "bad.gltf",
             "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [ {\"mesh\": 5} ]",
-            "bad.gltf: EOF while parsing an object at line 1 column 52",
+            "bad.gltf: EOF while parsing an object at line 1 column 54",
         ),
         (
             "badindex.gltf",

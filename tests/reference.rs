@@ -299,7 +299,8 @@ fn bench_writes_ratios_to_none() {
     assert!(rows[1].shadow_resource_bytes > 0);
     // One 256² d24 map per face of the point light's cube (or one map).
     assert!(
-        rows[2].shadow_resource_bytes % (256 * 256 * 4) == 0 && rows[2].shadow_resource_bytes > 0,
+        rows[2].shadow_resource_bytes.is_multiple_of(256 * 256 * 4)
+            && rows[2].shadow_resource_bytes > 0,
         "{}",
         rows[2].shadow_resource_bytes
     );

@@ -241,9 +241,9 @@ fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
             pct(m.interior.false_lit_pct),
             err(m.mean_abs_error),
             err(m.rms_error),
-            err(r.flip.mean as f64),
-            err(r.flip.p95 as f64),
-            err(r.flip.p99 as f64),
+            err(r.flip.mean),
+            err(r.flip.p95),
+            err(r.flip.p99),
             format!("{:.2}", r.frame_ms),
         ])?;
     }

@@ -1176,7 +1176,7 @@ mod tests {
         let other = mask_from_gbuffer(&bvh, &light, &positions, &normals, 1, 512.0);
         let moved = mask.iter().zip(&other).filter(|(a, b)| a != b).count();
         assert!(moved >= 5, "a 512-ULP offset moves {moved} samples");
-        assert!(mask.iter().any(|&v| v == 0.0) && mask.iter().any(|&v| v == 1.0));
+        assert!(mask.contains(&0.0) && mask.contains(&1.0));
         let f16s = |v: &[f32]| -> Vec<u8> {
             v.iter()
                 .flat_map(|x| half::f16::from_f32(*x).to_le_bytes())
