@@ -197,6 +197,7 @@ impl HeadlessFrame {
         width: u32,
         height: u32,
     ) -> Result<HeadlessFrame> {
+        Renderer::check_formats(gpu)?;
         let renderer = Renderer::new(gpu);
         let scene_gpu = renderer.upload_scene(gpu, scene)?;
         let frame = renderer.create_frame(gpu, width, height)?;

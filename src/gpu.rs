@@ -152,7 +152,8 @@ impl GpuContext {
         let wanted = wgpu::Features::TIMESTAMP_QUERY
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
             | wgpu::Features::PIPELINE_STATISTICS_QUERY
-            | wgpu::Features::DEPTH_CLIP_CONTROL;
+            | wgpu::Features::DEPTH_CLIP_CONTROL
+            | wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
         let features = adapter.features() & wanted;
         let (device, queue) =
             pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
@@ -233,6 +234,28 @@ impl GpuContext {
                 "{what}: needs {:.1} MiB, more than the memory budget of {} MiB (raise it with --memory-budget MIB, or choose a smaller size)",
                 bytes as f64 / (1u64 << 20) as f64,
                 self.memory_budget >> 20
+            );
+        }
+        Ok(())
+    }
+
+    /// An error unless the adapter can render to `format` (`what` says what
+    /// for): wgpu's GL backend, for one, cannot render to 32-bit float
+    /// colour targets.
+    pub fn require_renderable(&self, format: wgpu::TextureFormat, what: &str) -> Result<()> {
+        let features = self.device.features();
+        let usages = if features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES)
+        {
+            self.adapter.get_texture_format_features(format)
+        } else {
+            format.guaranteed_format_features(features)
+        }
+        .allowed_usages;
+        if !usages.contains(wgpu::TextureUsages::RENDER_ATTACHMENT) {
+            bail!(
+                "the {:?} adapter '{}' cannot render to {format:?}, the format of {what}; choose another backend (--backend vulkan: Mesa's lavapipe runs on any machine)",
+                self.info.backend,
+                self.info.name
             );
         }
         Ok(())

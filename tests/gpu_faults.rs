@@ -57,3 +57,33 @@ fn unknown_backends_and_missing_adapters_exit_2() {
         stderr(&o)
     );
 }
+
+/// `--backend gl` renders where the adapter can, and otherwise says why not:
+/// no GL adapter, or one that cannot render to a format shadowlab needs.
+#[test]
+fn the_gl_backend_works_or_says_why_not() {
+    let out = tmpdir("gl");
+    let o = shadowlab(&[
+        "render",
+        "--backend",
+        "gl",
+        "--scene",
+        "floating",
+        "--size",
+        "64x36",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(!err.contains("panicked"), "{err}");
+    if o.status.success() {
+        assert!(out.join("visibility-0.png").exists());
+    } else {
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains("no graphics adapter found for backend(s) GL")
+                || (err.contains("the Gl adapter") && err.contains("cannot render to")),
+            "{err}"
+        );
+    }
+}

@@ -492,6 +492,21 @@ pub fn texture_2d(
 }
 
 impl Renderer {
+    /// An error naming the first render-target format of a frame that the
+    /// device cannot render to (call before [`Renderer::new`]).
+    pub fn check_formats(gpu: &GpuContext) -> Result<()> {
+        for (format, what) in [
+            (DEPTH_FORMAT, "the depth buffer"),
+            (GBUFFER_POSITION_FORMAT, "the G-buffer's positions"),
+            (GBUFFER_NORMAL_FORMAT, "the G-buffer's normals"),
+            (MASK_FORMAT, "the visibility masks"),
+            (COLOR_FORMAT, "the colour image"),
+        ] {
+            gpu.require_renderable(format, what)?;
+        }
+        Ok(())
+    }
+
     pub fn new(gpu: &GpuContext) -> Renderer {
         let device = &gpu.device;
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;

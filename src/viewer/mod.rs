@@ -439,6 +439,7 @@ impl App {
         }
         config.present_mode = present_mode(self.state.vsync);
         surface.configure(&gpu.device, &config);
+        Renderer::check_formats(&gpu)?;
         let renderer = Renderer::new(&gpu);
         let (scene, camera, lights, choice) = self
             .preloaded
