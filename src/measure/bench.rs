@@ -168,46 +168,44 @@ fn opt(s: &Option<Stat>) -> String {
     s.map_or("-".into(), |s| format!("{:.2}", s.median))
 }
 
-/// `bench.csv` (through the `csv` crate, which quotes labels such as
-/// `x[a=1,b=2]`); a GPU time the adapter cannot measure is an empty field.
+/// `bench.csv`; a GPU time the adapter cannot measure is an empty field.
 fn write_csv(path: &Path, rows: &[BenchRow]) -> Result<()> {
-    let mut w =
-        csv::Writer::from_path(path).with_context(|| format!("writing {}", path.display()))?;
-    w.write_record([
-        "technique",
-        "frame_ms_median",
-        "frame_ms_p5",
-        "frame_ms_p95",
-        "masks_ms_median",
-        "gpu_frame_ms_median",
-        "gpu_prepass_ms_median",
-        "gpu_masks_ms_median",
-        "gpu_lighting_ms_median",
-        "ratio_to_none",
-        "triangles_drawn",
-        "caster_triangles",
-        "shadow_resource_bytes",
-    ])?;
     let gpu = |s: &Option<Stat>| s.map_or(String::new(), |s| format!("{:.3}", s.median));
-    for r in rows {
-        w.write_record([
-            r.technique.clone(),
-            format!("{:.3}", r.frame_ms.median),
-            format!("{:.3}", r.frame_ms.p5),
-            format!("{:.3}", r.frame_ms.p95),
-            format!("{:.3}", r.masks_ms.median),
-            gpu(&r.gpu_frame_ms),
-            gpu(&r.gpu_prepass_ms),
-            gpu(&r.gpu_masks_ms),
-            gpu(&r.gpu_lighting_ms),
-            format!("{:.4}", r.ratio_to_none),
-            r.triangles_drawn.to_string(),
-            r.caster_triangles.to_string(),
-            r.shadow_resource_bytes.to_string(),
-        ])?;
-    }
-    w.flush()?;
-    Ok(())
+    super::write_csv(
+        path,
+        &[
+            "technique",
+            "frame_ms_median",
+            "frame_ms_p5",
+            "frame_ms_p95",
+            "masks_ms_median",
+            "gpu_frame_ms_median",
+            "gpu_prepass_ms_median",
+            "gpu_masks_ms_median",
+            "gpu_lighting_ms_median",
+            "ratio_to_none",
+            "triangles_drawn",
+            "caster_triangles",
+            "shadow_resource_bytes",
+        ],
+        rows.iter().map(|r| {
+            vec![
+                r.technique.clone(),
+                format!("{:.3}", r.frame_ms.median),
+                format!("{:.3}", r.frame_ms.p5),
+                format!("{:.3}", r.frame_ms.p95),
+                format!("{:.3}", r.masks_ms.median),
+                gpu(&r.gpu_frame_ms),
+                gpu(&r.gpu_prepass_ms),
+                gpu(&r.gpu_masks_ms),
+                gpu(&r.gpu_lighting_ms),
+                format!("{:.4}", r.ratio_to_none),
+                r.triangles_drawn.to_string(),
+                r.caster_triangles.to_string(),
+                r.shadow_resource_bytes.to_string(),
+            ]
+        }),
+    )
 }
 
 fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[BenchRow]) -> String {

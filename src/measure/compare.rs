@@ -199,56 +199,54 @@ pub fn run(
     Ok(rows)
 }
 
-/// `quality.csv` (through the `csv` crate, which quotes labels such as
-/// `x[a=1,b=2]`).
+/// `quality.csv`.
 fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
-    let mut w =
-        csv::Writer::from_path(path).with_context(|| format!("writing {}", path.display()))?;
-    w.write_record([
-        "technique",
-        "light",
-        "considered_pixels",
-        "reference_shadowed_pct",
-        "false_shadow_pct",
-        "false_lit_pct",
-        "total_pct",
-        "edge_false_shadow_pct",
-        "edge_false_lit_pct",
-        "interior_false_shadow_pct",
-        "interior_false_lit_pct",
-        "mean_abs_error",
-        "rms_error",
-        "flip_mean",
-        "flip_p95",
-        "flip_p99",
-        "frame_ms",
-    ])?;
-    for r in rows {
-        let m = &r.mask;
-        let pct = |v: f64| format!("{v:.4}");
-        let err = |v: f64| format!("{v:.5}");
-        w.write_record([
-            r.technique.clone(),
-            r.light.to_string(),
-            m.considered_pixels.to_string(),
-            pct(m.reference_shadowed_pct),
-            pct(m.all.false_shadow_pct),
-            pct(m.all.false_lit_pct),
-            pct(m.all.total_pct),
-            pct(m.edge.false_shadow_pct),
-            pct(m.edge.false_lit_pct),
-            pct(m.interior.false_shadow_pct),
-            pct(m.interior.false_lit_pct),
-            err(m.mean_abs_error),
-            err(m.rms_error),
-            err(r.flip.mean),
-            err(r.flip.p95),
-            err(r.flip.p99),
-            format!("{:.2}", r.frame_ms),
-        ])?;
-    }
-    w.flush()?;
-    Ok(())
+    let pct = |v: f64| format!("{v:.4}");
+    let err = |v: f64| format!("{v:.5}");
+    super::write_csv(
+        path,
+        &[
+            "technique",
+            "light",
+            "considered_pixels",
+            "reference_shadowed_pct",
+            "false_shadow_pct",
+            "false_lit_pct",
+            "total_pct",
+            "edge_false_shadow_pct",
+            "edge_false_lit_pct",
+            "interior_false_shadow_pct",
+            "interior_false_lit_pct",
+            "mean_abs_error",
+            "rms_error",
+            "flip_mean",
+            "flip_p95",
+            "flip_p99",
+            "frame_ms",
+        ],
+        rows.iter().map(|r| {
+            let m = &r.mask;
+            vec![
+                r.technique.clone(),
+                r.light.to_string(),
+                m.considered_pixels.to_string(),
+                pct(m.reference_shadowed_pct),
+                pct(m.all.false_shadow_pct),
+                pct(m.all.false_lit_pct),
+                pct(m.all.total_pct),
+                pct(m.edge.false_shadow_pct),
+                pct(m.edge.false_lit_pct),
+                pct(m.interior.false_shadow_pct),
+                pct(m.interior.false_lit_pct),
+                err(m.mean_abs_error),
+                err(m.rms_error),
+                err(r.flip.mean),
+                err(r.flip.p95),
+                err(r.flip.p99),
+                format!("{:.2}", r.frame_ms),
+            ]
+        }),
+    )
 }
 
 fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[QualityRow]) -> String {

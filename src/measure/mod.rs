@@ -74,6 +74,24 @@ pub fn choice_label(c: &TechniqueChoice) -> String {
     }
 }
 
+/// Writes a CSV file through the `csv` crate, which quotes fields such as
+/// the label `x[a=1,b=2]`.
+pub fn write_csv(
+    path: &std::path::Path,
+    header: &[&str],
+    rows: impl IntoIterator<Item = Vec<String>>,
+) -> Result<()> {
+    use anyhow::Context;
+    let mut w =
+        csv::Writer::from_path(path).with_context(|| format!("writing {}", path.display()))?;
+    w.write_record(header)?;
+    for r in rows {
+        w.write_record(&r)?;
+    }
+    w.flush()?;
+    Ok(())
+}
+
 /// A file-name-safe form of a label.
 pub fn file_stem(label: &str) -> String {
     label
