@@ -127,12 +127,65 @@ fn check_node_forest(file: &str, doc: &gltf::Document) -> Result<()> {
     Ok(())
 }
 
+/// Runs a call into the `gltf` crate, turning its error — or a panic, which
+/// its validation raises on some malformed documents (an attribute's
+/// accessor index out of range, found by fuzzing) — into an error naming
+/// the file. The panic message is not printed.
+fn importer_guard<T>(file: &str, f: impl FnOnce() -> gltf::Result<T>) -> Result<T> {
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    std::panic::set_hook(hook);
+    match r {
+        Ok(r) => r.map_err(|e| anyhow!("{file}: {e}")),
+        Err(payload) => {
+            let why = payload
+                .downcast_ref::<String>()
+                .map(String::as_str)
+                .or_else(|| payload.downcast_ref::<&str>().copied())
+                .unwrap_or("unknown");
+            bail!("{file}: malformed glTF (the importer failed: {why})")
+        }
+    }
+}
+
+/// Checks that every mesh attribute names an existing accessor, which the
+/// `gltf` crate's own validation assumes for `POSITION` (and panics on).
+fn check_attribute_indices(file: &str, bytes: &[u8]) -> Result<()> {
+    let gltf = importer_guard(file, || gltf::Gltf::from_slice_without_validation(bytes))?;
+    let root = gltf.document.into_json();
+    let accessors = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let targets = primitive.targets.iter().flatten().flat_map(|t| {
+                [&t.positions, &t.normals, &t.tangents]
+                    .into_iter()
+                    .flatten()
+                    .map(|i| ("targets", i.value()))
+            });
+            let attributes = primitive
+                .attributes
+                .values()
+                .map(|i| ("attributes", i.value()))
+                .chain(primitive.indices.iter().map(|i| ("indices", i.value())));
+            for (what, index) in attributes.chain(targets) {
+                if index >= accessors {
+                    bail!(
+                        "{file}: meshes[{m}].primitives[{p}].{what}: accessor {index} out of range ({accessors} accessors)"
+                    );
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Checks, before the importer reads them, that every buffer and image a
 /// glTF file names by URI (other than `data:` URIs) is a regular file: the
 /// importer reads whatever a URI names, and `/dev/zero` or a FIFO would never
 /// end.
 fn check_external_files(file: &str, path: &Path, bytes: &[u8]) -> Result<()> {
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| anyhow!("{file}: {e}"))?;
+    let gltf = importer_guard(file, || gltf::Gltf::from_slice(bytes))?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let buffers = gltf.buffers().map(|b| match b.source() {
         gltf::buffer::Source::Uri(u) => Some(("buffer", b.index(), u)),
@@ -241,8 +294,9 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
     if bytes.starts_with(b"glTF") {
         check_glb_layout(&file, &bytes)?;
     }
+    check_attribute_indices(&file, &bytes)?;
     check_external_files(&file, path, &bytes)?;
-    let (doc, buffers, images) = gltf::import(path).map_err(|e| anyhow!("{file}: {e}"))?;
+    let (doc, buffers, images) = importer_guard(&file, || gltf::import(path))?;
     check_node_forest(&file, &doc)?;
     check_accessors(&file, &doc, &buffers)?;
     let mut scene = Scene::new(path.file_stem().and_then(|s| s.to_str()).unwrap_or("gltf"));
