@@ -12,11 +12,19 @@ use std::path::{Path, PathBuf};
 pub const MTL_SEPARATOR: u8 = 0;
 
 /// A per-process scratch folder holding the files an input is written to,
-/// and a small valid `box.obj` that TOML inputs may include.
+/// and a small valid `box.obj` that TOML inputs may include; in memory
+/// (`/dev/shm`) where there is one, since writing and reading the files
+/// dominates the time of an execution.
 fn scratch() -> &'static Path {
     static DIR: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
     DIR.get_or_init(|| {
-        let d = std::env::temp_dir().join(format!("shadowlab-fuzz-{}", std::process::id()));
+        let shm = Path::new("/dev/shm");
+        let base = if shm.is_dir() {
+            shm.to_path_buf()
+        } else {
+            std::env::temp_dir()
+        };
+        let d = base.join(format!("shadowlab-fuzz-{}", std::process::id()));
         std::fs::create_dir_all(&d).expect("creating the fuzz scratch folder");
         std::fs::write(
             d.join("box.obj"),

@@ -127,32 +127,70 @@ fn check_node_forest(file: &str, doc: &gltf::Document) -> Result<()> {
     Ok(())
 }
 
-/// Runs a call into the `gltf` crate, turning its error — or a panic, which
-/// its validation raises on some malformed documents (an attribute's
-/// accessor index out of range, found by fuzzing) — into an error naming
-/// the file. The panic message is not printed.
-fn importer_guard<T>(file: &str, f: impl FnOnce() -> gltf::Result<T>) -> Result<T> {
+/// Runs `f`, turning a panic — which the `gltf` crate raises on some
+/// malformed documents that its validation lets through (found by fuzzing:
+/// an attribute's accessor index out of range, an accessor whose element
+/// size is not the attribute's) — into an error naming the file. The panic
+/// message is not printed.
+fn without_panics<T>(file: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
     let hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(|_| {}));
     let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
     std::panic::set_hook(hook);
-    match r {
-        Ok(r) => r.map_err(|e| anyhow!("{file}: {e}")),
-        Err(payload) => {
-            let why = payload
-                .downcast_ref::<String>()
-                .map(String::as_str)
-                .or_else(|| payload.downcast_ref::<&str>().copied())
-                .unwrap_or("unknown");
-            bail!("{file}: malformed glTF (the importer failed: {why})")
+    r.unwrap_or_else(|payload| {
+        let why = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied())
+            .unwrap_or("unknown");
+        bail!("{file}: malformed glTF (the importer failed: {why})")
+    })
+}
+
+/// Checks that the accessors a primitive is read through have the types
+/// glTF 2.0 requires (§ 3.7.2.1): POSITION and NORMAL `VEC3` of `FLOAT`,
+/// TEXCOORD_0 `VEC2` of `FLOAT` or normalised `UNSIGNED_BYTE`/`SHORT`,
+/// indices `SCALAR` of unsigned integers.
+fn check_primitive_accessors(
+    file: &str,
+    mesh: &str,
+    index: usize,
+    prim: &gltf::Primitive,
+) -> Result<()> {
+    use gltf::Semantic;
+    use gltf::accessor::{DataType as T, Dimensions as D};
+    let float = [T::F32].as_slice();
+    let uv = [T::F32, T::U8, T::U16].as_slice();
+    let unsigned = [T::U8, T::U16, T::U32].as_slice();
+    let rules: [(&str, Option<gltf::Accessor>, D, &[T]); 4] = [
+        ("POSITION", prim.get(&Semantic::Positions), D::Vec3, float),
+        ("NORMAL", prim.get(&Semantic::Normals), D::Vec3, float),
+        ("TEXCOORD_0", prim.get(&Semantic::TexCoords(0)), D::Vec2, uv),
+        ("indices", prim.indices(), D::Scalar, unsigned),
+    ];
+    for (what, accessor, dims, types) in rules {
+        let Some(a) = accessor else { continue };
+        if a.dimensions() != dims || !types.contains(&a.data_type()) {
+            bail!(
+                "{file}: mesh '{mesh}' primitive {index}: {what} accessor {} is {:?} of {:?}; glTF requires {dims:?} of {}",
+                a.index(),
+                a.dimensions(),
+                a.data_type(),
+                types
+                    .iter()
+                    .map(|t| format!("{t:?}"))
+                    .collect::<Vec<_>>()
+                    .join(" or ")
+            );
         }
     }
+    Ok(())
 }
 
 /// Checks that every mesh attribute names an existing accessor, which the
 /// `gltf` crate's own validation assumes for `POSITION` (and panics on).
 fn check_attribute_indices(file: &str, bytes: &[u8]) -> Result<()> {
-    let gltf = importer_guard(file, || gltf::Gltf::from_slice_without_validation(bytes))?;
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| anyhow!("{file}: {e}"))?;
     let root = gltf.document.into_json();
     let accessors = root.accessors.len();
     for (m, mesh) in root.meshes.iter().enumerate() {
@@ -185,7 +223,7 @@ fn check_attribute_indices(file: &str, bytes: &[u8]) -> Result<()> {
 /// importer reads whatever a URI names, and `/dev/zero` or a FIFO would never
 /// end.
 fn check_external_files(file: &str, path: &Path, bytes: &[u8]) -> Result<()> {
-    let gltf = importer_guard(file, || gltf::Gltf::from_slice(bytes))?;
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| anyhow!("{file}: {e}"))?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let buffers = gltf.buffers().map(|b| match b.source() {
         gltf::buffer::Source::Uri(u) => Some(("buffer", b.index(), u)),
@@ -290,13 +328,18 @@ fn check_accessors(file: &str, doc: &gltf::Document, buffers: &[gltf::buffer::Da
 /// the first camera node.
 pub fn load_scene(path: &Path) -> Result<Scene> {
     let file = path.display().to_string();
+    without_panics(&file, || load_checked(&file, path))
+}
+
+fn load_checked(file: &str, path: &Path) -> Result<Scene> {
+    let file = file.to_string();
     let bytes = std::fs::read(path).with_context(|| format!("reading {file}"))?;
     if bytes.starts_with(b"glTF") {
         check_glb_layout(&file, &bytes)?;
     }
     check_attribute_indices(&file, &bytes)?;
     check_external_files(&file, path, &bytes)?;
-    let (doc, buffers, images) = importer_guard(&file, || gltf::import(path))?;
+    let (doc, buffers, images) = gltf::import(path).map_err(|e| anyhow!("{file}: {e}"))?;
     check_node_forest(&file, &doc)?;
     check_accessors(&file, &doc, &buffers)?;
     let mut scene = Scene::new(path.file_stem().and_then(|s| s.to_str()).unwrap_or("gltf"));
@@ -425,6 +468,7 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
             let mesh_id = match mesh_ids.get(&key) {
                 Some(&id) => id,
                 None => {
+                    check_primitive_accessors(&file, gmesh.name().unwrap_or(&name), pi, &prim)?;
                     let reader = prim.reader(|b| Some(&buffers[b.index()]));
                     let positions: Vec<Vec3> = reader
                         .read_positions()
