@@ -190,7 +190,8 @@ fn check_primitive_accessors(
 /// Checks that every mesh attribute names an existing accessor, which the
 /// `gltf` crate's own validation assumes for `POSITION` (and panics on).
 fn check_attribute_indices(file: &str, bytes: &[u8]) -> Result<()> {
-    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| anyhow!("{file}: {e}"))?;
+    let gltf =
+        gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| anyhow!("{file}: {e}"))?;
     let root = gltf.document.into_json();
     let accessors = root.accessors.len();
     for (m, mesh) in root.meshes.iter().enumerate() {
