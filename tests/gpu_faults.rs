@@ -87,3 +87,38 @@ fn the_gl_backend_works_or_says_why_not() {
         );
     }
 }
+
+/// An allocation the device cannot satisfy (here 16384² × 2048 layers of
+/// RGBA32F, 8 TiB, within every per-texture limit) is an out-of-memory
+/// error, not a panic or an abort.
+#[test]
+fn an_allocation_past_the_device_memory_is_an_out_of_memory_error() {
+    let gpu = gpu();
+    let layers = gpu.device.limits().max_texture_array_layers.min(2048);
+    let side = gpu.max_texture_size().min(16384);
+    let e = gpu
+        .checked("allocating a huge texture", || {
+            let t = gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("huge"),
+                size: wgpu::Extent3d {
+                    width: side,
+                    height: side,
+                    depth_or_array_layers: layers,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            });
+            drop(t);
+            Ok(())
+        })
+        .unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("allocating a huge texture: the GPU is out of memory"),
+        "{e}"
+    );
+}
