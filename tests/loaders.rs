@@ -371,3 +371,30 @@ fn khronos_validator_finds_no_errors_in_exports() {
         assert_eq!(j["errors"], 0, "{name}: {report}");
     }
 }
+
+/// A FIFO (or a device) named as a scene, an MTL library or a model to
+/// include would block a reader forever: refused or skipped, never a hang.
+#[test]
+fn special_files_never_hang_a_loader() {
+    let dir = tmpdir("fifo");
+    let fifo = dir.join("pipe.obj");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+    let e = format!("{:#}", scene::load(fifo.to_str().unwrap()).unwrap_err());
+    assert!(e.contains("pipe.obj: not a regular file"), "{e}");
+    // An OBJ whose MTL library is a FIFO loads with the grey default.
+    std::process::Command::new("mkfifo")
+        .arg(dir.join("pipe.mtl"))
+        .status()
+        .unwrap();
+    let obj = write(
+        &dir,
+        "m.obj",
+        "mtllib pipe.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n",
+    );
+    scene::load(obj.to_str().unwrap()).unwrap();
+    // A TOML file including a FIFO.
+    let toml = write(&dir, "t.toml", "[[model]]\npath = \"pipe.obj\"\n");
+    let e = format!("{:#}", scene::load(toml.to_str().unwrap()).unwrap_err());
+    assert!(e.contains("pipe.obj: not a regular file"), "{e}");
+}

@@ -949,6 +949,10 @@ pub fn load_file(path: &Path) -> Result<Scene> {
 /// [`load_file`] for a file that scene files `includes` (outermost first)
 /// include: an error names the chain when `path` is already on it.
 pub fn load_file_included(path: &Path, includes: &[PathBuf]) -> Result<Scene> {
+    if path.exists() && !path.is_file() {
+        // A directory, FIFO or device: reading it fails or never ends.
+        bail!("{}: not a regular file", path.display());
+    }
     let canonical = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
     if includes.contains(&canonical) {
         let chain: Vec<String> = includes

@@ -254,6 +254,10 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
     let (models, materials) =
         tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &LOAD_OPTIONS, |p| {
             let mtl_path = dir.join(p);
+            // Not a FIFO or a device, which would never end.
+            if !mtl_path.is_file() {
+                return Err(tobj::LoadError::OpenFileFailed);
+            }
             let mtl_text =
                 std::fs::read_to_string(&mtl_path).map_err(|_| tobj::LoadError::OpenFileFailed)?;
             if let Err(e) = check_mtl(&mtl_path.display().to_string(), &mtl_text) {
