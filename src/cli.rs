@@ -75,6 +75,10 @@ pub struct ViewCmdArgs {
     /// Start with the technique debug views on (light frusta, depth map).
     #[arg(long)]
     pub debug_views: bool,
+    /// Start showing light N's visibility mask in grey instead of the image
+    /// (the M key toggles it).
+    #[arg(long, value_name = "N")]
+    pub mask: Option<usize>,
 }
 
 #[derive(Args)]
@@ -345,6 +349,7 @@ pub fn run(cli: Cli) -> Result<()> {
                 vsync: !a.no_vsync,
                 heatmap: a.heatmap,
                 debug_views: a.debug_views,
+                mask: a.mask,
             })
         }
     }

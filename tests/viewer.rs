@@ -113,3 +113,58 @@ fn viewer_shows_the_technique_debug_views() {
         .count();
     assert!(yellow > 100, "no frustum lines ({yellow} yellow pixels)");
 }
+
+/// `--mask 0` shows light 0's visibility mask in grey. The blit that draws
+/// the view and the one that presents it share an encoder; with one shared
+/// uniform buffer both saw the second's mode and the mask never showed.
+#[test]
+fn the_mask_overlay_shows_the_mask() {
+    let dir = tmpdir("viewer-mask");
+    let shot = dir.join("mask.png");
+    let o = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1024x768x24"])
+        .arg(env!("CARGO_BIN_EXE_shadowlab"))
+        .args([
+            "view",
+            "--scene",
+            "floating",
+            "--technique",
+            "shadow-map",
+            "--mask",
+            "0",
+            "--size",
+            "800x450",
+            "--frames",
+            "3",
+            "--screenshot",
+        ])
+        .arg(&shot)
+        .output()
+        .expect("xvfb-run");
+    assert!(o.status.success(), "viewer failed: {}", stderr(&o));
+    let img = image::open(&shot).unwrap().to_rgba8();
+    // The view right of the panel: every pixel grey; lit (white) and
+    // shadowed (dark) pixels both present; none of the image's colours.
+    let view: Vec<_> = (0..450)
+        .flat_map(|y| (560..800).map(move |x| (x, y)))
+        .map(|(x, y)| *img.get_pixel(x, y))
+        .collect();
+    let coloured = view
+        .iter()
+        .filter(|p| p[0].abs_diff(p[1]) > 2 || p[1].abs_diff(p[2]) > 2)
+        .count();
+    let white = view.iter().filter(|p| p[0] > 250).count();
+    let dark = view.iter().filter(|p| p[0] < 60).count();
+    assert!(
+        coloured == 0 && white > 1000 && dark > 200,
+        "{coloured} coloured, {white} white, {dark} dark pixels"
+    );
+    // A light that does not exist is refused before a window opens.
+    let o = shadowlab(&["view", "--scene", "floating", "--mask", "3"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("--mask 3: there are 1 light(s)"),
+        "{}",
+        stderr(&o)
+    );
+}

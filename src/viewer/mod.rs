@@ -37,6 +37,8 @@ pub struct ViewerOptions {
     pub heatmap: bool,
     /// Start with the technique debug views on.
     pub debug_views: bool,
+    /// Start showing this light's visibility mask instead of the image.
+    pub mask: Option<usize>,
 }
 
 /// The composited window image (also what screenshots read) holds sRGB-encoded
@@ -61,7 +63,6 @@ struct BlitUniform {
 /// Draws a texture (or a mask layer) over a whole target.
 struct Blit {
     layout: wgpu::BindGroupLayout,
-    uniform: wgpu::Buffer,
     sampler: wgpu::Sampler,
     module: wgpu::ShaderModule,
     pipelines: Vec<(wgpu::TextureFormat, wgpu::RenderPipeline)>,
@@ -105,12 +106,6 @@ impl Blit {
             ],
         });
         Blit {
-            uniform: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("blit"),
-                size: 16,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
             sampler: device.create_sampler(&wgpu::SamplerDescriptor {
                 mag_filter: wgpu::FilterMode::Linear,
                 min_filter: wgpu::FilterMode::Linear,
@@ -181,15 +176,23 @@ impl Blit {
         masks: &wgpu::TextureView,
         mode: [u32; 4],
     ) {
-        gpu.queue
-            .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&BlitUniform { mode }));
+        // A buffer per draw: several draws share one encoder, and a queued
+        // write to one shared buffer would land before all of them.
+        use wgpu::util::DeviceExt;
+        let uniform = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("blit"),
+                contents: bytemuck::bytes_of(&BlitUniform { mode }),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
         let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("blit"),
             layout: &self.layout,
             entries: &[
                 wgpu::BindGroupEntry {
                     binding: 0,
-                    resource: self.uniform.as_entire_binding(),
+                    resource: uniform.as_entire_binding(),
                 },
                 wgpu::BindGroupEntry {
                     binding: 1,
@@ -346,6 +349,12 @@ struct App {
 pub fn run(options: ViewerOptions) -> Result<()> {
     let started = Instant::now();
     let (scene, camera, lights) = options.view.resolve()?;
+    if let Some(m) = options.mask.filter(|&m| m >= lights.len()) {
+        anyhow::bail!(
+            "--mask {m}: there are {} light(s), numbered from 0",
+            lights.len()
+        );
+    }
     let mut choice = technique::parse_choice(&options.technique)?;
     technique::apply_settings(&mut choice.params, &options.set)?;
     let preloaded = Some((scene, camera, lights, choice));
@@ -360,7 +369,7 @@ pub fn run(options: ViewerOptions) -> Result<()> {
             },
             vsync: options.vsync,
             supersampling: 1,
-            overlay: Overlay::Image,
+            overlay: options.mask.map_or(Overlay::Image, Overlay::Mask),
             selected_light: 0,
             same_technique_for_all: true,
             show_panel: true,
