@@ -5,15 +5,25 @@ mod common;
 use common::*;
 use std::process::Command;
 
+/// Runs `shadowlab view ARGS --screenshot SHOT` under Xvfb.
+fn view_under_xvfb(args: &[&str], shot: &std::path::Path) -> std::process::Output {
+    Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1024x768x24"])
+        .arg(env!("CARGO_BIN_EXE_shadowlab"))
+        .arg("view")
+        .args(args)
+        .arg("--screenshot")
+        .arg(shot)
+        .output()
+        .expect("xvfb-run (package xvfb) must be installed: scripts/setup.sh --test does it")
+}
+
 #[test]
 fn viewer_screenshot_shows_scene_and_panel() {
     let dir = tmpdir("viewer");
     let shot = dir.join("view.png");
-    let o = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 1024x768x24"])
-        .arg(env!("CARGO_BIN_EXE_shadowlab"))
-        .args([
-            "view",
+    let o = view_under_xvfb(
+        &[
             "--scene",
             "floating",
             "--technique",
@@ -23,11 +33,9 @@ fn viewer_screenshot_shows_scene_and_panel() {
             "--frames",
             "4",
             "--heatmap",
-            "--screenshot",
-        ])
-        .arg(&shot)
-        .output()
-        .expect("xvfb-run (package xvfb) must be installed: scripts/setup.sh --test does it");
+        ],
+        &shot,
+    );
     assert!(o.status.success(), "viewer failed: {}", stderr(&o));
     // The heatmap against raytraced arrived from its background thread.
     let stdout = String::from_utf8_lossy(&o.stdout);
@@ -80,11 +88,8 @@ fn viewer_screenshot_shows_scene_and_panel() {
 #[test]
 fn viewer_shows_the_technique_debug_views() {
     let dir = tmpdir("viewer-debug");
-    let o = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 1024x768x24"])
-        .arg(env!("CARGO_BIN_EXE_shadowlab"))
-        .args([
-            "view",
+    let o = view_under_xvfb(
+        &[
             "--scene",
             "room",
             "--light",
@@ -96,11 +101,9 @@ fn viewer_shows_the_technique_debug_views() {
             "--frames",
             "3",
             "--debug-views",
-            "--screenshot",
-        ])
-        .arg(dir.join("debug.png"))
-        .output()
-        .expect("xvfb-run");
+        ],
+        &dir.join("debug.png"),
+    );
     assert!(o.status.success(), "viewer failed: {}", stderr(&o));
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(stdout.contains("debug views: 3 image(s)"), "{stdout}");
@@ -121,11 +124,8 @@ fn viewer_shows_the_technique_debug_views() {
 fn the_mask_overlay_shows_the_mask() {
     let dir = tmpdir("viewer-mask");
     let shot = dir.join("mask.png");
-    let o = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 1024x768x24"])
-        .arg(env!("CARGO_BIN_EXE_shadowlab"))
-        .args([
-            "view",
+    let o = view_under_xvfb(
+        &[
             "--scene",
             "floating",
             "--technique",
@@ -136,11 +136,9 @@ fn the_mask_overlay_shows_the_mask() {
             "800x450",
             "--frames",
             "3",
-            "--screenshot",
-        ])
-        .arg(&shot)
-        .output()
-        .expect("xvfb-run");
+        ],
+        &shot,
+    );
     assert!(o.status.success(), "viewer failed: {}", stderr(&o));
     let img = image::open(&shot).unwrap().to_rgba8();
     // The view right of the panel: every pixel grey; lit (white) and
