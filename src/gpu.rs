@@ -110,7 +110,7 @@ impl GpuContext {
         self.check_not_lost(what)?;
         if let Some(e) = o {
             bail!(
-                "{what}: the GPU is out of memory ({e}); choose smaller sizes or a lower --memory-budget"
+                "{what}: the GPU is out of memory ({e}); choose smaller sizes, or set --memory-budget below the device's memory so that such requests are refused up front"
             );
         }
         if let Some(e) = v {

@@ -385,41 +385,37 @@ impl Material {
     /// Checks coefficients, texture references (against `textures`
     /// loaded textures) and the procedural texture.
     pub fn validate(&self, textures: usize) -> Result<()> {
-        let what = |e: anyhow::Error| e.context(format!("material '{}'", self.name));
-        let colours = [("ka", self.ka), ("kd", self.kd), ("ks", self.ks)];
-        for (field, c) in colours {
+        self.check(textures)
+            .with_context(|| format!("material '{}'", self.name))
+    }
+
+    fn check(&self, textures: usize) -> Result<()> {
+        for (field, c) in [("ka", self.ka), ("kd", self.kd), ("ks", self.ks)] {
             if !(c.is_finite() && c.min_element() >= 0.0) {
-                return Err(what(anyhow::anyhow!(
-                    "{field} must be finite and non-negative, got {c}"
-                )));
+                bail!("{field} must be finite and non-negative, got {c}");
             }
         }
         if !(0.0..=1000.0).contains(&self.shininess) {
-            return Err(what(anyhow::anyhow!(
-                "shininess must be in 0..=1000, got {}",
-                self.shininess
-            )));
+            bail!("shininess must be in 0..=1000, got {}", self.shininess);
         }
         if !(self.uv_scale.is_finite() && self.uv_scale > 0.0) {
-            return Err(what(anyhow::anyhow!(
+            bail!(
                 "uv_scale must be a positive finite number, got {}",
                 self.uv_scale
-            )));
+            );
         }
         for (field, t) in [
             ("diffuse texture", self.diffuse_texture),
             ("normal map", self.normal_map),
         ] {
             if let Some(i) = t.filter(|&i| i >= textures) {
-                return Err(what(anyhow::anyhow!(
-                    "{field} index {i} out of range ({textures} textures)"
-                )));
+                bail!("{field} index {i} out of range ({textures} textures)");
             }
         }
-        if let Some(p) = &self.procedural {
-            p.validate().map_err(what)?;
+        match &self.procedural {
+            Some(p) => p.validate(),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     pub fn color(name: &str, kd: Vec3) -> Material {
