@@ -189,10 +189,7 @@ fn check_primitive_accessors(
 
 /// Checks that every mesh attribute names an existing accessor, which the
 /// `gltf` crate's own validation assumes for `POSITION` (and panics on).
-fn check_attribute_indices(file: &str, bytes: &[u8]) -> Result<()> {
-    let gltf =
-        gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| anyhow!("{file}: {e}"))?;
-    let root = gltf.document.into_json();
+fn check_attribute_indices(file: &str, root: &gltf::json::Root) -> Result<()> {
     let accessors = root.accessors.len();
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
@@ -223,21 +220,21 @@ fn check_attribute_indices(file: &str, bytes: &[u8]) -> Result<()> {
 /// glTF file names by URI (other than `data:` URIs) is a regular file: the
 /// importer reads whatever a URI names, and `/dev/zero` or a FIFO would never
 /// end.
-fn check_external_files(file: &str, path: &Path, bytes: &[u8]) -> Result<()> {
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| anyhow!("{file}: {e}"))?;
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let buffers = gltf.buffers().map(|b| match b.source() {
-        gltf::buffer::Source::Uri(u) => Some(("buffer", b.index(), u)),
-        gltf::buffer::Source::Bin => None,
-    });
-    let images = gltf.images().map(|i| match i.source() {
-        gltf::image::Source::Uri { uri, .. } => Some(("image", i.index(), uri)),
-        gltf::image::Source::View { .. } => None,
-    });
-    for (what, index, uri) in buffers.chain(images).flatten() {
-        if uri.starts_with("data:") {
+fn check_external_files(file: &str, dir: &Path, root: &gltf::json::Root) -> Result<()> {
+    let buffers = root
+        .buffers
+        .iter()
+        .enumerate()
+        .map(|(i, b)| ("buffer", i, &b.uri));
+    let images = root
+        .images
+        .iter()
+        .enumerate()
+        .map(|(i, im)| ("image", i, &im.uri));
+    for (what, index, uri) in buffers.chain(images) {
+        let Some(uri) = uri.as_deref().filter(|u| !u.starts_with("data:")) else {
             continue;
-        }
+        };
         let target = dir.join(uri);
         if !target.exists() {
             bail!("{file}: {what} {index}: '{uri}' not found");
@@ -338,8 +335,14 @@ fn load_checked(file: &str, path: &Path) -> Result<Scene> {
     if bytes.starts_with(b"glTF") {
         check_glb_layout(&file, &bytes)?;
     }
-    check_attribute_indices(&file, &bytes)?;
-    check_external_files(&file, path, &bytes)?;
+    // One parse without the importer's validation serves both checks that
+    // must come before it.
+    let root = gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| anyhow!("{file}: {e}"))?
+        .document
+        .into_json();
+    check_attribute_indices(&file, &root)?;
+    check_external_files(&file, path.parent().unwrap_or(Path::new(".")), &root)?;
     let (doc, buffers, images) = gltf::import(path).map_err(|e| anyhow!("{file}: {e}"))?;
     check_node_forest(&file, &doc)?;
     check_accessors(&file, &doc, &buffers)?;

@@ -122,7 +122,9 @@ pub fn load(path: &Path, includes: &[PathBuf]) -> Result<Scene> {
     );
     scene.source = file.clone();
     for (field, c) in [("background", f.background), ("ambient", f.ambient)] {
-        if c.is_some_and(|c| !Vec3::from(c).is_finite() || Vec3::from(c).min_element() < 0.0) {
+        if c.map(Vec3::from)
+            .is_some_and(|c| !c.is_finite() || c.min_element() < 0.0)
+        {
             bail!("{file}: `{field}` must be three finite non-negative numbers");
         }
     }
