@@ -1,6 +1,6 @@
 //! Command-line interface: `scenes`, `techniques`, `export`, `render`.
 
-use crate::frame::{self, FrameRecord, HeadlessFrame};
+use crate::headless::{self, FrameRecord, HeadlessFrame};
 use crate::gpu::GpuContext;
 use crate::measure;
 use crate::renderer::{LightingModel, RenderSettings, Shading};
@@ -190,6 +190,11 @@ pub struct ViewArgs {
     #[arg(long, value_name = "MIB", default_value_t = crate::gpu::DEFAULT_MEMORY_BUDGET_MIB,
           value_parser = clap::value_parser!(u64).range(1..=(1u64 << 24)))]
     pub memory_budget: u64,
+    /// Anisotropic filtering of material textures, 1 (trilinear) to 16;
+    /// default 8 on GPUs, 1 on CPU adapters such as lavapipe (where it
+    /// doubles the cost of the lighting pass).
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=16))]
+    pub anisotropy: Option<u16>,
 }
 
 #[derive(Args)]
@@ -279,11 +284,11 @@ impl ViewArgs {
         for l in &lights {
             l.validate()?;
         }
-        if lights.len() > crate::renderer::MAX_LIGHTS {
+        if lights.len() > crate::frame::MAX_LIGHTS {
             bail!(
                 "{} lights; at most {} are supported",
                 lights.len(),
-                crate::renderer::MAX_LIGHTS
+                crate::frame::MAX_LIGHTS
             );
         }
         Ok((scene, camera, lights))
@@ -293,6 +298,9 @@ impl ViewArgs {
     pub fn gpu(&self) -> Result<GpuContext> {
         let mut gpu = GpuContext::new(self.backend.as_deref())?;
         gpu.memory_budget = self.memory_budget << 20;
+        if let Some(a) = self.anisotropy {
+            gpu.anisotropy = a;
+        }
         Ok(gpu)
     }
 
@@ -304,6 +312,7 @@ impl ViewArgs {
             background: self.background,
             show_light_icons: !self.no_icons,
             gpu_timing: false,
+            stage_waits: false,
         }
     }
 }
@@ -479,6 +488,7 @@ fn bench(a: BenchArgs) -> Result<()> {
         &camera,
         &lights,
         a.view.size,
+        &a.view.settings(),
         &techniques,
         a.warmup,
         a.frames,
@@ -524,8 +534,8 @@ fn render(a: RenderArgs) -> Result<()> {
     all.sort_by(|x, y| x.total_ms.total_cmp(&y.total_ms));
     let timings = all[all.len() / 2].clone();
     let rb = Instant::now();
-    let images = frame::read_back(&gpu, &hf.frame, lights.len())?;
-    frame::write_images(&a.out, &images)?;
+    let images = headless::read_back(&gpu, &hf.frame, lights.len())?;
+    headless::write_images(&a.out, &images)?;
     let t_write = rb.elapsed();
     let record = FrameRecord {
         scene: &scene,
@@ -537,6 +547,7 @@ fn render(a: RenderArgs) -> Result<()> {
         frame: &hf.frame,
         timings: &timings,
         adapter: gpu.adapter_summary(),
+        anisotropy: gpu.anisotropy,
         extra_timings: serde_json::json!({
             "scene_load": t_scene.as_secs_f64() * 1e3,
             "gpu_init": t_gpu.as_secs_f64() * 1e3,
@@ -546,7 +557,7 @@ fn render(a: RenderArgs) -> Result<()> {
             "frames_rendered": a.frames,
         }),
     };
-    let json = frame::frame_json(&record);
+    let json = headless::frame_json(&record);
     let path = a.out.join("frame.json");
     std::fs::write(&path, serde_json::to_string_pretty(&json)?)
         .with_context(|| format!("writing {}", path.display()))?;

@@ -6,6 +6,7 @@
 
 pub mod cli;
 pub mod frame;
+pub mod headless;
 pub mod fuzz_input;
 pub mod gpu;
 pub mod measure;

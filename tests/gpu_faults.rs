@@ -13,7 +13,7 @@ fn a_lost_device_is_an_error_not_a_panic() {
     let scene = builtin::by_name("floating").unwrap().unwrap();
     let choice = shadowlab::technique::resolve("shadow-map").unwrap();
     let mut hf =
-        shadowlab::frame::HeadlessFrame::new(&gpu, &scene, std::slice::from_ref(&choice), 64, 36)
+        shadowlab::headless::HeadlessFrame::new(&gpu, &scene, std::slice::from_ref(&choice), 64, 36)
             .unwrap();
     hf.render(
         &gpu,
@@ -38,7 +38,7 @@ fn a_lost_device_is_an_error_not_a_panic() {
         format!("{e:#}").contains("the GPU device was lost"),
         "{e:#}"
     );
-    let e = shadowlab::frame::HeadlessFrame::new(&gpu, &scene, &[choice], 64, 36)
+    let e = shadowlab::headless::HeadlessFrame::new(&gpu, &scene, &[choice], 64, 36)
         .err()
         .unwrap();
     assert!(

@@ -4,7 +4,7 @@
 mod common;
 use common::*;
 use glam::{Mat4, Vec3, Vec4};
-use shadowlab::frame::{self, HeadlessFrame};
+use shadowlab::headless::{self, HeadlessFrame};
 use shadowlab::measure;
 use shadowlab::renderer::RenderSettings;
 use shadowlab::scene::{Camera, Light, LightArea, Material, Scene, shapes};
@@ -59,8 +59,8 @@ fn render_reference(scene: &Scene, camera: &Camera, id: &str, w: u32, h: u32) ->
     };
     hf.render(gpu, scene, camera, &scene.lights, &settings)
         .unwrap();
-    let img = frame::read_back(gpu, &hf.frame, 1).unwrap();
-    (img.masks[0].clone(), hf.frame.uniform.view_proj)
+    let img = headless::read_back(gpu, &hf.frame, 1).unwrap();
+    (img.masks[0].clone(), hf.frame.uniform().view_proj)
 }
 
 #[test]
@@ -266,6 +266,7 @@ fn bench_writes_ratios_to_none() {
         &scene.camera,
         &scene.lights,
         (96, 54),
+        &Default::default(),
         &list,
         1,
         3,

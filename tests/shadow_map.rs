@@ -230,9 +230,7 @@ fn the_maps_and_floor_stages_render_maps_but_write_a_lit_mask() {
 fn maps_past_the_device_or_the_memory_budget_are_refused_before_allocating() {
     let gpu = gpu();
     // Frames beyond the device limit are refused.
-    let r = shadowlab::renderer::Renderer::new(gpu);
-    let e = r
-        .create_frame(gpu, gpu.max_texture_size() + 1, 8)
+    let e = shadowlab::frame::FrameTargets::new(gpu, gpu.max_texture_size() + 1, 8)
         .err()
         .unwrap();
     assert!(
@@ -245,8 +243,8 @@ fn maps_past_the_device_or_the_memory_budget_are_refused_before_allocating() {
     scene.lights = scene.light_preset("point").unwrap();
     let mut c = shadowlab::technique::resolve("shadow-map:vsm").unwrap();
     c.params.set("size", "16384").unwrap();
-    let mut hf = shadowlab::frame::HeadlessFrame::new(gpu, &scene, &[c], 64, 64).unwrap();
-    let render = |hf: &mut shadowlab::frame::HeadlessFrame| {
+    let mut hf = shadowlab::headless::HeadlessFrame::new(gpu, &scene, &[c], 64, 64).unwrap();
+    let render = |hf: &mut shadowlab::headless::HeadlessFrame| {
         hf.render(
             gpu,
             &scene,
@@ -260,9 +258,11 @@ fn maps_past_the_device_or_the_memory_budget_are_refused_before_allocating() {
     assert!(e.contains("more than the memory budget of 4096 MiB"), "{e}");
     assert!(e.contains("55296.0 MiB"), "{e}");
     // Nothing failed stays cached: a size that fits renders shadows next.
-    hf.techniques[0].choice.params.set("size", "256").unwrap();
+    let mut params = hf.techniques[0].choice.params.clone();
+    params.set("size", "256").unwrap();
+    hf.techniques[0].set_params(params).unwrap();
     render(&mut hf).unwrap();
-    let mask = shadowlab::frame::read_back(gpu, &hf.frame, 1)
+    let mask = shadowlab::headless::read_back(gpu, &hf.frame, 1)
         .unwrap()
         .masks
         .remove(0);

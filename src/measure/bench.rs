@@ -5,7 +5,7 @@
 //! technique's frame time as a ratio to `none` measured in the same run.
 
 use super::choice_label;
-use crate::frame::HeadlessFrame;
+use crate::headless::HeadlessFrame;
 use crate::gpu::GpuContext;
 use crate::renderer::{FrameTimings, RenderSettings};
 use crate::scene::{Camera, Light, Scene};
@@ -57,7 +57,9 @@ pub struct BenchRow {
     pub counters: Vec<(String, f64)>,
 }
 
-/// Benchmarks `techniques` (with `none` added first when missing).
+/// Benchmarks `techniques` (with `none` added first when missing) with the
+/// render settings `base` (shading, specular model, culling), each stage
+/// waited for, GPU timestamps on and light icons off.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     gpu: &GpuContext,
@@ -65,6 +67,7 @@ pub fn run(
     camera: &Camera,
     lights: &[Light],
     size: (u32, u32),
+    base: &RenderSettings,
     techniques: &[TechniqueChoice],
     warmup: u32,
     frames: u32,
@@ -78,7 +81,8 @@ pub fn run(
     let settings = RenderSettings {
         show_light_icons: false,
         gpu_timing: true,
-        ..Default::default()
+        stage_waits: true,
+        ..*base
     };
     let bar = indicatif::ProgressBar::new((list.len() as u32 * (warmup + frames)) as u64);
     bar.set_style(

@@ -4,9 +4,10 @@
 
 use super::quality::{self, FlipStats, MaskMetrics};
 use super::{choice_label, file_stem};
-use crate::frame::{self, FrameImages, HeadlessFrame};
+use crate::headless::{self, FrameImages, HeadlessFrame};
 use crate::gpu::GpuContext;
-use crate::renderer::{RenderSettings, TechniqueInstance};
+use crate::renderer::RenderSettings;
+use crate::technique::TechniqueInstance;
 use crate::scene::{Camera, Light, Scene};
 use crate::technique::TechniqueChoice;
 use anyhow::{Context, Result};
@@ -21,7 +22,7 @@ pub struct QualityRow {
     pub technique: String,
     pub light: usize,
     pub mask: MaskMetrics,
-    /// The same over pixels on a receiver plane (see `planar::receiver_planes`)...
+    /// The same over pixels on a receiver plane (see `scene::planes::receiver_planes`)...
     pub on_planes: MaskMetrics,
     /// ...and over the other pixels.
     pub off_planes: MaskMetrics,
@@ -33,9 +34,9 @@ pub struct QualityRow {
 
 /// Pixels whose visible surface lies on one of the scene's receiver planes.
 pub fn plane_pixels(gpu: &GpuContext, hf: &HeadlessFrame, scene: &Scene) -> Result<Vec<bool>> {
-    let planes = crate::technique::planar::receiver_planes(scene);
+    let planes = crate::scene::planes::receiver_planes(scene);
     let tol = scene.bounds().size().length().max(1e-3) * 1e-4;
-    let pos = gpu.read_texture(&hf.frame.gbuffer_position, 0, 16)?;
+    let pos = gpu.read_texture(hf.frame.gbuffer_position(), 0, 16)?;
     Ok(bytemuck::cast_slice::<u8, [f32; 4]>(&pos)
         .iter()
         .map(|p| {
@@ -58,8 +59,8 @@ pub fn considered_pixels(
     hf: &HeadlessFrame,
     lights: &[Light],
 ) -> Result<Vec<Vec<bool>>> {
-    let pos = gpu.read_texture(&hf.frame.gbuffer_position, 0, 16)?;
-    let nrm = gpu.read_texture(&hf.frame.gbuffer_normal, 0, 8)?;
+    let pos = gpu.read_texture(hf.frame.gbuffer_position(), 0, 16)?;
+    let nrm = gpu.read_texture(hf.frame.gbuffer_normal(), 0, 8)?;
     let pos: &[[f32; 4]] = bytemuck::cast_slice(&pos);
     let nrm: &[[half::f16; 4]] = bytemuck::cast_slice(&nrm);
     Ok(lights
@@ -91,7 +92,7 @@ fn render_with(
         .map(|_| TechniqueInstance::new(gpu, choice.clone()))
         .collect::<Result<_>>()?;
     let t = hf.render(gpu, scene, camera, lights, settings)?;
-    Ok((frame::read_back(gpu, &hf.frame, lights.len())?, t.total_ms))
+    Ok((headless::read_back(gpu, &hf.frame, lights.len())?, t.total_ms))
 }
 
 /// Renders the reference and every technique, writes images, heatmaps and
@@ -118,7 +119,7 @@ pub fn run(
     let (w, h) = size;
     let mut hf = HeadlessFrame::new(gpu, scene, std::slice::from_ref(reference), w, h)?;
     let (ref_img, ref_ms) = render_with(gpu, &mut hf, scene, camera, lights, &settings, reference)?;
-    frame::write_images(&out.join("reference"), &ref_img)?;
+    headless::write_images(&out.join("reference"), &ref_img)?;
     let considered = considered_pixels(gpu, &hf, lights)?;
     let on_plane = plane_pixels(gpu, &hf, scene)?;
     let split = |cons: &[bool], want: bool| -> Vec<bool> {

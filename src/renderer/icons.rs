@@ -2,7 +2,7 @@
 //! directional lights, an arrow inside a cone for spot lights; unlit, in the
 //! light's colour, sized from the scene bounds.
 
-use super::MAX_LIGHTS;
+use crate::frame::MAX_LIGHTS;
 use crate::gpu::GpuContext;
 use crate::scene::{Aabb, Light, LightType, Mesh, shapes};
 use bytemuck::{Pod, Zeroable};
@@ -83,10 +83,11 @@ fn upload(device: &wgpu::Device, mut m: Mesh) -> IconMesh {
 }
 
 impl LightIcons {
-    pub fn new(device: &wgpu::Device, frame_layout: &wgpu::BindGroupLayout) -> LightIcons {
+    pub fn new(gpu: &GpuContext, frame_layout: &wgpu::BindGroupLayout) -> LightIcons {
+        let device = &gpu.device;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("icon"),
-            entries: &[super::uniform_entry(
+            entries: &[crate::gpu::uniform_entry(
                 0,
                 wgpu::ShaderStages::VERTEX_FRAGMENT,
                 true,
@@ -103,16 +104,18 @@ impl LightIcons {
             layout: &layout,
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
-                resource: crate::renderer::dynamic_uniform::<IconUniform>(&uniforms),
+                resource: crate::gpu::dynamic_uniform::<IconUniform>(&uniforms),
             }],
         });
-        let module = super::shader_module(device, "icons", &[include_str!("icons.wgsl")]);
+        let device = &gpu.device;
+        let module = crate::frame::shader_module(device, "icons", &[include_str!("icons.wgsl")]);
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("icons"),
             bind_group_layouts: &[Some(frame_layout), None, Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        let pipeline = gpu.cache.render_pipeline("icons", &(), || {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("icons"),
             layout: Some(&pl),
             vertex: wgpu::VertexState {
@@ -127,7 +130,7 @@ impl LightIcons {
             },
             primitive: Default::default(),
             depth_stencil: Some(wgpu::DepthStencilState {
-                format: super::DEPTH_FORMAT,
+                format: crate::frame::DEPTH_FORMAT,
                 depth_write_enabled: Some(false),
                 depth_compare: Some(wgpu::CompareFunction::LessEqual),
                 stencil: Default::default(),
@@ -138,10 +141,11 @@ impl LightIcons {
                 module: &module,
                 entry_point: Some("fs_icon"),
                 compilation_options: Default::default(),
-                targets: &[Some(super::COLOR_FORMAT.into())],
+                targets: &[Some(crate::frame::COLOR_FORMAT.into())],
             }),
             multiview_mask: None,
             cache: None,
+        })
         });
         let mut spot = arrow();
         let cone = shapes::lathe("cone", &[Vec2::new(0.45, 0.0), Vec2::new(0.0, 0.9)], 24);

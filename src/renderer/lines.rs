@@ -1,7 +1,7 @@
 //! Debug lines drawn over a rendered frame, depth-tested against the scene:
 //! what techniques offer as debug views (light frusta, silhouette edges).
 
-use super::{COLOR_FORMAT, DEPTH_FORMAT, FrameResources};
+use crate::frame::{COLOR_FORMAT, DEPTH_FORMAT, FrameTargets};
 use crate::gpu::GpuContext;
 use crate::technique::DebugLine;
 use wgpu::util::DeviceExt;
@@ -18,14 +18,16 @@ pub struct LineRenderer {
 }
 
 impl LineRenderer {
-    pub fn new(device: &wgpu::Device, frame_layout: &wgpu::BindGroupLayout) -> LineRenderer {
-        let module = super::shader_module(device, "lines", &[include_str!("lines.wgsl")]);
+    pub fn new(gpu: &GpuContext, frame_layout: &wgpu::BindGroupLayout) -> LineRenderer {
+        let device = &gpu.device;
+        let module = crate::frame::shader_module(device, "lines", &[include_str!("lines.wgsl")]);
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("lines"),
             bind_group_layouts: &[Some(frame_layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        let pipeline = gpu.cache.render_pipeline("lines", &(), || {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("lines"),
             layout: Some(&layout),
             vertex: wgpu::VertexState {
@@ -62,12 +64,13 @@ impl LineRenderer {
             }),
             multiview_mask: None,
             cache: None,
+        })
         });
         LineRenderer { pipeline }
     }
 
     /// Draws `lines` onto the frame's colour image.
-    pub fn draw(&self, gpu: &GpuContext, frame: &FrameResources, lines: &[DebugLine]) {
+    pub fn draw(&self, gpu: &GpuContext, frame: &FrameTargets, lines: &[DebugLine]) {
         if lines.is_empty() {
             return;
         }
@@ -92,7 +95,7 @@ impl LineRenderer {
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("debug lines"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &frame.color_view,
+                    view: frame.color_view(),
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
@@ -101,7 +104,7 @@ impl LineRenderer {
                     },
                 })],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &frame.depth_view,
+                    view: frame.depth_view(),
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Load,
                         store: wgpu::StoreOp::Store,
@@ -111,7 +114,7 @@ impl LineRenderer {
                 ..Default::default()
             });
             pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &frame.frame_bind_group, &[]);
+            pass.set_bind_group(0, frame.frame_bind_group(), &[]);
             pass.set_vertex_buffer(0, buffer.slice(..));
             pass.draw(0..vertices.len() as u32, 0..1);
         }

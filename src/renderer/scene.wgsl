@@ -62,6 +62,24 @@ fn fs_gbuffer(i: GOut) -> GBuffer {
     return g;
 }
 
+// The lighting pass is specialised per pipeline (pipeline-overridable
+// constants, set by `LitKey` in lighting.rs): the light count bounds every
+// loop, and the shading mode, specular model and material features are
+// constants, so no pipeline branches on them per pixel.
+override LIGHT_COUNT: u32 = 1u;
+// Shading mode: 0 flat, 1 Gouraud, 2 per-pixel (entry points differ for Gouraud).
+override SHADING: u32 = 2u;
+// 0 Phong (V·R)^n, 1 Blinn-Phong (N·H)^n.
+override SPECULAR: u32 = 1u;
+override DIFFUSE_TEXTURE: bool = false;
+override NORMAL_MAP: bool = false;
+// 0 none, else the kind of `procedural_factor`.
+override PROCEDURAL: u32 = 0u;
+
+const SHADING_FLAT: u32 = 0u;
+const SHADING_PIXEL: u32 = 2u;
+const SPECULAR_PHONG: u32 = 0u;
+
 struct LitOut {
     @invariant @builtin(position) clip: vec4f,
     @location(0) world_pos: vec3f,
@@ -70,33 +88,86 @@ struct LitOut {
     @location(3) tangent: vec4f,
     @location(4) local_pos: vec3f,
     @location(5) @interpolate(flat) object: u32,
-    // Gouraud: per-light diffuse (xyz) and specular intensity (w)... as
-    // diffuse rgb and specular rgb packed in two vec4 per light pair.
-    @location(6) g_diffuse0: vec4f,
-    @location(7) g_diffuse1: vec4f,
-    @location(8) g_diffuse2: vec4f,
-    @location(9) g_diffuse3: vec4f,
-    @location(10) g_specular0: vec4f,
-    @location(11) g_specular1: vec4f,
-    @location(12) g_specular2: vec4f,
-    @location(13) g_specular3: vec4f,
 };
 
-// Phong (V·R)^n or Blinn-Phong (N·H)^n specular and Lambert diffuse for one
-// light: returns (diffuse rgb, specular rgb) before material colours.
-fn light_terms(i: u32, pos: vec3f, n: vec3f, v: vec3f, shininess: f32) -> array<vec3f, 2> {
+// Gouraud: the vertex's lighting terms ride along, per light diffuse (rgb)
+// and specular (rgb) radiance before material colours.
+struct GouraudOut {
+    @invariant @builtin(position) clip: vec4f,
+    @location(0) world_pos: vec3f,
+    @location(1) uv: vec2f,
+    @location(2) local_pos: vec3f,
+    @location(3) @interpolate(flat) object: u32,
+    @location(4) diffuse0: vec3f,
+    @location(5) diffuse1: vec3f,
+    @location(6) diffuse2: vec3f,
+    @location(7) diffuse3: vec3f,
+    @location(8) specular0: vec3f,
+    @location(9) specular1: vec3f,
+    @location(10) specular2: vec3f,
+    @location(11) specular3: vec3f,
+};
+
+// Direction to the light (unit) and the radiance reaching `pos`
+// (colour × intensity × range window × spot cone), for light `i`. The
+// uniform's light directions are unit vectors (`LightGpu::from_light`).
+struct LightSample {
+    to_light: vec3f,
+    radiance: vec3f,
+};
+
+fn sample_light(i: u32, pos: vec3f) -> LightSample {
+    let l = frame.lights[i];
+    var s: LightSample;
+    let kind = u32(l.position.w);
+    if kind == LIGHT_DIRECTIONAL {
+        s.to_light = -l.direction.xyz;
+        s.radiance = l.color.rgb;
+        return s;
+    }
+    let d = l.position.xyz - pos;
+    let dist = length(d);
+    s.to_light = d / max(dist, 1e-6);
+    var att = 1.0;
+    let range = l.direction.w;
+    if range > 0.0 {
+        // x = 1 − (dist / range)⁴, squared (without pow: exp2/log2 per pixel)
+        let q = dist * dist / (range * range);
+        let x = clamp(1.0 - q * q, 0.0, 1.0);
+        att = x * x;
+    }
+    if kind == LIGHT_SPOT {
+        let c = dot(-s.to_light, l.direction.xyz);
+        att *= smoothstep(l.cone.x, l.color.w, c);
+    }
+    s.radiance = l.color.rgb * att;
+    return s;
+}
+
+struct LightTerms {
+    diffuse: vec3f,
+    specular: vec3f,
+};
+
+// Lambert diffuse and Phong (V·R)^n or Blinn-Phong (N·H)^n specular
+// radiance of light `i` at `pos`, before material colours.
+fn light_terms(i: u32, pos: vec3f, n: vec3f, v: vec3f, shininess: f32) -> LightTerms {
     let s = sample_light(i, pos);
     let ndl = dot(n, s.to_light);
     if ndl <= 0.0 {
-        return array<vec3f, 2>(vec3f(0.0), vec3f(0.0));
+        return LightTerms(vec3f(0.0), vec3f(0.0));
     }
     var spec: f32;
-    if frame.settings.y == 0u {
+    if SPECULAR == SPECULAR_PHONG {
         spec = pow(max(dot(v, reflect(-s.to_light, n)), 0.0), shininess);
     } else {
         spec = pow(max(dot(n, normalize(s.to_light + v)), 0.0), shininess);
     }
-    return array<vec3f, 2>(s.radiance * ndl, s.radiance * spec);
+    return LightTerms(s.radiance * ndl, s.radiance * spec);
+}
+
+fn world_normal(obj: ObjectGpu, n: vec3f) -> vec3f {
+    return normalize((obj.normal_matrix * vec4f(n, 0.0)).xyz);
 }
 
 @vertex
@@ -105,100 +176,146 @@ fn vs_lit(v: VertexIn) -> LitOut {
     let obj = objects[v.object];
     o.clip = clip_position(v.object, v.position);
     o.world_pos = (obj.model * vec4f(v.position, 1.0)).xyz;
-    o.normal = normalize((obj.normal_matrix * vec4f(v.normal, 0.0)).xyz);
+    o.normal = world_normal(obj, v.normal);
     o.uv = v.uv;
     // A mirroring model matrix flips cross(n, t): flip the handedness with it.
     let mirror = sign(determinant(mat3x3f(obj.model[0].xyz, obj.model[1].xyz, obj.model[2].xyz)));
     o.tangent = vec4f(normalize((obj.model * vec4f(v.tangent.xyz, 0.0)).xyz), v.tangent.w * mirror);
     o.local_pos = v.position;
     o.object = v.object;
-    if frame.settings.x == 1u {
-        // Gouraud: intensities per vertex, interpolated (SEEDS §1).
-        let view = normalize(frame.camera_pos.xyz - o.world_pos);
-        var d: array<vec4f, 4>;
-        var s: array<vec4f, 4>;
-        for (var i = 0u; i < frame.settings.z; i++) {
-            let t = light_terms(i, o.world_pos, o.normal, view, material.ks.w);
-            d[i] = vec4f(t[0], 0.0);
-            s[i] = vec4f(t[1], 0.0);
-        }
-        o.g_diffuse0 = d[0];
-        o.g_diffuse1 = d[1];
-        o.g_diffuse2 = d[2];
-        o.g_diffuse3 = d[3];
-        o.g_specular0 = s[0];
-        o.g_specular1 = s[1];
-        o.g_specular2 = s[2];
-        o.g_specular3 = s[3];
+    return o;
+}
+
+@vertex
+fn vs_lit_gouraud(v: VertexIn) -> GouraudOut {
+    var o: GouraudOut;
+    let obj = objects[v.object];
+    o.clip = clip_position(v.object, v.position);
+    o.world_pos = (obj.model * vec4f(v.position, 1.0)).xyz;
+    o.uv = v.uv;
+    o.local_pos = v.position;
+    o.object = v.object;
+    // Intensities per vertex, interpolated (SEEDS §1).
+    let n = world_normal(obj, v.normal);
+    let view = normalize(frame.camera_pos.xyz - o.world_pos);
+    if LIGHT_COUNT > 0u {
+        let t = light_terms(0u, o.world_pos, n, view, material.ks.w);
+        o.diffuse0 = t.diffuse;
+        o.specular0 = t.specular;
+    }
+    if LIGHT_COUNT > 1u {
+        let t = light_terms(1u, o.world_pos, n, view, material.ks.w);
+        o.diffuse1 = t.diffuse;
+        o.specular1 = t.specular;
+    }
+    if LIGHT_COUNT > 2u {
+        let t = light_terms(2u, o.world_pos, n, view, material.ks.w);
+        o.diffuse2 = t.diffuse;
+        o.specular2 = t.specular;
+    }
+    if LIGHT_COUNT > 3u {
+        let t = light_terms(3u, o.world_pos, n, view, material.ks.w);
+        o.diffuse3 = t.diffuse;
+        o.specular3 = t.specular;
     }
     return o;
 }
 
+// Surface colours: texture or procedural pattern modulate kd and ka.
+struct SurfaceColors {
+    ka: vec3f,
+    kd: vec3f,
+};
+
+fn surface_colors(uv: vec2f, local_pos: vec3f) -> SurfaceColors {
+    var c = SurfaceColors(material.ka.rgb, material.kd.rgb);
+    if DIFFUSE_TEXTURE {
+        let t = textureSample(diffuse_tex, tex_sampler, uv).rgb;
+        c.kd *= t;
+        c.ka *= t;
+    }
+    if PROCEDURAL > 0u {
+        let f = procedural_factor(PROCEDURAL, local_pos, material.proc_b.w, u32(material.flags.y));
+        c.kd = mix(material.proc_a.rgb, material.proc_b.rgb, f);
+        c.ka = c.kd;
+    }
+    return c;
+}
+
+// Accumulates one light into `color` (relight: ambient + v·direct) or
+// `darken` (darken: the final colour times v).
+struct Composed {
+    color: vec3f,
+    darken: f32,
+};
+
+fn compose_light(acc: Composed, l: u32, vis: f32, terms: LightTerms, kd: vec3f) -> Composed {
+    let direct = terms.diffuse * kd + terms.specular * material.ks.rgb;
+    var out = acc;
+    if frame.lights[l].extra.x > 0.5 {
+        out.color += direct;
+        out.darken *= vis;
+    } else {
+        out.color += vis * direct;
+    }
+    return out;
+}
+
+// The light's mask value at pixel `px` (1 where the object receives no shadow).
+fn visibility(px: vec2i, l: u32, receives: bool) -> f32 {
+    if receives {
+        return textureLoad(masks, px, l, 0).r;
+    }
+    return 1.0;
+}
+
 @fragment
 fn fs_lit(i: LitOut) -> @location(0) vec4f {
-    let obj = objects[i.object];
+    let receives = objects[i.object].info.z != 0u;
     let view = normalize(frame.camera_pos.xyz - i.world_pos);
-    // Surface colours: texture or procedural pattern modulate kd and ka.
-    var kd = material.kd.rgb;
-    var ka = material.ka.rgb;
     let uv = i.uv * material.ka.w;
-    if material.kd.w > 0.5 {
-        let t = textureSample(diffuse_tex, tex_sampler, uv).rgb;
-        kd *= t;
-        ka *= t;
-    }
-    let kind = u32(material.proc_a.w);
-    if kind > 0u {
-        let f = procedural_factor(kind, i.local_pos, material.proc_b.w, u32(material.flags.y));
-        kd = mix(material.proc_a.rgb, material.proc_b.rgb, f);
-        ka = kd;
-    }
+    let surface = surface_colors(uv, i.local_pos);
     // Normal: face normal (flat) or interpolated, normal-mapped (per-pixel).
     let geo = face_normal(i.world_pos);
     var n = geo;
-    if frame.settings.x != 0u {
+    if SHADING != SHADING_FLAT {
         n = normalize(i.normal);
         if dot(n, geo) < 0.0 {
             n = -n; // two-sided lighting for open meshes
         }
-        if frame.settings.x == 2u && material.flags.x > 0.5 {
+        if SHADING == SHADING_PIXEL && NORMAL_MAP {
             let t = normalize(i.tangent.xyz - n * dot(n, i.tangent.xyz));
             let b = cross(n, t) * i.tangent.w;
             let m = textureSample(normal_tex, tex_sampler, uv).xyz * 2.0 - 1.0;
             n = normalize(t * m.x + b * m.y + n * m.z);
         }
     }
-    // Relight lights add v·(diffuse + specular); darken lights add their
-    // full light and multiply the final colour by v.
-    var color = frame.ambient.rgb * ka;
-    var darken = 1.0;
     let px = vec2i(i.clip.xy);
-    let receives = obj.info.z != 0u;
-    let gd = array<vec4f, 4>(i.g_diffuse0, i.g_diffuse1, i.g_diffuse2, i.g_diffuse3);
-    let gs = array<vec4f, 4>(i.g_specular0, i.g_specular1, i.g_specular2, i.g_specular3);
-    for (var l = 0u; l < frame.settings.z; l++) {
-        var vis = 1.0;
-        if receives {
-            vis = textureLoad(masks, px, l, 0).r;
-        }
-        var diffuse: vec3f;
-        var specular: vec3f;
-        if frame.settings.x == 1u {
-            diffuse = gd[l].rgb;
-            specular = gs[l].rgb;
-        } else {
-            let t = light_terms(l, i.world_pos, n, view, material.ks.w);
-            diffuse = t[0];
-            specular = t[1];
-        }
-        let direct = diffuse * kd + specular * material.ks.rgb;
-        if frame.lights[l].extra.x > 0.5 {
-            color += direct;
-            darken *= vis;
-        } else {
-            color += vis * direct;
-        }
+    var acc = Composed(frame.ambient.rgb * surface.ka, 1.0);
+    for (var l = 0u; l < LIGHT_COUNT; l++) {
+        let terms = light_terms(l, i.world_pos, n, view, material.ks.w);
+        acc = compose_light(acc, l, visibility(px, l, receives), terms, surface.kd);
     }
-    return vec4f(color * darken, 1.0);
+    return vec4f(acc.color * acc.darken, 1.0);
 }
 
+@fragment
+fn fs_lit_gouraud(i: GouraudOut) -> @location(0) vec4f {
+    let receives = objects[i.object].info.z != 0u;
+    let surface = surface_colors(i.uv * material.ka.w, i.local_pos);
+    let px = vec2i(i.clip.xy);
+    var acc = Composed(frame.ambient.rgb * surface.ka, 1.0);
+    if LIGHT_COUNT > 0u {
+        acc = compose_light(acc, 0u, visibility(px, 0u, receives), LightTerms(i.diffuse0, i.specular0), surface.kd);
+    }
+    if LIGHT_COUNT > 1u {
+        acc = compose_light(acc, 1u, visibility(px, 1u, receives), LightTerms(i.diffuse1, i.specular1), surface.kd);
+    }
+    if LIGHT_COUNT > 2u {
+        acc = compose_light(acc, 2u, visibility(px, 2u, receives), LightTerms(i.diffuse2, i.specular2), surface.kd);
+    }
+    if LIGHT_COUNT > 3u {
+        acc = compose_light(acc, 3u, visibility(px, 3u, receives), LightTerms(i.diffuse3, i.specular3), surface.kd);
+    }
+    return vec4f(acc.color * acc.darken, 1.0);
+}

@@ -2,9 +2,12 @@
 //! flags, lights and cameras, plus the loaders (OBJ/MTL, glTF, TOML) and the
 //! built-in scenes.
 
+pub mod area;
 pub mod builtin;
+pub mod bvh;
 pub mod gltf_io;
 pub mod obj;
+pub mod planes;
 pub mod shapes;
 pub mod toml_scene;
 
@@ -990,6 +993,23 @@ pub fn load_file_included(path: &Path, includes: &[PathBuf]) -> Result<Scene> {
     Ok(scene)
 }
 
+/// Identifies a scene's geometry and flags (object transforms and flags,
+/// and the hash of every mesh's positions and indices that
+/// [`Scene::finalize`] takes), so that per-scene data — adjacency, BVHs,
+/// receiver planes — is rebuilt exactly when it changes.
+pub fn scene_fingerprint(scene: &Scene) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    (&scene.source, scene.geometry_hash).hash(&mut h);
+    for o in &scene.objects {
+        (o.casts_shadow, o.receives_shadow, o.shadow_plane, o.mesh).hash(&mut h);
+        for f in o.transform.to_cols_array() {
+            f.to_bits().hash(&mut h);
+        }
+    }
+    h.finish()
+}
+
 /// Places a default camera and light for a scene loaded from a model file
 /// that brings neither.
 pub fn frame_scene_defaults(scene: &mut Scene) {
@@ -1015,6 +1035,17 @@ pub fn frame_scene_defaults(scene: &mut Scene) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_fingerprint_changes_when_vertices_do() {
+        let mut s = builtin::by_name("floating").unwrap().unwrap();
+        let before = scene_fingerprint(&s);
+        assert_eq!(scene_fingerprint(&s), before);
+        // Same source, objects, transforms and vertex counts: only a vertex moves.
+        s.meshes[0].positions[0].y += 0.5;
+        s.finalize().unwrap();
+        assert_ne!(scene_fingerprint(&s), before);
+    }
 
     fn one_box() -> Scene {
         let mut s = Scene::new("t");

@@ -13,8 +13,8 @@ pub mod raytraced;
 pub mod shadow_map;
 pub mod shadow_volume;
 
+use crate::frame::{Compose, FrameLayouts, FrameTargets, SceneGpu};
 use crate::gpu::GpuContext;
-use crate::renderer::{FrameResources, SceneGpu};
 use crate::scene::{Light, Scene};
 use anyhow::{Context, Result, anyhow};
 pub use params::{ParamKind, ParamSpec, ParamValues};
@@ -24,26 +24,55 @@ pub struct MaskContext<'a> {
     pub gpu: &'a GpuContext,
     pub scene: &'a Scene,
     pub scene_gpu: &'a SceneGpu,
-    pub frame: &'a FrameResources,
+    /// The frame's targets, read only: size, uniform, depth, G-buffer.
+    pub frame: &'a FrameTargets,
     pub light_index: usize,
     pub light: &'a Light,
     /// The camera of the frame.
     pub camera: &'a crate::scene::Camera,
-    pub params: &'a ParamValues,
-    /// The mask layer to write (format [`crate::renderer::MASK_FORMAT`]).
+    /// The mask layer to write (format [`crate::frame::MASK_FORMAT`]).
     pub target: &'a wgpu::TextureView,
 }
 
-/// One shadow technique instance, owned per light.
+impl MaskContext<'_> {
+    /// Binds the frame uniform (group 0), the object table (group 1) and
+    /// the G-buffer (group 3) of a technique pass; the pass binds group 2.
+    pub fn bind_frame_groups(&self, pass: &mut wgpu::RenderPass) {
+        pass.set_bind_group(crate::frame::FRAME_GROUP, self.frame.frame_bind_group(), &[]);
+        pass.set_bind_group(
+            crate::frame::OBJECTS_GROUP,
+            &self.scene_gpu.object_bind_group,
+            &[],
+        );
+        pass.set_bind_group(
+            crate::frame::GBUFFER_GROUP,
+            self.frame.gbuffer_bind_group(),
+            &[],
+        );
+    }
+}
+
+/// One shadow technique instance, owned per light. Its family's shaders,
+/// layouts and pipelines are shared per device (`GpuContext::cache`); the
+/// instance owns its light's state (maps, volumes).
 pub trait ShadowTechnique: Send {
+    /// Parses the parameter values into the family's typed configuration;
+    /// called on creation and whenever a value changes.
+    fn configure(&mut self, params: &ParamValues) -> Result<()>;
+
     /// Records (or performs) the work that writes the light's visibility mask
     /// into `ctx.target`. Every pixel of the target must be written.
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()>;
 
+    /// How the lighting pass composes this technique's mask.
+    fn compose(&self) -> Compose {
+        Compose::Relight
+    }
+
     /// True when the frame must use a projection with the far plane at
     /// infinity ([`crate::scene::Camera::projection_infinite`]).
-    fn infinite_far_plane(&self, _params: &ParamValues) -> Result<bool> {
-        Ok(false)
+    fn infinite_far_plane(&self) -> bool {
+        false
     }
 
     /// Called once the GPU has finished this frame's masks: read back
@@ -160,58 +189,22 @@ pub static FAMILIES: &[&Family] = &[
     &shadow_volume::FAMILY,
 ];
 
-/// Identifies a scene's geometry and flags (object transforms and flags,
-/// and the hash of every mesh's positions and indices that
-/// [`Scene::finalize`] takes), so that per-scene data — adjacency, BVHs,
-/// receiver planes — is rebuilt exactly when it changes.
-pub fn scene_fingerprint(scene: &Scene) -> u64 {
-    use std::hash::{Hash, Hasher};
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    (&scene.source, scene.geometry_hash).hash(&mut h);
-    for o in &scene.objects {
-        (o.casts_shadow, o.receives_shadow, o.shadow_plane, o.mesh).hash(&mut h);
-        for f in o.transform.to_cols_array() {
-            f.to_bits().hash(&mut h);
-        }
-    }
-    h.finish()
-}
 
-/// Layout entry of a G-buffer texture read with `textureLoad` in fragment shaders.
-pub fn gbuffer_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: false },
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-        count: None,
-    }
-}
-
-/// Pipeline layout of a mask pass: the frame uniform (group 0), the object
-/// table (group 1) and the technique's own group 2.
+/// Pipeline layout of a technique pass: frame uniform (group 0), object
+/// table (group 1), the technique's own group 2 and the G-buffer (group 3).
 pub fn pipeline_layout(
     gpu: &GpuContext,
     label: &str,
     own: &wgpu::BindGroupLayout,
 ) -> wgpu::PipelineLayout {
-    let r = crate::renderer::shared_layouts(&gpu.device);
-    gpu.device
-        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some(label),
-            bind_group_layouts: &[Some(&r.0), Some(&r.1), Some(own)],
-            immediate_size: 0,
-        })
+    FrameLayouts::of(gpu).technique_layout(&gpu.device, label, own)
 }
 
 /// Depth-stencil state of a pass over the frame's depth: read only,
 /// compare Always, with `stencil` (default: untouched).
 pub fn frame_depth_read(stencil: wgpu::StencilState) -> wgpu::DepthStencilState {
     wgpu::DepthStencilState {
-        format: crate::renderer::DEPTH_FORMAT,
+        format: crate::frame::DEPTH_FORMAT,
         depth_write_enabled: Some(false),
         depth_compare: Some(wgpu::CompareFunction::Always),
         stencil,
@@ -220,9 +213,10 @@ pub fn frame_depth_read(stencil: wgpu::StencilState) -> wgpu::DepthStencilState 
 }
 
 /// A full-screen pipeline (`vs_fullscreen` of common.wgsl, one triangle)
-/// running `fs` of `module` into `targets`.
+/// running `fs` of `module` into `targets`, from the device's cache (the
+/// label names the pass; label, entry point and states are the key).
 pub fn fullscreen_pipeline(
-    device: &wgpu::Device,
+    gpu: &GpuContext,
     label: &str,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
@@ -230,26 +224,28 @@ pub fn fullscreen_pipeline(
     targets: &[Option<wgpu::ColorTargetState>],
     depth_stencil: Option<wgpu::DepthStencilState>,
 ) -> wgpu::RenderPipeline {
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(label),
-        layout: Some(layout),
-        vertex: wgpu::VertexState {
-            module,
-            entry_point: Some("vs_fullscreen"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: Default::default(),
-        depth_stencil,
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module,
-            entry_point: Some(fs),
-            compilation_options: Default::default(),
-            targets,
-        }),
-        multiview_mask: None,
-        cache: None,
+    gpu.cache.render_pipeline(label, &(fs, targets, &depth_stencil), || {
+        gpu.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(layout),
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some("vs_fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: depth_stencil.clone(),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some(fs),
+                compilation_options: Default::default(),
+                targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
     })
 }
 
@@ -295,7 +291,7 @@ pub fn pass_over_frame_depth<'e>(
             },
         })],
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view: &ctx.frame.depth_view,
+            view: ctx.frame.depth_view(),
             depth_ops: Some(wgpu::Operations {
                 load: wgpu::LoadOp::Load,
                 store: wgpu::StoreOp::Store,
@@ -307,6 +303,46 @@ pub fn pass_over_frame_depth<'e>(
         }),
         ..Default::default()
     })
+}
+
+/// A technique for one light with its parameter values.
+pub struct TechniqueInstance {
+    pub choice: TechniqueChoice,
+    pub technique: Box<dyn ShadowTechnique>,
+}
+
+impl TechniqueInstance {
+    pub fn new(gpu: &GpuContext, choice: TechniqueChoice) -> Result<TechniqueInstance> {
+        let mut technique = (choice.family.create)(gpu)?;
+        technique.configure(&choice.params)?;
+        Ok(TechniqueInstance { choice, technique })
+    }
+
+    /// Changes the parameter values (the viewer's sliders); on an error
+    /// the previous values stay.
+    pub fn set_params(&mut self, params: ParamValues) -> Result<()> {
+        self.technique.configure(&params)?;
+        self.choice.params = params;
+        Ok(())
+    }
+}
+
+/// What the lights' techniques ask of the frame.
+#[derive(Clone, Debug, Default)]
+pub struct TechniqueNeeds {
+    /// Per light: how its mask is composed.
+    pub compose: Vec<Compose>,
+    /// Some technique needs the far plane at infinity (shadow volumes).
+    pub infinite_far_plane: bool,
+}
+
+impl TechniqueNeeds {
+    pub fn of(techniques: &[TechniqueInstance]) -> TechniqueNeeds {
+        TechniqueNeeds {
+            compose: techniques.iter().map(|t| t.technique.compose()).collect(),
+            infinite_far_plane: techniques.iter().any(|t| t.technique.infinite_far_plane()),
+        }
+    }
 }
 
 /// A resolved technique id: family, preset name and parameter values.
@@ -436,17 +472,6 @@ mod tests {
                 assert!(!s.doc.is_empty());
             }
         }
-    }
-
-    #[test]
-    fn the_fingerprint_changes_when_vertices_do() {
-        let mut s = crate::scene::builtin::by_name("floating").unwrap().unwrap();
-        let before = scene_fingerprint(&s);
-        assert_eq!(scene_fingerprint(&s), before);
-        // Same source, objects, transforms and vertex counts: only a vertex moves.
-        s.meshes[0].positions[0].y += 0.5;
-        s.finalize().unwrap();
-        assert_ne!(scene_fingerprint(&s), before);
     }
 
     #[test]

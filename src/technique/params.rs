@@ -5,6 +5,69 @@
 use anyhow::{Result, bail};
 use serde::Serialize;
 
+/// A choice parameter's values as a Rust enum, declared with
+/// [`choice_enum!`]: the enum gives the table its option names, and a
+/// family reads the value back as the enum ([`ParamValues::choice`]).
+pub trait Choice: Copy + Sized + 'static {
+    /// The option names, in the enum's order.
+    const NAMES: &'static [&'static str];
+    /// Every variant, in the same order.
+    const ALL: &'static [Self];
+
+    /// Position of `self` in [`Choice::ALL`].
+    fn index(self) -> usize;
+
+    /// The option's name as typed on the command line.
+    fn name(self) -> &'static str {
+        Self::NAMES[self.index()]
+    }
+
+    /// WGSL constants `const PREFIX_NAME: u32 = index;` for shaders that
+    /// branch on the choice (names upper-cased, `-` as `_`).
+    fn wgsl_constants(prefix: &str) -> String {
+        Self::NAMES
+            .iter()
+            .enumerate()
+            .map(|(i, n)| {
+                format!(
+                    "const {prefix}_{}: u32 = {i}u;\n",
+                    n.to_ascii_uppercase().replace('-', "_")
+                )
+            })
+            .collect()
+    }
+}
+
+/// Declares an enum of a choice parameter with its option names:
+/// `choice_enum! { pub enum Cull { Back = "back", Front = "front" } }`.
+macro_rules! choice_enum {
+    ($(#[$meta:meta])* $vis:vis enum $name:ident {
+        $($(#[$vmeta:meta])* $variant:ident = $text:literal),+ $(,)?
+    }) => {
+        $(#[$meta])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        $vis enum $name {
+            $($(#[$vmeta])* $variant),+
+        }
+        impl $crate::technique::params::Choice for $name {
+            const NAMES: &'static [&'static str] = &[$($text),+];
+            const ALL: &'static [Self] = &[$(Self::$variant),+];
+            fn index(self) -> usize {
+                Self::ALL.iter().position(|&v| v == self).expect("every variant is listed")
+            }
+        }
+    };
+}
+pub(crate) use choice_enum;
+
+impl Choice for crate::frame::Compose {
+    const NAMES: &'static [&'static str] = &["relight", "darken"];
+    const ALL: &'static [Self] = &[Self::Relight, Self::Darken];
+    fn index(self) -> usize {
+        self as usize
+    }
+}
+
 /// What kind of value a parameter holds. Every value is stored as `f64`:
 /// booleans as 0/1, choices as the index into their names.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -75,6 +138,12 @@ impl ParamSpec {
             doc,
         }
     }
+    /// A choice among the variants of `T`, defaulting to variant `default`
+    /// (its index: `Filter::Grid as usize`).
+    pub const fn choice_of<T: Choice>(name: &'static str, default: usize, doc: &'static str) -> Self {
+        Self::choice(name, T::NAMES, default, doc)
+    }
+
     pub const fn choice(
         name: &'static str,
         options: &'static [&'static str],
@@ -104,10 +173,9 @@ impl ParamSpec {
     );
 
     /// How the lighting pass uses the mask ([`crate::renderer::Compose`]).
-    pub const COMPOSE: ParamSpec = ParamSpec::choice(
+    pub const COMPOSE: ParamSpec = ParamSpec::choice_of::<crate::frame::Compose>(
         "compose",
-        &["relight", "darken"],
-        0,
+        crate::frame::Compose::Relight as usize,
         "relight: ambient + masked direct light (an ambient pass, lit where the shadow test passes); darken: the lit image times the mask (one lit pass and a darkening pass, the documents' way)",
     );
 
@@ -220,14 +288,43 @@ impl ParamValues {
     pub fn get(&self, name: &str) -> Result<f64> {
         self.index(name).map(|i| self.values[i])
     }
-    pub fn get_f32(&self, name: &str) -> Result<f32> {
-        self.get(name).map(|v| v as f32)
+
+    /// The value of the parameter `spec` (a family's named constant, so a
+    /// misspelt parameter does not compile); an error when the values
+    /// belong to another table.
+    fn value(&self, spec: &ParamSpec) -> Result<f64> {
+        let i = self.index(spec.name)?;
+        if self.specs[i].kind != spec.kind {
+            bail!("parameter '{}' has another type in this table", spec.name);
+        }
+        Ok(self.values[i])
     }
-    pub fn get_bool(&self, name: &str) -> Result<bool> {
-        self.get(name).map(|v| v != 0.0)
+
+    /// A float parameter's value.
+    pub fn float(&self, spec: &ParamSpec) -> Result<f32> {
+        self.value(spec).map(|v| v as f32)
     }
-    pub fn get_usize(&self, name: &str) -> Result<usize> {
-        self.get(name).map(|v| v as usize)
+
+    /// An integer parameter's value.
+    pub fn int(&self, spec: &ParamSpec) -> Result<u32> {
+        self.value(spec).map(|v| v as u32)
+    }
+
+    /// A boolean parameter's value.
+    pub fn flag(&self, spec: &ParamSpec) -> Result<bool> {
+        self.value(spec).map(|v| v != 0.0)
+    }
+
+    /// A choice parameter's value as its enum.
+    pub fn choice<T: Choice>(&self, spec: &ParamSpec) -> Result<T> {
+        if spec.kind != ParamKind::Choice(T::NAMES) {
+            bail!("parameter '{}' is not a choice of {:?}", spec.name, T::NAMES);
+        }
+        let v = self.value(spec)?;
+        T::ALL
+            .get(v as usize)
+            .copied()
+            .ok_or_else(|| anyhow::anyhow!("parameter '{}' holds no valid choice", spec.name))
     }
 
     /// `name → formatted value`, for frame.json.
@@ -258,7 +355,7 @@ mod tests {
         ParamSpec::float("bias", 0.5, 0.0, 1.0, 0.01, "a bias"),
         ParamSpec::int("size", 1024, 16, 8192, "map size"),
         ParamSpec::boolean("stencil", true, "use stencil"),
-        ParamSpec::choice("mode", &["relight", "darken"], 0, "compose"),
+        ParamSpec::COMPOSE,
     ];
 
     #[test]
@@ -275,23 +372,30 @@ mod tests {
         assert!(p.set("bias", "NaN").is_err());
         assert!(p.set("size", "1.5").is_err());
         p.set("stencil", "false").unwrap();
-        assert!(!p.get_bool("stencil").unwrap());
-        p.set("mode", "darken").unwrap();
-        assert_eq!(p.get_usize("mode").unwrap(), 1);
-        let e = p.set("mode", "blend").unwrap_err().to_string();
+        assert!(!p.flag(&SPECS[2]).unwrap());
+        p.set("compose", "darken").unwrap();
+        assert_eq!(
+            p.choice::<crate::frame::Compose>(&SPECS[3]).unwrap(),
+            crate::frame::Compose::Darken
+        );
+        let e = p.set("compose", "blend").unwrap_err().to_string();
         assert!(e.contains("relight, darken"), "{e}");
         let e = p.set("nope", "1").unwrap_err().to_string();
-        assert!(e.contains("valid: bias, size, stencil, mode"), "{e}");
+        assert!(e.contains("valid: bias, size, stencil, compose"), "{e}");
         let e = p.get("nope").unwrap_err().to_string();
         assert!(e.contains("unknown parameter 'nope'"), "{e}");
-        assert!(p.get_f32("Bias").is_err() && p.get_usize("").is_err());
+        assert!(p.get("Bias").is_err() && p.get("").is_err());
+        // A spec of another table, or of another type, is an error.
+        let other = ParamSpec::float("compose", 0.0, 0.0, 1.0, 0.1, "x");
+        assert!(p.float(&other).is_err());
+        assert!(p.float(&ParamSpec::float("nope", 0.0, 0.0, 1.0, 0.1, "x")).is_err());
     }
 
     #[test]
     fn json_uses_readable_values() {
         let p = ParamValues::defaults(SPECS);
         let j = p.to_json();
-        assert_eq!(j["mode"], "relight");
+        assert_eq!(j["compose"], "relight");
         assert_eq!(j["stencil"], true);
         assert_eq!(j["size"], 1024);
     }

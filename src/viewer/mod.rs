@@ -6,13 +6,12 @@ mod orbit;
 mod ui;
 
 use crate::cli::ViewArgs;
-use crate::frame;
+use crate::headless;
 use crate::gpu::GpuContext;
-use crate::renderer::{
-    FrameResources, FrameTimings, RenderSettings, Renderer, SceneGpu, TechniqueInstance,
-};
+use crate::frame::{FrameTargets, SceneGpu};
+use crate::renderer::{FrameTimings, RenderSettings, Renderer};
 use crate::scene::{self, Camera, Light, Scene};
-use crate::technique::{self, TechniqueChoice};
+use crate::technique::{self, TechniqueChoice, TechniqueInstance};
 use anyhow::{Context as _, Result, anyhow};
 use glam::Vec2;
 use std::path::PathBuf;
@@ -256,14 +255,13 @@ pub struct SceneState {
 impl SceneState {
     fn load(
         gpu: &GpuContext,
-        renderer: &Renderer,
         scene: Scene,
         camera: Camera,
         lights: Vec<Light>,
         choice: &TechniqueChoice,
     ) -> Result<SceneState> {
-        let scene_gpu = renderer.upload_scene(gpu, &scene)?;
-        let techniques = (0..crate::renderer::MAX_LIGHTS)
+        let scene_gpu = SceneGpu::upload(gpu, &scene)?;
+        let techniques = (0..crate::frame::MAX_LIGHTS)
             .map(|_| TechniqueInstance::new(gpu, choice.clone()))
             .collect::<Result<_>>()?;
         Ok(SceneState {
@@ -283,7 +281,7 @@ struct Gfx {
     config: wgpu::SurfaceConfiguration,
     gpu: GpuContext,
     renderer: Renderer,
-    frame: Option<FrameResources>,
+    frame: Option<FrameTargets>,
     composite: Option<Composite>,
     blit: Blit,
     egui_ctx: egui::Context,
@@ -438,6 +436,9 @@ impl App {
             .context("creating the window surface")?;
         let mut gpu = GpuContext::with_instance(instance, backends, Some(&surface))?;
         gpu.memory_budget = self.options.view.memory_budget << 20;
+        if let Some(a) = self.options.view.anisotropy {
+            gpu.anisotropy = a;
+        }
         let size = window.inner_size();
         let mut config = surface
             .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
@@ -448,14 +449,14 @@ impl App {
         }
         config.present_mode = present_mode(self.state.vsync);
         surface.configure(&gpu.device, &config);
-        Renderer::check_formats(&gpu)?;
+        crate::frame::check_formats(&gpu)?;
         let renderer = Renderer::new(&gpu);
         let (scene, camera, lights, choice) = self
             .preloaded
             .take()
             .ok_or_else(|| anyhow!("the viewer's window was created twice"))?;
         self.scene = Some(SceneState::load(
-            &gpu, &renderer, scene, camera, lights, &choice,
+            &gpu, scene, camera, lights, &choice,
         )?);
         let egui_ctx = egui::Context::default();
         let egui_state = egui_winit::State::new(
@@ -493,7 +494,6 @@ impl App {
         let (camera, lights) = (scene.camera, scene.lights.clone());
         self.scene = Some(SceneState::load(
             &gfx.gpu,
-            &gfx.renderer,
             scene,
             camera,
             lights,
@@ -565,9 +565,9 @@ impl App {
         if gfx
             .frame
             .as_ref()
-            .is_none_or(|f| (f.width, f.height) != (fw, fh))
+            .is_none_or(|f| (f.width(), f.height()) != (fw, fh))
         {
-            gfx.frame = Some(gfx.renderer.create_frame(&gfx.gpu, fw, fh)?);
+            gfx.frame = Some(FrameTargets::new(&gfx.gpu, fw, fh)?);
         }
         if gfx
             .composite
@@ -707,7 +707,7 @@ impl App {
         }
         let frame = gfx.frame.as_ref().expect("created above");
         let composite = gfx.composite.as_ref().expect("created above");
-        let mask_view = frame.masks.create_view(&wgpu::TextureViewDescriptor {
+        let mask_view = frame.masks().create_view(&wgpu::TextureViewDescriptor {
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             ..Default::default()
         });
@@ -724,7 +724,7 @@ impl App {
             view3d,
             &composite.srgb,
             COMPOSITE_SRGB,
-            &frame.color_view,
+            frame.color_view(),
             &mask_view,
             mode,
         );
@@ -823,7 +823,7 @@ impl App {
             )
             .with_context(|| format!("writing {}", path.display()))?;
             let timings = self.state.last_timings.clone().unwrap_or_default();
-            let record = frame::FrameRecord {
+            let record = headless::FrameRecord {
                 scene: &scene.scene,
                 scene_gpu: &scene.scene_gpu,
                 camera: &scene.camera,
@@ -833,11 +833,12 @@ impl App {
                 frame,
                 timings: &timings,
                 adapter: gfx.gpu.adapter_summary(),
+                anisotropy: gfx.gpu.anisotropy,
                 extra_timings: serde_json::json!({"supersampling": ss}),
             };
             std::fs::write(
                 path.with_extension("json"),
-                serde_json::to_string_pretty(&frame::frame_json(&record))?,
+                serde_json::to_string_pretty(&headless::frame_json(&record))?,
             )?;
             self.state.message = Some(format!("saved {}", path.display()));
             println!("screenshot: {}", path.display());
@@ -885,12 +886,12 @@ impl App {
         };
         let read = || -> Result<FrameData> {
             Ok(FrameData {
-                width: frame.width as usize,
-                height: frame.height as usize,
-                positions: gfx.gpu.read_texture(&frame.gbuffer_position, 0, 16)?,
-                normals: gfx.gpu.read_texture(&frame.gbuffer_normal, 0, 8)?,
-                mask: gfx.gpu.read_texture(&frame.masks, li as u32, 2)?,
-                color: gfx.gpu.read_texture(&frame.color, 0, 4)?,
+                width: frame.width() as usize,
+                height: frame.height() as usize,
+                positions: gfx.gpu.read_texture(frame.gbuffer_position(), 0, 16)?,
+                normals: gfx.gpu.read_texture(frame.gbuffer_normal(), 0, 8)?,
+                mask: gfx.gpu.read_texture(frame.masks(), li as u32, 2)?,
+                color: gfx.gpu.read_texture(frame.color(), 0, 4)?,
             })
         };
         let data = match read() {
@@ -927,7 +928,8 @@ fn heatmap_job(
 ) -> Result<(egui::ColorImage, String), String> {
     let (w, h) = (data.width, data.height);
     let (pos, nrm, mask, color) = (&data.positions, &data.normals, &data.mask, &data.color);
-    use crate::technique::raytraced::{CasterBvh, ReferenceSettings, mask_from_gbuffer};
+    use crate::scene::bvh::CasterBvh;
+    use crate::technique::raytraced::{ReferenceSettings, mask_from_gbuffer};
     let positions: &[[f32; 4]] = bytemuck::cast_slice(pos);
     let normals: Vec<glam::Vec3> = bytemuck::cast_slice::<u8, [half::f16; 4]>(nrm)
         .iter()
@@ -1136,7 +1138,8 @@ impl ApplicationHandler for App {
 mod tests {
     use super::*;
     use crate::scene::{Material, shapes};
-    use crate::technique::raytraced::{CasterBvh, ReferenceSettings, mask_from_gbuffer};
+    use crate::scene::bvh::CasterBvh;
+    use crate::technique::raytraced::{ReferenceSettings, mask_from_gbuffer};
     use glam::{Mat4, Vec3};
 
     /// A floor at y = 30 and a box whose top edge, under a sun 3° above the

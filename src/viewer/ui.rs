@@ -4,7 +4,9 @@
 
 use super::{Overlay, SceneState, ViewerState};
 use crate::gpu::GpuContext;
-use crate::renderer::{LightingModel, MAX_LIGHTS, Shading, TechniqueInstance};
+use crate::frame::MAX_LIGHTS;
+use crate::renderer::{LightingModel, Shading};
+use crate::technique::TechniqueInstance;
 use crate::scene::{Light, LightArea, LightType, builtin};
 use crate::technique::{self, FAMILIES, ParamKind, ParamSpec, ParamValues};
 use glam::Vec3;
@@ -223,8 +225,10 @@ fn technique_panel(
             li..li + 1
         };
         for i in range {
-            if scene.techniques[i].choice.family.id == scene.techniques[li].choice.family.id {
-                scene.techniques[i].choice.params = params.clone();
+            if scene.techniques[i].choice.family.id == scene.techniques[li].choice.family.id
+                && let Err(e) = scene.techniques[i].set_params(params.clone())
+            {
+                state.error = Some(format!("{e:#}"));
             }
         }
     }

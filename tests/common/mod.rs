@@ -1,7 +1,7 @@
 #![allow(dead_code)]
 //! Helpers shared by the integration tests.
 
-use shadowlab::frame::{self, FrameImages, HeadlessFrame};
+use shadowlab::headless::{self, FrameImages, HeadlessFrame};
 use shadowlab::gpu::GpuContext;
 use shadowlab::renderer::RenderSettings;
 use shadowlab::scene::Scene;
@@ -29,7 +29,7 @@ pub fn render(scene: &Scene, technique_id: &str, w: u32, h: u32) -> FrameImages 
     };
     hf.render(gpu, scene, &scene.camera, &scene.lights, &settings)
         .unwrap();
-    frame::read_back(gpu, &hf.frame, scene.lights.len()).unwrap()
+    headless::read_back(gpu, &hf.frame, scene.lights.len()).unwrap()
 }
 
 /// One frame of `technique` (an id with optional `[k=v]` settings) with
@@ -120,7 +120,7 @@ pub fn mask_of(scene: &Scene, technique_id: &str, set: &[&str], w: u32, h: u32) 
     };
     hf.render(gpu, scene, &scene.camera, &scene.lights, &settings)
         .unwrap();
-    frame::read_back(gpu, &hf.frame, 1).unwrap().masks.remove(0)
+    headless::read_back(gpu, &hf.frame, 1).unwrap().masks.remove(0)
 }
 
 /// Quality of `technique_id` against `raytraced` on `scene`'s camera and lights.

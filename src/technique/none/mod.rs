@@ -20,8 +20,12 @@ pub static FAMILY: Family = Family {
 pub struct NoShadows;
 
 impl ShadowTechnique for NoShadows {
+    fn configure(&mut self, _params: &super::ParamValues) -> Result<()> {
+        Ok(())
+    }
+
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        crate::renderer::clear_mask(encoder, ctx.target, 1.0);
+        crate::frame::clear_mask(encoder, ctx.target, 1.0);
         Ok(())
     }
 }

@@ -9,31 +9,36 @@
 //! plane) are discarded per fragment.
 
 use super::light_space::shadow_matrix;
-use super::{Family, MaskContext, ParamSpec, Preset, ShadowTechnique};
-use crate::renderer::{DEPTH_FORMAT, MASK_FORMAT, VERTEX_LAYOUT};
-use crate::scene::{Object, Scene};
+use super::{Family, MaskContext, ParamSpec, ParamValues, Preset, ShadowTechnique};
+use crate::frame::{Compose, DEPTH_FORMAT, MASK_FORMAT, VERTEX_LAYOUT};
+use crate::gpu::GpuContext;
+use crate::scene::planes::{MAX_PLANES, ReceiverPlane, receiver_planes};
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat4, Vec4};
+use std::sync::Arc;
+
+const DEPTH_OFFSET: ParamSpec = ParamSpec::float(
+    "depth_offset",
+    32.0,
+    0.0,
+    4096.0,
+    1.0,
+    "offset of the flattened shadows towards the camera, in units of 2^-20 of the depth range, against z-fighting with the receiver",
+);
+const STENCIL: ParamSpec = ParamSpec::boolean(
+    "stencil",
+    true,
+    "stencil-tag each receiver plane (id = index + 1): each pixel darkens once and shadows stay on the plane; off shows double darkening and spill",
+);
 
 pub static FAMILY: Family = Family {
     id: "planar",
     summary: "projected planar shadows: casters flattened onto receiver planes by the shadow matrix",
     params: &[
         ParamSpec::DARKENING,
-        ParamSpec::float(
-            "depth_offset",
-            32.0,
-            0.0,
-            4096.0,
-            1.0,
-            "offset of the flattened shadows towards the camera, in units of 2^-20 of the depth range, against z-fighting with the receiver",
-        ),
-        ParamSpec::boolean(
-            "stencil",
-            true,
-            "stencil-tag each receiver plane (id = index + 1): each pixel darkens once and shadows stay on the plane; off shows double darkening and spill",
-        ),
+        DEPTH_OFFSET,
+        STENCIL,
         ParamSpec::COMPOSE,
     ],
     presets: &[
@@ -56,104 +61,6 @@ pub static FAMILY: Family = Family {
     create: |gpu| Ok(Box::new(PlanarShadows::new(gpu))),
 };
 
-/// At most this many receiver planes are used.
-pub const MAX_PLANES: usize = 8;
-
-/// A receiver plane `(A, B, C, D)` with unit normal, from a scene object.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ReceiverPlane {
-    pub equation: Vec4,
-    pub object: usize,
-}
-
-fn plane_of(a: Vec3, b: Vec3, c: Vec3) -> Option<Vec4> {
-    let n = (b - a).cross(c - a).try_normalize()?;
-    Some(n.extend(-n.dot(a)))
-}
-
-fn world_positions(scene: &Scene, o: &Object) -> impl Iterator<Item = Vec3> {
-    scene.meshes[o.mesh]
-        .positions
-        .iter()
-        .map(move |&p| o.transform.transform_point3(p))
-}
-
-/// The receiver planes of a scene: its `shadow_plane` objects (plane of the
-/// first triangle), else the largest planar shadow-receiving object.
-pub fn receiver_planes(scene: &Scene) -> Vec<ReceiverPlane> {
-    let mut planes = vec![];
-    for (i, o) in scene
-        .objects
-        .iter()
-        .enumerate()
-        .filter(|(_, o)| o.shadow_plane)
-    {
-        let m = &scene.meshes[o.mesh];
-        if let Some(t) = m.indices.chunks_exact(3).next() {
-            let p = |k: usize| o.transform.transform_point3(m.positions[t[k] as usize]);
-            if let Some(eq) = plane_of(p(0), p(1), p(2)) {
-                planes.push(ReceiverPlane {
-                    equation: eq,
-                    object: i,
-                });
-            }
-        }
-    }
-    if !planes.is_empty() {
-        planes.truncate(MAX_PLANES);
-        return planes;
-    }
-    let tol = scene.bounds().size().length().max(1e-3) * 1e-5;
-    let mut best: Option<(f32, ReceiverPlane)> = None;
-    for (i, o) in scene
-        .objects
-        .iter()
-        .enumerate()
-        .filter(|(_, o)| o.receives_shadow)
-    {
-        let m = &scene.meshes[o.mesh];
-        let Some(t) = m.indices.chunks_exact(3).next() else {
-            continue;
-        };
-        let p = |k: u32| o.transform.transform_point3(m.positions[k as usize]);
-        let Some(eq) = plane_of(p(t[0]), p(t[1]), p(t[2])) else {
-            continue;
-        };
-        if world_positions(scene, o).any(|v| eq.dot(v.extend(1.0)).abs() > tol) {
-            continue;
-        }
-        let area: f32 = m
-            .indices
-            .chunks_exact(3)
-            .map(|t| (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length() * 0.5)
-            .sum();
-        if best.as_ref().is_none_or(|(a, _)| area > *a) {
-            best = Some((
-                area,
-                ReceiverPlane {
-                    equation: eq,
-                    object: i,
-                },
-            ));
-        }
-    }
-    match best {
-        Some((area, p)) => {
-            log::info!(
-                "planar: no ShadowPlane object; using the largest planar receiver '{}' (area {area:.2})",
-                scene.objects[p.object].name
-            );
-            vec![p]
-        }
-        None => {
-            log::warn!(
-                "planar: the scene has no ShadowPlane object and no planar receiver; no shadows"
-            );
-            vec![]
-        }
-    }
-}
-
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct PlanarUniform {
@@ -163,35 +70,55 @@ struct PlanarUniform {
     _pad: [Vec4; 10],
 }
 
-pub struct PlanarShadows {
-    uniforms: wgpu::Buffer,
+/// The planar family's parameters, parsed.
+#[derive(Clone, Copy, Debug)]
+struct PlanarConfig {
+    /// Mask value inside a shadow (1 − darkening).
+    visibility: f32,
+    /// Offset towards the camera, NDC depth.
+    depth_offset: f32,
+    stencil: bool,
+    compose: Compose,
+}
+
+impl PlanarConfig {
+    fn parse(p: &ParamValues) -> Result<PlanarConfig> {
+        Ok(PlanarConfig {
+            visibility: 1.0 - p.float(&ParamSpec::DARKENING)?,
+            depth_offset: p.float(&DEPTH_OFFSET)? / (1u32 << 20) as f32,
+            stencil: p.flag(&STENCIL)?,
+            compose: p.choice(&ParamSpec::COMPOSE)?,
+        })
+    }
+}
+
+/// The family's shader, layouts and pipelines, shared per device.
+struct PlanarShared {
     layout: wgpu::BindGroupLayout,
     tag: wgpu::RenderPipeline,
     /// [stencil off, stencil on]
     flatten: [wgpu::RenderPipeline; 2],
+}
+
+pub struct PlanarShadows {
+    shared: Arc<PlanarShared>,
+    config: Option<PlanarConfig>,
+    uniforms: wgpu::Buffer,
     planes: Option<(u64, Vec<ReceiverPlane>)>,
     drawn_planes: usize,
 }
 
-impl PlanarShadows {
-    pub fn new(gpu: &crate::gpu::GpuContext) -> PlanarShadows {
+impl PlanarShared {
+    fn new(gpu: &GpuContext) -> PlanarShared {
         let device = &gpu.device;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("planar"),
             entries: &[
-                crate::renderer::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
-                super::gbuffer_entry(1),
-                super::gbuffer_entry(2),
+                crate::gpu::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
             ],
         });
-        let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("planar uniforms"),
-            size: (std::mem::size_of::<PlanarUniform>() * MAX_PLANES) as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
         let module =
-            crate::renderer::shader_module(device, "planar", &[include_str!("planar.wgsl")]);
+            crate::frame::technique_shader(device, "planar", &[include_str!("planar.wgsl")]);
         let pl = super::pipeline_layout(gpu, "planar", &layout);
         let stencil_face = |compare, pass_op| wgpu::StencilFaceState {
             compare,
@@ -205,6 +132,7 @@ impl PlanarShadows {
                         buffers: &[Option<wgpu::VertexBufferLayout>],
                         depth: wgpu::DepthStencilState,
                         target: wgpu::ColorTargetState| {
+            gpu.cache.render_pipeline(label, &(vs, fs, &depth), || {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&pl),
@@ -215,7 +143,7 @@ impl PlanarShadows {
                     buffers,
                 },
                 primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(depth),
+                depth_stencil: Some(depth.clone()),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
@@ -225,6 +153,7 @@ impl PlanarShadows {
                 }),
                 multiview_mask: None,
                 cache: None,
+            })
             })
         };
         let stencil = |face: wgpu::StencilFaceState, write: u32| wgpu::StencilState {
@@ -284,11 +213,25 @@ impl PlanarShadows {
                 },
             )
         };
-        PlanarShadows {
-            uniforms,
+        PlanarShared {
             layout,
             tag,
             flatten: [flatten(false), flatten(true)],
+        }
+    }
+}
+
+impl PlanarShadows {
+    pub fn new(gpu: &GpuContext) -> PlanarShadows {
+        PlanarShadows {
+            shared: gpu.cache.shared(|| PlanarShared::new(gpu)),
+            config: None,
+            uniforms: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("planar uniforms"),
+                size: (std::mem::size_of::<PlanarUniform>() * MAX_PLANES) as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
             planes: None,
             drawn_planes: 0,
         }
@@ -296,16 +239,24 @@ impl PlanarShadows {
 }
 
 impl ShadowTechnique for PlanarShadows {
+    fn configure(&mut self, params: &ParamValues) -> Result<()> {
+        self.config = Some(PlanarConfig::parse(params)?);
+        Ok(())
+    }
+
+    fn compose(&self) -> Compose {
+        self.config.map_or(Compose::Relight, |c| c.compose)
+    }
+
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        let key = super::scene_fingerprint(ctx.scene);
+        let config = self.config.ok_or_else(|| anyhow::anyhow!("planar: not configured"))?;
+        let key = crate::scene::scene_fingerprint(ctx.scene);
         if self.planes.as_ref().is_none_or(|(k, _)| *k != key) {
             self.planes = Some((key, receiver_planes(ctx.scene)));
         }
         let planes = &self.planes.as_ref().expect("set above").1;
         let l = ctx.light.homogeneous();
         let tol = ctx.scene_gpu.bounds.size().length().max(1e-3) * 1e-4;
-        let vis = 1.0 - ctx.params.get_f32("darkening")?;
-        let offset = ctx.params.get_f32("depth_offset")? / (1u32 << 20) as f32;
         // Orient each plane towards the light; skip planes the light lies in or behind.
         let uniforms: Vec<PlanarUniform> = planes
             .iter()
@@ -318,7 +269,7 @@ impl ShadowTechnique for PlanarShadows {
                 (eq.dot(l) > 1e-6).then(|| PlanarUniform {
                     shadow: shadow_matrix(eq, l),
                     plane: eq,
-                    params: Vec4::new(vis, offset, tol, 0.0),
+                    params: Vec4::new(config.visibility, config.depth_offset, tol, 0.0),
                     _pad: [Vec4::ZERO; 10],
                 })
             })
@@ -332,40 +283,25 @@ impl ShadowTechnique for PlanarShadows {
             .device
             .create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("planar"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: crate::renderer::dynamic_uniform::<PlanarUniform>(&self.uniforms),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(
-                            &ctx.frame.gbuffer_position_view,
-                        ),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: wgpu::BindingResource::TextureView(
-                            &ctx.frame.gbuffer_normal_view,
-                        ),
-                    },
-                ],
+                layout: &self.shared.layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: crate::gpu::dynamic_uniform::<PlanarUniform>(&self.uniforms),
+                }],
             });
-        let stencil = ctx.params.get_bool("stencil")?;
+        let stencil = config.stencil;
         let mut pass = super::mask_pass(encoder, ctx, "planar");
-        pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
-        pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+        ctx.bind_frame_groups(&mut pass);
         let stride = std::mem::size_of::<PlanarUniform>() as u32;
         if stencil {
-            pass.set_pipeline(&self.tag);
+            pass.set_pipeline(&self.shared.tag);
             for i in 0..uniforms.len() {
                 pass.set_stencil_reference(i as u32 + 1);
                 pass.set_bind_group(2, &bind_group, &[i as u32 * stride]);
                 pass.draw(0..3, 0..1);
             }
         }
-        pass.set_pipeline(&self.flatten[stencil as usize]);
+        pass.set_pipeline(&self.shared.flatten[stencil as usize]);
         for i in 0..uniforms.len() {
             pass.set_stencil_reference(i as u32 + 1);
             pass.set_bind_group(2, &bind_group, &[i as u32 * stride]);

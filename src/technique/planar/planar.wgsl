@@ -1,4 +1,4 @@
-// Planar projected shadows (SEEDS §2). common.wgsl is prepended.
+// Planar projected shadows (SEEDS §2). common.wgsl and gbuffer.wgsl are prepended.
 
 struct PlanarUniform {
     // M = (P·L)·I − L·Pᵀ
@@ -11,8 +11,6 @@ struct PlanarUniform {
 };
 
 @group(2) @binding(0) var<uniform> planar: PlanarUniform;
-@group(2) @binding(1) var gbuffer_position: texture_2d<f32>;
-@group(2) @binding(2) var gbuffer_normal: texture_2d<f32>;
 
 // Stencil tag: passes (and writes the plane's id) where the visible,
 // shadow-receiving surface lies on the receiver plane.

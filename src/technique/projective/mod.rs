@@ -8,39 +8,61 @@
 //! receiver, whose low precision gives false self-shadowing.
 
 use super::light_space::{LightFrustum, fit_bounds};
-use super::{Family, MaskContext, ParamSpec, Preset, ShadowTechnique};
-use crate::renderer::{MASK_FORMAT, VERTEX_LAYOUT};
+use super::{Family, MaskContext, ParamSpec, ParamValues, Preset, ShadowTechnique};
+use crate::frame::{MASK_FORMAT, VERTEX_LAYOUT};
+use crate::gpu::GpuContext;
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec4};
+use std::sync::Arc;
+
+const SIZE: ParamSpec = ParamSpec::int("size", 512, 16, 8192, "texture side in texels, per caster");
+const MARGIN: ParamSpec = ParamSpec::float(
+    "margin",
+    0.05,
+    0.0,
+    1.0,
+    0.01,
+    "widening of the frustum fitted around each caster, as a fraction of its bounding radius",
+);
+const DEPTH_IN_ALPHA: ParamSpec = ParamSpec::boolean(
+    "depth_in_alpha",
+    false,
+    "store the caster's depth in an 8-bit channel and compare it per receiver (003 §4): shadows on the caster itself, with 8-bit acne",
+);
+const ALPHA_BIAS: ParamSpec = ParamSpec::float(
+    "alpha_bias",
+    0.004,
+    0.0,
+    0.1,
+    0.001,
+    "depth-in-alpha comparison bias, as a fraction of the fitted depth range",
+);
+
+/// The projective family's parameters, parsed.
+#[derive(Clone, Copy, Debug)]
+struct ProjectiveConfig {
+    size: u32,
+    margin: f32,
+    depth_in_alpha: bool,
+    alpha_bias: f32,
+}
+
+impl ProjectiveConfig {
+    fn parse(p: &ParamValues) -> Result<ProjectiveConfig> {
+        Ok(ProjectiveConfig {
+            size: p.int(&SIZE)?,
+            margin: p.float(&MARGIN)?,
+            depth_in_alpha: p.flag(&DEPTH_IN_ALPHA)?,
+            alpha_bias: p.float(&ALPHA_BIAS)?,
+        })
+    }
+}
 
 pub static FAMILY: Family = Family {
     id: "projective",
     summary: "projective shadow textures: one black-on-white texture per caster, projected onto receivers",
-    params: &[
-        ParamSpec::int("size", 512, 16, 8192, "texture side in texels, per caster"),
-        ParamSpec::float(
-            "margin",
-            0.05,
-            0.0,
-            1.0,
-            0.01,
-            "widening of the frustum fitted around each caster, as a fraction of its bounding radius",
-        ),
-        ParamSpec::boolean(
-            "depth_in_alpha",
-            false,
-            "store the caster's depth in an 8-bit channel and compare it per receiver (003 §4): shadows on the caster itself, with 8-bit acne",
-        ),
-        ParamSpec::float(
-            "alpha_bias",
-            0.004,
-            0.0,
-            0.1,
-            0.001,
-            "depth-in-alpha comparison bias, as a fraction of the fitted depth range",
-        ),
-    ],
+    params: &[SIZE, MARGIN, DEPTH_IN_ALPHA, ALPHA_BIAS],
     presets: &[
         Preset {
             name: "default",
@@ -77,38 +99,43 @@ struct Projector {
     depth: wgpu::TextureView,
 }
 
-pub struct ProjectiveShadows {
+/// The family's layouts, pipelines and placeholder, shared per device.
+struct ProjectiveShared {
     layout: wgpu::BindGroupLayout,
     caster_pipeline: wgpu::RenderPipeline,
     project_pipeline: wgpu::RenderPipeline,
-    uniforms: Option<wgpu::Buffer>,
     /// Bound in place of a projector's texture while that texture is rendered.
     placeholder: wgpu::TextureView,
+}
+
+pub struct ProjectiveShadows {
+    shared: Arc<ProjectiveShared>,
+    config: Option<ProjectiveConfig>,
+    uniforms: Option<wgpu::Buffer>,
     projectors: Vec<Projector>,
     /// (scene fingerprint, texture size) the projectors were made for.
     made_for: Option<(u64, u32)>,
     bytes: u64,
 }
 
-impl ProjectiveShadows {
-    pub fn new(gpu: &crate::gpu::GpuContext) -> ProjectiveShadows {
+impl ProjectiveShared {
+    fn new(gpu: &GpuContext) -> ProjectiveShared {
         let device = &gpu.device;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("projective"),
             entries: &[
-                crate::renderer::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
-                super::gbuffer_entry(1),
-                super::gbuffer_entry(2),
-                super::gbuffer_entry(3),
+                crate::gpu::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
+                crate::gpu::texture_entry(1, wgpu::TextureViewDimension::D2, false),
             ],
         });
-        let module = crate::renderer::shader_module(
+        let module = crate::frame::technique_shader(
             device,
             "projective",
             &[include_str!("projective.wgsl")],
         );
         let pl = super::pipeline_layout(gpu, "projective", &layout);
-        let caster_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        let caster_pipeline = gpu.cache.render_pipeline("projective caster", &(), || {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("projective caster"),
             layout: Some(&pl),
             vertex: wgpu::VertexState {
@@ -134,9 +161,10 @@ impl ProjectiveShadows {
             }),
             multiview_mask: None,
             cache: None,
+        })
         });
         let project_pipeline = super::fullscreen_pipeline(
-            device,
+            gpu,
             "projective project",
             &pl,
             &module,
@@ -156,7 +184,7 @@ impl ProjectiveShadows {
             })],
             Some(super::frame_depth_read(Default::default())),
         );
-        let placeholder = crate::renderer::texture_2d(
+        let placeholder = crate::gpu::texture_2d(
             device,
             "projective placeholder",
             1,
@@ -166,11 +194,20 @@ impl ProjectiveShadows {
             wgpu::TextureUsages::TEXTURE_BINDING,
         )
         .create_view(&Default::default());
-        ProjectiveShadows {
+        ProjectiveShared {
             placeholder,
             layout,
             caster_pipeline,
             project_pipeline,
+        }
+    }
+}
+
+impl ProjectiveShadows {
+    pub fn new(gpu: &GpuContext) -> ProjectiveShadows {
+        ProjectiveShadows {
+            shared: gpu.cache.shared(|| ProjectiveShared::new(gpu)),
+            config: None,
             uniforms: None,
             projectors: vec![],
             made_for: None,
@@ -198,7 +235,7 @@ impl ProjectiveShadows {
         self.made_for = None;
         let device = &ctx.gpu.device;
         let texture = |format, usage| {
-            crate::renderer::texture_2d(device, "projective", size, size, 1, format, usage)
+            crate::gpu::texture_2d(device, "projective", size, size, 1, format, usage)
                 .create_view(&Default::default())
         };
         use wgpu::TextureUsages as U;
@@ -228,16 +265,25 @@ impl ProjectiveShadows {
 }
 
 impl ShadowTechnique for ProjectiveShadows {
+    fn configure(&mut self, params: &ParamValues) -> Result<()> {
+        self.config = Some(ProjectiveConfig::parse(params)?);
+        Ok(())
+    }
+
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        let size = ctx.params.get_usize("size")? as u32;
-        let key = (super::scene_fingerprint(ctx.scene), size);
+        let ProjectiveConfig {
+            size,
+            margin,
+            depth_in_alpha: depth_mode,
+            alpha_bias,
+        } = self
+            .config
+            .ok_or_else(|| anyhow::anyhow!("projective: not configured"))?;
+        let key = (crate::scene::scene_fingerprint(ctx.scene), size);
         if self.made_for != Some(key) {
             self.make_projectors(ctx, size)?;
             self.made_for = Some(key);
         }
-        let margin = ctx.params.get_f32("margin")?;
-        let depth_mode = ctx.params.get_bool("depth_in_alpha")?;
-        let alpha_bias = ctx.params.get_f32("alpha_bias")?;
         // One frustum per caster; casters that contain a local light are skipped.
         let frusta: Vec<Option<LightFrustum>> = self
             .projectors
@@ -282,32 +328,20 @@ impl ShadowTechnique for ProjectiveShadows {
                 .device
                 .create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("projector"),
-                    layout: &self.layout,
+                    layout: &self.shared.layout,
                     entries: &[
                         wgpu::BindGroupEntry {
                             binding: 0,
-                            resource: crate::renderer::dynamic_uniform::<ProjectorUniform>(ubuf),
+                            resource: crate::gpu::dynamic_uniform::<ProjectorUniform>(ubuf),
                         },
                         wgpu::BindGroupEntry {
                             binding: 1,
                             resource: wgpu::BindingResource::TextureView(texture),
                         },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: wgpu::BindingResource::TextureView(
-                                &ctx.frame.gbuffer_position_view,
-                            ),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 3,
-                            resource: wgpu::BindingResource::TextureView(
-                                &ctx.frame.gbuffer_normal_view,
-                            ),
-                        },
                     ],
                 })
         };
-        let caster_group = bind_group(&self.placeholder);
+        let caster_group = bind_group(&self.shared.placeholder);
         let bind_groups: Vec<wgpu::BindGroup> = self
             .projectors
             .iter()
@@ -339,18 +373,16 @@ impl ShadowTechnique for ProjectiveShadows {
                 }),
                 ..Default::default()
             });
-            pass.set_pipeline(&self.caster_pipeline);
-            pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
-            pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+            pass.set_pipeline(&self.shared.caster_pipeline);
+            ctx.bind_frame_groups(&mut pass);
             pass.set_bind_group(2, &caster_group, &[i as u32 * stride]);
             ctx.scene_gpu
                 .draw_objects(&mut pass, |d| d.object == p.object);
         }
         // Project every texture onto the receivers, multiplying into the mask.
         let mut pass = super::mask_pass(encoder, ctx, "projective");
-        pass.set_pipeline(&self.project_pipeline);
-        pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
-        pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+        pass.set_pipeline(&self.shared.project_pipeline);
+        ctx.bind_frame_groups(&mut pass);
         for (i, bg) in bind_groups.iter().enumerate() {
             if frusta[i].is_some() {
                 pass.set_bind_group(2, bg, &[i as u32 * stride]);

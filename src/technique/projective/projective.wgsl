@@ -1,4 +1,4 @@
-// Projective shadow textures (SEEDS §3). common.wgsl is prepended.
+// Projective shadow textures (SEEDS §3). common.wgsl and gbuffer.wgsl are prepended.
 
 struct Projector {
     // light view-projection fitted around one caster
@@ -15,8 +15,6 @@ struct Projector {
 
 @group(2) @binding(0) var<uniform> projector: Projector;
 @group(2) @binding(1) var shadow_texture: texture_2d<f32>;
-@group(2) @binding(2) var gbuffer_position: texture_2d<f32>;
-@group(2) @binding(3) var gbuffer_normal: texture_2d<f32>;
 
 // Linear depth in the projector's [near, far], 0 at the near plane.
 fn linear_depth(world: vec3f) -> f32 {

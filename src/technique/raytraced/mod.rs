@@ -9,36 +9,35 @@
 //! offset scales with the magnitude of the position.
 
 use super::{Family, MaskContext, ParamSpec, ParamValues, Preset, ShadowTechnique};
-use crate::scene::{Light, LightArea, LightType, Scene};
+use crate::scene::area::{concentric_disk, stratified_square};
+use crate::scene::bvh::CasterBvh;
+use crate::scene::{Light, LightArea, LightType};
 use anyhow::Result;
 use glam::Vec3;
-use obvhs::cwbvh::CwBvh;
-use obvhs::ray::Ray;
-use obvhs::triangle::Triangle;
 use rayon::prelude::*;
-use std::sync::{Arc, Mutex, Weak};
+use std::sync::Arc;
 use std::time::Instant;
+
+const SAMPLES: ParamSpec = ParamSpec::int(
+    "samples",
+    256,
+    1,
+    4096,
+    "shadow rays per pixel for area lights (stratified); hard lights use one",
+);
+const OFFSET_ULPS: ParamSpec = ParamSpec::float(
+    "offset_ulps",
+    64.0,
+    1.0,
+    65536.0,
+    1.0,
+    "ray-origin offset along the geometric normal, in float ULPs of the position (scales with its magnitude)",
+);
 
 pub static FAMILY: Family = Family {
     id: "raytraced",
     summary: "ground truth: CPU shadow rays from the G-buffer against a BVH of the casters",
-    params: &[
-        ParamSpec::int(
-            "samples",
-            256,
-            1,
-            4096,
-            "shadow rays per pixel for area lights (stratified); hard lights use one",
-        ),
-        ParamSpec::float(
-            "offset_ulps",
-            64.0,
-            1.0,
-            65536.0,
-            1.0,
-            "ray-origin offset along the geometric normal, in float ULPs of the position (scales with its magnitude)",
-        ),
-    ],
+    params: &[SAMPLES, OFFSET_ULPS],
     presets: &[
         Preset {
             name: "default",
@@ -66,8 +65,8 @@ pub struct ReferenceSettings {
 impl ReferenceSettings {
     pub fn from_params(p: &ParamValues) -> Result<Self> {
         Ok(ReferenceSettings {
-            samples: p.get_usize("samples")?,
-            offset_ulps: p.get_f32("offset_ulps")?,
+            samples: p.int(&SAMPLES)? as usize,
+            offset_ulps: p.float(&OFFSET_ULPS)?,
         })
     }
     /// The defaults of the family's table (`raytraced:default`), which the
@@ -83,91 +82,6 @@ impl ReferenceSettings {
         } else {
             1
         }
-    }
-}
-
-/// BVH over the world-space triangles of a scene's shadow casters.
-pub struct CasterBvh {
-    key: u64,
-    bvh: Option<CwBvh>,
-    triangles: Vec<Triangle>,
-    pub build_ms: f64,
-}
-
-impl CasterBvh {
-    pub fn build(scene: &Scene) -> CasterBvh {
-        let t = Instant::now();
-        let key = super::scene_fingerprint(scene);
-        let triangles: Vec<Triangle> = scene
-            .world_triangles(|o| o.casts_shadow && !o.shadow_plane)
-            .into_iter()
-            .map(|[a, b, c]| Triangle {
-                v0: a.into(),
-                v1: b.into(),
-                v2: c.into(),
-            })
-            .collect();
-        let bvh = (!triangles.is_empty()).then(|| {
-            obvhs::cwbvh::builder::build_cwbvh_from_tris(
-                &triangles,
-                obvhs::BvhBuildParams::medium_build(),
-                &mut std::time::Duration::default(),
-            )
-        });
-        CasterBvh {
-            key,
-            bvh,
-            triangles,
-            build_ms: t.elapsed().as_secs_f64() * 1e3,
-        }
-    }
-
-    /// The BVH of `scene`'s casters, shared between all users while alive;
-    /// `held` is returned as is when it still matches the scene.
-    pub fn for_scene(scene: &Scene, held: Option<&Arc<CasterBvh>>) -> Arc<CasterBvh> {
-        static CACHE: Mutex<Vec<(u64, Weak<CasterBvh>)>> = Mutex::new(Vec::new());
-        let key = super::scene_fingerprint(scene);
-        if let Some(h) = held.filter(|h| h.key == key) {
-            return h.clone();
-        }
-        let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
-        cache.retain(|(_, w)| w.strong_count() > 0);
-        if let Some(b) = cache
-            .iter()
-            .find(|(k, _)| *k == key)
-            .and_then(|(_, w)| w.upgrade())
-        {
-            return b;
-        }
-        let b = Arc::new(CasterBvh::build(scene));
-        cache.push((key, Arc::downgrade(&b)));
-        b
-    }
-
-    /// True when nothing blocks the segment from `origin` along `dir` (unit)
-    /// up to distance `tmax`.
-    pub fn unoccluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
-        let Some(bvh) = &self.bvh else { return true };
-        // obvhs' traversal misses hits when a direction component is −0.0
-        // (a sun along (0, −1, 0) gives the ray (−0, 1, −0)): use +0.0.
-        let dir = Vec3::select(dir.cmpeq(Vec3::ZERO), Vec3::ZERO, dir);
-        let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
-        bvh.ray_traverse_miss(ray, |r, id| {
-            self.triangles[bvh.primitive_indices[id] as usize].intersect(r)
-        })
-    }
-
-    pub fn triangle_count(&self) -> usize {
-        self.triangles.len()
-    }
-
-    /// Memory of the triangles, BVH nodes and index table.
-    pub fn bytes(&self) -> u64 {
-        let nodes = self.bvh.as_ref().map_or(0, |b| {
-            b.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>()
-                + b.primitive_indices.len() * 4
-        });
-        (self.triangles.len() * std::mem::size_of::<Triangle>() + nodes) as u64
     }
 }
 
@@ -194,53 +108,6 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3, ulps: f32) -> Vec3 {
 fn basis(n: Vec3) -> (Vec3, Vec3) {
     let t = n.any_orthonormal_vector();
     (t, n.cross(t))
-}
-
-/// `n` stratified points in [−1,1]², one in each of n strata of equal area:
-/// r = round(√n) rows, row j holding c_j = ⌊n/r⌋ or ⌈n/r⌉ cells and of
-/// height c_j/n, so every cell (width 1/c_j) covers 1/n of the square and
-/// no part of the square is left without samples when n is not a square
-/// (n = k² gives the k×k grid). Row-major; each point is jittered inside its
-/// cell by `jitter` in [0,1)².
-pub fn stratified_square(n: usize, mut jitter: impl FnMut() -> (f32, f32)) -> Vec<(f32, f32)> {
-    if n == 0 {
-        return vec![];
-    }
-    let rows = ((n as f64).sqrt().round() as usize).max(1);
-    let mut out = Vec::with_capacity(n);
-    let mut start = 0;
-    for j in 0..rows {
-        let cols = n / rows + usize::from(j < n % rows);
-        for i in 0..cols {
-            let (jx, jy) = jitter();
-            let x = 2.0 * (i as f32 + jx) / cols as f32 - 1.0;
-            let y = if n.is_multiple_of(rows) {
-                2.0 * (j as f32 + jy) / rows as f32 - 1.0
-            } else {
-                2.0 * (start as f32 + jy * cols as f32) / n as f32 - 1.0
-            };
-            out.push((x, y));
-        }
-        start += cols;
-    }
-    out
-}
-
-/// Shirley–Chiu concentric map of [−1,1]² onto the unit disk (keeps
-/// stratification).
-pub fn concentric_disk(a: f32, b: f32) -> (f32, f32) {
-    if a == 0.0 && b == 0.0 {
-        return (0.0, 0.0);
-    }
-    let (r, phi) = if a.abs() > b.abs() {
-        (a, std::f32::consts::FRAC_PI_4 * (b / a))
-    } else {
-        (
-            b,
-            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (a / b),
-        )
-    };
-    (r * phi.cos(), r * phi.sin())
 }
 
 /// Small deterministic per-pixel random numbers (PCG hash).
@@ -344,6 +211,7 @@ pub fn mask_from_gbuffer(
 
 #[derive(Default)]
 pub struct RayTraced {
+    settings: Option<ReferenceSettings>,
     bvh: Option<Arc<CasterBvh>>,
     rays: f64,
     trace_ms: f64,
@@ -352,6 +220,11 @@ pub struct RayTraced {
 }
 
 impl ShadowTechnique for RayTraced {
+    fn configure(&mut self, params: &ParamValues) -> Result<()> {
+        self.settings = Some(ReferenceSettings::from_params(params)?);
+        Ok(())
+    }
+
     fn render_mask(
         &mut self,
         ctx: &MaskContext,
@@ -363,14 +236,14 @@ impl ShadowTechnique for RayTraced {
         self.bvh = Some(bvh.clone());
         self.build_ms = bvh.build_ms;
         self.bvh_bytes = bvh.bytes();
-        let pos_raw = gpu.read_texture(&frame.gbuffer_position, 0, 16)?;
-        let nrm_raw = gpu.read_texture(&frame.gbuffer_normal, 0, 8)?;
+        let pos_raw = gpu.read_texture(frame.gbuffer_position(), 0, 16)?;
+        let nrm_raw = gpu.read_texture(frame.gbuffer_normal(), 0, 8)?;
         let positions: &[[f32; 4]] = bytemuck::cast_slice(&pos_raw);
         let normals: Vec<Vec3> = bytemuck::cast_slice::<u8, [half::f16; 4]>(&nrm_raw)
             .iter()
             .map(|n| Vec3::new(n[0].to_f32(), n[1].to_f32(), n[2].to_f32()).normalize_or_zero())
             .collect();
-        let settings = ReferenceSettings::from_params(ctx.params)?;
+        let settings = self.settings.unwrap_or_else(ReferenceSettings::defaults);
         let samples = settings.samples_for(ctx.light);
         let t = Instant::now();
         let mask = mask_from_gbuffer(
@@ -383,7 +256,7 @@ impl ShadowTechnique for RayTraced {
         );
         self.trace_ms = t.elapsed().as_secs_f64() * 1e3;
         self.rays = positions.iter().filter(|p| p[3] >= 0.5).count() as f64 * samples as f64;
-        crate::renderer::write_mask(gpu, frame, ctx.light_index, &mask);
+        crate::frame::write_mask(gpu, frame, ctx.light_index, &mask);
         Ok(())
     }
 
@@ -411,6 +284,7 @@ impl ShadowTechnique for RayTraced {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::Scene;
 
     #[test]
     fn offset_scales_with_position_magnitude() {
@@ -442,43 +316,5 @@ mod tests {
         let above = Vec3::new(0.0, -1.0, 0.0);
         let light = Light::directional(Vec3::new(0.0, -1.0, 0.0), 1.0);
         assert_eq!(visibility(&bvh, &light, above, Vec3::Y, 1, 64.0, 0), 0.0);
-    }
-
-    #[test]
-    fn stratified_samples_cover_each_cell_once() {
-        let pts = stratified_square(16, || (0.5, 0.5));
-        let mut cells: Vec<(i32, i32)> = pts
-            .iter()
-            .map(|(x, y)| (((x + 1.0) * 2.0) as i32, ((y + 1.0) * 2.0) as i32))
-            .collect();
-        cells.sort();
-        cells.dedup();
-        assert_eq!(cells.len(), 16);
-        // Not a square: every sample kept, one per stratum of area 1/n, and
-        // the strata tile the square (no region without samples).
-        for n in [2usize, 3, 5, 7, 12, 17, 30] {
-            let pts = stratified_square(n, || (0.5, 0.5));
-            assert_eq!(pts.len(), n);
-            let lo = stratified_square(n, || (0.0, 0.0));
-            let hi = stratified_square(n, || (1.0, 1.0));
-            let area: f32 = lo
-                .iter()
-                .zip(&hi)
-                .map(|(a, b)| (b.0 - a.0) * (b.1 - a.1) / 4.0)
-                .sum();
-            assert!((area - 1.0).abs() < 1e-5, "n = {n}: strata cover {area}");
-            for ((a, b), p) in lo.iter().zip(&hi).zip(&pts) {
-                assert!(
-                    ((b.0 - a.0) * (b.1 - a.1) / 4.0 - 1.0 / n as f32).abs() <= 1e-5,
-                    "n = {n}"
-                );
-                assert!(a.0 <= p.0 && p.0 <= b.0 && a.1 <= p.1 && p.1 <= b.1);
-                assert!(a.0 >= -1.0 && a.1 >= -1.0 && b.0 <= 1.0 + 1e-6 && b.1 <= 1.0 + 1e-6);
-            }
-        }
-        for (a, b) in [(1.0, 0.0), (0.0, 1.0), (-1.0, -1.0), (0.3, -0.7)] {
-            let (x, y) = concentric_disk(a, b);
-            assert!(x * x + y * y <= 1.0 + 1e-5);
-        }
     }
 }

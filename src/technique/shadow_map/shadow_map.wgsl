@@ -1,6 +1,15 @@
 // Shadow maps (SEEDS §5): the depth pass from the light and the
-// screen-space lookup that writes the visibility mask. common.wgsl is
-// prepended.
+// screen-space lookup that writes the visibility mask. common.wgsl,
+// gbuffer.wgsl and the `FILTER_*` constants generated from the `Filter`
+// enum are prepended.
+
+// Specialisation (pipeline-overridable constants, set per pipeline by
+// pipelines.rs): the filter, taps per side, the 8-bit map and the
+// receiver-plane bias are constants of each pipeline.
+override FILTER_KIND: u32 = FILTER_GRID;
+override TAPS: u32 = 3u;
+override BYTE_MAP: bool = false;
+override RECEIVER_PLANE: bool = false;
 
 struct ShadowMap {
     // world → light clip, one per face (1 for spot/directional, 6 for point)
@@ -8,9 +17,7 @@ struct ShadowMap {
     // xyz light position, w faces: 1, 6 (cube) or 2 (dual paraboloid, whose
     // `faces` are the two hemispheres' view matrices)
     light: vec4f,
-    // x filter (0 hard, 1 pcf 2×2, 2 pcf grid, 3 pcf disk, 4 pcss, 5 variable width),
-    // y samples per side (grid) or count (disk), z filter radius (texels),
-    // w normal offset (texels)
+    // x filter radius (texels), y normal offset (texels), zw unused
     kernel: vec4f,
     // x map size, y 1/size, z world size of a texel at unit distance
     // (perspective, paraboloid) or of any texel (orthographic),
@@ -19,11 +26,11 @@ struct ShadowMap {
     // x light size (texels at unit depth ratio, pcss), y variable-width scale,
     // z variable-width exponent, w blocker-search radius (texels)
     soft: vec4f,
-    // x near, y far (to linearise perspective depth), z 1 = 8-bit map,
-    // w area-light radius for pcss (0 = use soft.x)
+    // x near, y far (to linearise perspective depth), z area-light radius
+    // for pcss (0 = use soft.x), w unused
     depth: vec4f,
     // x face rendered by the depth pass (or blurred), y blur axis (0 x, 1 y),
-    // z blur radius (texels), w 1 = receiver-plane depth bias
+    // z blur radius (texels), w unused
     face: vec4u,
     // moments: x light-bleeding reduction, y exponent c (esm, evsm +),
     // z exponent c− (evsm), w moment bias (msm)
@@ -31,18 +38,10 @@ struct ShadowMap {
 };
 
 @group(2) @binding(0) var<uniform> sm: ShadowMap;
-@group(2) @binding(1) var gbuffer_position: texture_2d<f32>;
-@group(2) @binding(2) var gbuffer_normal: texture_2d<f32>;
 @group(2) @binding(3) var depth_map: texture_depth_2d_array;
 @group(2) @binding(4) var compare_sampler: sampler_comparison;
 @group(2) @binding(5) var byte_map: texture_2d_array<f32>;
 @group(2) @binding(6) var moment_map: texture_2d_array<f32>;
-
-const FILTER_VSM: u32 = 6u;
-const FILTER_ESM: u32 = 7u;
-const FILTER_EVSM2: u32 = 8u;
-const FILTER_EVSM4: u32 = 9u;
-const FILTER_MSM: u32 = 10u;
 
 // ---- depth pass
 
@@ -114,10 +113,9 @@ fn fs_depth_paraboloid(i: DepthOut) {
 // The moments each filter stores (Donnelly & Lauritzen 2006; Annen 2008;
 // Lauritzen & McCool 2008; Peters & Klein 2015).
 fn moments_of(z: f32) -> vec4f {
-    let kind = u32(sm.kernel.x);
     let cp = sm.moments.y;
     let cn = sm.moments.z;
-    switch kind {
+    switch FILTER_KIND {
         case FILTER_VSM: {
             return vec4f(z, z * z, 0.0, 0.0);
         }
@@ -204,7 +202,7 @@ fn linear_depth(z: f32) -> f32 {
 fn stored(texel: vec2i, face: u32) -> f32 {
     let size = i32(sm.map.x);
     let t = clamp(texel, vec2i(0), vec2i(size - 1));
-    if sm.depth.z > 0.5 {
+    if BYTE_MAP {
         return textureLoad(byte_map, t, i32(face), 0).r;
     }
     return textureLoad(depth_map, t, i32(face), 0);
@@ -224,7 +222,7 @@ fn receiver_plane(t: vec3f) -> vec2f {
     let dy = dpdy(t);
     let det = dx.x * dy.y - dx.y * dy.x;
     let g = vec2f(dy.y * dx.z - dx.y * dy.z, dx.x * dy.z - dy.x * dx.z) / det;
-    if sm.face.w == 0u || abs(det) < 1e-20 || any(g != g) {
+    if !RECEIVER_PLANE || abs(det) < 1e-20 || any(g != g) {
         return vec2f(0.0);
     }
     return clamp(g, vec2f(-4.0), vec2f(4.0));
@@ -242,7 +240,7 @@ fn lit_at(texel: vec2i, face: u32, z: f32) -> f32 {
 
 // Bilinear (hardware-style 2×2) comparison at uv.
 fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
-    if sm.depth.z < 0.5 {
+    if !BYTE_MAP {
         return textureSampleCompareLevel(depth_map, compare_sampler, uv, i32(face), z);
     }
     let p = uv * sm.map.x - 0.5;
@@ -313,10 +311,10 @@ fn msm_hamburger(moments: vec4f, z: f32) -> f32 {
 }
 
 // Visibility from filtered moments for receiver depth z (linear, [0, 1]).
-fn moment_visibility(m: vec4f, z: f32, kind: u32) -> f32 {
+fn moment_visibility(m: vec4f, z: f32) -> f32 {
     let cp = sm.moments.y;
     let cn = sm.moments.z;
-    switch kind {
+    switch FILTER_KIND {
         case FILTER_VSM: {
             return chebyshev(m.xy, z, 1e-6);
         }
@@ -372,14 +370,14 @@ fn pcf_grid(uv: vec2f, face: u32, z: f32, radius_texels: f32, k: u32) -> f32 {
 }
 
 // Half-width in texels of the penumbra that a blocker at linear depth db
-// casts on a receiver at dr from an area light of radius sm.depth.w (world
+// casts on a receiver at dr from an area light of radius sm.depth.z (world
 // units; for directional lights the tangent of the angular radius): the
 // segment from the receiver to the light's rim, seen from the light centre.
 fn penumbra_texels(dr: f32, db: f32) -> f32 {
     if sm.map.w > 0.5 && !is_paraboloid() {
-        return sm.depth.w * (dr - db) * (sm.depth.y - sm.depth.x) / sm.map.z;
+        return sm.depth.z * (dr - db) * (sm.depth.y - sm.depth.x) / sm.map.z;
     }
-    return sm.depth.w * (dr - db) / (dr * max(db, 1e-4)) / sm.map.z;
+    return sm.depth.z * (dr - db) / (dr * max(db, 1e-4)) / sm.map.z;
 }
 
 // Mean linear depth of the blockers (stored < z) in a disk, and their count.
@@ -409,7 +407,7 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     if sm.map.w < 0.5 || is_paraboloid() {
         texel_world = sm.map.z * length(g.xyz - sm.light.xyz);
     }
-    let p = g.xyz + n * sm.kernel.w * texel_world;
+    let p = g.xyz + n * sm.kernel.y * texel_world;
     var c = sm.faces[face] * vec4f(p, 1.0);
     if is_paraboloid() {
         c = paraboloid(vec4f(p, 1.0), face);
@@ -431,34 +429,33 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     // texel away at a single depth: take off that slope (Isidoro's
     // fractional sampling error), capped.
     let z = ndc.z - min(2.0 * dot(vec2f(sm.map.y), abs(rp_gradient)), 0.01);
-    let kind = u32(sm.kernel.x);
-    if kind >= FILTER_VSM {
-        return vec4f(moment_visibility(moments_at(uv, face), linear01(c), kind));
+    if FILTER_KIND >= FILTER_VSM {
+        return vec4f(moment_visibility(moments_at(uv, face), linear01(c)));
     }
-    let count = max(u32(sm.kernel.y), 1u);
-    let radius = sm.kernel.z;
+    let count = max(TAPS, 1u);
+    let radius = sm.kernel.x;
     let phi = ign(frag.xy) * 6.2831853;
     var v = 1.0;
-    switch kind {
-        case 0u: {
+    switch FILTER_KIND {
+        case FILTER_HARD: {
             let t = floor(uv * sm.map.x);
             v = lit_at(vec2i(t), face, tap_z(ndc.z, (t + 0.5) * sm.map.y));
         }
-        case 1u: {
+        case FILTER_PCF2X2: {
             v = pcf2x2(uv, face, z);
         }
-        case 2u: {
+        case FILTER_GRID: {
             v = pcf_grid(uv, face, z, radius, count);
         }
-        case 3u: {
+        case FILTER_DISK: {
             v = pcf_disk(uv, face, z, radius, count * count, phi);
         }
-        case 4u: {
+        case FILTER_PCSS: {
             // PCSS (Fernando 2005): blocker search, then a penumbra
             // w = (d_receiver − d_blocker) / d_blocker · light size; from the
             // light's own area when it has one.
             let dr = linear_depth(z);
-            let physical = sm.depth.w > 0.0;
+            let physical = sm.depth.z > 0.0;
             var search = sm.soft.w;
             if physical {
                 search = clamp(penumbra_texels(dr, select(sm.depth.x, 0.0, sm.map.w > 0.5 && !is_paraboloid())), 1.0, 64.0);
@@ -490,9 +487,9 @@ fn fs_debug_map(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let uv = frag.xy / 256.0;
     let t = vec2i(uv * sm.map.x);
     var d: f32;
-    if u32(sm.kernel.x) >= FILTER_VSM {
+    if FILTER_KIND >= FILTER_VSM {
         d = moment_texel(t, 0u).x;
-        if u32(sm.kernel.x) == FILTER_ESM || u32(sm.kernel.x) == FILTER_EVSM2 || u32(sm.kernel.x) == FILTER_EVSM4 {
+        if FILTER_KIND == FILTER_ESM || FILTER_KIND == FILTER_EVSM2 || FILTER_KIND == FILTER_EVSM4 {
             d = 1.0 + log(max(d, 1e-30)) / sm.moments.y;
         }
     } else {

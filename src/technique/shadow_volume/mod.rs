@@ -21,71 +21,129 @@
 pub mod adjacency;
 pub mod silhouette;
 
-use super::{DebugLine, Family, MaskContext, ParamSpec, Preset, ShadowTechnique};
+use super::params::choice_enum;
+use super::{DebugLine, Family, MaskContext, ParamSpec, ParamValues, Preset, ShadowTechnique};
+use crate::frame::{Compose, DEPTH_FORMAT, MASK_FORMAT};
 use crate::gpu::GpuContext;
-use crate::renderer::{DEPTH_FORMAT, MASK_FORMAT};
 use crate::scene::{Light, LightType, Scene};
 use adjacency::Adjacency;
 use anyhow::{Result, bail};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 use silhouette::{CasterPlan, VolumeKind, VolumeMesh};
-use std::collections::HashMap;
+use std::sync::Arc;
 
-const METHODS: &[&str] = &["zpass", "zfail", "auto"];
+choice_enum! {
+    /// How the volumes are counted.
+    pub enum Method { ZPass = "zpass", ZFail = "zfail", Auto = "auto" }
+}
+choice_enum! {
+    /// Which volumes a caster extrudes.
+    pub enum SilhouetteMode { Auto = "auto", Edges = "edges", Triangles = "triangles" }
+}
+choice_enum! {
+    /// Where silhouettes are found and volumes extruded.
+    pub enum Extrusion { Gpu = "gpu", Cpu = "cpu" }
+}
+choice_enum! {
+    /// How volumes extruded to infinity escape far-plane clipping.
+    pub enum FarPlane { Infinite = "infinite", DepthClamp = "depth-clamp" }
+}
+choice_enum! {
+    /// One two-sided stencil draw or two single-sided ones.
+    pub enum StencilMode { TwoSided = "two-sided", TwoPass = "two-pass" }
+}
+
+const METHOD: ParamSpec = ParamSpec::choice_of::<Method>(
+    "method",
+    Method::Auto as usize,
+    "zpass: count volume faces in front of each pixel (fails when the camera is in a shadow); zfail: count those behind (Carmack's reverse; caps needed); auto: z-fail only for casters whose volume can contain part of the near-plane rectangle",
+);
+const SILHOUETTE: ParamSpec = ParamSpec::choice_of::<SilhouetteMode>(
+    "silhouette",
+    SilhouetteMode::Auto as usize,
+    "edges: side quads on silhouette edges (exact for closed meshes); triangles: every triangle extrudes its own closed volume (exact for any mesh, more fill); auto: edges for closed meshes, triangles for the others (reported in the log)",
+);
+const EXTRUSION: ParamSpec = ParamSpec::choice_of::<Extrusion>(
+    "extrusion",
+    Extrusion::Gpu as usize,
+    "gpu: a compute shader finds silhouettes and writes the volumes into an index buffer drawn with draw-indirect; cpu: the same on the CPU (rayon), uploaded every frame",
+);
+const LENGTH: ParamSpec = ParamSpec::float(
+    "length",
+    0.0,
+    0.0,
+    100000.0,
+    0.5,
+    "extrusion length in world units; 0 extrudes to infinity (w = 0)",
+);
+const FAR_PLANE: ParamSpec = ParamSpec::choice_of::<FarPlane>(
+    "far_plane",
+    FarPlane::Infinite as usize,
+    "how volumes extruded to infinity escape far-plane clipping: a projection with the far plane at infinity, or depth clamping (unclipped_depth; falls back to infinite where the adapter lacks it)",
+);
+const STENCIL: ParamSpec = ParamSpec::choice_of::<StencilMode>(
+    "stencil",
+    StencilMode::TwoSided as usize,
+    "two-sided: both faces in one draw with wrapping increment/decrement; two-pass: front and back faces in two draws with saturating operations",
+);
+const SCISSOR: ParamSpec = ParamSpec::boolean(
+    "scissor",
+    true,
+    "restrict the stencil work to the screen rectangle of an attenuated light's range",
+);
+const CULL_CASTERS: ParamSpec = ParamSpec::boolean(
+    "cull_casters",
+    true,
+    "skip casters whose volume cannot touch the view frustum",
+);
+
+/// The shadow-volume family's parameters, parsed.
+#[derive(Clone, Copy, Debug)]
+struct VolumeConfig {
+    method: Method,
+    silhouette: SilhouetteMode,
+    extrusion: Extrusion,
+    /// World units; 0 = to infinity.
+    length: f32,
+    far_plane: FarPlane,
+    stencil: StencilMode,
+    scissor: bool,
+    cull_casters: bool,
+    /// Mask value inside a shadow (1 − darkening).
+    visibility: f32,
+    compose: Compose,
+}
+
+impl VolumeConfig {
+    fn parse(p: &ParamValues) -> Result<VolumeConfig> {
+        Ok(VolumeConfig {
+            method: p.choice(&METHOD)?,
+            silhouette: p.choice(&SILHOUETTE)?,
+            extrusion: p.choice(&EXTRUSION)?,
+            length: p.float(&LENGTH)?,
+            far_plane: p.choice(&FAR_PLANE)?,
+            stencil: p.choice(&STENCIL)?,
+            scissor: p.flag(&SCISSOR)?,
+            cull_casters: p.flag(&CULL_CASTERS)?,
+            visibility: 1.0 - p.float(&ParamSpec::DARKENING)?,
+            compose: p.choice(&ParamSpec::COMPOSE)?,
+        })
+    }
+}
 
 pub static FAMILY: Family = Family {
     id: "shadow-volume",
     summary: "stencil shadow volumes: silhouettes extruded away from the light, counted in the stencil buffer (exact hard shadows)",
     params: &[
-        ParamSpec::choice(
-            "method",
-            METHODS,
-            2,
-            "zpass: count volume faces in front of each pixel (fails when the camera is in a shadow); zfail: count those behind (Carmack's reverse; caps needed); auto: z-fail only for casters whose volume can contain part of the near-plane rectangle",
-        ),
-        ParamSpec::choice(
-            "silhouette",
-            &["auto", "edges", "triangles"],
-            0,
-            "edges: side quads on silhouette edges (exact for closed meshes); triangles: every triangle extrudes its own closed volume (exact for any mesh, more fill); auto: edges for closed meshes, triangles for the others (reported in the log)",
-        ),
-        ParamSpec::choice(
-            "extrusion",
-            &["gpu", "cpu"],
-            0,
-            "gpu: a compute shader finds silhouettes and writes the volumes into an index buffer drawn with draw-indirect; cpu: the same on the CPU (rayon), uploaded every frame",
-        ),
-        ParamSpec::float(
-            "length",
-            0.0,
-            0.0,
-            100000.0,
-            0.5,
-            "extrusion length in world units; 0 extrudes to infinity (w = 0)",
-        ),
-        ParamSpec::choice(
-            "far_plane",
-            &["infinite", "depth-clamp"],
-            0,
-            "how volumes extruded to infinity escape far-plane clipping: a projection with the far plane at infinity, or depth clamping (unclipped_depth; falls back to infinite where the adapter lacks it)",
-        ),
-        ParamSpec::choice(
-            "stencil",
-            &["two-sided", "two-pass"],
-            0,
-            "two-sided: both faces in one draw with wrapping increment/decrement; two-pass: front and back faces in two draws with saturating operations",
-        ),
-        ParamSpec::boolean(
-            "scissor",
-            true,
-            "restrict the stencil work to the screen rectangle of an attenuated light's range",
-        ),
-        ParamSpec::boolean(
-            "cull_casters",
-            true,
-            "skip casters whose volume cannot touch the view frustum",
-        ),
+        METHOD,
+        SILHOUETTE,
+        EXTRUSION,
+        LENGTH,
+        FAR_PLANE,
+        STENCIL,
+        SCISSOR,
+        CULL_CASTERS,
         ParamSpec::DARKENING,
         ParamSpec::COMPOSE,
     ],
@@ -215,17 +273,22 @@ struct Stats {
     per_triangle: usize,
 }
 
-pub struct ShadowVolumeRenderer {
+/// The family's shaders, layouts and fixed pipelines, shared per device;
+/// the volume pipelines come from the device's cache by [`VolumeKey`].
+struct VolumeShared {
     layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
-    volume_pipelines: HashMap<VolumeKey, wgpu::RenderPipeline>,
     shadow_pipeline: wgpu::RenderPipeline,
     debug_scene_pipeline: wgpu::RenderPipeline,
-    debug_volume_pipelines: HashMap<bool, wgpu::RenderPipeline>,
     extrude_layout: wgpu::BindGroupLayout,
     extrude_edges: wgpu::ComputePipeline,
     extrude_faces: wgpu::ComputePipeline,
+}
+
+pub struct ShadowVolumeRenderer {
+    shared: Arc<VolumeShared>,
+    config: Option<VolumeConfig>,
     uniform: wgpu::Buffer,
     extrude_params: wgpu::Buffer,
     indices: wgpu::Buffer,
@@ -370,24 +433,23 @@ pub fn range_scissor(light: &Light, view_proj: Mat4, width: u32, height: u32) ->
     Some([x0, y0, x1 - x0, y1 - y0])
 }
 
-impl ShadowVolumeRenderer {
-    pub fn new(gpu: &GpuContext) -> ShadowVolumeRenderer {
+impl VolumeShared {
+    fn new(gpu: &GpuContext) -> VolumeShared {
         let device = &gpu.device;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadow volume"),
             entries: &[
-                crate::renderer::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, false),
-                crate::renderer::storage_entry(1, wgpu::ShaderStages::VERTEX, true),
-                super::gbuffer_entry(2),
+                crate::gpu::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, false),
+                crate::gpu::storage_entry(1, wgpu::ShaderStages::VERTEX, true),
             ],
         });
         let module =
-            crate::renderer::shader_module(device, "shadow volume", &[include_str!("volume.wgsl")]);
+            crate::frame::technique_shader(device, "shadow volume", &[include_str!("volume.wgsl")]);
         let pipeline_layout = super::pipeline_layout(gpu, "shadow volume", &layout);
         let fullscreen =
             |label: &str, fs: &str, target: wgpu::ColorTargetState, stencil: wgpu::StencilState| {
                 super::fullscreen_pipeline(
-                    device,
+                    gpu,
                     label,
                     &pipeline_layout,
                     &module,
@@ -420,12 +482,12 @@ impl ShadowVolumeRenderer {
         let extrude_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadow volume extrusion"),
             entries: &[
-                crate::renderer::uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
-                crate::renderer::storage_entry(1, wgpu::ShaderStages::COMPUTE, true),
-                crate::renderer::storage_entry(2, wgpu::ShaderStages::COMPUTE, true),
-                crate::renderer::storage_entry(3, wgpu::ShaderStages::COMPUTE, true),
-                crate::renderer::storage_entry(4, wgpu::ShaderStages::COMPUTE, false),
-                crate::renderer::storage_entry(5, wgpu::ShaderStages::COMPUTE, false),
+                crate::gpu::uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
+                crate::gpu::storage_entry(1, wgpu::ShaderStages::COMPUTE, true),
+                crate::gpu::storage_entry(2, wgpu::ShaderStages::COMPUTE, true),
+                crate::gpu::storage_entry(3, wgpu::ShaderStages::COMPUTE, true),
+                crate::gpu::storage_entry(4, wgpu::ShaderStages::COMPUTE, false),
+                crate::gpu::storage_entry(5, wgpu::ShaderStages::COMPUTE, false),
             ],
         });
         let extrude_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -439,15 +501,33 @@ impl ShadowVolumeRenderer {
                 immediate_size: 0,
             });
         let compute = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&extrude_pipeline_layout),
-                module: &extrude_module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
+            gpu.cache.compute_pipeline("shadow volume extrusion", &entry, || {
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(entry),
+                    layout: Some(&extrude_pipeline_layout),
+                    module: &extrude_module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
             })
         };
+        VolumeShared {
+            extrude_edges: compute("cs_edges"),
+            extrude_faces: compute("cs_faces"),
+            extrude_layout,
+            layout,
+            pipeline_layout,
+            module,
+            shadow_pipeline,
+            debug_scene_pipeline,
+        }
+    }
+}
+
+impl ShadowVolumeRenderer {
+    pub fn new(gpu: &GpuContext) -> ShadowVolumeRenderer {
+        let device = &gpu.device;
         let usage_args = wgpu::BufferUsages::INDIRECT
             | wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_DST
@@ -470,9 +550,8 @@ impl ShadowVolumeRenderer {
             )
         });
         ShadowVolumeRenderer {
-            extrude_edges: compute("cs_edges"),
-            extrude_faces: compute("cs_faces"),
-            extrude_layout,
+            shared: gpu.cache.shared(|| VolumeShared::new(gpu)),
+            config: None,
             uniform: buffer(
                 device,
                 "shadow volume uniform",
@@ -496,13 +575,6 @@ impl ShadowVolumeRenderer {
             statistics,
             depth_clamp: gpu.depth_clamp,
             warned_no_depth_clamp: false,
-            layout,
-            pipeline_layout,
-            module,
-            volume_pipelines: HashMap::new(),
-            shadow_pipeline,
-            debug_scene_pipeline,
-            debug_volume_pipelines: HashMap::new(),
             adjacency: None,
             geometry: None,
             stats: Stats::default(),
@@ -513,9 +585,10 @@ impl ShadowVolumeRenderer {
         }
     }
 
-    fn volume_pipeline(&mut self, device: &wgpu::Device, key: VolumeKey) -> &wgpu::RenderPipeline {
-        let (module, layout) = (&self.module, &self.pipeline_layout);
-        self.volume_pipelines.entry(key).or_insert_with(|| {
+    fn volume_pipeline(&self, gpu: &GpuContext, key: VolumeKey) -> wgpu::RenderPipeline {
+        let (module, layout) = (&self.shared.module, &self.shared.pipeline_layout);
+        let device = &gpu.device;
+        gpu.cache.render_pipeline("shadow volume", &key, || {
             let (stencil, cull_mode) = stencil_state(key);
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some("shadow volume"),
@@ -555,15 +628,11 @@ impl ShadowVolumeRenderer {
         })
     }
 
-    fn debug_volume_pipeline(
-        &mut self,
-        device: &wgpu::Device,
-        unclipped: bool,
-    ) -> &wgpu::RenderPipeline {
-        let (module, layout) = (&self.module, &self.pipeline_layout);
-        self.debug_volume_pipelines
-            .entry(unclipped)
-            .or_insert_with(|| {
+    fn debug_volume_pipeline(&self, gpu: &GpuContext, unclipped: bool) -> wgpu::RenderPipeline {
+        let (module, layout) = (&self.shared.module, &self.shared.pipeline_layout);
+        let device = &gpu.device;
+        gpu.cache
+            .render_pipeline("shadow volume debug: volumes", &unclipped, || {
                 device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                     label: Some("shadow volume debug: volumes"),
                     layout: Some(layout),
@@ -603,7 +672,7 @@ impl ShadowVolumeRenderer {
 
     /// Welds and uploads the casters of `scene` when it changed.
     fn ensure_geometry(&mut self, gpu: &GpuContext, scene: &Scene) {
-        let key = super::scene_fingerprint(scene);
+        let key = crate::scene::scene_fingerprint(scene);
         if self.geometry.as_ref().is_some_and(|g| g.fingerprint == key) {
             return;
         }
@@ -750,7 +819,7 @@ impl ShadowVolumeRenderer {
                 .write_buffer(&self.extrude_params, 0, bytemuck::bytes_of(&params));
             let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("shadow volume extrusion"),
-                layout: &self.extrude_layout,
+                layout: &self.shared.extrude_layout,
                 entries: &[
                     entry(0, &self.extrude_params),
                     entry(1, &geometry.faces),
@@ -766,8 +835,8 @@ impl ShadowVolumeRenderer {
             });
             pass.set_bind_group(0, &group, &[]);
             for (pipeline, n) in [
-                (&self.extrude_edges, vm.edges.len()),
-                (&self.extrude_faces, vm.faces.len()),
+                (&self.shared.extrude_edges, vm.edges.len()),
+                (&self.shared.extrude_faces, vm.faces.len()),
             ] {
                 let groups = n.div_ceil(64) as u32;
                 if groups > 0 {
@@ -833,16 +902,13 @@ impl ShadowVolumeRenderer {
     }
 
     /// Decides, per caster, whether and how its volume is drawn.
-    fn plan(&mut self, ctx: &MaskContext) -> Result<Vec<CasterPlan>> {
-        let p = ctx.params;
-        let method = p.get_usize("method")?;
-        let silhouette = p.get_usize("silhouette")?;
-        let cull = p.get_bool("cull_casters")?;
+    fn plan(&mut self, ctx: &MaskContext, config: &VolumeConfig) -> Result<Vec<CasterPlan>> {
+        let (method, silhouette, cull) = (config.method, config.silhouette, config.cull_casters);
         let geometry = self.geometry.as_mut().expect("ensured");
-        let view_proj = ctx.frame.uniform.view_proj;
+        let view_proj = ctx.frame.uniform().view_proj;
         let frustum = silhouette::frustum_planes(view_proj);
         let light = ctx.light.homogeneous();
-        let inv = ctx.frame.uniform.inv_view_proj;
+        let inv = ctx.frame.uniform().inv_view_proj;
         let near = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)].map(|(x, y)| {
             let c = inv * Vec4::new(x, y, 0.0, 1.0);
             c.truncate() / c.w
@@ -859,17 +925,17 @@ impl ShadowVolumeRenderer {
                     !cull || silhouette::volume_may_touch(&frustum, &c.world_bounds, light);
                 let kind = match silhouette {
                     _ if !touches => VolumeKind::Skip,
-                    0 if !c.closed => {
+                    SilhouetteMode::Auto if !c.closed => {
                         report.push(c.object);
                         VolumeKind::Triangles
                     }
-                    0 | 1 => VolumeKind::Silhouette,
-                    _ => VolumeKind::Triangles,
+                    SilhouetteMode::Auto | SilhouetteMode::Edges => VolumeKind::Silhouette,
+                    SilhouetteMode::Triangles => VolumeKind::Triangles,
                 };
                 let zfail = match method {
-                    0 => false,
-                    1 => true,
-                    _ => region
+                    Method::ZPass => false,
+                    Method::ZFail => true,
+                    Method::Auto => region
                         .as_ref()
                         .is_none_or(|r| silhouette::meets(r, &c.world_bounds)),
                 };
@@ -915,19 +981,31 @@ fn index_usage() -> wgpu::BufferUsages {
 }
 
 impl ShadowTechnique for ShadowVolumeRenderer {
-    fn infinite_far_plane(&self, params: &super::ParamValues) -> Result<bool> {
-        Ok(params.get_f32("length")? <= 0.0
-            && (params.get_usize("far_plane")? == 0 || !self.depth_clamp))
+    fn configure(&mut self, params: &ParamValues) -> Result<()> {
+        self.config = Some(VolumeConfig::parse(params)?);
+        Ok(())
+    }
+
+    fn compose(&self) -> Compose {
+        self.config.map_or(Compose::Relight, |c| c.compose)
+    }
+
+    fn infinite_far_plane(&self) -> bool {
+        self.config.is_some_and(|c| {
+            c.length <= 0.0 && (c.far_plane == FarPlane::Infinite || !self.depth_clamp)
+        })
     }
 
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        let p = ctx.params;
+        let config = self
+            .config
+            .ok_or_else(|| anyhow::anyhow!("shadow-volume: not configured"))?;
         let gpu = ctx.gpu;
         self.ensure_geometry(gpu, ctx.scene);
-        let plans = self.plan(ctx)?;
-        let length = p.get_f32("length")?;
+        let plans = self.plan(ctx, &config)?;
+        let length = config.length;
         let dark_cap = !(ctx.light.kind == LightType::Directional && length <= 0.0);
-        let clamp_asked = length <= 0.0 && p.get_usize("far_plane")? == 1;
+        let clamp_asked = length <= 0.0 && config.far_plane == FarPlane::DepthClamp;
         if clamp_asked
             && !self.depth_clamp
             && !std::mem::replace(&mut self.warned_no_depth_clamp, true)
@@ -942,7 +1020,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
             encoder,
             &plans,
             dark_cap,
-            p.get_usize("extrusion")? == 0,
+            config.extrusion == Extrusion::Gpu,
         )?;
         self.stats = Stats {
             skipped: plans.iter().filter(|p| p.kind == VolumeKind::Skip).count(),
@@ -973,23 +1051,16 @@ impl ShadowTechnique for ShadowVolumeRenderer {
         };
         let uniform = VolumeUniform {
             light: world_light,
-            extrusion: Vec4::new(length, 1.0 - p.get_f32("darkening")?, 0.0, 0.0),
+            extrusion: Vec4::new(length, config.visibility, 0.0, 0.0),
         };
         gpu.queue
             .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
         let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("shadow volume"),
-            layout: &self.layout,
-            entries: &[
-                entry(0, &self.uniform),
-                entry(1, &geometry.positions),
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&ctx.frame.gbuffer_normal_view),
-                },
-            ],
+            layout: &self.shared.layout,
+            entries: &[entry(0, &self.uniform), entry(1, &geometry.positions)],
         });
-        let two_pass = p.get_usize("stencil")? == 1;
+        let two_pass = config.stencil == StencilMode::TwoPass;
         let mut draws = vec![];
         for zfail in [false, true] {
             for pass in if two_pass { &[1u8, 2][..] } else { &[0u8][..] } {
@@ -998,25 +1069,20 @@ impl ShadowTechnique for ShadowVolumeRenderer {
                     pass: *pass,
                     unclipped,
                 };
-                draws.push((self.volume_pipeline(&gpu.device, key).clone(), zfail));
+                draws.push((self.volume_pipeline(gpu, key), zfail));
             }
         }
-        let scissor = if p.get_bool("scissor")? {
-            range_scissor(
-                ctx.light,
-                ctx.frame.uniform.view_proj,
-                ctx.frame.width,
-                ctx.frame.height,
-            )
+        let (width, height) = (ctx.frame.width(), ctx.frame.height());
+        let scissor = if config.scissor {
+            range_scissor(ctx.light, ctx.frame.uniform().view_proj, width, height)
         } else {
-            Some([0, 0, ctx.frame.width, ctx.frame.height])
+            Some([0, 0, width, height])
         };
         {
             let mut pass = super::mask_pass(encoder, ctx, "shadow volumes");
             if let Some([x, y, w, h]) = scissor {
                 pass.set_scissor_rect(x, y, w, h);
-                pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
-                pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+                ctx.bind_frame_groups(&mut pass);
                 pass.set_bind_group(2, &group, &[]);
                 pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
                 if let Some((set, _)) = &self.statistics {
@@ -1030,7 +1096,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
                 if self.statistics.is_some() {
                     pass.end_pipeline_statistics_query();
                 }
-                pass.set_pipeline(&self.shadow_pipeline);
+                pass.set_pipeline(&self.shared.shadow_pipeline);
                 pass.set_stencil_reference(0);
                 pass.draw(0..3, 0..1);
             }
@@ -1043,13 +1109,13 @@ impl ShadowTechnique for ShadowVolumeRenderer {
         self.pending = true;
 
         if self.want_debug {
-            let (w, h) = (ctx.frame.width, ctx.frame.height);
+            let (w, h) = (width, height);
             if self
                 .debug
                 .as_ref()
                 .is_none_or(|t| (t.width(), t.height()) != (w, h))
             {
-                self.debug = Some(crate::renderer::texture_2d(
+                self.debug = Some(crate::gpu::texture_2d(
                     &gpu.device,
                     "shadow volume debug",
                     w,
@@ -1059,7 +1125,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
                     wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
                 ));
             }
-            let volume_pipeline = self.debug_volume_pipeline(&gpu.device, unclipped).clone();
+            let volume_pipeline = self.debug_volume_pipeline(gpu, unclipped);
             let view = self
                 .debug
                 .as_ref()
@@ -1073,10 +1139,9 @@ impl ShadowTechnique for ShadowVolumeRenderer {
                 wgpu::LoadOp::Clear(wgpu::Color::BLACK),
                 false,
             );
-            pass.set_bind_group(0, &ctx.frame.frame_bind_group, &[]);
-            pass.set_bind_group(1, &ctx.scene_gpu.object_bind_group, &[]);
+            ctx.bind_frame_groups(&mut pass);
             pass.set_bind_group(2, &group, &[]);
-            pass.set_pipeline(&self.debug_scene_pipeline);
+            pass.set_pipeline(&self.shared.debug_scene_pipeline);
             pass.draw(0..3, 0..1);
             pass.set_pipeline(&volume_pipeline);
             pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);

@@ -1,6 +1,6 @@
 // Shadow volumes (SEEDS §4): the volume vertex shader that extrudes odd
 // indices away from the light, the stencil-to-mask pass and the debug
-// view. common.wgsl is prepended.
+// view. common.wgsl and gbuffer.wgsl are prepended.
 
 struct Volume {
     // the light in world space: xyz position (w = 1) or the direction the
@@ -14,7 +14,6 @@ struct Volume {
 @group(2) @binding(0) var<uniform> volume: Volume;
 // xyz object-space welded position, w the scene object id (bits)
 @group(2) @binding(1) var<storage, read> positions: array<vec4f>;
-@group(2) @binding(2) var gbuffer_normal: texture_2d<f32>;
 
 // Index 2v: welded vertex v through the same @invariant transform as the
 // prepass (so light caps on lit faces match the scene depth exactly);

@@ -1,13 +1,12 @@
-//! Rendering one frame headless and writing it out: `image.png`,
+//! Rendering frames headless (no window) and writing them out: `image.png`,
 //! `visibility-N.png` (16-bit grey, 65535 = fully lit, background 65535) and
 //! `frame.json` (everything needed to reproduce the frame's rays).
 
+use crate::frame::{FrameTargets, SceneGpu};
 use crate::gpu::GpuContext;
-use crate::renderer::{
-    FrameResources, FrameTimings, RenderSettings, Renderer, SceneGpu, TechniqueInstance,
-};
+use crate::renderer::{FrameTimings, RenderSettings, Renderer};
 use crate::scene::{Camera, Light, Scene};
-use crate::technique::TechniqueChoice;
+use crate::technique::{TechniqueChoice, TechniqueInstance};
 use anyhow::{Context, Result};
 use serde_json::json;
 use std::path::Path;
@@ -28,27 +27,27 @@ pub struct FrameImages {
 /// G-buffer coverage back from the GPU.
 pub fn read_back(
     gpu: &GpuContext,
-    frame: &FrameResources,
+    frame: &FrameTargets,
     light_count: usize,
 ) -> Result<FrameImages> {
-    let color = gpu.read_texture(&frame.color, 0, 4)?;
+    let color = gpu.read_texture(frame.color(), 0, 4)?;
     let masks = (0..light_count)
         .map(|i| {
-            let raw = gpu.read_texture(&frame.masks, i as u32, 2)?;
+            let raw = gpu.read_texture(frame.masks(), i as u32, 2)?;
             Ok(bytemuck::cast_slice::<u8, half::f16>(&raw)
                 .iter()
                 .map(|h| h.to_f32())
                 .collect())
         })
         .collect::<Result<Vec<Vec<f32>>>>()?;
-    let pos = gpu.read_texture(&frame.gbuffer_position, 0, 16)?;
+    let pos = gpu.read_texture(frame.gbuffer_position(), 0, 16)?;
     let coverage = bytemuck::cast_slice::<u8, [f32; 4]>(&pos)
         .iter()
         .map(|p| p[3] > 0.5)
         .collect();
     Ok(FrameImages {
-        width: frame.width,
-        height: frame.height,
+        width: frame.width(),
+        height: frame.height(),
         color,
         masks,
         coverage,
@@ -104,19 +103,21 @@ pub struct FrameRecord<'a> {
     pub lights: &'a [Light],
     pub techniques: Vec<&'a TechniqueInstance>,
     pub settings: &'a RenderSettings,
-    pub frame: &'a FrameResources,
+    pub frame: &'a FrameTargets,
     pub timings: &'a FrameTimings,
     pub adapter: String,
+    /// Anisotropic filtering of the material textures.
+    pub anisotropy: u16,
     pub extra_timings: serde_json::Value,
 }
 
 pub fn frame_json(r: &FrameRecord) -> serde_json::Value {
-    let u = &r.frame.uniform;
+    let u = r.frame.uniform();
     json!({
         "scene": r.scene.name,
         "scene_source": r.scene.source,
         "adapter": r.adapter,
-        "size": {"width": r.frame.width, "height": r.frame.height},
+        "size": {"width": r.frame.width(), "height": r.frame.height()},
         "techniques": r.techniques.iter().enumerate().map(|(i, inst)| {
             let t = &inst.choice;
             json!({
@@ -130,6 +131,7 @@ pub fn frame_json(r: &FrameRecord) -> serde_json::Value {
             })
         }).collect::<Vec<_>>(),
         "render_settings": r.settings,
+        "texture_anisotropy": r.anisotropy,
         "camera": {
             "eye": r.camera.eye.to_array(),
             "target": r.camera.target.to_array(),
@@ -137,7 +139,7 @@ pub fn frame_json(r: &FrameRecord) -> serde_json::Value {
             "fov_y_deg": r.camera.fov_y_deg,
             "near": r.camera.near,
             "far": r.camera.far,
-            "aspect": r.frame.width as f32 / r.frame.height as f32,
+            "aspect": r.frame.width() as f32 / r.frame.height() as f32,
         },
         "matrices": {
             "layout": "column-major, 16 numbers per matrix; clip = projection · view · world",
@@ -173,7 +175,7 @@ pub fn frame_json(r: &FrameRecord) -> serde_json::Value {
 pub struct HeadlessFrame {
     pub renderer: Renderer,
     pub scene_gpu: SceneGpu,
-    pub frame: FrameResources,
+    pub frame: FrameTargets,
     pub techniques: Vec<TechniqueInstance>,
 }
 
@@ -197,10 +199,10 @@ impl HeadlessFrame {
         width: u32,
         height: u32,
     ) -> Result<HeadlessFrame> {
-        Renderer::check_formats(gpu)?;
+        crate::frame::check_formats(gpu)?;
         let renderer = Renderer::new(gpu);
-        let scene_gpu = renderer.upload_scene(gpu, scene)?;
-        let frame = renderer.create_frame(gpu, width, height)?;
+        let scene_gpu = SceneGpu::upload(gpu, scene)?;
+        let frame = FrameTargets::new(gpu, width, height)?;
         let techniques = choices
             .iter()
             .map(|c| TechniqueInstance::new(gpu, c.clone()))

@@ -1,6 +1,14 @@
-//! GPU context: adapter selection (`--backend`, `WGPU_BACKEND`, real GPUs
-//! before the CPU adapter), device creation with the optional features the
-//! techniques use, and texture readback.
+//! GPU layer: the context (adapter selection — `--backend`, `WGPU_BACKEND`,
+//! real GPUs before the CPU adapter — and device creation with the optional
+//! features the techniques use), texture readback, the per-device pipeline
+//! cache ([`cache`]) and texture, bind-layout and shader helpers
+//! ([`helpers`]). It knows nothing of scenes, frames or techniques.
+
+pub mod cache;
+pub mod helpers;
+
+pub use cache::{DeviceCache, PIPELINE_CACHE_BOUND};
+pub use helpers::*;
 
 use anyhow::{Result, bail};
 
@@ -37,6 +45,13 @@ pub struct GpuContext {
     /// Bytes one frame's targets or one technique instance's resources may
     /// take ([`GpuContext::check_allocation`]); `--memory-budget` sets it.
     pub memory_budget: u64,
+    /// Anisotropic filtering of material textures (1 = trilinear only):
+    /// by default 8 on GPUs and 1 on CPU adapters, where each extra sample
+    /// costs shader time (on lavapipe 8× anisotropy doubles the lighting
+    /// pass of `room`); `--anisotropy` sets it.
+    pub anisotropy: u16,
+    /// Pipelines and per-family resources shared by every user of the device.
+    pub cache: DeviceCache,
     /// Set by the device-lost callback: why the device was lost.
     lost: std::sync::Arc<std::sync::Mutex<Option<String>>>,
 }
@@ -188,6 +203,12 @@ impl GpuContext {
             pipeline_statistics: features.contains(wgpu::Features::PIPELINE_STATISTICS_QUERY),
             depth_clamp: features.contains(wgpu::Features::DEPTH_CLIP_CONTROL),
             memory_budget: DEFAULT_MEMORY_BUDGET_MIB << 20,
+            anisotropy: if info.device_type == wgpu::DeviceType::Cpu {
+                1
+            } else {
+                8
+            },
+            cache: DeviceCache::default(),
             lost,
             instance,
             adapter,

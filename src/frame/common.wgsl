@@ -29,9 +29,6 @@ struct Frame {
     ambient: vec4f,
     // width, height, 1/width, 1/height
     size: vec4f,
-    // x shading (0 flat, 1 Gouraud, 2 per-pixel), y model (0 Phong, 1 Blinn-Phong),
-    // z light count, w unused
-    settings: vec4u,
     lights: array<LightGpu, 4>,
 };
 
@@ -57,39 +54,6 @@ struct VertexIn {
 // this one function with an @invariant output so depths match exactly.
 fn clip_position(object: u32, p: vec3f) -> vec4f {
     return frame.view_proj * (objects[object].model * vec4f(p, 1.0));
-}
-
-// Direction to the light (unit) and the radiance reaching `pos`
-// (colour × intensity × range window × spot cone), for light `i`.
-struct LightSample {
-    to_light: vec3f,
-    radiance: vec3f,
-};
-
-fn sample_light(i: u32, pos: vec3f) -> LightSample {
-    let l = frame.lights[i];
-    var s: LightSample;
-    let kind = u32(l.position.w);
-    if kind == LIGHT_DIRECTIONAL {
-        s.to_light = -normalize(l.direction.xyz);
-        s.radiance = l.color.rgb;
-        return s;
-    }
-    let d = l.position.xyz - pos;
-    let dist = length(d);
-    s.to_light = d / max(dist, 1e-6);
-    var att = 1.0;
-    let range = l.direction.w;
-    if range > 0.0 {
-        let x = clamp(1.0 - pow(dist / range, 4.0), 0.0, 1.0);
-        att = x * x;
-    }
-    if kind == LIGHT_SPOT {
-        let c = dot(-s.to_light, normalize(l.direction.xyz));
-        att *= smoothstep(l.cone.x, l.color.w, c);
-    }
-    s.radiance = l.color.rgb * att;
-    return s;
 }
 
 // A triangle covering the whole target (for screen-space passes).

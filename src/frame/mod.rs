@@ -1,0 +1,261 @@
+//! The frame layer: what every pass of a frame shares. Target formats, the
+//! vertex layout, the scene's GPU buffers ([`SceneGpu`]), the frame's
+//! targets ([`FrameTargets`], read-only to techniques), the frame uniform,
+//! the bind-group layouts of groups 0 (frame), 1 (objects) and 3 (the
+//! G-buffer, one bind group for every technique shader) and the common WGSL.
+
+mod scene_gpu;
+mod targets;
+mod textures;
+
+pub use scene_gpu::{DrawCall, MaterialVariant, SceneGpu};
+pub use targets::{FrameTargets, clear_mask, write_mask};
+
+use crate::gpu::{GpuContext, storage_entry, texture_entry, uniform_entry};
+use crate::scene::{Camera, Light, LightArea, LightType, Scene};
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec4};
+use serde::Serialize;
+use std::sync::Arc;
+
+pub const MAX_LIGHTS: usize = 4;
+/// Visibility masks: one layer per light, 1 = fully lit.
+pub const MASK_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R16Float;
+/// Scene depth with a stencil for the stencil-based techniques.
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth24PlusStencil8;
+pub const GBUFFER_POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub const GBUFFER_NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+/// Bind group indices shared by every pass: the frame uniform, the object
+/// table, the pass's own resources, the G-buffer (technique passes).
+pub const FRAME_GROUP: u32 = 0;
+pub const OBJECTS_GROUP: u32 = 1;
+pub const OWN_GROUP: u32 = 2;
+pub const GBUFFER_GROUP: u32 = 3;
+
+/// WGSL shared by the renderer and the technique shaders.
+pub const COMMON_WGSL: &str = include_str!("common.wgsl");
+/// WGSL declaring the G-buffer at [`GBUFFER_GROUP`] (technique shaders).
+pub const GBUFFER_WGSL: &str = include_str!("gbuffer.wgsl");
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub uv: [f32; 2],
+    pub tangent: [f32; 4],
+}
+
+pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: std::mem::size_of::<Vertex>() as u64,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4],
+};
+
+
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Default)]
+pub struct LightGpu {
+    pub position: Vec4,
+    pub direction: Vec4,
+    pub color: Vec4,
+    pub cone: Vec4,
+    pub extra: Vec4,
+}
+
+/// How the lighting pass uses a light's visibility mask `v`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Compose {
+    /// `ambient + v · (diffuse + specular)`: the shadow removes the light.
+    Relight,
+    /// The documents' way: the lit colour (ambient included) times `v`, a
+    /// shadow colour blended over the lit image.
+    Darken,
+}
+
+impl LightGpu {
+    pub fn from_light(l: &Light, compose: Compose) -> LightGpu {
+        let kind = match l.kind {
+            LightType::Point => 0.0,
+            LightType::Spot => 1.0,
+            LightType::Directional => 2.0,
+        };
+        let (a, b, shape) = match l.area {
+            None => (0.0, 0.0, 0.0),
+            Some(LightArea::Sphere { radius }) => (radius, 0.0, 1.0),
+            Some(LightArea::Rect { width, height }) => (width, height, 2.0),
+        };
+        LightGpu {
+            position: l.position.extend(kind),
+            direction: l.direction.normalize_or_zero().extend(l.range),
+            color: (l.color * l.intensity).extend(l.inner_cone_deg.to_radians().cos()),
+            cone: Vec4::new(l.outer_cone_deg.to_radians().cos(), a, b, shape),
+            extra: Vec4::new((compose == Compose::Darken) as u32 as f32, 0.0, 0.0, 0.0),
+        }
+    }
+}
+
+/// The per-frame uniform (group 0 of every pass, `Frame` in common.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct FrameUniform {
+    pub view_proj: Mat4,
+    pub inv_view_proj: Mat4,
+    pub view: Mat4,
+    pub proj: Mat4,
+    pub camera_pos: Vec4,
+    pub ambient: Vec4,
+    pub size: Vec4,
+    pub lights: [LightGpu; MAX_LIGHTS],
+}
+
+
+/// The layouts of groups 0, 1 and 3 and the scene materials; one set per
+/// device ([`FrameLayouts::of`]).
+pub struct FrameLayouts {
+    pub frame: wgpu::BindGroupLayout,
+    pub objects: wgpu::BindGroupLayout,
+    pub gbuffer: wgpu::BindGroupLayout,
+    pub material: wgpu::BindGroupLayout,
+    /// The mask array, read by the lighting pass.
+    pub masks: wgpu::BindGroupLayout,
+}
+
+impl FrameLayouts {
+    pub fn of(gpu: &GpuContext) -> Arc<FrameLayouts> {
+        gpu.cache.shared(|| {
+            let device = &gpu.device;
+            let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+            let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
+                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some(label),
+                    entries,
+                })
+            };
+            let gbuffer_texture = |binding| texture_entry(binding, wgpu::TextureViewDimension::D2, false);
+            FrameLayouts {
+                frame: layout("frame", &[uniform_entry(0, wgpu::ShaderStages::all(), false)]),
+                objects: layout(
+                    "objects",
+                    &[storage_entry(0, vf | wgpu::ShaderStages::COMPUTE, true)],
+                ),
+                gbuffer: layout("gbuffer", &[gbuffer_texture(0), gbuffer_texture(1)]),
+                masks: layout(
+                    "masks",
+                    &[texture_entry(0, wgpu::TextureViewDimension::D2Array, false)],
+                ),
+                material: layout(
+                    "material",
+                    &[
+                        uniform_entry(0, vf, false),
+                        texture_entry(1, wgpu::TextureViewDimension::D2, true),
+                        texture_entry(2, wgpu::TextureViewDimension::D2, true),
+                        wgpu::BindGroupLayoutEntry {
+                            binding: 3,
+                            visibility: wgpu::ShaderStages::FRAGMENT,
+                            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                            count: None,
+                        },
+                    ],
+                ),
+            }
+        })
+    }
+
+    /// Pipeline layout of a technique pass: frame, objects, the pass's own
+    /// group `own` and the G-buffer.
+    pub fn technique_layout(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        own: &wgpu::BindGroupLayout,
+    ) -> wgpu::PipelineLayout {
+        device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: &[
+                Some(&self.frame),
+                Some(&self.objects),
+                Some(own),
+                Some(&self.gbuffer),
+            ],
+            immediate_size: 0,
+        })
+    }
+}
+
+/// An error naming the first render-target format of a frame that the
+/// device cannot render to.
+pub fn check_formats(gpu: &GpuContext) -> anyhow::Result<()> {
+    for (format, what) in [
+        (DEPTH_FORMAT, "the depth buffer"),
+        (GBUFFER_POSITION_FORMAT, "the G-buffer's positions"),
+        (GBUFFER_NORMAL_FORMAT, "the G-buffer's normals"),
+        (MASK_FORMAT, "the visibility masks"),
+        (COLOR_FORMAT, "the colour image"),
+    ] {
+        gpu.require_renderable(format, what)?;
+    }
+    Ok(())
+}
+
+/// A shader module of the renderer: `common.wgsl` followed by `sources`.
+pub fn shader_module(device: &wgpu::Device, label: &str, sources: &[&str]) -> wgpu::ShaderModule {
+    crate::gpu::compose_shader(device, label, &[&[COMMON_WGSL], sources].concat())
+}
+
+/// A shader module of a technique: `common.wgsl`, `gbuffer.wgsl`, `sources`.
+pub fn technique_shader(
+    device: &wgpu::Device,
+    label: &str,
+    sources: &[&str],
+) -> wgpu::ShaderModule {
+    crate::gpu::compose_shader(
+        device,
+        label,
+        &[&[COMMON_WGSL, GBUFFER_WGSL], sources].concat(),
+    )
+}
+
+/// The frame uniform for a camera and lights (each with its mask's compose
+/// mode) at a frame size; `infinite_far_plane` for shadow volumes.
+pub fn frame_uniform(
+    scene: &Scene,
+    camera: &Camera,
+    lights: &[Light],
+    compose: &[Compose],
+    infinite_far_plane: bool,
+    width: u32,
+    height: u32,
+) -> FrameUniform {
+    let view = camera.view();
+    let aspect = width as f32 / height as f32;
+    let proj = if infinite_far_plane {
+        camera.projection_infinite(aspect)
+    } else {
+        camera.projection(aspect)
+    };
+    let view_proj = proj * view;
+    let mut gl = [LightGpu::default(); MAX_LIGHTS];
+    for (i, (g, l)) in gl.iter_mut().zip(lights).enumerate() {
+        *g = LightGpu::from_light(l, compose.get(i).copied().unwrap_or(Compose::Relight));
+    }
+    FrameUniform {
+        view_proj,
+        inv_view_proj: view_proj.inverse(),
+        view,
+        proj,
+        camera_pos: camera.eye.extend(1.0),
+        ambient: scene.ambient.extend(0.0),
+        size: Vec4::new(
+            width as f32,
+            height as f32,
+            1.0 / width as f32,
+            1.0 / height as f32,
+        ),
+        lights: gl,
+    }
+}

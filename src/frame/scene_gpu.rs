@@ -1,0 +1,258 @@
+//! The scene on the GPU: every mesh in one vertex and one index buffer, the
+//! object table (group 1) and one bind group per material.
+
+use super::{FrameLayouts, Vertex, textures};
+use crate::gpu::GpuContext;
+use crate::scene::{Aabb, Material, Scene};
+use anyhow::{Result, bail};
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3, Vec4};
+use wgpu::util::DeviceExt;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ObjectGpu {
+    model: Mat4,
+    normal_matrix: Mat4,
+    info: [u32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct MaterialGpu {
+    ka: Vec4,
+    kd: Vec4,
+    ks: Vec4,
+    proc_a: Vec4,
+    proc_b: Vec4,
+    flags: Vec4,
+}
+
+/// One indexed draw of one object.
+#[derive(Clone, Copy, Debug)]
+pub struct DrawCall {
+    pub object: u32,
+    pub first_index: u32,
+    pub index_count: u32,
+    pub base_vertex: i32,
+    pub material: usize,
+    pub casts_shadow: bool,
+    pub shadow_plane: bool,
+}
+
+/// The scene's GPU buffers: all meshes in one vertex and one index buffer,
+/// the object table and one bind group per material.
+pub struct SceneGpu {
+    pub vertex_buffer: wgpu::Buffer,
+    pub index_buffer: wgpu::Buffer,
+    pub object_buffer: wgpu::Buffer,
+    pub object_bind_group: wgpu::BindGroup,
+    pub draws: Vec<DrawCall>,
+    pub material_bind_groups: Vec<wgpu::BindGroup>,
+    /// Per material, the shader features the lighting pass specialises on.
+    pub material_variants: Vec<MaterialVariant>,
+    pub triangle_count: usize,
+    pub caster_triangle_count: usize,
+    pub bounds: Aabb,
+}
+
+/// The features of a material that select a lighting-pass variant.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct MaterialVariant {
+    pub diffuse_texture: bool,
+    pub normal_map: bool,
+    /// 0 none, else [`crate::scene::ProceduralKind`] as index + 1.
+    pub procedural: u32,
+}
+
+impl MaterialVariant {
+    fn of(m: &Material) -> MaterialVariant {
+        MaterialVariant {
+            diffuse_texture: m.diffuse_texture.is_some(),
+            normal_map: m.normal_map.is_some(),
+            procedural: m.procedural.map_or(0, |p| p.kind as u32 + 1),
+        }
+    }
+}
+
+impl SceneGpu {
+    /// Uploads a scene: meshes, object table, materials and textures.
+    pub fn upload(gpu: &GpuContext, scene: &Scene) -> Result<SceneGpu> {
+        let layouts = FrameLayouts::of(gpu);
+        let device = &gpu.device;
+        let mut vertices: Vec<Vertex> = vec![];
+        let mut indices: Vec<u32> = vec![];
+        let mut ranges = vec![];
+        for m in &scene.meshes {
+            let base = vertices.len() as i32;
+            let first = indices.len() as u32;
+            vertices.extend((0..m.positions.len()).map(|i| Vertex {
+                position: m.positions[i].into(),
+                normal: m.normals[i].into(),
+                uv: m.uvs[i].into(),
+                tangent: m.tangents[i].into(),
+            }));
+            indices.extend_from_slice(&m.indices);
+            ranges.push((base, first, m.indices.len() as u32));
+        }
+        if vertices.is_empty() || indices.is_empty() {
+            bail!("scene '{}' has no triangles", scene.name);
+        }
+        let objects: Vec<ObjectGpu> = scene
+            .objects
+            .iter()
+            .map(|o| ObjectGpu {
+                model: o.transform,
+                normal_matrix: o.transform.inverse().transpose(),
+                info: [
+                    o.material as u32,
+                    o.casts_shadow as u32,
+                    o.receives_shadow as u32,
+                    o.shadow_plane as u32,
+                ],
+            })
+            .collect();
+        let draws = scene
+            .objects
+            .iter()
+            .enumerate()
+            .map(|(i, o)| {
+                let (base_vertex, first_index, index_count) = ranges[o.mesh];
+                DrawCall {
+                    object: i as u32,
+                    first_index,
+                    index_count,
+                    base_vertex,
+                    material: o.material,
+                    casts_shadow: o.casts_shadow,
+                    shadow_plane: o.shadow_plane,
+                }
+            })
+            .collect();
+        let init = |label: &str, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let storage_ro = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+        let vertex_buffer = init(
+            "vertices",
+            bytemuck::cast_slice(&vertices),
+            wgpu::BufferUsages::VERTEX | storage_ro,
+        );
+        let index_buffer = init(
+            "indices",
+            bytemuck::cast_slice(&indices),
+            wgpu::BufferUsages::INDEX | storage_ro,
+        );
+        let object_buffer = init("objects", bytemuck::cast_slice(&objects), storage_ro);
+        let object_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("objects"),
+            layout: &layouts.objects,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: object_buffer.as_entire_binding(),
+            }],
+        });
+        let gpu_textures: Vec<wgpu::TextureView> = scene
+            .textures
+            .iter()
+            .map(|t| textures::upload(gpu, t))
+            .collect();
+        let white = textures::solid(gpu, [255, 255, 255, 255], true);
+        let flat_normal = textures::solid(gpu, [128, 128, 255, 255], false);
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("material"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            anisotropy_clamp: gpu.anisotropy.clamp(1, 16),
+            ..Default::default()
+        });
+        let material_bind_groups = scene
+            .materials
+            .iter()
+            .map(|m| {
+                let proc_kind = m.procedural.map_or(0.0, |p| p.kind as u32 as f32 + 1.0);
+                let p = m.procedural;
+                let data = MaterialGpu {
+                    ka: m.ka.extend(m.uv_scale),
+                    kd: m.kd.extend(m.diffuse_texture.is_some() as u32 as f32),
+                    ks: m.ks.extend(m.shininess.max(1.0)),
+                    proc_a: p.map_or(Vec3::ZERO, |p| p.color_a).extend(proc_kind),
+                    proc_b: p
+                        .map_or(Vec3::ZERO, |p| p.color_b)
+                        .extend(p.map_or(1.0, |p| p.scale)),
+                    flags: Vec4::new(
+                        m.normal_map.is_some() as u32 as f32,
+                        p.map_or(0.0, |p| p.octaves as f32),
+                        0.0,
+                        0.0,
+                    ),
+                };
+                let buf = init(
+                    "material",
+                    bytemuck::bytes_of(&data),
+                    wgpu::BufferUsages::UNIFORM,
+                );
+                let diffuse = m.diffuse_texture.map_or(&white, |t| &gpu_textures[t]);
+                let normal = m.normal_map.map_or(&flat_normal, |t| &gpu_textures[t]);
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some(&m.name),
+                    layout: &layouts.material,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: buf.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::TextureView(diffuse),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::TextureView(normal),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 3,
+                            resource: wgpu::BindingResource::Sampler(&sampler),
+                        },
+                    ],
+                })
+            })
+            .collect();
+        Ok(SceneGpu {
+            vertex_buffer,
+            index_buffer,
+            object_buffer,
+            object_bind_group,
+            draws,
+            material_bind_groups,
+            material_variants: scene.materials.iter().map(MaterialVariant::of).collect(),
+            triangle_count: scene.triangle_count(),
+            caster_triangle_count: scene.caster_triangle_count(),
+            bounds: scene.bounds(),
+        })
+    }
+
+
+    /// Binds the vertex and index buffers and draws every non-plane object
+    /// that `filter` accepts, with `instance_index` = object id. The caller
+    /// sets pipeline and bind groups 0 and 1.
+    pub fn draw_objects(&self, pass: &mut wgpu::RenderPass, filter: impl Fn(&DrawCall) -> bool) {
+        pass.set_vertex_buffer(0, self.vertex_buffer.slice(..));
+        pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+        for d in self.draws.iter().filter(|d| !d.shadow_plane && filter(d)) {
+            pass.draw_indexed(
+                d.first_index..d.first_index + d.index_count,
+                d.base_vertex,
+                d.object..d.object + 1,
+            );
+        }
+    }
+}
+

@@ -1,0 +1,178 @@
+//! The lighting pass, specialised per pipeline: light count, shading mode,
+//! specular model and the material's features (diffuse texture, normal map,
+//! procedural kind) are pipeline-overridable constants of `scene.wgsl`, so
+//! a pixel runs only its own variant's code; Gouraud has its own entry
+//! points and is the only variant that carries per-vertex lighting.
+
+use super::{LightingModel, RenderSettings, Shading};
+use crate::frame::{self, FrameLayouts, FrameTargets, MaterialVariant, SceneGpu};
+use crate::gpu::GpuContext;
+
+/// Everything a lighting pipeline depends on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct LitKey {
+    pub cull_back_faces: bool,
+    pub shading: Shading,
+    pub specular: LightingModel,
+    pub lights: u32,
+    pub material: MaterialVariant,
+}
+
+impl LitKey {
+    /// The values of `scene.wgsl`'s pipeline-overridable constants.
+    fn constants(&self) -> [(&'static str, f64); 6] {
+        let b = |v: bool| v as u32 as f64;
+        [
+            ("LIGHT_COUNT", self.lights as f64),
+            (
+                "SHADING",
+                match self.shading {
+                    Shading::Flat => 0.0,
+                    Shading::Gouraud => 1.0,
+                    Shading::Pixel => 2.0,
+                },
+            ),
+            (
+                "SPECULAR",
+                match self.specular {
+                    LightingModel::Phong => 0.0,
+                    LightingModel::BlinnPhong => 1.0,
+                },
+            ),
+            ("DIFFUSE_TEXTURE", b(self.material.diffuse_texture)),
+            ("NORMAL_MAP", b(self.material.normal_map)),
+            ("PROCEDURAL", self.material.procedural as f64),
+        ]
+    }
+
+    /// Vertex and fragment entry points of the key's shading mode.
+    fn entry_points(&self) -> (&'static str, &'static str) {
+        match self.shading {
+            Shading::Gouraud => ("vs_lit_gouraud", "fs_lit_gouraud"),
+            Shading::Flat | Shading::Pixel => ("vs_lit", "fs_lit"),
+        }
+    }
+}
+
+/// The scene shader module (prepass and lighting) of a device.
+pub fn scene_module(gpu: &GpuContext) -> wgpu::ShaderModule {
+    struct SceneModule(wgpu::ShaderModule);
+    gpu.cache
+        .shared(|| {
+            SceneModule(frame::shader_module(
+                &gpu.device,
+                "scene",
+                &[include_str!("procedural.wgsl"), include_str!("scene.wgsl")],
+            ))
+        })
+        .0
+        .clone()
+}
+
+pub struct Lighting {
+    layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
+}
+
+impl Lighting {
+    pub fn new(gpu: &GpuContext, layouts: &FrameLayouts) -> Lighting {
+        Lighting {
+            layout: gpu
+                .device
+                .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("lighting"),
+                    bind_group_layouts: &[
+                        Some(&layouts.frame),
+                        Some(&layouts.objects),
+                        Some(&layouts.material),
+                        Some(&layouts.masks),
+                    ],
+                    immediate_size: 0,
+                }),
+            module: scene_module(gpu),
+        }
+    }
+
+    fn pipeline(&self, gpu: &GpuContext, key: LitKey) -> wgpu::RenderPipeline {
+        gpu.cache.render_pipeline("lighting", &key, || {
+            let constants = key.constants();
+            let options = wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                ..Default::default()
+            };
+            let (vs, fs) = key.entry_points();
+            gpu.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("lighting"),
+                    layout: Some(&self.layout),
+                    vertex: wgpu::VertexState {
+                        module: &self.module,
+                        entry_point: Some(vs),
+                        compilation_options: options.clone(),
+                        buffers: &[Some(frame::VERTEX_LAYOUT)],
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        cull_mode: key.cull_back_faces.then_some(wgpu::Face::Back),
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: frame::DEPTH_FORMAT,
+                        depth_write_enabled: Some(false),
+                        depth_compare: Some(wgpu::CompareFunction::Equal),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &self.module,
+                        entry_point: Some(fs),
+                        compilation_options: options,
+                        targets: &[Some(frame::COLOR_FORMAT.into())],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+        })
+    }
+
+    /// Draws every object with its material's variant.
+    pub fn draw(
+        &self,
+        gpu: &GpuContext,
+        pass: &mut wgpu::RenderPass,
+        scene_gpu: &SceneGpu,
+        frame: &FrameTargets,
+        lights: u32,
+        settings: &RenderSettings,
+    ) {
+        pass.set_bind_group(frame::FRAME_GROUP, frame.frame_bind_group(), &[]);
+        pass.set_bind_group(frame::OBJECTS_GROUP, &scene_gpu.object_bind_group, &[]);
+        pass.set_bind_group(3, frame.mask_bind_group(), &[]);
+        pass.set_vertex_buffer(0, scene_gpu.vertex_buffer.slice(..));
+        pass.set_index_buffer(scene_gpu.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+        let mut bound_material = usize::MAX;
+        let mut bound_key = None;
+        for d in scene_gpu.draws.iter().filter(|d| !d.shadow_plane) {
+            if d.material != bound_material {
+                let key = LitKey {
+                    cull_back_faces: settings.cull_back_faces,
+                    shading: settings.shading,
+                    specular: settings.lighting,
+                    lights,
+                    material: scene_gpu.material_variants[d.material],
+                };
+                if bound_key != Some(key) {
+                    pass.set_pipeline(&self.pipeline(gpu, key));
+                    bound_key = Some(key);
+                }
+                pass.set_bind_group(2, &scene_gpu.material_bind_groups[d.material], &[]);
+                bound_material = d.material;
+            }
+            pass.draw_indexed(
+                d.first_index..d.first_index + d.index_count,
+                d.base_vertex,
+                d.object..d.object + 1,
+            );
+        }
+    }
+}

@@ -1,0 +1,492 @@
+//! The shadow-map family's parameter table and its typed reading
+//! ([`ShadowMapConfig`]): the table names, ranges and documents every
+//! parameter once; the enums carry the choices into Rust and, as generated
+//! WGSL constants and pipeline-overridable constants, into the shaders.
+
+use crate::scene::LightType;
+use crate::technique::params::choice_enum;
+use crate::technique::{ParamSpec, ParamValues, Preset};
+use anyhow::Result;
+
+choice_enum! {
+    /// The lookup's filter.
+    pub enum Filter {
+        Hard = "hard",
+        Pcf2x2 = "pcf2x2",
+        Grid = "grid",
+        Disk = "disk",
+        Pcss = "pcss",
+        Varwidth = "varwidth",
+        Vsm = "vsm",
+        Esm = "esm",
+        Evsm2 = "evsm2",
+        Evsm4 = "evsm4",
+        Msm = "msm",
+    }
+}
+
+impl Filter {
+    /// Filters of moment maps (filtered before the lookup).
+    pub fn is_moment(self) -> bool {
+        matches!(
+            self,
+            Filter::Vsm | Filter::Esm | Filter::Evsm2 | Filter::Evsm4 | Filter::Msm
+        )
+    }
+
+    /// Filters whose tap count is `samples` (the others ignore it).
+    pub fn uses_taps(self) -> bool {
+        matches!(
+            self,
+            Filter::Grid | Filter::Disk | Filter::Pcss | Filter::Varwidth
+        )
+    }
+}
+
+choice_enum! {
+    /// How the map stores depth.
+    pub enum DepthFormat { D16 = "d16", D24 = "d24", D32f = "d32f", R8 = "r8" }
+}
+
+impl DepthFormat {
+    /// The depth attachment (the 8-bit map still depth-tests in 16 bits).
+    pub fn depth_texture(self) -> wgpu::TextureFormat {
+        match self {
+            DepthFormat::D16 | DepthFormat::R8 => wgpu::TextureFormat::Depth16Unorm,
+            DepthFormat::D24 => wgpu::TextureFormat::Depth24Plus,
+            DepthFormat::D32f => wgpu::TextureFormat::Depth32Float,
+        }
+    }
+
+    /// Bytes per texel of the depth attachment and the 8-bit copy.
+    pub fn bytes_per_texel(self) -> u64 {
+        match self {
+            DepthFormat::D16 => 2,
+            DepthFormat::D24 | DepthFormat::D32f => 4,
+            DepthFormat::R8 => 2 + 1,
+        }
+    }
+}
+
+choice_enum! {
+    /// Faces culled in the depth pass.
+    pub enum CullFace { Back = "back", Front = "front", None = "none" }
+}
+
+impl CullFace {
+    pub fn face(self) -> Option<wgpu::Face> {
+        match self {
+            CullFace::Back => Some(wgpu::Face::Back),
+            CullFace::Front => Some(wgpu::Face::Front),
+            CullFace::None => None,
+        }
+    }
+}
+
+choice_enum! {
+    /// Point lights: six cube faces or two paraboloid hemispheres.
+    pub enum Omni { Cube = "cube", DualParaboloid = "dual-paraboloid" }
+}
+
+choice_enum! {
+    /// What the technique runs: everything, the maps alone, or the floor.
+    pub enum Stage { Full = "full", Maps = "maps", Floor = "floor" }
+}
+
+pub const FILTER: ParamSpec = ParamSpec::choice_of::<Filter>(
+    "filter",
+    Filter::Grid as usize,
+    "hard: nearest texel; pcf2x2: hardware bilinear comparison; grid: N×N 2×2-PCF taps; disk: N² taps on a rotated Vogel disk; pcss: blocker search + penumbra from the light size; varwidth: radius ∝ |d_blocker − d_receiver|^exponent (002); vsm: variance (Chebyshev) with light-bleeding reduction; esm: exponential; evsm2/evsm4: exponential variance, 2 or 4 moments; msm: 4-moment Hamburger (Peters & Klein 2015)",
+);
+
+pub const SAMPLES: ParamSpec = ParamSpec::int(
+        "samples",
+        3,
+        1,
+        16,
+        "taps per side: grid N×N (up to 16×16), disk N²",
+    );
+
+pub const RADIUS: ParamSpec = ParamSpec::float(
+        "radius",
+        1.5,
+        0.0,
+        32.0,
+        0.25,
+        "filter radius in texels (grid and disk)",
+    );
+
+pub const SIZE: ParamSpec = ParamSpec::int(
+        "size",
+        2048,
+        64,
+        16384,
+        "map side in texels (per cube face for point lights)",
+    );
+
+pub const FORMAT: ParamSpec = ParamSpec::choice_of::<DepthFormat>(
+    "format",
+    DepthFormat::D32f as usize,
+    "depth format; r8 stores depth in 8 bits and shows the low-precision failure",
+);
+
+pub const DEPTH_BIAS: ParamSpec = ParamSpec::float(
+        "depth_bias",
+        2.0,
+        0.0,
+        100000.0,
+        1.0,
+        "constant depth bias of the depth pass, in the format's smallest steps",
+    );
+
+pub const SLOPE_BIAS: ParamSpec = ParamSpec::float(
+        "slope_bias",
+        2.0,
+        0.0,
+        20.0,
+        0.1,
+        "slope-scaled depth bias (polygon offset factor)",
+    );
+
+pub const NORMAL_OFFSET_DIRECTIONAL: ParamSpec = ParamSpec::float(
+        "normal_offset_directional",
+        1.0,
+        0.0,
+        10.0,
+        0.1,
+        "directional lights: lookup point moved along the geometric normal, in shadow-map texels",
+    );
+
+pub const NORMAL_OFFSET_LOCAL: ParamSpec = ParamSpec::float(
+        "normal_offset_local",
+        0.5,
+        0.0,
+        10.0,
+        0.1,
+        "point and spot lights: lookup point moved along the geometric normal, in shadow-map texels at the point's distance",
+    );
+
+pub const RECEIVER_PLANE: ParamSpec = ParamSpec::boolean(
+        "receiver_plane",
+        false,
+        "receiver-plane depth bias (Isidoro 2006): each tap compares against the receiver's plane at the tap, from screen derivatives of the light-space position",
+    );
+
+pub const CULL: ParamSpec = ParamSpec::choice_of::<CullFace>(
+    "cull",
+    CullFace::None as usize,
+    "faces culled in the depth pass; back or front culling leaks light through open meshes (bunny, teapot)",
+);
+
+pub const OMNI: ParamSpec = ParamSpec::choice_of::<Omni>(
+    "omni",
+    Omni::Cube as usize,
+    "point lights: six 90° faces (cube) or two paraboloid hemispheres (Brabec 2002; distorts large triangles)",
+);
+
+pub const NEAR: ParamSpec = ParamSpec::float(
+        "near",
+        0.0,
+        0.0,
+        10000.0,
+        0.01,
+        "near plane of the light frustum (0 = fitted to the scene)",
+    );
+
+pub const FAR: ParamSpec = ParamSpec::float(
+        "far",
+        0.0,
+        0.0,
+        100000.0,
+        0.1,
+        "far plane of the light frustum (0 = fitted to the scene)",
+    );
+
+pub const FOV: ParamSpec = ParamSpec::float(
+        "fov",
+        0.0,
+        0.0,
+        170.0,
+        1.0,
+        "spot light frustum angle in degrees (0 = the cone plus 4°); precision degrades above 90°",
+    );
+
+pub const LIGHT_SIZE: ParamSpec = ParamSpec::float(
+        "light_size",
+        24.0,
+        0.0,
+        400.0,
+        1.0,
+        "pcss: light size, as the penumbra width in texels per unit of (d_receiver − d_blocker)/d_blocker",
+    );
+
+pub const BLOCKER_SEARCH: ParamSpec = ParamSpec::float(
+        "blocker_search",
+        12.0,
+        1.0,
+        64.0,
+        1.0,
+        "pcss and varwidth: blocker-search radius in texels",
+    );
+
+pub const VARWIDTH_SCALE: ParamSpec = ParamSpec::float(
+        "varwidth_scale",
+        8.0,
+        0.0,
+        200.0,
+        0.5,
+        "varwidth: texels of radius per unit of |d_blocker − d_receiver|^exponent",
+    );
+
+pub const VARWIDTH_EXPONENT: ParamSpec = ParamSpec::float(
+        "varwidth_exponent",
+        1.0,
+        0.1,
+        4.0,
+        0.1,
+        "varwidth: the exponent",
+    );
+
+pub const BLUR: ParamSpec = ParamSpec::int(
+        "blur",
+        2,
+        0,
+        16,
+        "moment filters: separable box blur radius in texels (0 = none)",
+    );
+
+pub const AREA: ParamSpec = ParamSpec::boolean(
+        "area",
+        false,
+        "lights with an area size: accumulate `area_maps` shadow maps rendered from stratified points of the area",
+    );
+
+pub const AREA_MAPS: ParamSpec = ParamSpec::int(
+        "area_maps",
+        16,
+        1,
+        64,
+        "area: number of shadow maps (the documents use the 4 corners)",
+    );
+
+pub const BLEEDING_REDUCTION: ParamSpec = ParamSpec::float(
+        "bleeding_reduction",
+        0.2,
+        0.0,
+        0.95,
+        0.01,
+        "vsm and evsm: light-bleeding reduction, the lower cut of the Chebyshev bound",
+    );
+
+pub const EXPONENT: ParamSpec = ParamSpec::float(
+        "exponent",
+        40.0,
+        1.0,
+        80.0,
+        1.0,
+        "esm and evsm: exponent c of the positive warp exp(c(z − 1))",
+    );
+
+pub const EXPONENT_NEGATIVE: ParamSpec = ParamSpec::float(
+        "exponent_negative",
+        5.0,
+        1.0,
+        40.0,
+        1.0,
+        "evsm4: exponent of the negative warp −exp(−c z)",
+    );
+
+pub const MOMENT_BIAS: ParamSpec = ParamSpec::float(
+        "moment_bias",
+        3e-5,
+        0.0,
+        0.01,
+        1e-5,
+        "msm: moment bias α towards (0.5, 0.5, 0.5, 0.5)",
+    );
+
+pub const STAGE: ParamSpec = ParamSpec::choice_of::<Stage>(
+    "stage",
+    Stage::Full as usize,
+    "full: maps and lookup; maps: the shadow-map pass alone (mask = 1); floor: a bare depth-only render of the same casters into the same map (position-only, no bias, no colour; mask = 1), what a shadow map cannot beat",
+);
+
+/// Every parameter, in table order.
+pub const PARAMS: &[ParamSpec] = &[
+    FILTER,
+    SAMPLES,
+    RADIUS,
+    SIZE,
+    FORMAT,
+    DEPTH_BIAS,
+    SLOPE_BIAS,
+    NORMAL_OFFSET_DIRECTIONAL,
+    NORMAL_OFFSET_LOCAL,
+    RECEIVER_PLANE,
+    CULL,
+    OMNI,
+    NEAR,
+    FAR,
+    FOV,
+    LIGHT_SIZE,
+    BLOCKER_SEARCH,
+    VARWIDTH_SCALE,
+    VARWIDTH_EXPONENT,
+    BLUR,
+    AREA,
+    AREA_MAPS,
+    BLEEDING_REDUCTION,
+    EXPONENT,
+    EXPONENT_NEGATIVE,
+    MOMENT_BIAS,
+    STAGE,
+];
+
+pub const PRESETS: &[Preset] = &[
+        Preset {
+            name: "pcf",
+            summary: "3×3 grid of hardware 2×2 PCF taps over ±1.5 texels, 2048², d32f",
+            values: &[],
+        },
+        Preset {
+            name: "hard",
+            summary: "nearest texel, no filtering",
+            values: &[("filter", "hard")],
+        },
+        Preset {
+            name: "pcf2x2",
+            summary: "one hardware bilinear comparison",
+            values: &[("filter", "pcf2x2")],
+        },
+        Preset {
+            name: "pcf-disk",
+            summary: "16 taps on a per-pixel rotated Vogel disk of radius 2.5 texels",
+            values: &[("filter", "disk"), ("samples", "4"), ("radius", "2.5")],
+        },
+        Preset {
+            name: "pcss",
+            summary: "percentage-closer soft shadows",
+            values: &[("filter", "pcss"), ("samples", "5")],
+        },
+        Preset {
+            name: "varwidth",
+            summary: "the documents' variable-width PCF",
+            values: &[("filter", "varwidth"), ("samples", "4")],
+        },
+        Preset {
+            name: "vsm",
+            summary: "variance shadow map, 1024², blurred",
+            values: &[("filter", "vsm"), ("size", "1024")],
+        },
+        Preset {
+            name: "esm",
+            summary: "exponential shadow map, 1024², blurred",
+            values: &[("filter", "esm"), ("size", "1024")],
+        },
+        Preset {
+            name: "evsm2",
+            summary: "exponential variance shadow map, positive warp only",
+            values: &[("filter", "evsm2"), ("size", "1024")],
+        },
+        Preset {
+            name: "evsm4",
+            summary: "exponential variance shadow map, both warps",
+            values: &[("filter", "evsm4"), ("size", "1024")],
+        },
+        Preset {
+            name: "msm",
+            summary: "4-moment Hamburger shadow map",
+            values: &[("filter", "msm"), ("size", "1024")],
+        },
+        Preset {
+            name: "area",
+            summary: "soft shadows: 16 maps from stratified points of the light's area, averaged",
+            values: &[("area", "true"), ("filter", "pcf2x2"), ("size", "1024")],
+        },
+        Preset {
+            name: "8bit",
+            summary: "depth stored in 8 bits: acne everywhere",
+            values: &[("format", "r8"), ("filter", "hard")],
+        },
+    ];
+
+/// The shadow-map family's parameters, parsed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowMapConfig {
+    pub filter: Filter,
+    /// Taps per side (grid) or √taps (disk, pcss, varwidth).
+    pub samples: u32,
+    pub radius: f32,
+    pub size: u32,
+    pub format: DepthFormat,
+    /// Constant depth bias in the format's smallest steps.
+    pub depth_bias: i32,
+    pub slope_bias: f32,
+    pub normal_offset_directional: f32,
+    pub normal_offset_local: f32,
+    pub receiver_plane: bool,
+    pub cull: CullFace,
+    pub omni: Omni,
+    pub near: f32,
+    pub far: f32,
+    pub fov_deg: f32,
+    pub light_size: f32,
+    pub blocker_search: f32,
+    pub varwidth_scale: f32,
+    pub varwidth_exponent: f32,
+    pub blur: u32,
+    pub area: bool,
+    pub area_maps: u32,
+    pub bleeding_reduction: f32,
+    pub exponent: f32,
+    pub exponent_negative: f32,
+    pub moment_bias: f32,
+    pub stage: Stage,
+}
+
+impl ShadowMapConfig {
+    pub fn parse(p: &ParamValues) -> Result<ShadowMapConfig> {
+        Ok(ShadowMapConfig {
+            filter: p.choice(&FILTER)?,
+            samples: p.int(&SAMPLES)?,
+            radius: p.float(&RADIUS)?,
+            size: p.int(&SIZE)?,
+            format: p.choice(&FORMAT)?,
+            depth_bias: p.float(&DEPTH_BIAS)?.round().min(i32::MAX as f32) as i32,
+            slope_bias: p.float(&SLOPE_BIAS)?,
+            normal_offset_directional: p.float(&NORMAL_OFFSET_DIRECTIONAL)?,
+            normal_offset_local: p.float(&NORMAL_OFFSET_LOCAL)?,
+            receiver_plane: p.flag(&RECEIVER_PLANE)?,
+            cull: p.choice(&CULL)?,
+            omni: p.choice(&OMNI)?,
+            near: p.float(&NEAR)?,
+            far: p.float(&FAR)?,
+            fov_deg: p.float(&FOV)?,
+            light_size: p.float(&LIGHT_SIZE)?,
+            blocker_search: p.float(&BLOCKER_SEARCH)?,
+            varwidth_scale: p.float(&VARWIDTH_SCALE)?,
+            varwidth_exponent: p.float(&VARWIDTH_EXPONENT)?,
+            blur: p.int(&BLUR)?,
+            area: p.flag(&AREA)?,
+            area_maps: p.int(&AREA_MAPS)?,
+            bleeding_reduction: p.float(&BLEEDING_REDUCTION)?,
+            exponent: p.float(&EXPONENT)?,
+            exponent_negative: p.float(&EXPONENT_NEGATIVE)?,
+            moment_bias: p.float(&MOMENT_BIAS)?,
+            stage: p.choice(&STAGE)?,
+        })
+    }
+
+    /// The lookup's normal offset in texels for a light of this type.
+    pub fn normal_offset(&self, kind: LightType) -> f32 {
+        match kind {
+            LightType::Directional => self.normal_offset_directional,
+            _ => self.normal_offset_local,
+        }
+    }
+
+    /// The box-blur radius of moment maps (0 for depth maps).
+    pub fn moment_blur(&self) -> u32 {
+        if self.filter.is_moment() { self.blur } else { 0 }
+    }
+}

@@ -1,0 +1,328 @@
+//! The shadow-map family's GPU programs, shared by every light's instance
+//! on a device: one shader module, its layouts, samplers and placeholders
+//! ([`ShadowMapShared`]), and pipelines specialised by what they depend on
+//! — the depth pass by format, culling, bias and moment kind, the lookup by
+//! filter, taps, depth format and receiver-plane bias — taken from the
+//! device's bounded cache.
+
+use super::config::{CullFace, DepthFormat, Filter};
+use crate::frame::{MASK_FORMAT, VERTEX_LAYOUT};
+use crate::gpu::GpuContext;
+use crate::technique::params::Choice;
+
+/// Format of the moment maps (vsm, esm, evsm, msm).
+pub const MOMENT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+/// What a depth-pass pipeline depends on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct DepthPassKey {
+    pub format: DepthFormat,
+    pub cull: CullFace,
+    pub bias: i32,
+    pub slope_bits: u32,
+    /// The moment filter whose moments the pass stores, if any.
+    pub moments: Option<Filter>,
+    pub paraboloid: bool,
+}
+
+/// What a lookup pipeline depends on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct LookupKey {
+    pub filter: Filter,
+    /// Taps per side; 0 for filters without taps.
+    pub taps: u32,
+    pub byte_map: bool,
+    pub receiver_plane: bool,
+    /// Adds `constant × visibility` onto the mask (area-light maps).
+    pub accumulate: bool,
+}
+
+impl LookupKey {
+    /// The values of the lookup's pipeline-overridable constants.
+    fn constants(&self) -> [(&'static str, f64); 4] {
+        [
+            ("FILTER_KIND", self.filter.index() as f64),
+            ("TAPS", self.taps as f64),
+            ("BYTE_MAP", self.byte_map as u32 as f64),
+            ("RECEIVER_PLANE", self.receiver_plane as u32 as f64),
+        ]
+    }
+}
+
+/// A 1×1 array texture bound in place of a map that is not in use.
+fn placeholder(device: &wgpu::Device, format: wgpu::TextureFormat) -> wgpu::TextureView {
+    crate::gpu::texture_2d(
+        device,
+        "shadow map placeholder",
+        1,
+        1,
+        1,
+        format,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    )
+    .create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    })
+}
+
+pub struct ShadowMapShared {
+    pub layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
+    pub compare_sampler: wgpu::Sampler,
+    pub placeholder_bytes: wgpu::TextureView,
+    /// Bound in place of the maps while they are rendered.
+    pub placeholder_depth: wgpu::TextureView,
+    pub placeholder_moments: wgpu::TextureView,
+}
+
+impl ShadowMapShared {
+    pub fn new(gpu: &GpuContext) -> ShadowMapShared {
+        let device = &gpu.device;
+        let tex = |binding, sample_type| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type,
+                view_dimension: wgpu::TextureViewDimension::D2Array,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shadow map"),
+            entries: &[
+                crate::gpu::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
+                tex(3, wgpu::TextureSampleType::Depth),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 4,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+                    count: None,
+                },
+                tex(5, wgpu::TextureSampleType::Float { filterable: false }),
+                tex(6, wgpu::TextureSampleType::Float { filterable: false }),
+            ],
+        });
+        let filter_constants = Filter::wgsl_constants("FILTER");
+        let module = crate::frame::technique_shader(
+            device,
+            "shadow map",
+            &[&filter_constants, include_str!("shadow_map.wgsl")],
+        );
+        ShadowMapShared {
+            pipeline_layout: crate::technique::pipeline_layout(gpu, "shadow map", &layout),
+            layout,
+            module,
+            compare_sampler: device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("shadow compare"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                compare: Some(wgpu::CompareFunction::LessEqual),
+                ..Default::default()
+            }),
+            placeholder_bytes: placeholder(device, wgpu::TextureFormat::R8Unorm),
+            placeholder_depth: placeholder(device, wgpu::TextureFormat::Depth32Float),
+            placeholder_moments: placeholder(device, MOMENT_FORMAT),
+        }
+    }
+
+    /// A full-screen pass of the module with the filter constants of `key`.
+    fn fullscreen(
+        &self,
+        gpu: &GpuContext,
+        label: &'static str,
+        fs: &'static str,
+        key: LookupKey,
+        targets: &[Option<wgpu::ColorTargetState>],
+        depth_stencil: Option<wgpu::DepthStencilState>,
+    ) -> wgpu::RenderPipeline {
+        gpu.cache
+            .render_pipeline(label, &(key, targets, &depth_stencil), || {
+                let constants = key.constants();
+                let options = wgpu::PipelineCompilationOptions {
+                    constants: &constants,
+                    ..Default::default()
+                };
+                gpu.device
+                    .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                        label: Some(label),
+                        layout: Some(&self.pipeline_layout),
+                        vertex: wgpu::VertexState {
+                            module: &self.module,
+                            entry_point: Some("vs_fullscreen"),
+                            compilation_options: options.clone(),
+                            buffers: &[],
+                        },
+                        primitive: Default::default(),
+                        depth_stencil: depth_stencil.clone(),
+                        multisample: Default::default(),
+                        fragment: Some(wgpu::FragmentState {
+                            module: &self.module,
+                            entry_point: Some(fs),
+                            compilation_options: options,
+                            targets,
+                        }),
+                        multiview_mask: None,
+                        cache: None,
+                    })
+            })
+    }
+
+    /// The lookup writing (or accumulating into) the mask.
+    pub fn lookup(&self, gpu: &GpuContext, key: LookupKey) -> wgpu::RenderPipeline {
+        let target = if key.accumulate {
+            wgpu::ColorTargetState {
+                format: MASK_FORMAT,
+                blend: Some(wgpu::BlendState {
+                    color: wgpu::BlendComponent {
+                        src_factor: wgpu::BlendFactor::Constant,
+                        dst_factor: wgpu::BlendFactor::One,
+                        operation: wgpu::BlendOperation::Add,
+                    },
+                    alpha: wgpu::BlendComponent::REPLACE,
+                }),
+                write_mask: wgpu::ColorWrites::RED,
+            }
+        } else {
+            MASK_FORMAT.into()
+        };
+        self.fullscreen(
+            gpu,
+            "shadow map lookup",
+            "fs_lookup",
+            key,
+            &[Some(target)],
+            Some(crate::technique::frame_depth_read(Default::default())),
+        )
+    }
+
+    /// The separable box blur of moment maps.
+    pub fn blur(&self, gpu: &GpuContext, key: LookupKey) -> wgpu::RenderPipeline {
+        self.fullscreen(
+            gpu,
+            "shadow map blur",
+            "fs_blur",
+            key,
+            &[Some(MOMENT_FORMAT.into())],
+            None,
+        )
+    }
+
+    /// Debug view: face 0 of the map as grey.
+    pub fn debug_map(&self, gpu: &GpuContext, key: LookupKey) -> wgpu::RenderPipeline {
+        self.fullscreen(
+            gpu,
+            "shadow map debug",
+            "fs_debug_map",
+            key,
+            &[Some(wgpu::TextureFormat::Rgba8Unorm.into())],
+            None,
+        )
+    }
+
+    /// Debug views at the frame's size: the projected map, texels per pixel.
+    pub fn debug_frame(&self, gpu: &GpuContext, key: LookupKey) -> wgpu::RenderPipeline {
+        self.fullscreen(
+            gpu,
+            "shadow map debug frame",
+            "fs_debug_frame",
+            key,
+            &[
+                Some(wgpu::TextureFormat::Rgba8Unorm.into()),
+                Some(wgpu::TextureFormat::Rgba8Unorm.into()),
+            ],
+            None,
+        )
+    }
+
+    /// The depth pass from the light.
+    pub fn depth_pass(&self, gpu: &GpuContext, key: DepthPassKey) -> wgpu::RenderPipeline {
+        gpu.cache.render_pipeline("shadow map depth", &key, || {
+            let (entry, color) = if key.moments.is_some() {
+                (Some("fs_depth_moments"), Some(MOMENT_FORMAT))
+            } else if key.format == DepthFormat::R8 {
+                (Some("fs_depth_byte"), Some(wgpu::TextureFormat::R8Unorm))
+            } else if key.paraboloid {
+                (Some("fs_depth_paraboloid"), None)
+            } else {
+                (None, None)
+            };
+            let constants = [(
+                "FILTER_KIND",
+                key.moments.map_or(Filter::Grid, |f| f).index() as f64,
+            )];
+            let options = wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                ..Default::default()
+            };
+            let targets = [color.map(wgpu::ColorTargetState::from)];
+            gpu.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("shadow map depth"),
+                    layout: Some(&self.pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &self.module,
+                        entry_point: Some("vs_depth"),
+                        compilation_options: options.clone(),
+                        buffers: &[Some(VERTEX_LAYOUT)],
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        cull_mode: key.cull.face(),
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: key.format.depth_texture(),
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                        stencil: Default::default(),
+                        bias: wgpu::DepthBiasState {
+                            constant: key.bias,
+                            slope_scale: f32::from_bits(key.slope_bits),
+                            clamp: 0.0,
+                        },
+                    }),
+                    multisample: Default::default(),
+                    fragment: entry.map(|e| wgpu::FragmentState {
+                        module: &self.module,
+                        entry_point: Some(e),
+                        compilation_options: options,
+                        targets: if targets[0].is_some() { &targets } else { &[] },
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+        })
+    }
+
+    /// The floor of `stage=floor`: positions transformed by the face matrix,
+    /// depth test and write, nothing else.
+    pub fn floor(&self, gpu: &GpuContext, format: wgpu::TextureFormat) -> wgpu::RenderPipeline {
+        gpu.cache.render_pipeline("shadow map floor", &format, || {
+            gpu.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("shadow map floor"),
+                    layout: Some(&self.pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &self.module,
+                        entry_point: Some("vs_floor"),
+                        compilation_options: Default::default(),
+                        buffers: &[Some(VERTEX_LAYOUT)],
+                    },
+                    primitive: Default::default(),
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: None,
+                    multiview_mask: None,
+                    cache: None,
+                })
+        })
+    }
+}

@@ -1,0 +1,193 @@
+//! The light's matrices for one frame: perspective for spot lights, six
+//! 90° cube faces or two paraboloid hemispheres for point lights, and an
+//! orthographic box for directional lights fitted to the scene and clipped
+//! to what the camera sees (wgpu's [0, 1] depth).
+
+use crate::scene::{Aabb, Camera, Light, LightType};
+use glam::{Mat4, Vec3, Vec4};
+
+/// The light's matrices for one frame.
+#[derive(Clone, Debug)]
+pub struct LightSetup {
+    pub faces: Vec<Mat4>,
+    pub near: f32,
+    pub far: f32,
+    pub orthographic: bool,
+    /// `faces` are the two hemispheres' view matrices of a dual paraboloid.
+    pub paraboloid: bool,
+    /// World size of a texel at unit distance (perspective) or anywhere (orthographic), for a 1-texel map.
+    pub texel_scale: f32,
+}
+
+fn up_for(dir: Vec3) -> Vec3 {
+    if dir.normalize().dot(Vec3::Y).abs() > 0.99 {
+        Vec3::Z
+    } else {
+        Vec3::Y
+    }
+}
+
+/// Near/far of a local light around `bounds`, unless given.
+fn near_far(pos: Vec3, bounds: &Aabb, near: f32, far: f32) -> (f32, f32) {
+    let auto_far = bounds
+        .corners()
+        .iter()
+        .map(|c| c.distance(pos))
+        .fold(0.0f32, f32::max)
+        .max(1e-3)
+        * 1.01;
+    let f = if far > 0.0 { far } else { auto_far };
+    let closest = pos.clamp(bounds.min, bounds.max).distance(pos);
+    let n = if near > 0.0 {
+        near
+    } else {
+        (closest * 0.95).max(f * 2e-3)
+    };
+    (n, f.max(n * 1.01))
+}
+
+/// The six 90° views of a point light: +X, −X, +Y, −Y, +Z, −Z.
+pub fn cube_views(pos: Vec3) -> [Mat4; 6] {
+    let v = |d: Vec3, up: Vec3| glam::camera::rh::view::look_to_mat4(pos, d, up);
+    [
+        v(Vec3::X, Vec3::NEG_Y),
+        v(Vec3::NEG_X, Vec3::NEG_Y),
+        v(Vec3::Y, Vec3::Z),
+        v(Vec3::NEG_Y, Vec3::NEG_Z),
+        v(Vec3::Z, Vec3::NEG_Y),
+        v(Vec3::NEG_Z, Vec3::NEG_Y),
+    ]
+}
+
+/// The user's choices for the light frustum (0 = fitted).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FrustumParams {
+    pub near: f32,
+    pub far: f32,
+    pub fov_deg: f32,
+    /// Point lights: two paraboloid hemispheres instead of six faces.
+    pub paraboloid: bool,
+}
+
+/// Light matrices: spot (perspective over the cone), point (six faces),
+/// directional (orthographic around the scene, its xy clipped to the
+/// camera's view of the scene).
+pub fn light_setup(
+    light: &Light,
+    scene_bounds: &Aabb,
+    camera: &Camera,
+    aspect: f32,
+    fp: &FrustumParams,
+) -> LightSetup {
+    let FrustumParams {
+        near,
+        far,
+        fov_deg,
+        paraboloid,
+    } = *fp;
+    use glam::camera::rh::proj::directx::{orthographic, perspective};
+    match light.kind {
+        LightType::Spot => {
+            let (n, f) = near_far(light.position, scene_bounds, near, far);
+            let fov = if fov_deg > 0.0 {
+                fov_deg
+            } else {
+                (2.0 * light.outer_cone_deg + 4.0).min(170.0)
+            }
+            .to_radians();
+            let view = glam::camera::rh::view::look_to_mat4(
+                light.position,
+                light.direction,
+                up_for(light.direction),
+            );
+            LightSetup {
+                faces: vec![perspective(fov, 1.0, n, f) * view],
+                near: n,
+                far: f,
+                orthographic: false,
+                paraboloid: false,
+                texel_scale: 2.0 * (fov * 0.5).tan(),
+            }
+        }
+        LightType::Point if paraboloid => {
+            let (n, f) = near_far(light.position, scene_bounds, near, far);
+            let v = |d: Vec3| glam::camera::rh::view::look_to_mat4(light.position, d, Vec3::Z);
+            LightSetup {
+                faces: vec![v(Vec3::NEG_Y), v(Vec3::Y)],
+                near: n,
+                far: f,
+                orthographic: false,
+                paraboloid: true,
+                // At the centre of a hemisphere, uv changes by 1/2 per radian.
+                texel_scale: 4.0,
+            }
+        }
+        LightType::Point => {
+            let (n, f) = near_far(light.position, scene_bounds, near, far);
+            let proj = perspective(std::f32::consts::FRAC_PI_2, 1.0, n, f);
+            LightSetup {
+                faces: cube_views(light.position)
+                    .iter()
+                    .map(|v| proj * *v)
+                    .collect(),
+                near: n,
+                far: f,
+                orthographic: false,
+                paraboloid: false,
+                texel_scale: 2.0,
+            }
+        }
+        LightType::Directional => {
+            let dir = light.direction.normalize();
+            let c = scene_bounds.center();
+            let r = scene_bounds.size().length() * 0.5 + 1e-3;
+            let view = glam::camera::rh::view::look_to_mat4(c - dir * (2.0 * r), dir, up_for(dir));
+            let scene_ls = scene_bounds.transformed(view);
+            // The camera frustum, its far plane pulled in to the scene, in light space.
+            let vp = camera.projection(aspect) * camera.view();
+            let inv = vp.inverse();
+            let reach = (camera.eye.distance(c) + r).min(camera.far);
+            let far_z = {
+                let p = camera.projection(aspect) * Vec4::new(0.0, 0.0, -reach, 1.0);
+                (p.z / p.w).clamp(0.0, 1.0)
+            };
+            let corners = [0.0f32, far_z].into_iter().flat_map(|z| {
+                [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)].map(|(x, y)| {
+                    let w = inv * Vec4::new(x, y, z, 1.0);
+                    view.transform_point3(w.truncate() / w.w)
+                })
+            });
+            let cam_ls = Aabb::from_points(corners);
+            let min_x = scene_ls.min.x.max(cam_ls.min.x);
+            let max_x = scene_ls.max.x.min(cam_ls.max.x);
+            let min_y = scene_ls.min.y.max(cam_ls.min.y);
+            let max_y = scene_ls.max.y.min(cam_ls.max.y);
+            let (min_x, max_x, min_y, max_y) = if min_x < max_x && min_y < max_y {
+                (min_x, max_x, min_y, max_y)
+            } else {
+                (
+                    scene_ls.min.x,
+                    scene_ls.max.x,
+                    scene_ls.min.y,
+                    scene_ls.max.y,
+                )
+            };
+            // Square texels: the larger extent on both axes.
+            let half = ((max_x - min_x).max(max_y - min_y) * 0.5).max(1e-3);
+            let (cx, cy) = ((min_x + max_x) * 0.5, (min_y + max_y) * 0.5);
+            // View space looks down −z: depth range from the scene's z extent.
+            let (n, f) = (-scene_ls.max.z - 1e-3, -scene_ls.min.z + 1e-3);
+            LightSetup {
+                faces: vec![
+                    orthographic(cx - half, cx + half, cy - half, cy + half, n.max(0.0), f) * view,
+                ],
+                near: n.max(0.0),
+                far: f,
+                orthographic: true,
+                paraboloid: false,
+                texel_scale: 2.0 * half,
+            }
+        }
+    }
+}
+
