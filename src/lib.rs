@@ -4,11 +4,12 @@
 //! writes the same mask from the same G-buffer, so each technique can be
 //! measured against ground truth pixel by pixel.
 
+pub mod args;
 pub mod cli;
 pub mod frame;
-pub mod headless;
 pub mod fuzz_input;
 pub mod gpu;
+pub mod headless;
 pub mod measure;
 pub mod renderer;
 pub mod scene;

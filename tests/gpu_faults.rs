@@ -12,9 +12,14 @@ fn a_lost_device_is_an_error_not_a_panic() {
     let gpu = GpuContext::new(None).unwrap();
     let scene = builtin::by_name("floating").unwrap().unwrap();
     let choice = shadowlab::technique::resolve("shadow-map").unwrap();
-    let mut hf =
-        shadowlab::headless::HeadlessFrame::new(&gpu, &scene, std::slice::from_ref(&choice), 64, 36)
-            .unwrap();
+    let mut hf = shadowlab::headless::HeadlessFrame::new(
+        &gpu,
+        &scene,
+        std::slice::from_ref(&choice),
+        64,
+        36,
+    )
+    .unwrap();
     hf.render(
         &gpu,
         &scene,

@@ -3,6 +3,7 @@
 
 mod common;
 use common::*;
+use shadowlab::renderer::RenderSettings;
 use shadowlab::scene::builtin;
 
 /// Number of distinct colours (quantised to 4 bits per channel).
@@ -84,6 +85,39 @@ fn golden_images_match() {
         let scene = builtin::by_name(name).unwrap().unwrap();
         let img = render(&scene, "none", 256, 144);
         check_golden(name, &img.color, 256, 144);
+    }
+}
+
+/// The lighting pass is specialised per shading mode, specular model and
+/// material: each variant matches the image of the former single shader
+/// (blessed before the specialisation).
+#[test]
+fn golden_images_of_the_shading_variants_match() {
+    use shadowlab::renderer::{LightingModel, Shading};
+    for (name, shading, lighting) in [
+        ("room", Shading::Flat, LightingModel::BlinnPhong),
+        ("room", Shading::Gouraud, LightingModel::BlinnPhong),
+        ("room", Shading::Pixel, LightingModel::Phong),
+        ("bunny", Shading::Gouraud, LightingModel::Phong),
+        ("floating", Shading::Flat, LightingModel::Phong),
+    ] {
+        let scene = builtin::by_name(name).unwrap().unwrap();
+        let settings = RenderSettings {
+            shading,
+            lighting,
+            ..golden_settings()
+        };
+        let img = render_with(&scene, "none", 256, 144, &settings);
+        let label = format!(
+            "{name}-{}-{}",
+            format!("{shading:?}").to_lowercase(),
+            if lighting == LightingModel::Phong {
+                "phong"
+            } else {
+                "blinn-phong"
+            }
+        );
+        check_golden(&label, &img.color, 256, 144);
     }
 }
 

@@ -54,8 +54,6 @@ pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferL
     attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4],
 };
 
-
-
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable, Default)]
 pub struct LightGpu {
@@ -113,7 +111,6 @@ pub struct FrameUniform {
     pub lights: [LightGpu; MAX_LIGHTS],
 }
 
-
 /// The layouts of groups 0, 1 and 3 and the scene materials; one set per
 /// device ([`FrameLayouts::of`]).
 pub struct FrameLayouts {
@@ -121,8 +118,9 @@ pub struct FrameLayouts {
     pub objects: wgpu::BindGroupLayout,
     pub gbuffer: wgpu::BindGroupLayout,
     pub material: wgpu::BindGroupLayout,
-    /// The mask array, read by the lighting pass.
-    pub masks: wgpu::BindGroupLayout,
+    /// The lighting pass's group 3: the mask array and the material
+    /// textures' sampler (its anisotropy is a render setting).
+    pub lighting: wgpu::BindGroupLayout,
 }
 
 impl FrameLayouts {
@@ -136,17 +134,29 @@ impl FrameLayouts {
                     entries,
                 })
             };
-            let gbuffer_texture = |binding| texture_entry(binding, wgpu::TextureViewDimension::D2, false);
+            let gbuffer_texture =
+                |binding| texture_entry(binding, wgpu::TextureViewDimension::D2, false);
             FrameLayouts {
-                frame: layout("frame", &[uniform_entry(0, wgpu::ShaderStages::all(), false)]),
+                frame: layout(
+                    "frame",
+                    &[uniform_entry(0, wgpu::ShaderStages::all(), false)],
+                ),
                 objects: layout(
                     "objects",
                     &[storage_entry(0, vf | wgpu::ShaderStages::COMPUTE, true)],
                 ),
                 gbuffer: layout("gbuffer", &[gbuffer_texture(0), gbuffer_texture(1)]),
-                masks: layout(
-                    "masks",
-                    &[texture_entry(0, wgpu::TextureViewDimension::D2Array, false)],
+                lighting: layout(
+                    "lighting",
+                    &[
+                        texture_entry(0, wgpu::TextureViewDimension::D2Array, false),
+                        wgpu::BindGroupLayoutEntry {
+                            binding: 1,
+                            visibility: wgpu::ShaderStages::FRAGMENT,
+                            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                            count: None,
+                        },
+                    ],
                 ),
                 material: layout(
                     "material",
@@ -154,12 +164,6 @@ impl FrameLayouts {
                         uniform_entry(0, vf, false),
                         texture_entry(1, wgpu::TextureViewDimension::D2, true),
                         texture_entry(2, wgpu::TextureViewDimension::D2, true),
-                        wgpu::BindGroupLayoutEntry {
-                            binding: 3,
-                            visibility: wgpu::ShaderStages::FRAGMENT,
-                            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                            count: None,
-                        },
                     ],
                 ),
             }

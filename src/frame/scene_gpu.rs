@@ -163,16 +163,6 @@ impl SceneGpu {
             .collect();
         let white = textures::solid(gpu, [255, 255, 255, 255], true);
         let flat_normal = textures::solid(gpu, [128, 128, 255, 255], false);
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("material"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::Repeat,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            anisotropy_clamp: gpu.anisotropy.clamp(1, 16),
-            ..Default::default()
-        });
         let material_bind_groups = scene
             .materials
             .iter()
@@ -217,10 +207,6 @@ impl SceneGpu {
                             binding: 2,
                             resource: wgpu::BindingResource::TextureView(normal),
                         },
-                        wgpu::BindGroupEntry {
-                            binding: 3,
-                            resource: wgpu::BindingResource::Sampler(&sampler),
-                        },
                     ],
                 })
             })
@@ -239,7 +225,6 @@ impl SceneGpu {
         })
     }
 
-
     /// Binds the vertex and index buffers and draws every non-plane object
     /// that `filter` accepts, with `instance_index` = object id. The caller
     /// sets pipeline and bind groups 0 and 1.
@@ -255,4 +240,3 @@ impl SceneGpu {
         }
     }
 }
-

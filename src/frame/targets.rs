@@ -24,7 +24,7 @@ pub struct FrameTargets {
     gbuffer_bind_group: wgpu::BindGroup,
     masks: wgpu::Texture,
     mask_layer_views: Vec<wgpu::TextureView>,
-    mask_bind_group: wgpu::BindGroup,
+    mask_array_view: wgpu::TextureView,
     color: wgpu::Texture,
     color_view: wgpu::TextureView,
     frame_buffer: wgpu::Buffer,
@@ -105,14 +105,6 @@ impl FrameTargets {
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             ..Default::default()
         });
-        let mask_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("masks"),
-            layout: &layouts.masks,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::TextureView(&mask_array_view),
-            }],
-        });
         let color = crate::gpu::texture_2d(
             device,
             "color",
@@ -165,7 +157,7 @@ impl FrameTargets {
             gbuffer_normal,
             masks,
             mask_layer_views,
-            mask_bind_group,
+            mask_array_view,
             color,
             color_view,
             frame_buffer,
@@ -173,7 +165,6 @@ impl FrameTargets {
             uniform: FrameUniform::zeroed(),
         })
     }
-
 
     pub fn width(&self) -> u32 {
         self.width
@@ -237,9 +228,9 @@ impl FrameTargets {
         &self.mask_layer_views[i]
     }
 
-    /// The mask array bound for the lighting pass.
-    pub fn mask_bind_group(&self) -> &wgpu::BindGroup {
-        &self.mask_bind_group
+    /// The mask array as one view (read by the lighting pass).
+    pub fn mask_array_view(&self) -> &wgpu::TextureView {
+        &self.mask_array_view
     }
 
     pub fn color(&self) -> &wgpu::Texture {
@@ -301,4 +292,3 @@ pub fn clear_mask(encoder: &mut wgpu::CommandEncoder, target: &wgpu::TextureView
         ..Default::default()
     });
 }
-

@@ -50,12 +50,7 @@ impl DeviceCache {
         self.state.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    fn pipeline(
-        &self,
-        owner: &str,
-        key: &impl Hash,
-        make: impl FnOnce() -> Pipeline,
-    ) -> Pipeline {
+    fn pipeline(&self, owner: &str, key: &impl Hash, make: impl FnOnce() -> Pipeline) -> Pipeline {
         let k = hash_of(&(owner, key));
         {
             let mut s = self.lock();

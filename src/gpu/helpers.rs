@@ -97,4 +97,3 @@ pub fn texture_2d(
         view_formats: &[],
     })
 }
-

@@ -1,14 +1,16 @@
 //! GPU layer: the context (adapter selection — `--backend`, `WGPU_BACKEND`,
 //! real GPUs before the CPU adapter — and device creation with the optional
-//! features the techniques use), texture readback, the per-device pipeline
-//! cache ([`cache`]) and texture, bind-layout and shader helpers
-//! ([`helpers`]). It knows nothing of scenes, frames or techniques.
+//! features the techniques use), texture readback (waiting, and
+//! [`readback`] without waiting), the per-device pipeline cache
+//! ([`cache`]) and texture, bind-layout and shader helpers ([`helpers`]). It knows nothing of scenes, frames or techniques.
 
 pub mod cache;
 pub mod helpers;
+pub mod readback;
 
 pub use cache::{DeviceCache, PIPELINE_CACHE_BOUND};
 pub use helpers::*;
+pub use readback::AsyncReadback;
 
 use anyhow::{Result, bail};
 
@@ -45,13 +47,10 @@ pub struct GpuContext {
     /// Bytes one frame's targets or one technique instance's resources may
     /// take ([`GpuContext::check_allocation`]); `--memory-budget` sets it.
     pub memory_budget: u64,
-    /// Anisotropic filtering of material textures (1 = trilinear only):
-    /// by default 8 on GPUs and 1 on CPU adapters, where each extra sample
-    /// costs shader time (on lavapipe 8× anisotropy doubles the lighting
-    /// pass of `room`); `--anisotropy` sets it.
-    pub anisotropy: u16,
     /// Pipelines and per-family resources shared by every user of the device.
     pub cache: DeviceCache,
+    /// Times the CPU has waited for the GPU ([`GpuContext::waits`]).
+    waits: std::sync::atomic::AtomicU64,
     /// Set by the device-lost callback: why the device was lost.
     lost: std::sync::Arc<std::sync::Mutex<Option<String>>>,
 }
@@ -203,12 +202,8 @@ impl GpuContext {
             pipeline_statistics: features.contains(wgpu::Features::PIPELINE_STATISTICS_QUERY),
             depth_clamp: features.contains(wgpu::Features::DEPTH_CLIP_CONTROL),
             memory_budget: DEFAULT_MEMORY_BUDGET_MIB << 20,
-            anisotropy: if info.device_type == wgpu::DeviceType::Cpu {
-                1
-            } else {
-                8
-            },
             cache: DeviceCache::default(),
+            waits: Default::default(),
             lost,
             instance,
             adapter,
@@ -216,6 +211,18 @@ impl GpuContext {
             queue,
             info,
         })
+    }
+
+    /// Anisotropic filtering of material textures when none is asked for:
+    /// 8 on GPUs; 1 (trilinear only) on CPU adapters, where every extra
+    /// sample costs shader time (on lavapipe any anisotropy more than
+    /// doubles the lighting pass of `room`).
+    pub fn default_anisotropy(&self) -> u16 {
+        if self.info.device_type == wgpu::DeviceType::Cpu {
+            1
+        } else {
+            8
+        }
     }
 
     /// One-line description of the adapter for logs and frame.json.
@@ -346,7 +353,7 @@ impl GpuContext {
         slice.map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
         });
-        self.device.poll(wgpu::PollType::wait_indefinitely())?;
+        self.wait_idle()?;
         rx.recv()??;
         let out = slice.get_mapped_range()?.to_vec();
         buffer.unmap();
@@ -355,7 +362,16 @@ impl GpuContext {
 
     /// Waits until all submitted work has finished.
     pub fn wait_idle(&self) -> Result<()> {
+        self.waits
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         self.device.poll(wgpu::PollType::wait_indefinitely())?;
         Ok(())
+    }
+
+    /// How many times the CPU has waited for the GPU on this device (each
+    /// [`Self::wait_idle`] and [`Self::read_buffer`]): a frame of a GPU
+    /// technique waits once.
+    pub fn waits(&self) -> u64 {
+        self.waits.load(std::sync::atomic::Ordering::Relaxed)
     }
 }

@@ -5,8 +5,8 @@
 //! technique's frame time as a ratio to `none` measured in the same run.
 
 use super::choice_label;
-use crate::headless::HeadlessFrame;
 use crate::gpu::GpuContext;
+use crate::headless::HeadlessFrame;
 use crate::renderer::{FrameTimings, RenderSettings};
 use crate::scene::{Camera, Light, Scene};
 use crate::technique::{self, TechniqueChoice};

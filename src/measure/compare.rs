@@ -4,12 +4,12 @@
 
 use super::quality::{self, FlipStats, MaskMetrics};
 use super::{choice_label, file_stem};
-use crate::headless::{self, FrameImages, HeadlessFrame};
 use crate::gpu::GpuContext;
+use crate::headless::{self, FrameImages, HeadlessFrame};
 use crate::renderer::RenderSettings;
-use crate::technique::TechniqueInstance;
 use crate::scene::{Camera, Light, Scene};
 use crate::technique::TechniqueChoice;
+use crate::technique::TechniqueInstance;
 use anyhow::{Context, Result};
 use glam::Vec3;
 use serde::Serialize;
@@ -92,7 +92,10 @@ fn render_with(
         .map(|_| TechniqueInstance::new(gpu, choice.clone()))
         .collect::<Result<_>>()?;
     let t = hf.render(gpu, scene, camera, lights, settings)?;
-    Ok((headless::read_back(gpu, &hf.frame, lights.len())?, t.total_ms))
+    Ok((
+        headless::read_back(gpu, &hf.frame, lights.len())?,
+        t.total_ms,
+    ))
 }
 
 /// Renders the reference and every technique, writes images, heatmaps and

@@ -116,36 +116,36 @@ impl LightIcons {
         });
         let pipeline = gpu.cache.render_pipeline("icons", &(), || {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("icons"),
-            layout: Some(&pl),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_icon"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: std::mem::size_of::<IconVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
-                })],
-            },
-            primitive: Default::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: crate::frame::DEPTH_FORMAT,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_icon"),
-                compilation_options: Default::default(),
-                targets: &[Some(crate::frame::COLOR_FORMAT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
+                label: Some("icons"),
+                layout: Some(&pl),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_icon"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: std::mem::size_of::<IconVertex>() as u64,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+                    })],
+                },
+                primitive: Default::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: crate::frame::DEPTH_FORMAT,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_icon"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(crate::frame::COLOR_FORMAT.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
         });
         let mut spot = arrow();
         let cone = shapes::lathe("cone", &[Vec2::new(0.45, 0.0), Vec2::new(0.0, 0.9)], 24);

@@ -72,6 +72,9 @@ pub fn scene_module(gpu: &GpuContext) -> wgpu::ShaderModule {
 pub struct Lighting {
     layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
+    group_layout: wgpu::BindGroupLayout,
+    /// Material samplers by anisotropy.
+    samplers: std::sync::Mutex<std::collections::HashMap<u16, wgpu::Sampler>>,
 }
 
 impl Lighting {
@@ -85,12 +88,50 @@ impl Lighting {
                         Some(&layouts.frame),
                         Some(&layouts.objects),
                         Some(&layouts.material),
-                        Some(&layouts.masks),
+                        Some(&layouts.lighting),
                     ],
                     immediate_size: 0,
                 }),
             module: scene_module(gpu),
+            group_layout: layouts.lighting.clone(),
+            samplers: Default::default(),
         }
+    }
+
+    /// Group 3: the frame's masks and the material sampler of `anisotropy`.
+    fn bind_group(
+        &self,
+        gpu: &GpuContext,
+        frame: &FrameTargets,
+        anisotropy: u16,
+    ) -> wgpu::BindGroup {
+        let mut samplers = self.samplers.lock().unwrap_or_else(|e| e.into_inner());
+        let sampler = samplers.entry(anisotropy).or_insert_with(|| {
+            gpu.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("material"),
+                address_mode_u: wgpu::AddressMode::Repeat,
+                address_mode_v: wgpu::AddressMode::Repeat,
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                anisotropy_clamp: anisotropy,
+                ..Default::default()
+            })
+        });
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("lighting"),
+            layout: &self.group_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(frame.mask_array_view()),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::Sampler(sampler),
+                },
+            ],
+        })
     }
 
     fn pipeline(&self, gpu: &GpuContext, key: LitKey) -> wgpu::RenderPipeline {
@@ -147,7 +188,11 @@ impl Lighting {
     ) {
         pass.set_bind_group(frame::FRAME_GROUP, frame.frame_bind_group(), &[]);
         pass.set_bind_group(frame::OBJECTS_GROUP, &scene_gpu.object_bind_group, &[]);
-        pass.set_bind_group(3, frame.mask_bind_group(), &[]);
+        let anisotropy = settings
+            .anisotropy
+            .unwrap_or_else(|| gpu.default_anisotropy())
+            .clamp(1, 16);
+        pass.set_bind_group(3, &self.bind_group(gpu, frame, anisotropy), &[]);
         pass.set_vertex_buffer(0, scene_gpu.vertex_buffer.slice(..));
         pass.set_index_buffer(scene_gpu.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
         let mut bound_material = usize::MAX;

@@ -24,7 +24,6 @@ use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 use std::time::Instant;
 
-
 /// Shading modes of SEEDS §1.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
@@ -65,6 +64,10 @@ pub struct RenderSettings {
     /// last frame whose timestamps have arrived.
     #[serde(default)]
     pub stage_waits: bool,
+    /// Anisotropic filtering of material textures, 1 (trilinear) to 16;
+    /// `None`: the device's default ([`GpuContext::default_anisotropy`]).
+    #[serde(default)]
+    pub anisotropy: Option<u16>,
 }
 
 impl Default for RenderSettings {
@@ -77,10 +80,10 @@ impl Default for RenderSettings {
             show_light_icons: true,
             gpu_timing: false,
             stage_waits: false,
+            anisotropy: None,
         }
     }
 }
-
 
 /// The renderer's passes; their pipelines come from the device's cache.
 pub struct Renderer {
@@ -116,43 +119,42 @@ impl Renderer {
 
     /// The prepass pipeline (back faces culled or not).
     fn gbuffer_pipeline(&self, gpu: &GpuContext, cull_back_faces: bool) -> wgpu::RenderPipeline {
-        gpu.cache
-            .render_pipeline("prepass", &cull_back_faces, || {
-                gpu.device
-                    .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                        label: Some("gbuffer"),
-                        layout: Some(&self.gbuffer_layout),
-                        vertex: wgpu::VertexState {
-                            module: &self.module,
-                            entry_point: Some("vs_gbuffer"),
-                            compilation_options: Default::default(),
-                            buffers: &[Some(frame::VERTEX_LAYOUT)],
-                        },
-                        primitive: wgpu::PrimitiveState {
-                            cull_mode: cull_back_faces.then_some(wgpu::Face::Back),
-                            ..Default::default()
-                        },
-                        depth_stencil: Some(wgpu::DepthStencilState {
-                            format: frame::DEPTH_FORMAT,
-                            depth_write_enabled: Some(true),
-                            depth_compare: Some(wgpu::CompareFunction::Less),
-                            stencil: Default::default(),
-                            bias: Default::default(),
-                        }),
-                        multisample: Default::default(),
-                        fragment: Some(wgpu::FragmentState {
-                            module: &self.module,
-                            entry_point: Some("fs_gbuffer"),
-                            compilation_options: Default::default(),
-                            targets: &[
-                                Some(frame::GBUFFER_POSITION_FORMAT.into()),
-                                Some(frame::GBUFFER_NORMAL_FORMAT.into()),
-                            ],
-                        }),
-                        multiview_mask: None,
-                        cache: None,
-                    })
-            })
+        gpu.cache.render_pipeline("prepass", &cull_back_faces, || {
+            gpu.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("gbuffer"),
+                    layout: Some(&self.gbuffer_layout),
+                    vertex: wgpu::VertexState {
+                        module: &self.module,
+                        entry_point: Some("vs_gbuffer"),
+                        compilation_options: Default::default(),
+                        buffers: &[Some(frame::VERTEX_LAYOUT)],
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        cull_mode: cull_back_faces.then_some(wgpu::Face::Back),
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: frame::DEPTH_FORMAT,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &self.module,
+                        entry_point: Some("fs_gbuffer"),
+                        compilation_options: Default::default(),
+                        targets: &[
+                            Some(frame::GBUFFER_POSITION_FORMAT.into()),
+                            Some(frame::GBUFFER_NORMAL_FORMAT.into()),
+                        ],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+        })
     }
 
     /// The layouts every pass of this device shares.
@@ -357,8 +359,14 @@ impl Renderer {
             }),
             ..Default::default()
         });
-        self.lighting
-            .draw(gpu, &mut pass, scene_gpu, frame, lights.len() as u32, settings);
+        self.lighting.draw(
+            gpu,
+            &mut pass,
+            scene_gpu,
+            frame,
+            lights.len() as u32,
+            settings,
+        );
         if settings.show_light_icons {
             self.icons.draw(
                 gpu,

@@ -20,8 +20,8 @@ struct MaterialGpu {
 @group(2) @binding(0) var<uniform> material: MaterialGpu;
 @group(2) @binding(1) var diffuse_tex: texture_2d<f32>;
 @group(2) @binding(2) var normal_tex: texture_2d<f32>;
-@group(2) @binding(3) var tex_sampler: sampler;
 @group(3) @binding(0) var masks: texture_2d_array<f32>;
+@group(3) @binding(1) var tex_sampler: sampler;
 
 struct GOut {
     @invariant @builtin(position) clip: vec4f,

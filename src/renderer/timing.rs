@@ -1,11 +1,9 @@
 //! Frame timing: CPU wall times per stage and GPU timestamps read back
-//! without stalling (two readback buffers, mapped asynchronously).
+//! without stalling (two readback slots, mapped asynchronously).
 
-use crate::gpu::GpuContext;
+use crate::gpu::{AsyncReadback, GpuContext};
 use anyhow::Result;
 use serde::Serialize;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicU8, Ordering};
 
 /// CPU wall times of one frame's stages, milliseconds. With
 /// [`super::RenderSettings::stage_waits`] each stage waits for the GPU so
@@ -33,42 +31,23 @@ pub struct GpuPassTimes {
 
 /// Six timestamps per frame: start and end of the prepass, mask and lighting
 /// work (bracketing each, so time between submissions, such as CPU-side
-/// technique work, is not counted as GPU time).
+/// technique work, is not counted as GPU time), read back through two
+/// [`AsyncReadback`] slots so that no frame waits for them.
 pub struct GpuTimer {
     queries: wgpu::QuerySet,
     resolve: wgpu::Buffer,
-    slots: [ReadbackSlot; 2],
+    /// Readback slots and the frame whose timestamps each holds.
+    slots: [(AsyncReadback, u64); 2],
     /// The slot this frame's timestamps are copied into (none while both
-    /// are still being mapped).
+    /// are still being read).
     current: Option<usize>,
     frame: u64,
     latest: Option<(u64, GpuPassTimes)>,
 }
 
-const SLOT_FREE: u8 = 0;
-const SLOT_PENDING: u8 = 1;
-const SLOT_MAPPED: u8 = 2;
-const SLOT_FAILED: u8 = 3;
-
-struct ReadbackSlot {
-    buffer: wgpu::Buffer,
-    state: Arc<AtomicU8>,
-    /// The frame whose timestamps the buffer holds.
-    frame: u64,
-}
-
 impl GpuTimer {
     pub fn new(device: &wgpu::Device) -> GpuTimer {
-        let slot = || ReadbackSlot {
-            buffer: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamp readback"),
-                size: 48,
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            }),
-            state: Arc::new(AtomicU8::new(SLOT_FREE)),
-            frame: 0,
-        };
+        let slot = || (AsyncReadback::new(device, "timestamp readback", 48), 0);
         GpuTimer {
             queries: device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("pass timestamps"),
@@ -88,72 +67,51 @@ impl GpuTimer {
         }
     }
 
-    /// Starts a frame: picks a free readback slot; returns the query set.
+    /// Starts a frame; returns the query set to write timestamps into.
     pub fn begin_frame(&mut self) -> wgpu::QuerySet {
         self.frame += 1;
-        self.current = self
-            .slots
-            .iter()
-            .position(|s| s.state.load(Ordering::Acquire) == SLOT_FREE);
+        self.current = None;
         self.queries.clone()
     }
 
-    /// Resolves the six timestamps into this frame's readback slot.
+    /// Resolves the six timestamps into a free readback slot.
     pub fn resolve(&mut self, enc: &mut wgpu::CommandEncoder) {
-        if let Some(i) = self.current {
-            enc.resolve_query_set(&self.queries, 0..6, &self.resolve, 0);
-            enc.copy_buffer_to_buffer(&self.resolve, 0, &self.slots[i].buffer, 0, 48);
+        for (i, (slot, frame)) in self.slots.iter_mut().enumerate() {
+            if let Some(buffer) = slot.target() {
+                enc.resolve_query_set(&self.queries, 0..6, &self.resolve, 0);
+                enc.copy_buffer_to_buffer(&self.resolve, 0, buffer, 0, 48);
+                *frame = self.frame;
+                self.current = Some(i);
+                return;
+            }
         }
     }
 
     /// After submission: asks for this frame's slot to be mapped.
     pub fn request_readback(&mut self) {
-        let Some(i) = self.current.take() else {
-            return;
-        };
-        let slot = &mut self.slots[i];
-        slot.frame = self.frame;
-        slot.state.store(SLOT_PENDING, Ordering::Release);
-        let state = slot.state.clone();
-        slot.buffer
-            .slice(..)
-            .map_async(wgpu::MapMode::Read, move |r| {
-                state.store(
-                    if r.is_ok() { SLOT_MAPPED } else { SLOT_FAILED },
-                    Ordering::Release,
-                );
-            });
+        if let Some(i) = self.current.take() {
+            self.slots[i].0.request();
+        }
     }
 
     /// The newest frame's GPU times whose readback has completed, without
     /// waiting for the GPU.
     pub fn latest(&mut self, gpu: &GpuContext) -> Result<Option<GpuPassTimes>> {
-        gpu.device.poll(wgpu::PollType::Poll)?;
         let period = gpu.queue.get_timestamp_period() as f64 * 1e-6;
-        for slot in &self.slots {
-            match slot.state.load(Ordering::Acquire) {
-                SLOT_MAPPED => {
-                    let t: Vec<u64> = bytemuck::cast_slice::<u8, u64>(
-                        &slot.buffer.slice(..).get_mapped_range()?,
-                    )
-                    .to_vec();
-                    slot.buffer.unmap();
-                    slot.state.store(SLOT_FREE, Ordering::Release);
-                    let d = |a: usize, b: usize| t[b].saturating_sub(t[a]) as f64 * period;
-                    let times = GpuPassTimes {
-                        prepass_ms: d(0, 1),
-                        masks_ms: d(2, 3),
-                        lighting_ms: d(4, 5),
-                        total_ms: d(0, 1) + d(2, 3) + d(4, 5),
-                    };
-                    if self.latest.is_none_or(|(f, _)| f < slot.frame) {
-                        self.latest = Some((slot.frame, times));
-                    }
-                }
-                SLOT_FAILED => {
-                    slot.state.store(SLOT_FREE, Ordering::Release);
-                }
-                _ => {}
+        for (slot, frame) in &self.slots {
+            let Some(data) = slot.try_read(gpu)? else {
+                continue;
+            };
+            let t: &[u64] = bytemuck::cast_slice(&data);
+            let d = |a: usize, b: usize| t[b].saturating_sub(t[a]) as f64 * period;
+            let times = GpuPassTimes {
+                prepass_ms: d(0, 1),
+                masks_ms: d(2, 3),
+                lighting_ms: d(4, 5),
+                total_ms: d(0, 1) + d(2, 3) + d(4, 5),
+            };
+            if self.latest.is_none_or(|(f, _)| f < *frame) {
+                self.latest = Some((*frame, times));
             }
         }
         Ok(self.latest.map(|(_, t)| t))

@@ -90,7 +90,6 @@ pub fn area_samples(light: &Light, n: usize, towards: Vec3) -> Vec<Light> {
         .collect()
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

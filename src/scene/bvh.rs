@@ -94,4 +94,3 @@ impl CasterBvh {
         (self.triangles.len() * std::mem::size_of::<Triangle>() + nodes) as u64
     }
 }
-

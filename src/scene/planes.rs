@@ -102,4 +102,3 @@ pub fn receiver_planes(scene: &Scene) -> Vec<ReceiverPlane> {
         }
     }
 }
-

@@ -38,7 +38,11 @@ impl MaskContext<'_> {
     /// Binds the frame uniform (group 0), the object table (group 1) and
     /// the G-buffer (group 3) of a technique pass; the pass binds group 2.
     pub fn bind_frame_groups(&self, pass: &mut wgpu::RenderPass) {
-        pass.set_bind_group(crate::frame::FRAME_GROUP, self.frame.frame_bind_group(), &[]);
+        pass.set_bind_group(
+            crate::frame::FRAME_GROUP,
+            self.frame.frame_bind_group(),
+            &[],
+        );
         pass.set_bind_group(
             crate::frame::OBJECTS_GROUP,
             &self.scene_gpu.object_bind_group,
@@ -189,7 +193,6 @@ pub static FAMILIES: &[&Family] = &[
     &shadow_volume::FAMILY,
 ];
 
-
 /// Pipeline layout of a technique pass: frame uniform (group 0), object
 /// table (group 1), the technique's own group 2 and the G-buffer (group 3).
 pub fn pipeline_layout(
@@ -224,29 +227,31 @@ pub fn fullscreen_pipeline(
     targets: &[Option<wgpu::ColorTargetState>],
     depth_stencil: Option<wgpu::DepthStencilState>,
 ) -> wgpu::RenderPipeline {
-    gpu.cache.render_pipeline(label, &(fs, targets, &depth_stencil), || {
-        gpu.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(label),
-            layout: Some(layout),
-            vertex: wgpu::VertexState {
-                module,
-                entry_point: Some("vs_fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: depth_stencil.clone(),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module,
-                entry_point: Some(fs),
-                compilation_options: Default::default(),
-                targets,
-            }),
-            multiview_mask: None,
-            cache: None,
+    gpu.cache
+        .render_pipeline(label, &(fs, targets, &depth_stencil), || {
+            gpu.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(layout),
+                    vertex: wgpu::VertexState {
+                        module,
+                        entry_point: Some("vs_fullscreen"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: Default::default(),
+                    depth_stencil: depth_stencil.clone(),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module,
+                        entry_point: Some(fs),
+                        compilation_options: Default::default(),
+                        targets,
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
         })
-    })
 }
 
 /// Begins a render pass on the light's mask layer, cleared to 1 (lit), with

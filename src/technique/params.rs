@@ -140,7 +140,11 @@ impl ParamSpec {
     }
     /// A choice among the variants of `T`, defaulting to variant `default`
     /// (its index: `Filter::Grid as usize`).
-    pub const fn choice_of<T: Choice>(name: &'static str, default: usize, doc: &'static str) -> Self {
+    pub const fn choice_of<T: Choice>(
+        name: &'static str,
+        default: usize,
+        doc: &'static str,
+    ) -> Self {
         Self::choice(name, T::NAMES, default, doc)
     }
 
@@ -172,7 +176,7 @@ impl ParamSpec {
         "shadow darkness: 0 invisible … 1 black (mask value 1 − darkening)",
     );
 
-    /// How the lighting pass uses the mask ([`crate::renderer::Compose`]).
+    /// How the lighting pass uses the mask ([`crate::frame::Compose`]).
     pub const COMPOSE: ParamSpec = ParamSpec::choice_of::<crate::frame::Compose>(
         "compose",
         crate::frame::Compose::Relight as usize,
@@ -318,7 +322,11 @@ impl ParamValues {
     /// A choice parameter's value as its enum.
     pub fn choice<T: Choice>(&self, spec: &ParamSpec) -> Result<T> {
         if spec.kind != ParamKind::Choice(T::NAMES) {
-            bail!("parameter '{}' is not a choice of {:?}", spec.name, T::NAMES);
+            bail!(
+                "parameter '{}' is not a choice of {:?}",
+                spec.name,
+                T::NAMES
+            );
         }
         let v = self.value(spec)?;
         T::ALL
@@ -388,7 +396,10 @@ mod tests {
         // A spec of another table, or of another type, is an error.
         let other = ParamSpec::float("compose", 0.0, 0.0, 1.0, 0.1, "x");
         assert!(p.float(&other).is_err());
-        assert!(p.float(&ParamSpec::float("nope", 0.0, 0.0, 1.0, 0.1, "x")).is_err());
+        assert!(
+            p.float(&ParamSpec::float("nope", 0.0, 0.0, 1.0, 0.1, "x"))
+                .is_err()
+        );
     }
 
     #[test]

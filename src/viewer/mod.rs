@@ -5,10 +5,10 @@
 mod orbit;
 mod ui;
 
-use crate::cli::ViewArgs;
-use crate::headless;
-use crate::gpu::GpuContext;
+use crate::args::ViewArgs;
 use crate::frame::{FrameTargets, SceneGpu};
+use crate::gpu::GpuContext;
+use crate::headless;
 use crate::renderer::{FrameTimings, RenderSettings, Renderer};
 use crate::scene::{self, Camera, Light, Scene};
 use crate::technique::{self, TechniqueChoice, TechniqueInstance};
@@ -296,6 +296,8 @@ pub struct ViewerState {
     pub vsync: bool,
     /// Supersampling factor of the 3D view (1 = off, 2 = 2×2).
     pub supersampling: u32,
+    /// The device's texture anisotropy, shown until one is chosen.
+    pub default_anisotropy: u16,
     pub overlay: Overlay,
     pub selected_light: usize,
     pub same_technique_for_all: bool,
@@ -367,6 +369,7 @@ pub fn run(options: ViewerOptions) -> Result<()> {
             },
             vsync: options.vsync,
             supersampling: 1,
+            default_anisotropy: 1,
             overlay: options.mask.map_or(Overlay::Image, Overlay::Mask),
             selected_light: 0,
             same_technique_for_all: true,
@@ -436,9 +439,7 @@ impl App {
             .context("creating the window surface")?;
         let mut gpu = GpuContext::with_instance(instance, backends, Some(&surface))?;
         gpu.memory_budget = self.options.view.memory_budget << 20;
-        if let Some(a) = self.options.view.anisotropy {
-            gpu.anisotropy = a;
-        }
+        self.state.default_anisotropy = gpu.default_anisotropy();
         let size = window.inner_size();
         let mut config = surface
             .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
@@ -455,9 +456,7 @@ impl App {
             .preloaded
             .take()
             .ok_or_else(|| anyhow!("the viewer's window was created twice"))?;
-        self.scene = Some(SceneState::load(
-            &gpu, scene, camera, lights, &choice,
-        )?);
+        self.scene = Some(SceneState::load(&gpu, scene, camera, lights, &choice)?);
         let egui_ctx = egui::Context::default();
         let egui_state = egui_winit::State::new(
             egui_ctx.clone(),
@@ -492,13 +491,7 @@ impl App {
         let scene = scene::load(name)?;
         let choice = old.techniques[0].choice.clone();
         let (camera, lights) = (scene.camera, scene.lights.clone());
-        self.scene = Some(SceneState::load(
-            &gfx.gpu,
-            scene,
-            camera,
-            lights,
-            &choice,
-        )?);
+        self.scene = Some(SceneState::load(&gfx.gpu, scene, camera, lights, &choice)?);
         self.state.scene_name = name.to_string();
         self.state.heatmap = None;
         self.state.selected_light = 0;
@@ -833,7 +826,11 @@ impl App {
                 frame,
                 timings: &timings,
                 adapter: gfx.gpu.adapter_summary(),
-                anisotropy: gfx.gpu.anisotropy,
+                anisotropy: self
+                    .state
+                    .settings
+                    .anisotropy
+                    .unwrap_or_else(|| gfx.gpu.default_anisotropy()),
                 extra_timings: serde_json::json!({"supersampling": ss}),
             };
             std::fs::write(
@@ -1137,8 +1134,8 @@ impl ApplicationHandler for App {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Material, shapes};
     use crate::scene::bvh::CasterBvh;
+    use crate::scene::{Material, shapes};
     use crate::technique::raytraced::{ReferenceSettings, mask_from_gbuffer};
     use glam::{Mat4, Vec3};
 

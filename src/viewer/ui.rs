@@ -3,11 +3,11 @@
 //! settings, statistics, debug overlays and help.
 
 use super::{Overlay, SceneState, ViewerState};
-use crate::gpu::GpuContext;
 use crate::frame::MAX_LIGHTS;
+use crate::gpu::GpuContext;
 use crate::renderer::{LightingModel, Shading};
-use crate::technique::TechniqueInstance;
 use crate::scene::{Light, LightArea, LightType, builtin};
+use crate::technique::TechniqueInstance;
 use crate::technique::{self, FAMILIES, ParamKind, ParamSpec, ParamValues};
 use glam::Vec3;
 
@@ -300,6 +300,20 @@ fn render_panel(ui: &mut egui::Ui, state: &mut ViewerState) {
                 ui.selectable_value(&mut state.settings.lighting, s, format!("{s:?}"));
             }
         });
+    // Texture filtering: the device's default until the slider moves.
+    let mut anisotropy = state
+        .settings
+        .anisotropy
+        .unwrap_or(state.default_anisotropy);
+    if ui
+        .add(egui::Slider::new(&mut anisotropy, 1..=16).text("texture anisotropy"))
+        .on_hover_text(
+            "anisotropic filtering of material textures (1 = trilinear); costly on CPU adapters",
+        )
+        .changed()
+    {
+        state.settings.anisotropy = Some(anisotropy);
+    }
     ui.checkbox(&mut state.settings.cull_back_faces, "back-face culling");
     ui.checkbox(&mut state.settings.show_light_icons, "light icons");
     ui.checkbox(&mut state.vsync, "vsync");

@@ -1,8 +1,8 @@
 #![allow(dead_code)]
 //! Helpers shared by the integration tests.
 
-use shadowlab::headless::{self, FrameImages, HeadlessFrame};
 use shadowlab::gpu::GpuContext;
+use shadowlab::headless::{self, FrameImages, HeadlessFrame};
 use shadowlab::renderer::RenderSettings;
 use shadowlab::scene::Scene;
 use shadowlab::technique;
@@ -18,16 +18,34 @@ pub fn gpu() -> &'static GpuContext {
 }
 
 /// Renders `scene` with its default camera and lights using `technique`.
+/// Light icons off and 8× texture anisotropy (the golden images' setting,
+/// whatever the device's default).
 pub fn render(scene: &Scene, technique_id: &str, w: u32, h: u32) -> FrameImages {
+    render_with(scene, technique_id, w, h, &golden_settings())
+}
+
+/// The render settings of the golden images.
+pub fn golden_settings() -> RenderSettings {
+    RenderSettings {
+        show_light_icons: false,
+        anisotropy: Some(8),
+        ..Default::default()
+    }
+}
+
+/// [`render`] with chosen render settings.
+pub fn render_with(
+    scene: &Scene,
+    technique_id: &str,
+    w: u32,
+    h: u32,
+    settings: &RenderSettings,
+) -> FrameImages {
     let gpu = gpu();
     let choice = technique::resolve(technique_id).unwrap();
     let n = scene.lights.len().max(1);
     let mut hf = HeadlessFrame::new(gpu, scene, &vec![choice; n], w, h).unwrap();
-    let settings = RenderSettings {
-        show_light_icons: false,
-        ..Default::default()
-    };
-    hf.render(gpu, scene, &scene.camera, &scene.lights, &settings)
+    hf.render(gpu, scene, &scene.camera, &scene.lights, settings)
         .unwrap();
     headless::read_back(gpu, &hf.frame, scene.lights.len()).unwrap()
 }
@@ -120,7 +138,10 @@ pub fn mask_of(scene: &Scene, technique_id: &str, set: &[&str], w: u32, h: u32) 
     };
     hf.render(gpu, scene, &scene.camera, &scene.lights, &settings)
         .unwrap();
-    headless::read_back(gpu, &hf.frame, 1).unwrap().masks.remove(0)
+    headless::read_back(gpu, &hf.frame, 1)
+        .unwrap()
+        .masks
+        .remove(0)
 }
 
 /// Quality of `technique_id` against `raytraced` on `scene`'s camera and lights.

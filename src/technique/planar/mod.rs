@@ -113,9 +113,11 @@ impl PlanarShared {
         let device = &gpu.device;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("planar"),
-            entries: &[
-                crate::gpu::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
-            ],
+            entries: &[crate::gpu::uniform_entry(
+                0,
+                wgpu::ShaderStages::VERTEX_FRAGMENT,
+                true,
+            )],
         });
         let module =
             crate::frame::technique_shader(device, "planar", &[include_str!("planar.wgsl")]);
@@ -133,27 +135,27 @@ impl PlanarShared {
                         depth: wgpu::DepthStencilState,
                         target: wgpu::ColorTargetState| {
             gpu.cache.render_pipeline(label, &(vs, fs, &depth), || {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&pl),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some(vs),
-                    compilation_options: Default::default(),
-                    buffers,
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(depth.clone()),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(fs),
-                    compilation_options: Default::default(),
-                    targets: &[Some(target)],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&pl),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some(vs),
+                        compilation_options: Default::default(),
+                        buffers,
+                    },
+                    primitive: wgpu::PrimitiveState::default(),
+                    depth_stencil: Some(depth.clone()),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(fs),
+                        compilation_options: Default::default(),
+                        targets: &[Some(target)],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
             })
         };
         let stencil = |face: wgpu::StencilFaceState, write: u32| wgpu::StencilState {
@@ -249,7 +251,9 @@ impl ShadowTechnique for PlanarShadows {
     }
 
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        let config = self.config.ok_or_else(|| anyhow::anyhow!("planar: not configured"))?;
+        let config = self
+            .config
+            .ok_or_else(|| anyhow::anyhow!("planar: not configured"))?;
         let key = crate::scene::scene_fingerprint(ctx.scene);
         if self.planes.as_ref().is_none_or(|(k, _)| *k != key) {
             self.planes = Some((key, receiver_planes(ctx.scene)));

@@ -136,32 +136,32 @@ impl ProjectiveShared {
         let pl = super::pipeline_layout(gpu, "projective", &layout);
         let caster_pipeline = gpu.cache.render_pipeline("projective caster", &(), || {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("projective caster"),
-            layout: Some(&pl),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_caster"),
-                compilation_options: Default::default(),
-                buffers: &[Some(VERTEX_LAYOUT)],
-            },
-            primitive: Default::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: PROJECTOR_DEPTH,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_caster"),
-                compilation_options: Default::default(),
-                targets: &[Some(TEXTURE_FORMAT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
+                label: Some("projective caster"),
+                layout: Some(&pl),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_caster"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(VERTEX_LAYOUT)],
+                },
+                primitive: Default::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: PROJECTOR_DEPTH,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_caster"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(TEXTURE_FORMAT.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
         });
         let project_pipeline = super::fullscreen_pipeline(
             gpu,

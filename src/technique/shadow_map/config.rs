@@ -100,29 +100,29 @@ pub const FILTER: ParamSpec = ParamSpec::choice_of::<Filter>(
 );
 
 pub const SAMPLES: ParamSpec = ParamSpec::int(
-        "samples",
-        3,
-        1,
-        16,
-        "taps per side: grid N×N (up to 16×16), disk N²",
-    );
+    "samples",
+    3,
+    1,
+    16,
+    "taps per side: grid N×N (up to 16×16), disk N²",
+);
 
 pub const RADIUS: ParamSpec = ParamSpec::float(
-        "radius",
-        1.5,
-        0.0,
-        32.0,
-        0.25,
-        "filter radius in texels (grid and disk)",
-    );
+    "radius",
+    1.5,
+    0.0,
+    32.0,
+    0.25,
+    "filter radius in texels (grid and disk)",
+);
 
 pub const SIZE: ParamSpec = ParamSpec::int(
-        "size",
-        2048,
-        64,
-        16384,
-        "map side in texels (per cube face for point lights)",
-    );
+    "size",
+    2048,
+    64,
+    16384,
+    "map side in texels (per cube face for point lights)",
+);
 
 pub const FORMAT: ParamSpec = ParamSpec::choice_of::<DepthFormat>(
     "format",
@@ -131,46 +131,46 @@ pub const FORMAT: ParamSpec = ParamSpec::choice_of::<DepthFormat>(
 );
 
 pub const DEPTH_BIAS: ParamSpec = ParamSpec::float(
-        "depth_bias",
-        2.0,
-        0.0,
-        100000.0,
-        1.0,
-        "constant depth bias of the depth pass, in the format's smallest steps",
-    );
+    "depth_bias",
+    2.0,
+    0.0,
+    100000.0,
+    1.0,
+    "constant depth bias of the depth pass, in the format's smallest steps",
+);
 
 pub const SLOPE_BIAS: ParamSpec = ParamSpec::float(
-        "slope_bias",
-        2.0,
-        0.0,
-        20.0,
-        0.1,
-        "slope-scaled depth bias (polygon offset factor)",
-    );
+    "slope_bias",
+    2.0,
+    0.0,
+    20.0,
+    0.1,
+    "slope-scaled depth bias (polygon offset factor)",
+);
 
 pub const NORMAL_OFFSET_DIRECTIONAL: ParamSpec = ParamSpec::float(
-        "normal_offset_directional",
-        1.0,
-        0.0,
-        10.0,
-        0.1,
-        "directional lights: lookup point moved along the geometric normal, in shadow-map texels",
-    );
+    "normal_offset_directional",
+    1.0,
+    0.0,
+    10.0,
+    0.1,
+    "directional lights: lookup point moved along the geometric normal, in shadow-map texels",
+);
 
 pub const NORMAL_OFFSET_LOCAL: ParamSpec = ParamSpec::float(
-        "normal_offset_local",
-        0.5,
-        0.0,
-        10.0,
-        0.1,
-        "point and spot lights: lookup point moved along the geometric normal, in shadow-map texels at the point's distance",
-    );
+    "normal_offset_local",
+    0.5,
+    0.0,
+    10.0,
+    0.1,
+    "point and spot lights: lookup point moved along the geometric normal, in shadow-map texels at the point's distance",
+);
 
 pub const RECEIVER_PLANE: ParamSpec = ParamSpec::boolean(
-        "receiver_plane",
-        false,
-        "receiver-plane depth bias (Isidoro 2006): each tap compares against the receiver's plane at the tap, from screen derivatives of the light-space position",
-    );
+    "receiver_plane",
+    false,
+    "receiver-plane depth bias (Isidoro 2006): each tap compares against the receiver's plane at the tap, from screen derivatives of the light-space position",
+);
 
 pub const CULL: ParamSpec = ParamSpec::choice_of::<CullFace>(
     "cull",
@@ -185,125 +185,125 @@ pub const OMNI: ParamSpec = ParamSpec::choice_of::<Omni>(
 );
 
 pub const NEAR: ParamSpec = ParamSpec::float(
-        "near",
-        0.0,
-        0.0,
-        10000.0,
-        0.01,
-        "near plane of the light frustum (0 = fitted to the scene)",
-    );
+    "near",
+    0.0,
+    0.0,
+    10000.0,
+    0.01,
+    "near plane of the light frustum (0 = fitted to the scene)",
+);
 
 pub const FAR: ParamSpec = ParamSpec::float(
-        "far",
-        0.0,
-        0.0,
-        100000.0,
-        0.1,
-        "far plane of the light frustum (0 = fitted to the scene)",
-    );
+    "far",
+    0.0,
+    0.0,
+    100000.0,
+    0.1,
+    "far plane of the light frustum (0 = fitted to the scene)",
+);
 
 pub const FOV: ParamSpec = ParamSpec::float(
-        "fov",
-        0.0,
-        0.0,
-        170.0,
-        1.0,
-        "spot light frustum angle in degrees (0 = the cone plus 4°); precision degrades above 90°",
-    );
+    "fov",
+    0.0,
+    0.0,
+    170.0,
+    1.0,
+    "spot light frustum angle in degrees (0 = the cone plus 4°); precision degrades above 90°",
+);
 
 pub const LIGHT_SIZE: ParamSpec = ParamSpec::float(
-        "light_size",
-        24.0,
-        0.0,
-        400.0,
-        1.0,
-        "pcss: light size, as the penumbra width in texels per unit of (d_receiver − d_blocker)/d_blocker",
-    );
+    "light_size",
+    24.0,
+    0.0,
+    400.0,
+    1.0,
+    "pcss: light size, as the penumbra width in texels per unit of (d_receiver − d_blocker)/d_blocker",
+);
 
 pub const BLOCKER_SEARCH: ParamSpec = ParamSpec::float(
-        "blocker_search",
-        12.0,
-        1.0,
-        64.0,
-        1.0,
-        "pcss and varwidth: blocker-search radius in texels",
-    );
+    "blocker_search",
+    12.0,
+    1.0,
+    64.0,
+    1.0,
+    "pcss and varwidth: blocker-search radius in texels",
+);
 
 pub const VARWIDTH_SCALE: ParamSpec = ParamSpec::float(
-        "varwidth_scale",
-        8.0,
-        0.0,
-        200.0,
-        0.5,
-        "varwidth: texels of radius per unit of |d_blocker − d_receiver|^exponent",
-    );
+    "varwidth_scale",
+    8.0,
+    0.0,
+    200.0,
+    0.5,
+    "varwidth: texels of radius per unit of |d_blocker − d_receiver|^exponent",
+);
 
 pub const VARWIDTH_EXPONENT: ParamSpec = ParamSpec::float(
-        "varwidth_exponent",
-        1.0,
-        0.1,
-        4.0,
-        0.1,
-        "varwidth: the exponent",
-    );
+    "varwidth_exponent",
+    1.0,
+    0.1,
+    4.0,
+    0.1,
+    "varwidth: the exponent",
+);
 
 pub const BLUR: ParamSpec = ParamSpec::int(
-        "blur",
-        2,
-        0,
-        16,
-        "moment filters: separable box blur radius in texels (0 = none)",
-    );
+    "blur",
+    2,
+    0,
+    16,
+    "moment filters: separable box blur radius in texels (0 = none)",
+);
 
 pub const AREA: ParamSpec = ParamSpec::boolean(
-        "area",
-        false,
-        "lights with an area size: accumulate `area_maps` shadow maps rendered from stratified points of the area",
-    );
+    "area",
+    false,
+    "lights with an area size: accumulate `area_maps` shadow maps rendered from stratified points of the area",
+);
 
 pub const AREA_MAPS: ParamSpec = ParamSpec::int(
-        "area_maps",
-        16,
-        1,
-        64,
-        "area: number of shadow maps (the documents use the 4 corners)",
-    );
+    "area_maps",
+    16,
+    1,
+    64,
+    "area: number of shadow maps (the documents use the 4 corners)",
+);
 
 pub const BLEEDING_REDUCTION: ParamSpec = ParamSpec::float(
-        "bleeding_reduction",
-        0.2,
-        0.0,
-        0.95,
-        0.01,
-        "vsm and evsm: light-bleeding reduction, the lower cut of the Chebyshev bound",
-    );
+    "bleeding_reduction",
+    0.2,
+    0.0,
+    0.95,
+    0.01,
+    "vsm and evsm: light-bleeding reduction, the lower cut of the Chebyshev bound",
+);
 
 pub const EXPONENT: ParamSpec = ParamSpec::float(
-        "exponent",
-        40.0,
-        1.0,
-        80.0,
-        1.0,
-        "esm and evsm: exponent c of the positive warp exp(c(z − 1))",
-    );
+    "exponent",
+    40.0,
+    1.0,
+    80.0,
+    1.0,
+    "esm and evsm: exponent c of the positive warp exp(c(z − 1))",
+);
 
 pub const EXPONENT_NEGATIVE: ParamSpec = ParamSpec::float(
-        "exponent_negative",
-        5.0,
-        1.0,
-        40.0,
-        1.0,
-        "evsm4: exponent of the negative warp −exp(−c z)",
-    );
+    "exponent_negative",
+    5.0,
+    1.0,
+    40.0,
+    1.0,
+    "evsm4: exponent of the negative warp −exp(−c z)",
+);
 
 pub const MOMENT_BIAS: ParamSpec = ParamSpec::float(
-        "moment_bias",
-        3e-5,
-        0.0,
-        0.01,
-        1e-5,
-        "msm: moment bias α towards (0.5, 0.5, 0.5, 0.5)",
-    );
+    "moment_bias",
+    3e-5,
+    0.0,
+    0.01,
+    1e-5,
+    "msm: moment bias α towards (0.5, 0.5, 0.5, 0.5)",
+);
 
 pub const STAGE: ParamSpec = ParamSpec::choice_of::<Stage>(
     "stage",
@@ -343,72 +343,72 @@ pub const PARAMS: &[ParamSpec] = &[
 ];
 
 pub const PRESETS: &[Preset] = &[
-        Preset {
-            name: "pcf",
-            summary: "3×3 grid of hardware 2×2 PCF taps over ±1.5 texels, 2048², d32f",
-            values: &[],
-        },
-        Preset {
-            name: "hard",
-            summary: "nearest texel, no filtering",
-            values: &[("filter", "hard")],
-        },
-        Preset {
-            name: "pcf2x2",
-            summary: "one hardware bilinear comparison",
-            values: &[("filter", "pcf2x2")],
-        },
-        Preset {
-            name: "pcf-disk",
-            summary: "16 taps on a per-pixel rotated Vogel disk of radius 2.5 texels",
-            values: &[("filter", "disk"), ("samples", "4"), ("radius", "2.5")],
-        },
-        Preset {
-            name: "pcss",
-            summary: "percentage-closer soft shadows",
-            values: &[("filter", "pcss"), ("samples", "5")],
-        },
-        Preset {
-            name: "varwidth",
-            summary: "the documents' variable-width PCF",
-            values: &[("filter", "varwidth"), ("samples", "4")],
-        },
-        Preset {
-            name: "vsm",
-            summary: "variance shadow map, 1024², blurred",
-            values: &[("filter", "vsm"), ("size", "1024")],
-        },
-        Preset {
-            name: "esm",
-            summary: "exponential shadow map, 1024², blurred",
-            values: &[("filter", "esm"), ("size", "1024")],
-        },
-        Preset {
-            name: "evsm2",
-            summary: "exponential variance shadow map, positive warp only",
-            values: &[("filter", "evsm2"), ("size", "1024")],
-        },
-        Preset {
-            name: "evsm4",
-            summary: "exponential variance shadow map, both warps",
-            values: &[("filter", "evsm4"), ("size", "1024")],
-        },
-        Preset {
-            name: "msm",
-            summary: "4-moment Hamburger shadow map",
-            values: &[("filter", "msm"), ("size", "1024")],
-        },
-        Preset {
-            name: "area",
-            summary: "soft shadows: 16 maps from stratified points of the light's area, averaged",
-            values: &[("area", "true"), ("filter", "pcf2x2"), ("size", "1024")],
-        },
-        Preset {
-            name: "8bit",
-            summary: "depth stored in 8 bits: acne everywhere",
-            values: &[("format", "r8"), ("filter", "hard")],
-        },
-    ];
+    Preset {
+        name: "pcf",
+        summary: "3×3 grid of hardware 2×2 PCF taps over ±1.5 texels, 2048², d32f",
+        values: &[],
+    },
+    Preset {
+        name: "hard",
+        summary: "nearest texel, no filtering",
+        values: &[("filter", "hard")],
+    },
+    Preset {
+        name: "pcf2x2",
+        summary: "one hardware bilinear comparison",
+        values: &[("filter", "pcf2x2")],
+    },
+    Preset {
+        name: "pcf-disk",
+        summary: "16 taps on a per-pixel rotated Vogel disk of radius 2.5 texels",
+        values: &[("filter", "disk"), ("samples", "4"), ("radius", "2.5")],
+    },
+    Preset {
+        name: "pcss",
+        summary: "percentage-closer soft shadows",
+        values: &[("filter", "pcss"), ("samples", "5")],
+    },
+    Preset {
+        name: "varwidth",
+        summary: "the documents' variable-width PCF",
+        values: &[("filter", "varwidth"), ("samples", "4")],
+    },
+    Preset {
+        name: "vsm",
+        summary: "variance shadow map, 1024², blurred",
+        values: &[("filter", "vsm"), ("size", "1024")],
+    },
+    Preset {
+        name: "esm",
+        summary: "exponential shadow map, 1024², blurred",
+        values: &[("filter", "esm"), ("size", "1024")],
+    },
+    Preset {
+        name: "evsm2",
+        summary: "exponential variance shadow map, positive warp only",
+        values: &[("filter", "evsm2"), ("size", "1024")],
+    },
+    Preset {
+        name: "evsm4",
+        summary: "exponential variance shadow map, both warps",
+        values: &[("filter", "evsm4"), ("size", "1024")],
+    },
+    Preset {
+        name: "msm",
+        summary: "4-moment Hamburger shadow map",
+        values: &[("filter", "msm"), ("size", "1024")],
+    },
+    Preset {
+        name: "area",
+        summary: "soft shadows: 16 maps from stratified points of the light's area, averaged",
+        values: &[("area", "true"), ("filter", "pcf2x2"), ("size", "1024")],
+    },
+    Preset {
+        name: "8bit",
+        summary: "depth stored in 8 bits: acne everywhere",
+        values: &[("format", "r8"), ("filter", "hard")],
+    },
+];
 
 /// The shadow-map family's parameters, parsed.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -487,6 +487,10 @@ impl ShadowMapConfig {
 
     /// The box-blur radius of moment maps (0 for depth maps).
     pub fn moment_blur(&self) -> u32 {
-        if self.filter.is_moment() { self.blur } else { 0 }
+        if self.filter.is_moment() {
+            self.blur
+        } else {
+            0
+        }
     }
 }

@@ -195,9 +195,7 @@ impl ShadowMapTechnique {
                 entries: &[
                     wgpu::BindGroupEntry {
                         binding: 0,
-                        resource: crate::gpu::dynamic_uniform::<ShadowMapUniform>(
-                            &self.uniforms,
-                        ),
+                        resource: crate::gpu::dynamic_uniform::<ShadowMapUniform>(&self.uniforms),
                     },
                     view(3, depth),
                     wgpu::BindGroupEntry {
@@ -383,7 +381,10 @@ impl ShadowTechnique for ShadowMapTechnique {
                 )
             })
         });
-        let byte_array = maps.byte.as_ref().map_or(&shared.placeholder_bytes, |b| &b.1);
+        let byte_array = maps
+            .byte
+            .as_ref()
+            .map_or(&shared.placeholder_bytes, |b| &b.1);
         let moment_array = maps
             .moment
             .as_ref()

@@ -190,4 +190,3 @@ pub fn light_setup(
         }
     }
 }
-

@@ -293,7 +293,9 @@ pub struct ShadowVolumeRenderer {
     extrude_params: wgpu::Buffer,
     indices: wgpu::Buffer,
     args: wgpu::Buffer,
-    readback: wgpu::Buffer,
+    /// The indirect arguments and statistics of a frame, read back without
+    /// waiting ([`ShadowTechnique::after_frame`]).
+    readback: crate::gpu::AsyncReadback,
     statistics: Option<(wgpu::QuerySet, wgpu::Buffer)>,
     depth_clamp: bool,
     warned_no_depth_clamp: bool,
@@ -501,16 +503,17 @@ impl VolumeShared {
                 immediate_size: 0,
             });
         let compute = |entry: &str| {
-            gpu.cache.compute_pipeline("shadow volume extrusion", &entry, || {
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(entry),
-                    layout: Some(&extrude_pipeline_layout),
-                    module: &extrude_module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    cache: None,
+            gpu.cache
+                .compute_pipeline("shadow volume extrusion", &entry, || {
+                    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some(entry),
+                        layout: Some(&extrude_pipeline_layout),
+                        module: &extrude_module,
+                        entry_point: Some(entry),
+                        compilation_options: Default::default(),
+                        cache: None,
+                    })
                 })
-            })
         };
         VolumeShared {
             extrude_edges: compute("cs_edges"),
@@ -566,11 +569,10 @@ impl ShadowVolumeRenderer {
             ),
             indices: buffer(device, "shadow volume indices", 16, index_usage()),
             args: buffer(device, "shadow volume indirect args", ARGS_SIZE, usage_args),
-            readback: buffer(
+            readback: crate::gpu::AsyncReadback::new(
                 device,
                 "shadow volume readback",
                 STATS_OFFSET + 8,
-                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             ),
             statistics,
             depth_clamp: gpu.depth_clamp,
@@ -888,12 +890,17 @@ impl ShadowVolumeRenderer {
                 wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             );
             encoder.copy_buffer_to_buffer(&self.indices, 0, &copy, 0, self.indices.size());
-            encoder.copy_buffer_to_buffer(&self.args, 0, &self.readback, 0, ARGS_SIZE);
+            let args_copy = buffer(
+                &gpu.device,
+                "shadow volume args readback",
+                ARGS_SIZE,
+                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            );
+            encoder.copy_buffer_to_buffer(&self.args, 0, &args_copy, 0, ARGS_SIZE);
             gpu.queue.submit([encoder.finish()]);
             let indices: Vec<u32> = bytemuck::cast_slice(&gpu.read_buffer(&copy)?).to_vec();
-            let args: Args = bytemuck::pod_read_unaligned(
-                &gpu.read_buffer(&self.readback)?[..ARGS_SIZE as usize],
-            );
+            let args: Args =
+                bytemuck::pod_read_unaligned(&gpu.read_buffer(&args_copy)?[..ARGS_SIZE as usize]);
             let lists = args.lists.map(|l| {
                 indices[l.first_index as usize..(l.first_index + l.index_count) as usize].to_vec()
             });
@@ -1101,12 +1108,14 @@ impl ShadowTechnique for ShadowVolumeRenderer {
                 pass.draw(0..3, 0..1);
             }
         }
-        if let Some((set, resolve)) = &self.statistics {
-            encoder.resolve_query_set(set, 0..1, resolve, 0);
-            encoder.copy_buffer_to_buffer(resolve, 0, &self.readback, STATS_OFFSET, 8);
+        if let Some(target) = self.readback.target() {
+            if let Some((set, resolve)) = &self.statistics {
+                encoder.resolve_query_set(set, 0..1, resolve, 0);
+                encoder.copy_buffer_to_buffer(resolve, 0, target, STATS_OFFSET, 8);
+            }
+            encoder.copy_buffer_to_buffer(&self.args, 0, target, 0, ARGS_SIZE);
+            self.pending = true;
         }
-        encoder.copy_buffer_to_buffer(&self.args, 0, &self.readback, 0, ARGS_SIZE);
-        self.pending = true;
 
         if self.want_debug {
             let (w, h) = (width, height);
@@ -1152,10 +1161,12 @@ impl ShadowTechnique for ShadowVolumeRenderer {
     }
 
     fn after_frame(&mut self, gpu: &GpuContext) -> Result<()> {
-        if !std::mem::take(&mut self.pending) {
-            return Ok(());
+        if std::mem::take(&mut self.pending) {
+            self.readback.request();
         }
-        let data = gpu.read_buffer(&self.readback)?;
+        let Some(data) = self.readback.try_read(gpu)? else {
+            return Ok(());
+        };
         let args: Args = bytemuck::pod_read_unaligned(&data[..ARGS_SIZE as usize]);
         self.stats.silhouette_edges = args.silhouette_edges;
         self.stats.volume_triangles = (args.lists[0].index_count + args.lists[1].index_count) / 3;

@@ -1,0 +1,156 @@
+//! The per-device pipeline cache: technique instances share their family's
+//! pipelines, switching back to a technique compiles nothing, a parameter
+//! sweep keeps the cache at its bound, and a frame waits for the GPU once
+//! while its timestamps still arrive.
+
+use shadowlab::gpu::{GpuContext, PIPELINE_CACHE_BOUND};
+use shadowlab::headless::HeadlessFrame;
+use shadowlab::renderer::RenderSettings;
+use shadowlab::scene::{Scene, builtin};
+use shadowlab::technique::{self, TechniqueInstance};
+
+/// A device of its own, so that other tests' pipelines do not count.
+fn own_gpu() -> GpuContext {
+    GpuContext::new(None).expect("a Vulkan adapter (install mesa-vulkan-drivers)")
+}
+
+fn room_with_spot() -> Scene {
+    let mut scene = builtin::by_name("room").unwrap().unwrap();
+    scene.lights = scene.light_preset("spot").unwrap();
+    scene
+}
+
+fn render(gpu: &GpuContext, hf: &mut HeadlessFrame, scene: &Scene, settings: &RenderSettings) {
+    hf.render(gpu, scene, &scene.camera, &scene.lights, settings)
+        .unwrap();
+}
+
+fn use_technique(gpu: &GpuContext, hf: &mut HeadlessFrame, id: &str) {
+    hf.techniques[0] = TechniqueInstance::new(gpu, technique::resolve(id).unwrap()).unwrap();
+}
+
+#[test]
+fn switching_back_to_a_technique_compiles_nothing() {
+    let gpu = own_gpu();
+    let scene = room_with_spot();
+    let settings = RenderSettings::default();
+    let choice = technique::resolve("shadow-map:pcf").unwrap();
+    let mut hf = HeadlessFrame::new(&gpu, &scene, &[choice], 96, 54).unwrap();
+    render(&gpu, &mut hf, &scene, &settings);
+    let after_first = gpu.cache.pipelines_created();
+    assert!(after_first > 0);
+    // A second frame compiles nothing.
+    render(&gpu, &mut hf, &scene, &settings);
+    assert_eq!(gpu.cache.pipelines_created(), after_first);
+    // Another family compiles its own pipelines once.
+    use_technique(&gpu, &mut hf, "shadow-volume");
+    render(&gpu, &mut hf, &scene, &settings);
+    let after_volume = gpu.cache.pipelines_created();
+    assert!(after_volume > after_first, "shadow volumes need pipelines");
+    // Back to the shadow map, and to the volumes again: nothing new.
+    for id in ["shadow-map:pcf", "shadow-volume", "shadow-map:pcf"] {
+        use_technique(&gpu, &mut hf, id);
+        render(&gpu, &mut hf, &scene, &settings);
+        assert_eq!(gpu.cache.pipelines_created(), after_volume, "{id}");
+    }
+    // A new instance (another light, another frame) shares them too.
+    let again = HeadlessFrame::new(
+        &gpu,
+        &scene,
+        &[technique::resolve("shadow-volume").unwrap()],
+        96,
+        54,
+    );
+    let mut again = again.unwrap();
+    render(&gpu, &mut again, &scene, &settings);
+    assert_eq!(gpu.cache.pipelines_created(), after_volume);
+}
+
+#[test]
+fn a_depth_bias_sweep_keeps_the_cache_at_its_bound() {
+    let gpu = own_gpu();
+    let scene = room_with_spot();
+    let settings = RenderSettings::default();
+    let choice = technique::resolve("shadow-map:hard").unwrap();
+    let mut hf = HeadlessFrame::new(&gpu, &scene, &[choice], 64, 36).unwrap();
+    render(&gpu, &mut hf, &scene, &settings);
+    let before = gpu.cache.pipelines_created();
+    for bias in 0..100 {
+        let mut params = hf.techniques[0].choice.params.clone();
+        params.set("depth_bias", &format!("{}", 10 + bias)).unwrap();
+        hf.techniques[0].set_params(params).unwrap();
+        render(&gpu, &mut hf, &scene, &settings);
+        assert!(gpu.cache.pipelines_cached() <= PIPELINE_CACHE_BOUND);
+    }
+    // One depth pass per bias value, each compiled once; the cache full.
+    assert_eq!(gpu.cache.pipelines_created(), before + 100);
+    assert_eq!(gpu.cache.pipelines_cached(), PIPELINE_CACHE_BOUND);
+    // The pipelines in use every frame stayed (least recently used goes
+    // first): one more frame compiles nothing.
+    render(&gpu, &mut hf, &scene, &settings);
+    assert_eq!(gpu.cache.pipelines_created(), before + 100);
+    // The sweep still draws shadows.
+    let mask = shadowlab::headless::read_back(&gpu, &hf.frame, 1)
+        .unwrap()
+        .masks
+        .remove(0);
+    assert!(mask.iter().any(|&v| v < 0.5));
+}
+
+#[test]
+fn a_frame_waits_once_and_its_gpu_times_still_arrive() {
+    let gpu = own_gpu();
+    if !gpu.timestamps {
+        eprintln!("adapter without timestamp queries: nothing to check");
+        return;
+    }
+    let scene = room_with_spot();
+    let choice = technique::resolve("shadow-map:pcf").unwrap();
+    let mut hf = HeadlessFrame::new(&gpu, &scene, &[choice], 96, 54).unwrap();
+    let settings = RenderSettings {
+        gpu_timing: true,
+        stage_waits: false,
+        ..Default::default()
+    };
+    let mut seen = None;
+    for _ in 0..4 {
+        let waits = gpu.waits();
+        let t = hf
+            .render(&gpu, &scene, &scene.camera, &scene.lights, &settings)
+            .unwrap();
+        assert_eq!(gpu.waits(), waits + 1, "one wait per frame");
+        seen = seen.or(t.gpu);
+    }
+    let t = seen.expect("GPU times of an earlier frame");
+    assert!(
+        t.prepass_ms > 0.0 && t.masks_ms > 0.0 && t.lighting_ms > 0.0,
+        "{t:?}"
+    );
+    // With stage waits, each frame reports its own times.
+    let waited = RenderSettings {
+        stage_waits: true,
+        ..settings
+    };
+    let t = hf
+        .render(&gpu, &scene, &scene.camera, &scene.lights, &waited)
+        .unwrap();
+    assert!(t.gpu.is_some());
+    // Shadow volumes read their statistics back without a second wait.
+    let mut hf = HeadlessFrame::new(
+        &gpu,
+        &scene,
+        &[technique::resolve("shadow-volume").unwrap()],
+        96,
+        54,
+    )
+    .unwrap();
+    for _ in 0..2 {
+        let waits = gpu.waits();
+        hf.render(&gpu, &scene, &scene.camera, &scene.lights, &settings)
+            .unwrap();
+        assert_eq!(gpu.waits(), waits + 1, "one wait per frame");
+    }
+    let counters: std::collections::HashMap<_, _> =
+        hf.techniques[0].technique.counters().into_iter().collect();
+    assert!(counters["silhouette_edges"] > 0.0, "{counters:?}");
+}
