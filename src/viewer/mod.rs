@@ -40,13 +40,16 @@ pub struct ViewerOptions {
     pub mask: Option<usize>,
 }
 
-/// The composited window image (also what screenshots read) holds sRGB-encoded
-/// bytes: the 3D view is written through an sRGB view of it, egui (which
-/// blends in gamma space) through a plain one.
-const COMPOSITE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
-const COMPOSITE_SRGB: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// A window image holds sRGB-encoded bytes: the 3D view is written
+/// through an sRGB view of it, egui (which blends in gamma space) through a
+/// plain one. Frames are composed straight into the surface; a screenshot
+/// composes the same frame once more into a texture that can be read.
+struct WindowTarget<'a> {
+    srgb: &'a wgpu::TextureView,
+    plain: &'a wgpu::TextureView,
+}
 
-/// The composite texture with its two views.
+/// The screenshot texture (the surface's format) with its two views.
 struct Composite {
     texture: wgpu::Texture,
     srgb: wgpu::TextureView,
@@ -282,7 +285,6 @@ struct Gfx {
     gpu: GpuContext,
     renderer: Renderer,
     frame: Option<FrameTargets>,
-    composite: Option<Composite>,
     blit: Blit,
     egui_ctx: egui::Context,
     egui_state: egui_winit::State,
@@ -444,10 +446,12 @@ impl App {
         let mut config = surface
             .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
             .ok_or_else(|| anyhow!("the adapter cannot present to this window"))?;
+        // The plain format with its sRGB twin as a view format.
         let caps = surface.get_capabilities(&gpu.adapter);
         if let Some(f) = caps.formats.iter().find(|f| f.is_srgb()) {
-            config.format = *f;
+            config.format = f.remove_srgb_suffix();
         }
+        config.view_formats = vec![config.format.add_srgb_suffix()];
         config.present_mode = present_mode(self.state.vsync);
         surface.configure(&gpu.device, &config);
         crate::frame::check_formats(&gpu)?;
@@ -466,8 +470,16 @@ impl App {
             None,
             Some(gpu.max_texture_size() as usize),
         );
-        let egui_renderer =
-            egui_wgpu::Renderer::new(&gpu.device, COMPOSITE_FORMAT, Default::default());
+        let egui_renderer = egui_wgpu::Renderer::new(
+            &gpu.device,
+            config.format,
+            egui_wgpu::RendererOptions {
+                // Dithering adds noise per pixel of every egui triangle:
+                // measurable on CPU adapters, invisible on 8-bit panels.
+                dithering: false,
+                ..Default::default()
+            },
+        );
         self.gfx = Some(Gfx {
             blit: Blit::new(&gpu.device),
             window,
@@ -476,7 +488,6 @@ impl App {
             gpu,
             renderer,
             frame: None,
-            composite: None,
             egui_ctx,
             egui_state,
             egui_renderer,
@@ -561,36 +572,6 @@ impl App {
             .is_none_or(|f| (f.width(), f.height()) != (fw, fh))
         {
             gfx.frame = Some(FrameTargets::new(&gfx.gpu, fw, fh)?);
-        }
-        if gfx
-            .composite
-            .as_ref()
-            .is_none_or(|c| (c.texture.width(), c.texture.height()) != (size.width, size.height))
-        {
-            let t = gfx.gpu.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("composite"),
-                size: wgpu::Extent3d {
-                    width: size.width,
-                    height: size.height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: COMPOSITE_FORMAT,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                    | wgpu::TextureUsages::COPY_SRC
-                    | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[COMPOSITE_SRGB],
-            });
-            gfx.composite = Some(Composite {
-                srgb: t.create_view(&wgpu::TextureViewDescriptor {
-                    format: Some(COMPOSITE_SRGB),
-                    ..Default::default()
-                }),
-                plain: t.create_view(&Default::default()),
-                texture: t,
-            });
         }
         if self.state.show_debug != self.state.debug_enabled {
             for t in &mut scene.techniques {
@@ -699,7 +680,6 @@ impl App {
             }
         }
         let frame = gfx.frame.as_ref().expect("created above");
-        let composite = gfx.composite.as_ref().expect("created above");
         let mask_view = frame.masks().create_view(&wgpu::TextureViewDescriptor {
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             ..Default::default()
@@ -709,18 +689,7 @@ impl App {
             Overlay::Mask(l) if l < nl => [1, l as u32, 0, 0],
             _ => [0, 0, 0, 0],
         };
-        let full = [0.0, 0.0, size.width as f32, size.height as f32];
         let view3d = [left as f32, 0.0, view_w as f32, size.height as f32];
-        gfx.blit.draw(
-            &gfx.gpu,
-            &mut enc,
-            view3d,
-            &composite.srgb,
-            COMPOSITE_SRGB,
-            frame.color_view(),
-            &mask_view,
-            mode,
-        );
         let cmd = gfx.egui_renderer.update_buffers(
             &gfx.gpu.device,
             &gfx.gpu.queue,
@@ -728,12 +697,24 @@ impl App {
             &jobs,
             &screen,
         );
-        {
+        let plain = gfx.config.format;
+        let srgb = plain.add_srgb_suffix();
+        let mut compose = |enc: &mut wgpu::CommandEncoder, target: WindowTarget| {
+            gfx.blit.draw(
+                &gfx.gpu,
+                enc,
+                view3d,
+                target.srgb,
+                srgb,
+                frame.color_view(),
+                &mask_view,
+                mode,
+            );
             let mut pass = enc
                 .begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("egui"),
                     color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &composite.plain,
+                        view: target.plain,
                         depth_slice: None,
                         resolve_target: None,
                         ops: wgpu::Operations {
@@ -745,6 +726,47 @@ impl App {
                 })
                 .forget_lifetime();
             gfx.egui_renderer.render(&mut pass, &jobs, &screen);
+        };
+        // The screenshot of this frame, when one is due.
+        let heatmap_pending = self.options.heatmap && !self.heatmap_reported;
+        let done = self
+            .options
+            .frames
+            .is_some_and(|n| self.frames_rendered + 1 >= n)
+            && !heatmap_pending;
+        let auto_path = self.options.screenshot.clone().filter(|_| done);
+        let screenshot = (self.state.screenshot_requested || auto_path.is_some()).then(|| {
+            let texture = gfx.gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("screenshot"),
+                size: wgpu::Extent3d {
+                    width: size.width,
+                    height: size.height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: plain,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[srgb],
+            });
+            Composite {
+                srgb: texture.create_view(&wgpu::TextureViewDescriptor {
+                    format: Some(srgb),
+                    ..Default::default()
+                }),
+                plain: texture.create_view(&Default::default()),
+                texture,
+            }
+        });
+        if let Some(c) = &screenshot {
+            compose(
+                &mut enc,
+                WindowTarget {
+                    srgb: &c.srgb,
+                    plain: &c.plain,
+                },
+            );
         }
         let surface_texture = match gfx.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
@@ -756,16 +778,17 @@ impl App {
             _ => None,
         };
         if let Some(st) = &surface_texture {
-            let view = st.texture.create_view(&Default::default());
-            gfx.blit.draw(
-                &gfx.gpu,
+            let view_srgb = st.texture.create_view(&wgpu::TextureViewDescriptor {
+                format: Some(srgb),
+                ..Default::default()
+            });
+            let view_plain = st.texture.create_view(&Default::default());
+            compose(
                 &mut enc,
-                full,
-                &view,
-                gfx.config.format,
-                &composite.srgb,
-                &mask_view,
-                [0; 4],
+                WindowTarget {
+                    srgb: &view_srgb,
+                    plain: &view_plain,
+                },
             );
         }
         gfx.gpu.queue.submit(cmd.into_iter().chain([enc.finish()]));
@@ -795,18 +818,16 @@ impl App {
         }
         // Screenshots: the key, or --screenshot after --frames (and after
         // the start-up heatmap when one was asked for).
-        let heatmap_pending = self.options.heatmap && !self.heatmap_reported;
-        let done = self
-            .options
-            .frames
-            .is_some_and(|n| self.frames_rendered >= n)
-            && !heatmap_pending;
-        let auto_path = self.options.screenshot.clone().filter(|_| done);
-        if self.state.screenshot_requested || auto_path.is_some() {
+        if let Some(composite) = &screenshot {
             self.state.screenshot_requested = false;
             let path = auto_path
                 .unwrap_or_else(|| PathBuf::from(format!("shadowlab-{}.png", chrono_stamp())));
-            let rgba = gfx.gpu.read_texture(&composite.texture, 0, 4)?;
+            let mut rgba = gfx.gpu.read_texture(&composite.texture, 0, 4)?;
+            if matches!(plain, wgpu::TextureFormat::Bgra8Unorm) {
+                for p in rgba.chunks_exact_mut(4) {
+                    p.swap(0, 2);
+                }
+            }
             image::save_buffer(
                 &path,
                 &rgba,
