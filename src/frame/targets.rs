@@ -15,7 +15,6 @@ use bytemuck::Zeroable;
 pub struct FrameTargets {
     width: u32,
     height: u32,
-    depth: wgpu::Texture,
     depth_view: wgpu::TextureView,
     gbuffer_position: wgpu::Texture,
     gbuffer_position_view: wgpu::TextureView,
@@ -151,7 +150,6 @@ impl FrameTargets {
             gbuffer_position_view,
             gbuffer_normal_view,
             gbuffer_bind_group,
-            depth,
             depth_view,
             gbuffer_position,
             gbuffer_normal,
@@ -189,10 +187,6 @@ impl FrameTargets {
     /// Depth-stencil of the prepass (depth and stencil aspects).
     pub fn depth_view(&self) -> &wgpu::TextureView {
         &self.depth_view
-    }
-
-    pub fn depth(&self) -> &wgpu::Texture {
-        &self.depth
     }
 
     /// Group 0: the frame uniform.

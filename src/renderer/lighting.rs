@@ -8,6 +8,11 @@ use super::{LightingModel, RenderSettings, Shading};
 use crate::frame::{self, FrameLayouts, FrameTargets, MaterialVariant, SceneGpu};
 use crate::gpu::GpuContext;
 
+/// The lighting pass's own groups: the material's, and the masks with the
+/// material sampler.
+const MATERIAL_GROUP: u32 = frame::OWN_GROUP;
+const LIGHTING_GROUP: u32 = 3;
+
 /// Everything a lighting pipeline depends on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct LitKey {
@@ -192,7 +197,11 @@ impl Lighting {
             .anisotropy
             .unwrap_or_else(|| gpu.default_anisotropy())
             .clamp(1, 16);
-        pass.set_bind_group(3, &self.bind_group(gpu, frame, anisotropy), &[]);
+        pass.set_bind_group(
+            LIGHTING_GROUP,
+            &self.bind_group(gpu, frame, anisotropy),
+            &[],
+        );
         pass.set_vertex_buffer(0, scene_gpu.vertex_buffer.slice(..));
         pass.set_index_buffer(scene_gpu.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
         let mut bound_material = usize::MAX;
@@ -210,7 +219,11 @@ impl Lighting {
                     pass.set_pipeline(&self.pipeline(gpu, key));
                     bound_key = Some(key);
                 }
-                pass.set_bind_group(2, &scene_gpu.material_bind_groups[d.material], &[]);
+                pass.set_bind_group(
+                    MATERIAL_GROUP,
+                    &scene_gpu.material_bind_groups[d.material],
+                    &[],
+                );
                 bound_material = d.material;
             }
             pass.draw_indexed(

@@ -21,7 +21,6 @@ use crate::technique::{MaskContext, TechniqueInstance, TechniqueNeeds};
 use anyhow::{Result, bail};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
-use std::sync::Arc;
 use std::time::Instant;
 
 /// Shading modes of SEEDS §1.
@@ -87,7 +86,6 @@ impl Default for RenderSettings {
 
 /// The renderer's passes; their pipelines come from the device's cache.
 pub struct Renderer {
-    layouts: Arc<FrameLayouts>,
     gbuffer_layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
     lighting: lighting::Lighting,
@@ -111,7 +109,6 @@ impl Renderer {
             icons: icons::LightIcons::new(gpu, &layouts.frame),
             lines: lines::LineRenderer::new(gpu, &layouts.frame),
             timer: gpu.timestamps.then(|| timing::GpuTimer::new(device)),
-            layouts,
             gbuffer_layout,
             module,
         }
@@ -155,11 +152,6 @@ impl Renderer {
                     cache: None,
                 })
         })
-    }
-
-    /// The layouts every pass of this device shares.
-    pub fn layouts(&self) -> &FrameLayouts {
-        &self.layouts
     }
 
     pub fn draw_lines(

@@ -17,11 +17,6 @@ pub trait Choice: Copy + Sized + 'static {
     /// Position of `self` in [`Choice::ALL`].
     fn index(self) -> usize;
 
-    /// The option's name as typed on the command line.
-    fn name(self) -> &'static str {
-        Self::NAMES[self.index()]
-    }
-
     /// WGSL constants `const PREFIX_NAME: u32 = index;` for shaders that
     /// branch on the choice (names upper-cased, `-` as `_`).
     fn wgsl_constants(prefix: &str) -> String {

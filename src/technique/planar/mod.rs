@@ -301,14 +301,14 @@ impl ShadowTechnique for PlanarShadows {
             pass.set_pipeline(&self.shared.tag);
             for i in 0..uniforms.len() {
                 pass.set_stencil_reference(i as u32 + 1);
-                pass.set_bind_group(2, &bind_group, &[i as u32 * stride]);
+                pass.set_bind_group(crate::frame::OWN_GROUP, &bind_group, &[i as u32 * stride]);
                 pass.draw(0..3, 0..1);
             }
         }
         pass.set_pipeline(&self.shared.flatten[stencil as usize]);
         for i in 0..uniforms.len() {
             pass.set_stencil_reference(i as u32 + 1);
-            pass.set_bind_group(2, &bind_group, &[i as u32 * stride]);
+            pass.set_bind_group(crate::frame::OWN_GROUP, &bind_group, &[i as u32 * stride]);
             ctx.scene_gpu.draw_objects(&mut pass, |d| d.casts_shadow);
         }
         Ok(())

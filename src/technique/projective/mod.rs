@@ -375,7 +375,7 @@ impl ShadowTechnique for ProjectiveShadows {
             });
             pass.set_pipeline(&self.shared.caster_pipeline);
             ctx.bind_frame_groups(&mut pass);
-            pass.set_bind_group(2, &caster_group, &[i as u32 * stride]);
+            pass.set_bind_group(crate::frame::OWN_GROUP, &caster_group, &[i as u32 * stride]);
             ctx.scene_gpu
                 .draw_objects(&mut pass, |d| d.object == p.object);
         }
@@ -385,7 +385,7 @@ impl ShadowTechnique for ProjectiveShadows {
         ctx.bind_frame_groups(&mut pass);
         for (i, bg) in bind_groups.iter().enumerate() {
             if frusta[i].is_some() {
-                pass.set_bind_group(2, bg, &[i as u32 * stride]);
+                pass.set_bind_group(crate::frame::OWN_GROUP, bg, &[i as u32 * stride]);
                 pass.draw(0..3, 0..1);
             }
         }

@@ -420,7 +420,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 });
                 pass.set_pipeline(&pipeline);
                 ctx.bind_frame_groups(&mut pass);
-                pass.set_bind_group(2, &render_group, &[slot(si, face, 0)]);
+                pass.set_bind_group(crate::frame::OWN_GROUP, &render_group, &[slot(si, face, 0)]);
                 ctx.scene_gpu.draw_objects(&mut pass, |d| d.casts_shadow);
             }
             if let (Some(m), Some(groups), true) = (&maps.moment, &blur_groups, blur > 0 && !floor)
@@ -440,7 +440,11 @@ impl ShadowTechnique for ShadowMapTechnique {
                         });
                         pass.set_pipeline(&shared.blur(gpu, lookup_key));
                         ctx.bind_frame_groups(&mut pass);
-                        pass.set_bind_group(2, &groups[src], &[slot(si, face, k)]);
+                        pass.set_bind_group(
+                            crate::frame::OWN_GROUP,
+                            &groups[src],
+                            &[slot(si, face, k)],
+                        );
                         pass.draw(0..3, 0..1);
                     }
                 }
@@ -472,7 +476,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 });
             }
             ctx.bind_frame_groups(&mut pass);
-            pass.set_bind_group(2, &lookup_group, &[slot(si, 0, 0)]);
+            pass.set_bind_group(crate::frame::OWN_GROUP, &lookup_group, &[slot(si, 0, 0)]);
             pass.draw(0..3, 0..1);
         }
         if c.stage != Stage::Full {
@@ -494,7 +498,11 @@ impl ShadowTechnique for ShadowMapTechnique {
             });
             pass.set_pipeline(&shared.debug_map(gpu, lookup_key));
             ctx.bind_frame_groups(&mut pass);
-            pass.set_bind_group(2, &lookup_group, &[slot(lights.len() - 1, 0, 0)]);
+            pass.set_bind_group(
+                crate::frame::OWN_GROUP,
+                &lookup_group,
+                &[slot(lights.len() - 1, 0, 0)],
+            );
             pass.draw(0..3, 0..1);
             drop(pass);
             // The frame-sized views, (re)made at the frame's size.
@@ -537,7 +545,11 @@ impl ShadowTechnique for ShadowMapTechnique {
             });
             pass.set_pipeline(&shared.debug_frame(gpu, lookup_key));
             ctx.bind_frame_groups(&mut pass);
-            pass.set_bind_group(2, &lookup_group, &[slot(lights.len() - 1, 0, 0)]);
+            pass.set_bind_group(
+                crate::frame::OWN_GROUP,
+                &lookup_group,
+                &[slot(lights.len() - 1, 0, 0)],
+            );
             pass.draw(0..3, 0..1);
         }
         self.samples = lights.len();

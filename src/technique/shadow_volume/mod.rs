@@ -19,171 +19,28 @@
 //! with draw-indexed-indirect.
 
 pub mod adjacency;
+pub mod config;
+mod pipelines;
 pub mod silhouette;
 
-use super::params::choice_enum;
-use super::{DebugLine, Family, MaskContext, ParamSpec, ParamValues, Preset, ShadowTechnique};
-use crate::frame::{Compose, DEPTH_FORMAT, MASK_FORMAT};
+use super::{DebugLine, Family, MaskContext, ParamValues, ShadowTechnique};
+use crate::frame::Compose;
 use crate::gpu::GpuContext;
 use crate::scene::{Light, LightType, Scene};
 use adjacency::Adjacency;
 use anyhow::{Result, bail};
 use bytemuck::{Pod, Zeroable};
+use config::{Extrusion, FarPlane, Method, SilhouetteMode, StencilMode, VolumeConfig};
 use glam::{Mat4, Vec3, Vec4};
+use pipelines::{VolumeKey, VolumeShared};
 use silhouette::{CasterPlan, VolumeKind, VolumeMesh};
 use std::sync::Arc;
-
-choice_enum! {
-    /// How the volumes are counted.
-    pub enum Method { ZPass = "zpass", ZFail = "zfail", Auto = "auto" }
-}
-choice_enum! {
-    /// Which volumes a caster extrudes.
-    pub enum SilhouetteMode { Auto = "auto", Edges = "edges", Triangles = "triangles" }
-}
-choice_enum! {
-    /// Where silhouettes are found and volumes extruded.
-    pub enum Extrusion { Gpu = "gpu", Cpu = "cpu" }
-}
-choice_enum! {
-    /// How volumes extruded to infinity escape far-plane clipping.
-    pub enum FarPlane { Infinite = "infinite", DepthClamp = "depth-clamp" }
-}
-choice_enum! {
-    /// One two-sided stencil draw or two single-sided ones.
-    pub enum StencilMode { TwoSided = "two-sided", TwoPass = "two-pass" }
-}
-
-const METHOD: ParamSpec = ParamSpec::choice_of::<Method>(
-    "method",
-    Method::Auto as usize,
-    "zpass: count volume faces in front of each pixel (fails when the camera is in a shadow); zfail: count those behind (Carmack's reverse; caps needed); auto: z-fail only for casters whose volume can contain part of the near-plane rectangle",
-);
-const SILHOUETTE: ParamSpec = ParamSpec::choice_of::<SilhouetteMode>(
-    "silhouette",
-    SilhouetteMode::Auto as usize,
-    "edges: side quads on silhouette edges (exact for closed meshes); triangles: every triangle extrudes its own closed volume (exact for any mesh, more fill); auto: edges for closed meshes, triangles for the others (reported in the log)",
-);
-const EXTRUSION: ParamSpec = ParamSpec::choice_of::<Extrusion>(
-    "extrusion",
-    Extrusion::Gpu as usize,
-    "gpu: a compute shader finds silhouettes and writes the volumes into an index buffer drawn with draw-indirect; cpu: the same on the CPU (rayon), uploaded every frame",
-);
-const LENGTH: ParamSpec = ParamSpec::float(
-    "length",
-    0.0,
-    0.0,
-    100000.0,
-    0.5,
-    "extrusion length in world units; 0 extrudes to infinity (w = 0)",
-);
-const FAR_PLANE: ParamSpec = ParamSpec::choice_of::<FarPlane>(
-    "far_plane",
-    FarPlane::Infinite as usize,
-    "how volumes extruded to infinity escape far-plane clipping: a projection with the far plane at infinity, or depth clamping (unclipped_depth; falls back to infinite where the adapter lacks it)",
-);
-const STENCIL: ParamSpec = ParamSpec::choice_of::<StencilMode>(
-    "stencil",
-    StencilMode::TwoSided as usize,
-    "two-sided: both faces in one draw with wrapping increment/decrement; two-pass: front and back faces in two draws with saturating operations",
-);
-const SCISSOR: ParamSpec = ParamSpec::boolean(
-    "scissor",
-    true,
-    "restrict the stencil work to the screen rectangle of an attenuated light's range",
-);
-const CULL_CASTERS: ParamSpec = ParamSpec::boolean(
-    "cull_casters",
-    true,
-    "skip casters whose volume cannot touch the view frustum",
-);
-
-/// The shadow-volume family's parameters, parsed.
-#[derive(Clone, Copy, Debug)]
-struct VolumeConfig {
-    method: Method,
-    silhouette: SilhouetteMode,
-    extrusion: Extrusion,
-    /// World units; 0 = to infinity.
-    length: f32,
-    far_plane: FarPlane,
-    stencil: StencilMode,
-    scissor: bool,
-    cull_casters: bool,
-    /// Mask value inside a shadow (1 − darkening).
-    visibility: f32,
-    compose: Compose,
-}
-
-impl VolumeConfig {
-    fn parse(p: &ParamValues) -> Result<VolumeConfig> {
-        Ok(VolumeConfig {
-            method: p.choice(&METHOD)?,
-            silhouette: p.choice(&SILHOUETTE)?,
-            extrusion: p.choice(&EXTRUSION)?,
-            length: p.float(&LENGTH)?,
-            far_plane: p.choice(&FAR_PLANE)?,
-            stencil: p.choice(&STENCIL)?,
-            scissor: p.flag(&SCISSOR)?,
-            cull_casters: p.flag(&CULL_CASTERS)?,
-            visibility: 1.0 - p.float(&ParamSpec::DARKENING)?,
-            compose: p.choice(&ParamSpec::COMPOSE)?,
-        })
-    }
-}
 
 pub static FAMILY: Family = Family {
     id: "shadow-volume",
     summary: "stencil shadow volumes: silhouettes extruded away from the light, counted in the stencil buffer (exact hard shadows)",
-    params: &[
-        METHOD,
-        SILHOUETTE,
-        EXTRUSION,
-        LENGTH,
-        FAR_PLANE,
-        STENCIL,
-        SCISSOR,
-        CULL_CASTERS,
-        ParamSpec::DARKENING,
-        ParamSpec::COMPOSE,
-    ],
-    presets: &[
-        Preset {
-            name: "auto",
-            summary: "hybrid: z-fail only where a volume can contain the near plane; per-triangle volumes for meshes that are not closed; GPU extrusion",
-            values: &[],
-        },
-        Preset {
-            name: "zpass",
-            summary: "z-pass counting (fails with the camera inside a shadow)",
-            values: &[("method", "zpass")],
-        },
-        Preset {
-            name: "zfail",
-            summary: "z-fail counting (Carmack's reverse) with caps",
-            values: &[("method", "zfail")],
-        },
-        Preset {
-            name: "edges",
-            summary: "silhouette volumes for every mesh, closed or not (z-fail): shows what open meshes get wrong",
-            values: &[("method", "zfail"), ("silhouette", "edges")],
-        },
-        Preset {
-            name: "triangles",
-            summary: "every triangle extrudes its own volume: exact for open and non-manifold meshes",
-            values: &[("silhouette", "triangles")],
-        },
-        Preset {
-            name: "cpu",
-            summary: "auto with CPU silhouettes and extrusion",
-            values: &[("extrusion", "cpu")],
-        },
-        Preset {
-            name: "darken",
-            summary: "the documents' look: one lit pass, shadows darkened to half",
-            values: &[("compose", "darken"), ("darkening", "0.5")],
-        },
-    ],
+    params: config::PARAMS,
+    presets: config::PRESETS,
     create: |gpu| Ok(Box::new(ShadowVolumeRenderer::new(gpu))),
 };
 
@@ -240,15 +97,6 @@ const ARGS_SIZE: u64 = std::mem::size_of::<Args>() as u64;
 /// Readback layout: the arguments, then the pipeline-statistics result.
 const STATS_OFFSET: u64 = 48;
 
-/// What a volume pipeline depends on.
-#[derive(Clone, Copy, PartialEq, Eq, Hash)]
-struct VolumeKey {
-    zfail: bool,
-    /// 0: two-sided, one draw; 1 and 2: the increment and decrement draws.
-    pass: u8,
-    unclipped: bool,
-}
-
 /// Per-scene GPU copies of the welded caster geometry.
 struct Geometry {
     fingerprint: u64,
@@ -271,19 +119,6 @@ struct Stats {
     zpass: usize,
     zfail: usize,
     per_triangle: usize,
-}
-
-/// The family's shaders, layouts and fixed pipelines, shared per device;
-/// the volume pipelines come from the device's cache by [`VolumeKey`].
-struct VolumeShared {
-    layout: wgpu::BindGroupLayout,
-    pipeline_layout: wgpu::PipelineLayout,
-    module: wgpu::ShaderModule,
-    shadow_pipeline: wgpu::RenderPipeline,
-    debug_scene_pipeline: wgpu::RenderPipeline,
-    extrude_layout: wgpu::BindGroupLayout,
-    extrude_edges: wgpu::ComputePipeline,
-    extrude_faces: wgpu::ComputePipeline,
 }
 
 pub struct ShadowVolumeRenderer {
@@ -342,61 +177,6 @@ fn buffer_with(
         })
 }
 
-/// The stencil operations of one volume pipeline.
-fn stencil_state(key: VolumeKey) -> (wgpu::StencilState, Option<wgpu::Face>) {
-    use wgpu::StencilOperation as Op;
-    let face = |depth_fail_op, pass_op| wgpu::StencilFaceState {
-        compare: wgpu::CompareFunction::Always,
-        fail_op: Op::Keep,
-        depth_fail_op,
-        pass_op,
-    };
-    // The operation on the counted event: depth pass (z-pass) or fail (z-fail).
-    let on = |op| {
-        if key.zfail {
-            face(op, Op::Keep)
-        } else {
-            face(Op::Keep, op)
-        }
-    };
-    // z-pass counts entries through front faces, z-fail exits through back faces.
-    let (increment_face, decrement_face) = if key.zfail {
-        (wgpu::Face::Back, wgpu::Face::Front)
-    } else {
-        (wgpu::Face::Front, wgpu::Face::Back)
-    };
-    let (front, back, cull) = match key.pass {
-        0 => {
-            let (inc, dec) = (on(Op::IncrementWrap), on(Op::DecrementWrap));
-            if key.zfail {
-                (dec, inc, None)
-            } else {
-                (inc, dec, None)
-            }
-        }
-        // Increments first so that saturation at 0 cannot lose a count.
-        1 => (
-            on(Op::IncrementClamp),
-            on(Op::IncrementClamp),
-            Some(decrement_face),
-        ),
-        _ => (
-            on(Op::DecrementClamp),
-            on(Op::DecrementClamp),
-            Some(increment_face),
-        ),
-    };
-    (
-        wgpu::StencilState {
-            front,
-            back,
-            read_mask: 0xff,
-            write_mask: 0xff,
-        },
-        cull,
-    )
-}
-
 /// Screen rectangle (x, y, w, h) in pixels that a light's range sphere can
 /// cover; `None` when it is off screen, the whole frame when unbounded or
 /// when the sphere reaches behind the camera.
@@ -433,99 +213,6 @@ pub fn range_scissor(light: &Light, view_proj: Mat4, width: u32, height: u32) ->
         return None;
     }
     Some([x0, y0, x1 - x0, y1 - y0])
-}
-
-impl VolumeShared {
-    fn new(gpu: &GpuContext) -> VolumeShared {
-        let device = &gpu.device;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("shadow volume"),
-            entries: &[
-                crate::gpu::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, false),
-                crate::gpu::storage_entry(1, wgpu::ShaderStages::VERTEX, true),
-            ],
-        });
-        let module =
-            crate::frame::technique_shader(device, "shadow volume", &[include_str!("volume.wgsl")]);
-        let pipeline_layout = super::pipeline_layout(gpu, "shadow volume", &layout);
-        let fullscreen =
-            |label: &str, fs: &str, target: wgpu::ColorTargetState, stencil: wgpu::StencilState| {
-                super::fullscreen_pipeline(
-                    gpu,
-                    label,
-                    &pipeline_layout,
-                    &module,
-                    fs,
-                    &[Some(target)],
-                    Some(super::frame_depth_read(stencil)),
-                )
-            };
-        let not_zero = wgpu::StencilFaceState {
-            compare: wgpu::CompareFunction::NotEqual,
-            ..wgpu::StencilFaceState::IGNORE
-        };
-        let shadow_pipeline = fullscreen(
-            "shadow volume: stencil to mask",
-            "fs_shadow",
-            MASK_FORMAT.into(),
-            wgpu::StencilState {
-                front: not_zero,
-                back: not_zero,
-                read_mask: 0xff,
-                write_mask: 0,
-            },
-        );
-        let debug_scene_pipeline = fullscreen(
-            "shadow volume debug: scene",
-            "fs_debug_scene",
-            wgpu::TextureFormat::Rgba8Unorm.into(),
-            Default::default(),
-        );
-        let extrude_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("shadow volume extrusion"),
-            entries: &[
-                crate::gpu::uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
-                crate::gpu::storage_entry(1, wgpu::ShaderStages::COMPUTE, true),
-                crate::gpu::storage_entry(2, wgpu::ShaderStages::COMPUTE, true),
-                crate::gpu::storage_entry(3, wgpu::ShaderStages::COMPUTE, true),
-                crate::gpu::storage_entry(4, wgpu::ShaderStages::COMPUTE, false),
-                crate::gpu::storage_entry(5, wgpu::ShaderStages::COMPUTE, false),
-            ],
-        });
-        let extrude_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("shadow volume extrusion"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("extrude.wgsl").into()),
-        });
-        let extrude_pipeline_layout =
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("shadow volume extrusion"),
-                bind_group_layouts: &[Some(&extrude_layout)],
-                immediate_size: 0,
-            });
-        let compute = |entry: &str| {
-            gpu.cache
-                .compute_pipeline("shadow volume extrusion", &entry, || {
-                    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                        label: Some(entry),
-                        layout: Some(&extrude_pipeline_layout),
-                        module: &extrude_module,
-                        entry_point: Some(entry),
-                        compilation_options: Default::default(),
-                        cache: None,
-                    })
-                })
-        };
-        VolumeShared {
-            extrude_edges: compute("cs_edges"),
-            extrude_faces: compute("cs_faces"),
-            extrude_layout,
-            layout,
-            pipeline_layout,
-            module,
-            shadow_pipeline,
-            debug_scene_pipeline,
-        }
-    }
 }
 
 impl ShadowVolumeRenderer {
@@ -585,91 +272,6 @@ impl ShadowVolumeRenderer {
             debug: None,
             silhouette_lines: vec![],
         }
-    }
-
-    fn volume_pipeline(&self, gpu: &GpuContext, key: VolumeKey) -> wgpu::RenderPipeline {
-        let (module, layout) = (&self.shared.module, &self.shared.pipeline_layout);
-        let device = &gpu.device;
-        gpu.cache.render_pipeline("shadow volume", &key, || {
-            let (stencil, cull_mode) = stencil_state(key);
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("shadow volume"),
-                layout: Some(layout),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some("vs_volume"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState {
-                    cull_mode,
-                    unclipped_depth: key.unclipped,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil,
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module,
-                    entry_point: Some("fs_volume"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: MASK_FORMAT,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::empty(),
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        })
-    }
-
-    fn debug_volume_pipeline(&self, gpu: &GpuContext, unclipped: bool) -> wgpu::RenderPipeline {
-        let (module, layout) = (&self.shared.module, &self.shared.pipeline_layout);
-        let device = &gpu.device;
-        gpu.cache
-            .render_pipeline("shadow volume debug: volumes", &unclipped, || {
-                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("shadow volume debug: volumes"),
-                    layout: Some(layout),
-                    vertex: wgpu::VertexState {
-                        module,
-                        entry_point: Some("vs_volume"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    primitive: wgpu::PrimitiveState {
-                        unclipped_depth: unclipped,
-                        ..Default::default()
-                    },
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: DEPTH_FORMAT,
-                        depth_write_enabled: Some(false),
-                        depth_compare: Some(wgpu::CompareFunction::Less),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module,
-                        entry_point: Some("fs_debug_volume"),
-                        compilation_options: Default::default(),
-                        targets: &[Some(wgpu::ColorTargetState {
-                            format: wgpu::TextureFormat::Rgba8Unorm,
-                            blend: Some(wgpu::BlendState::ALPHA_BLENDING),
-                            write_mask: wgpu::ColorWrites::ALL,
-                        })],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
-            })
     }
 
     /// Welds and uploads the casters of `scene` when it changed.
@@ -1076,7 +678,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
                     pass: *pass,
                     unclipped,
                 };
-                draws.push((self.volume_pipeline(gpu, key), zfail));
+                draws.push((self.shared.volume_pipeline(gpu, key), zfail));
             }
         }
         let (width, height) = (ctx.frame.width(), ctx.frame.height());
@@ -1090,7 +692,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
             if let Some([x, y, w, h]) = scissor {
                 pass.set_scissor_rect(x, y, w, h);
                 ctx.bind_frame_groups(&mut pass);
-                pass.set_bind_group(2, &group, &[]);
+                pass.set_bind_group(crate::frame::OWN_GROUP, &group, &[]);
                 pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
                 if let Some((set, _)) = &self.statistics {
                     pass.begin_pipeline_statistics_query(set, 0);
@@ -1134,7 +736,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
                     wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
                 ));
             }
-            let volume_pipeline = self.debug_volume_pipeline(gpu, unclipped);
+            let volume_pipeline = self.shared.debug_volume_pipeline(gpu, unclipped);
             let view = self
                 .debug
                 .as_ref()
@@ -1149,7 +751,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
                 false,
             );
             ctx.bind_frame_groups(&mut pass);
-            pass.set_bind_group(2, &group, &[]);
+            pass.set_bind_group(crate::frame::OWN_GROUP, &group, &[]);
             pass.set_pipeline(&self.shared.debug_scene_pipeline);
             pass.draw(0..3, 0..1);
             pass.set_pipeline(&volume_pipeline);
@@ -1272,48 +874,6 @@ mod tests {
             range_scissor(&l, vp, 100, 100),
             Some([0, 0, 100, 100]),
             "around the camera"
-        );
-    }
-
-    #[test]
-    fn stencil_operations_count_entries_and_exits() {
-        use wgpu::StencilOperation as Op;
-        let (s, cull) = stencil_state(VolumeKey {
-            zfail: false,
-            pass: 0,
-            unclipped: false,
-        });
-        assert_eq!(
-            (s.front.pass_op, s.back.pass_op, cull),
-            (Op::IncrementWrap, Op::DecrementWrap, None)
-        );
-        let (s, _) = stencil_state(VolumeKey {
-            zfail: true,
-            pass: 0,
-            unclipped: false,
-        });
-        assert_eq!(
-            (s.front.depth_fail_op, s.back.depth_fail_op),
-            (Op::DecrementWrap, Op::IncrementWrap)
-        );
-        // Two passes: back faces increment first for z-fail (front culled).
-        let (s, cull) = stencil_state(VolumeKey {
-            zfail: true,
-            pass: 1,
-            unclipped: false,
-        });
-        assert_eq!(
-            (s.back.depth_fail_op, cull),
-            (Op::IncrementClamp, Some(wgpu::Face::Front))
-        );
-        let (s, cull) = stencil_state(VolumeKey {
-            zfail: false,
-            pass: 2,
-            unclipped: false,
-        });
-        assert_eq!(
-            (s.back.pass_op, cull),
-            (Op::DecrementClamp, Some(wgpu::Face::Front))
         );
     }
 }
