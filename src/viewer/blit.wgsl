@@ -1,8 +1,10 @@
 // Copies (and, with supersampling, filters down) the rendered frame, or shows
-// one light's visibility mask in grey, onto the window's target.
+// one light's visibility mask in grey, onto the window's target; blends
+// egui's cached layer over it.
 
 struct Blit {
-    // x mode (0 colour, 1 mask), y mask layer
+    // x mode (0 colour, 1 mask, 2 colour with its alpha: a premultiplied
+    // layer blended over the target), y mask layer
     mode: vec4u,
 };
 
@@ -32,5 +34,9 @@ fn fs_blit(i: Out) -> @location(0) vec4f {
         let v = textureLoad(masks, vec2i(i.uv * size), i32(blit.mode.y), 0).r;
         return vec4f(vec3f(v), 1.0);
     }
-    return vec4f(textureSample(source, linear_sampler, i.uv).rgb, 1.0);
+    let c = textureSample(source, linear_sampler, i.uv);
+    if blit.mode.x == 2u {
+        return c;
+    }
+    return vec4f(c.rgb, 1.0);
 }

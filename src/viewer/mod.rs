@@ -2,6 +2,7 @@
 //! same [`Renderer`] as the headless commands, with egui panels generated
 //! from the technique registry and parameter tables.
 
+mod blit;
 mod orbit;
 mod ui;
 
@@ -13,6 +14,7 @@ use crate::renderer::{FrameTimings, RenderSettings, Renderer};
 use crate::scene::{self, Camera, Light, Scene};
 use crate::technique::{self, TechniqueChoice, TechniqueInstance};
 use anyhow::{Context as _, Result, anyhow};
+use blit::{Blit, EguiLayer};
 use glam::Vec2;
 use std::path::PathBuf;
 use std::sync::{Arc, mpsc};
@@ -54,181 +56,6 @@ struct Composite {
     texture: wgpu::Texture,
     srgb: wgpu::TextureView,
     plain: wgpu::TextureView,
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct BlitUniform {
-    mode: [u32; 4],
-}
-
-/// Draws a texture (or a mask layer) over a whole target.
-struct Blit {
-    layout: wgpu::BindGroupLayout,
-    sampler: wgpu::Sampler,
-    module: wgpu::ShaderModule,
-    pipelines: Vec<(wgpu::TextureFormat, wgpu::RenderPipeline)>,
-}
-
-impl Blit {
-    fn new(device: &wgpu::Device) -> Blit {
-        let tex = |binding, dim| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float {
-                    filterable: binding == 1,
-                },
-                view_dimension: dim,
-                multisampled: false,
-            },
-            count: None,
-        };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("blit"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                tex(1, wgpu::TextureViewDimension::D2),
-                tex(2, wgpu::TextureViewDimension::D2Array),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-            ],
-        });
-        Blit {
-            sampler: device.create_sampler(&wgpu::SamplerDescriptor {
-                mag_filter: wgpu::FilterMode::Linear,
-                min_filter: wgpu::FilterMode::Linear,
-                ..Default::default()
-            }),
-            module: device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("blit"),
-                source: wgpu::ShaderSource::Wgsl(include_str!("blit.wgsl").into()),
-            }),
-            layout,
-            pipelines: vec![],
-        }
-    }
-
-    fn pipeline(
-        &mut self,
-        device: &wgpu::Device,
-        format: wgpu::TextureFormat,
-    ) -> &wgpu::RenderPipeline {
-        if !self.pipelines.iter().any(|(f, _)| *f == format) {
-            let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("blit"),
-                bind_group_layouts: &[Some(&self.layout)],
-                immediate_size: 0,
-            });
-            let p = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("blit"),
-                layout: Some(&pl),
-                vertex: wgpu::VertexState {
-                    module: &self.module,
-                    entry_point: Some("vs_blit"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: Default::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &self.module,
-                    entry_point: Some("fs_blit"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(format.into())],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
-            self.pipelines.push((format, p));
-        }
-        &self
-            .pipelines
-            .iter()
-            .find(|(f, _)| *f == format)
-            .expect("inserted above")
-            .1
-    }
-
-    /// Draws `source` (or a mask) into the `viewport` (x, y, w, h) of
-    /// `target`, clearing the rest.
-    #[allow(clippy::too_many_arguments)]
-    fn draw(
-        &mut self,
-        gpu: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        viewport: [f32; 4],
-        target: &wgpu::TextureView,
-        format: wgpu::TextureFormat,
-        source: &wgpu::TextureView,
-        masks: &wgpu::TextureView,
-        mode: [u32; 4],
-    ) {
-        // A buffer per draw: several draws share one encoder, and a queued
-        // write to one shared buffer would land before all of them.
-        use wgpu::util::DeviceExt;
-        let uniform = gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("blit"),
-                contents: bytemuck::bytes_of(&BlitUniform { mode }),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-        let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("blit"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniform.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(source),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(masks),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::Sampler(&self.sampler),
-                },
-            ],
-        });
-        let pipeline = self.pipeline(&gpu.device, format).clone();
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("blit"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            ..Default::default()
-        });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.set_viewport(viewport[0], viewport[1], viewport[2], viewport[3], 0.0, 1.0);
-        pass.draw(0..3, 0..1);
-    }
 }
 
 /// What the main view shows.
@@ -286,6 +113,8 @@ struct Gfx {
     renderer: Renderer,
     frame: Option<FrameTargets>,
     blit: Blit,
+    /// egui's panels, drawn when they change and blended over every frame.
+    egui_layer: Option<EguiLayer>,
     egui_ctx: egui::Context,
     egui_state: egui_winit::State,
     egui_renderer: egui_wgpu::Renderer,
@@ -307,6 +136,9 @@ pub struct ViewerState {
     pub show_help: bool,
     pub last_timings: Option<FrameTimings>,
     pub frame_times: std::collections::VecDeque<f64>,
+    /// The statistics panel's text and when it was last refreshed.
+    pub stats_lines: Vec<String>,
+    pub stats_at: Option<Instant>,
     pub error: Option<String>,
     pub heatmap: Option<Heatmap>,
     pub heatmap_job: Option<mpsc::Receiver<Result<(egui::ColorImage, String), String>>>,
@@ -379,6 +211,8 @@ pub fn run(options: ViewerOptions) -> Result<()> {
             show_help: false,
             last_timings: None,
             frame_times: Default::default(),
+            stats_lines: vec![],
+            stats_at: None,
             error: None,
             heatmap: None,
             heatmap_job: None,
@@ -482,6 +316,7 @@ impl App {
         );
         self.gfx = Some(Gfx {
             blit: Blit::new(&gpu.device),
+            egui_layer: None,
             window,
             surface,
             config,
@@ -673,6 +508,7 @@ impl App {
             pixels_per_point: ppp,
         };
         let mut textures_delta = std::mem::take(&mut full_output.textures_delta);
+        let textures_changed = !textures_delta.set.is_empty();
         for (id, deltas) in textures_delta.set.drain() {
             for delta in &deltas {
                 gfx.egui_renderer
@@ -690,15 +526,50 @@ impl App {
             _ => [0, 0, 0, 0],
         };
         let view3d = [left as f32, 0.0, view_w as f32, size.height as f32];
-        let cmd = gfx.egui_renderer.update_buffers(
-            &gfx.gpu.device,
-            &gfx.gpu.queue,
-            &mut enc,
-            &jobs,
-            &screen,
-        );
         let plain = gfx.config.format;
         let srgb = plain.add_srgb_suffix();
+        // egui's panels, drawn into their layer only when they changed.
+        if gfx
+            .egui_layer
+            .as_ref()
+            .is_none_or(|l| l.size() != (size.width, size.height))
+        {
+            gfx.egui_layer = Some(EguiLayer::new(
+                &gfx.gpu.device,
+                plain,
+                size.width,
+                size.height,
+            ));
+        }
+        let layer = gfx.egui_layer.as_mut().expect("created above");
+        let mut cmd = vec![];
+        if layer.needs_drawing(&jobs, textures_changed) {
+            cmd = gfx.egui_renderer.update_buffers(
+                &gfx.gpu.device,
+                &gfx.gpu.queue,
+                &mut enc,
+                &jobs,
+                &screen,
+            );
+            let mut pass = enc
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("egui"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: layer.view(),
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    ..Default::default()
+                })
+                .forget_lifetime();
+            gfx.egui_renderer.render(&mut pass, &jobs, &screen);
+        }
+        let layer = gfx.egui_layer.as_ref().expect("created above");
+        let panels = blit::primitives_bounds(&jobs, ppp, size.width, size.height);
         let mut compose = |enc: &mut wgpu::CommandEncoder, target: WindowTarget| {
             gfx.blit.draw(
                 &gfx.gpu,
@@ -710,22 +581,17 @@ impl App {
                 &mask_view,
                 mode,
             );
-            let mut pass = enc
-                .begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("egui"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: target.plain,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    ..Default::default()
-                })
-                .forget_lifetime();
-            gfx.egui_renderer.render(&mut pass, &jobs, &screen);
+            if let Some(rect) = panels {
+                gfx.blit.draw_over(
+                    &gfx.gpu,
+                    enc,
+                    rect,
+                    target.plain,
+                    plain,
+                    layer.view(),
+                    &mask_view,
+                );
+            }
         };
         // The screenshot of this frame, when one is due.
         let heatmap_pending = self.options.heatmap && !self.heatmap_reported;

@@ -326,28 +326,45 @@ fn render_panel(ui: &mut egui::Ui, state: &mut ViewerState) {
     .on_hover_text("supersampling: the frame is rendered at twice the window size and filtered down (the mask architecture works per pixel, so this replaces MSAA)");
 }
 
-fn stats_panel(ui: &mut egui::Ui, state: &ViewerState, scene: &SceneState) {
+/// How often the statistics' text changes: readable, and the panels stay
+/// the same between changes (their layer is then not drawn again).
+const STATS_REFRESH: std::time::Duration = std::time::Duration::from_millis(250);
+
+fn stats_panel(ui: &mut egui::Ui, state: &mut ViewerState, scene: &SceneState) {
+    if state
+        .stats_at
+        .is_none_or(|at| at.elapsed() >= STATS_REFRESH)
+    {
+        state.stats_lines = stats_lines(state, scene);
+        state.stats_at = Some(std::time::Instant::now());
+    }
+    for line in &state.stats_lines {
+        ui.label(line);
+    }
+}
+
+fn stats_lines(state: &ViewerState, scene: &SceneState) -> Vec<String> {
     let n = state.frame_times.len().max(1) as f64;
     let mean = state.frame_times.iter().sum::<f64>() / n;
-    ui.label(format!(
+    let mut lines = vec![format!(
         "{:.1} FPS, frame {:.1} ms (mean of {} frames)",
         1000.0 / mean.max(1e-3),
         mean,
         state.frame_times.len()
-    ));
+    )];
     if let Some(t) = &state.last_timings {
-        ui.label(format!(
+        lines.push(format!(
             "wall: prepass {:.1}, masks {:.1}, lighting {:.1} ms",
             t.prepass_ms, t.masks_ms, t.lighting_ms
         ));
         if let Some(g) = &t.gpu {
-            ui.label(format!(
+            lines.push(format!(
                 "GPU: prepass {:.2}, masks {:.2}, lighting {:.2} ms",
                 g.prepass_ms, g.masks_ms, g.lighting_ms
             ));
         }
     }
-    ui.label(format!(
+    lines.push(format!(
         "triangles: {} drawn, {} casters",
         scene.scene_gpu.triangle_count, scene.scene_gpu.caster_triangle_count
     ));
@@ -359,9 +376,10 @@ fn stats_panel(ui: &mut egui::Ui, state: &ViewerState, scene: &SceneState) {
             .map(|(k, v)| format!("{k} {v:.0}"))
             .collect();
         if !c.is_empty() {
-            ui.label(format!("light {}: {}", i + 1, c.join(", ")));
+            lines.push(format!("light {}: {}", i + 1, c.join(", ")));
         }
     }
+    lines
 }
 
 fn debug_panel(
