@@ -5,8 +5,14 @@
 use crate::gpu::GpuContext;
 use egui::ClippedPrimitive;
 
-/// `Blit.mode.x` of blit.wgsl: the source with its alpha (a layer).
+/// `Blit.mode.x` of blit.wgsl: the view filtered down (supersampling).
+pub const BLIT_FILTERED: u32 = 0;
+/// A light's mask (layer `mode.y`) in grey.
+pub const BLIT_MASK: u32 = 1;
+/// A layer of the target's size with its alpha.
 const BLIT_LAYER: u32 = 2;
+/// The view, one texel per pixel.
+pub const BLIT_COPY: u32 = 3;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

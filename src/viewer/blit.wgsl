@@ -3,8 +3,9 @@
 // egui's cached layer over it.
 
 struct Blit {
-    // x mode (0 colour, 1 mask, 2 colour with its alpha: a premultiplied
-    // layer blended over the target), y mask layer
+    // x mode (0 colour, filtered down from a supersampled frame; 1 mask;
+    // 2 a premultiplied layer of the target's size, with its alpha; 3 colour
+    // of the viewport's size), y mask layer
     mode: vec4u,
 };
 
@@ -34,9 +35,11 @@ fn fs_blit(i: Out) -> @location(0) vec4f {
         let v = textureLoad(masks, vec2i(i.uv * size), i32(blit.mode.y), 0).r;
         return vec4f(vec3f(v), 1.0);
     }
-    let c = textureSample(source, linear_sampler, i.uv);
-    if blit.mode.x == 2u {
-        return c;
+    if blit.mode.x >= 2u {
+        // The source has the viewport's size: one texel per pixel, no filter.
+        let size = vec2f(textureDimensions(source));
+        let c = textureLoad(source, vec2i(i.uv * size), 0);
+        return select(vec4f(c.rgb, 1.0), c, blit.mode.x == 2u);
     }
-    return vec4f(c.rgb, 1.0);
+    return vec4f(textureSample(source, linear_sampler, i.uv).rgb, 1.0);
 }

@@ -522,8 +522,9 @@ impl App {
         });
         let mut enc = gfx.gpu.device.create_command_encoder(&Default::default());
         let mode = match self.state.overlay {
-            Overlay::Mask(l) if l < nl => [1, l as u32, 0, 0],
-            _ => [0, 0, 0, 0],
+            Overlay::Mask(l) if l < nl => [blit::BLIT_MASK, l as u32, 0, 0],
+            _ if ss == 1 => [blit::BLIT_COPY, 0, 0, 0],
+            _ => [blit::BLIT_FILTERED, 0, 0, 0],
         };
         let view3d = [left as f32, 0.0, view_w as f32, size.height as f32];
         let plain = gfx.config.format;
