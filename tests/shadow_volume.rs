@@ -5,8 +5,10 @@ mod common;
 use common::*;
 use glam::{Mat4, Vec3};
 use shadowlab::scene::{Camera, Light, LightType, Material, Scene, builtin, shapes};
-use shadowlab::technique::shadow_volume::ShadowVolumeRenderer;
+use shadowlab::technique::ParamValues;
+use shadowlab::technique::shadow_volume::config::VolumeConfig;
 use shadowlab::technique::shadow_volume::silhouette::{CasterPlan, VolumeKind};
+use shadowlab::technique::shadow_volume::{self, ShadowVolumeRenderer};
 
 /// A built-in scene seen from a camera preset under a light preset.
 fn preset(scene: &str, camera: &str, light: &str) -> Scene {
@@ -42,7 +44,9 @@ fn cpu_and_gpu_extrusion_give_the_same_volumes() {
     ] {
         let scene = preset(name, "default", light);
         let l = scene.lights[0];
-        let mut r = ShadowVolumeRenderer::new(gpu);
+        let config =
+            VolumeConfig::parse(&ParamValues::defaults(shadow_volume::FAMILY.params)).unwrap();
+        let mut r = ShadowVolumeRenderer::new(gpu, config);
         let casters = r.volume_mesh(gpu, &scene).casters.clone();
         for (kind, zfail) in [
             (VolumeKind::Silhouette, false),

@@ -60,8 +60,9 @@ impl MaskContext<'_> {
 /// layouts and pipelines are shared per device (`GpuContext::cache`); the
 /// instance owns its light's state (maps, volumes).
 pub trait ShadowTechnique: Send {
-    /// Parses the parameter values into the family's typed configuration;
-    /// called on creation and whenever a value changes.
+    /// Parses changed parameter values into the family's typed
+    /// configuration (the family's `create` parses the first ones); on an
+    /// error the configuration stays as it was.
     fn configure(&mut self, params: &ParamValues) -> Result<()>;
 
     /// Records (or performs) the work that writes the light's visibility mask
@@ -180,7 +181,8 @@ pub struct Family {
     pub params: &'static [ParamSpec],
     /// The first preset is the family's default (`family` = `family:<first>`).
     pub presets: &'static [Preset],
-    pub create: fn(&GpuContext) -> Result<Box<dyn ShadowTechnique>>,
+    /// A technique instance configured with the given values.
+    pub create: fn(&GpuContext, &ParamValues) -> Result<Box<dyn ShadowTechnique>>,
 }
 
 /// The registry: every technique family.
@@ -318,8 +320,7 @@ pub struct TechniqueInstance {
 
 impl TechniqueInstance {
     pub fn new(gpu: &GpuContext, choice: TechniqueChoice) -> Result<TechniqueInstance> {
-        let mut technique = (choice.family.create)(gpu)?;
-        technique.configure(&choice.params)?;
+        let technique = (choice.family.create)(gpu, &choice.params)?;
         Ok(TechniqueInstance { choice, technique })
     }
 

@@ -14,7 +14,7 @@ pub static FAMILY: Family = Family {
         summary: "all lit",
         values: &[],
     }],
-    create: |_| Ok(Box::new(NoShadows)),
+    create: |_, _| Ok(Box::new(NoShadows)),
 };
 
 pub struct NoShadows;

@@ -58,7 +58,12 @@ pub static FAMILY: Family = Family {
             values: &[("darkening", "0.5"), ("compose", "darken")],
         },
     ],
-    create: |gpu| Ok(Box::new(PlanarShadows::new(gpu))),
+    create: |gpu, params| {
+        Ok(Box::new(PlanarShadows::new(
+            gpu,
+            PlanarConfig::parse(params)?,
+        )))
+    },
 };
 
 #[repr(C)]
@@ -102,7 +107,7 @@ struct PlanarShared {
 
 pub struct PlanarShadows {
     shared: Arc<PlanarShared>,
-    config: Option<PlanarConfig>,
+    config: PlanarConfig,
     uniforms: wgpu::Buffer,
     planes: Option<(u64, Vec<ReceiverPlane>)>,
     drawn_planes: usize,
@@ -224,10 +229,10 @@ impl PlanarShared {
 }
 
 impl PlanarShadows {
-    pub fn new(gpu: &GpuContext) -> PlanarShadows {
+    fn new(gpu: &GpuContext, config: PlanarConfig) -> PlanarShadows {
         PlanarShadows {
             shared: gpu.cache.shared(|| PlanarShared::new(gpu)),
-            config: None,
+            config,
             uniforms: gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("planar uniforms"),
                 size: (std::mem::size_of::<PlanarUniform>() * MAX_PLANES) as u64,
@@ -242,18 +247,16 @@ impl PlanarShadows {
 
 impl ShadowTechnique for PlanarShadows {
     fn configure(&mut self, params: &ParamValues) -> Result<()> {
-        self.config = Some(PlanarConfig::parse(params)?);
+        self.config = PlanarConfig::parse(params)?;
         Ok(())
     }
 
     fn compose(&self) -> Compose {
-        self.config.map_or(Compose::Relight, |c| c.compose)
+        self.config.compose
     }
 
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        let config = self
-            .config
-            .ok_or_else(|| anyhow::anyhow!("planar: not configured"))?;
+        let config = self.config;
         let key = crate::scene::scene_fingerprint(ctx.scene);
         if self.planes.as_ref().is_none_or(|(k, _)| *k != key) {
             self.planes = Some((key, receiver_planes(ctx.scene)));

@@ -75,7 +75,12 @@ pub static FAMILY: Family = Family {
             values: &[("depth_in_alpha", "true")],
         },
     ],
-    create: |gpu| Ok(Box::new(ProjectiveShadows::new(gpu))),
+    create: |gpu, params| {
+        Ok(Box::new(ProjectiveShadows::new(
+            gpu,
+            ProjectiveConfig::parse(params)?,
+        )))
+    },
 };
 
 const TEXTURE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
@@ -110,7 +115,7 @@ struct ProjectiveShared {
 
 pub struct ProjectiveShadows {
     shared: Arc<ProjectiveShared>,
-    config: Option<ProjectiveConfig>,
+    config: ProjectiveConfig,
     uniforms: Option<wgpu::Buffer>,
     projectors: Vec<Projector>,
     /// (scene fingerprint, texture size) the projectors were made for.
@@ -204,10 +209,10 @@ impl ProjectiveShared {
 }
 
 impl ProjectiveShadows {
-    pub fn new(gpu: &GpuContext) -> ProjectiveShadows {
+    fn new(gpu: &GpuContext, config: ProjectiveConfig) -> ProjectiveShadows {
         ProjectiveShadows {
             shared: gpu.cache.shared(|| ProjectiveShared::new(gpu)),
-            config: None,
+            config,
             uniforms: None,
             projectors: vec![],
             made_for: None,
@@ -266,7 +271,7 @@ impl ProjectiveShadows {
 
 impl ShadowTechnique for ProjectiveShadows {
     fn configure(&mut self, params: &ParamValues) -> Result<()> {
-        self.config = Some(ProjectiveConfig::parse(params)?);
+        self.config = ProjectiveConfig::parse(params)?;
         Ok(())
     }
 
@@ -276,9 +281,7 @@ impl ShadowTechnique for ProjectiveShadows {
             margin,
             depth_in_alpha: depth_mode,
             alpha_bias,
-        } = self
-            .config
-            .ok_or_else(|| anyhow::anyhow!("projective: not configured"))?;
+        } = self.config;
         let key = (crate::scene::scene_fingerprint(ctx.scene), size);
         if self.made_for != Some(key) {
             self.make_projectors(ctx, size)?;

@@ -50,7 +50,16 @@ pub static FAMILY: Family = Family {
             values: &[("samples", "1024")],
         },
     ],
-    create: |_| Ok(Box::new(RayTraced::default())),
+    create: |_, params| {
+        Ok(Box::new(RayTraced {
+            settings: ReferenceSettings::from_params(params)?,
+            bvh: None,
+            rays: 0.0,
+            trace_ms: 0.0,
+            build_ms: 0.0,
+            bvh_bytes: 0,
+        }))
+    },
 };
 
 /// The reference's settings, read from its parameter table.
@@ -209,9 +218,8 @@ pub fn mask_from_gbuffer(
         .collect()
 }
 
-#[derive(Default)]
 pub struct RayTraced {
-    settings: Option<ReferenceSettings>,
+    settings: ReferenceSettings,
     bvh: Option<Arc<CasterBvh>>,
     rays: f64,
     trace_ms: f64,
@@ -221,7 +229,7 @@ pub struct RayTraced {
 
 impl ShadowTechnique for RayTraced {
     fn configure(&mut self, params: &ParamValues) -> Result<()> {
-        self.settings = Some(ReferenceSettings::from_params(params)?);
+        self.settings = ReferenceSettings::from_params(params)?;
         Ok(())
     }
 
@@ -243,7 +251,7 @@ impl ShadowTechnique for RayTraced {
             .iter()
             .map(|n| Vec3::new(n[0].to_f32(), n[1].to_f32(), n[2].to_f32()).normalize_or_zero())
             .collect();
-        let settings = self.settings.unwrap_or_else(ReferenceSettings::defaults);
+        let settings = self.settings;
         let samples = settings.samples_for(ctx.light);
         let t = Instant::now();
         let mask = mask_from_gbuffer(

@@ -30,7 +30,12 @@ pub static FAMILY: Family = Family {
     summary: "shadow maps: depth from the light, compared per pixel, with the PCF family of filters",
     params: config::PARAMS,
     presets: config::PRESETS,
-    create: |gpu| Ok(Box::new(ShadowMapTechnique::new(gpu))),
+    create: |gpu, params| {
+        Ok(Box::new(ShadowMapTechnique::new(
+            gpu,
+            ShadowMapConfig::parse(params)?,
+        )))
+    },
 };
 
 #[repr(C)]
@@ -62,7 +67,7 @@ struct Maps {
 
 pub struct ShadowMapTechnique {
     shared: Arc<ShadowMapShared>,
-    config: Option<ShadowMapConfig>,
+    config: ShadowMapConfig,
     uniforms: wgpu::Buffer,
     maps: Option<Maps>,
     /// Shadow maps rendered per face last frame (area lights: several).
@@ -80,10 +85,10 @@ pub struct ShadowMapTechnique {
 const STRIDE: u64 = 512;
 const SLOTS: u64 = 18;
 impl ShadowMapTechnique {
-    pub fn new(gpu: &GpuContext) -> ShadowMapTechnique {
+    pub fn new(gpu: &GpuContext, config: ShadowMapConfig) -> ShadowMapTechnique {
         ShadowMapTechnique {
             shared: gpu.cache.shared(|| ShadowMapShared::new(gpu)),
-            config: None,
+            config,
             uniforms: gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("shadow map uniforms"),
                 size: STRIDE * SLOTS,
@@ -218,14 +223,12 @@ fn clear_op(color: wgpu::Color) -> wgpu::Operations<wgpu::Color> {
 
 impl ShadowTechnique for ShadowMapTechnique {
     fn configure(&mut self, params: &ParamValues) -> Result<()> {
-        self.config = Some(ShadowMapConfig::parse(params)?);
+        self.config = ShadowMapConfig::parse(params)?;
         Ok(())
     }
 
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        let c = self
-            .config
-            .ok_or_else(|| anyhow::anyhow!("shadow-map: not configured"))?;
+        let c = self.config;
         let gpu = ctx.gpu;
         if self.want_debug && self.debug.is_none() {
             self.debug = Some(crate::gpu::texture_2d(

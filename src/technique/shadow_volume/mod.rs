@@ -41,7 +41,12 @@ pub static FAMILY: Family = Family {
     summary: "stencil shadow volumes: silhouettes extruded away from the light, counted in the stencil buffer (exact hard shadows)",
     params: config::PARAMS,
     presets: config::PRESETS,
-    create: |gpu| Ok(Box::new(ShadowVolumeRenderer::new(gpu))),
+    create: |gpu, params| {
+        Ok(Box::new(ShadowVolumeRenderer::new(
+            gpu,
+            VolumeConfig::parse(params)?,
+        )))
+    },
 };
 
 #[repr(C)]
@@ -123,7 +128,7 @@ struct Stats {
 
 pub struct ShadowVolumeRenderer {
     shared: Arc<VolumeShared>,
-    config: Option<VolumeConfig>,
+    config: VolumeConfig,
     uniform: wgpu::Buffer,
     extrude_params: wgpu::Buffer,
     indices: wgpu::Buffer,
@@ -216,7 +221,7 @@ pub fn range_scissor(light: &Light, view_proj: Mat4, width: u32, height: u32) ->
 }
 
 impl ShadowVolumeRenderer {
-    pub fn new(gpu: &GpuContext) -> ShadowVolumeRenderer {
+    pub fn new(gpu: &GpuContext, config: VolumeConfig) -> ShadowVolumeRenderer {
         let device = &gpu.device;
         let usage_args = wgpu::BufferUsages::INDIRECT
             | wgpu::BufferUsages::STORAGE
@@ -241,7 +246,7 @@ impl ShadowVolumeRenderer {
         });
         ShadowVolumeRenderer {
             shared: gpu.cache.shared(|| VolumeShared::new(gpu)),
-            config: None,
+            config,
             uniform: buffer(
                 device,
                 "shadow volume uniform",
@@ -591,24 +596,21 @@ fn index_usage() -> wgpu::BufferUsages {
 
 impl ShadowTechnique for ShadowVolumeRenderer {
     fn configure(&mut self, params: &ParamValues) -> Result<()> {
-        self.config = Some(VolumeConfig::parse(params)?);
+        self.config = VolumeConfig::parse(params)?;
         Ok(())
     }
 
     fn compose(&self) -> Compose {
-        self.config.map_or(Compose::Relight, |c| c.compose)
+        self.config.compose
     }
 
     fn infinite_far_plane(&self) -> bool {
-        self.config.is_some_and(|c| {
-            c.length <= 0.0 && (c.far_plane == FarPlane::Infinite || !self.depth_clamp)
-        })
+        let c = &self.config;
+        c.length <= 0.0 && (c.far_plane == FarPlane::Infinite || !self.depth_clamp)
     }
 
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        let config = self
-            .config
-            .ok_or_else(|| anyhow::anyhow!("shadow-volume: not configured"))?;
+        let config = self.config;
         let gpu = ctx.gpu;
         self.ensure_geometry(gpu, ctx.scene);
         let plans = self.plan(ctx, &config)?;
