@@ -371,9 +371,7 @@ fn render(a: RenderArgs) -> Result<()> {
         frame: &hf.frame,
         timings: &timings,
         adapter: gpu.adapter_summary(),
-        anisotropy: settings
-            .anisotropy
-            .unwrap_or_else(|| gpu.default_anisotropy()),
+        anisotropy: settings.texture_anisotropy(&gpu),
         extra_timings: serde_json::json!({
             "scene_load": t_scene.as_secs_f64() * 1e3,
             "gpu_init": t_gpu.as_secs_f64() * 1e3,

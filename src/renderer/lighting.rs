@@ -193,10 +193,7 @@ impl Lighting {
     ) {
         pass.set_bind_group(frame::FRAME_GROUP, frame.frame_bind_group(), &[]);
         pass.set_bind_group(frame::OBJECTS_GROUP, &scene_gpu.object_bind_group, &[]);
-        let anisotropy = settings
-            .anisotropy
-            .unwrap_or_else(|| gpu.default_anisotropy())
-            .clamp(1, 16);
+        let anisotropy = settings.texture_anisotropy(gpu);
         pass.set_bind_group(
             LIGHTING_GROUP,
             &self.bind_group(gpu, frame, anisotropy),

@@ -69,6 +69,16 @@ pub struct RenderSettings {
     pub anisotropy: Option<u16>,
 }
 
+impl RenderSettings {
+    /// The anisotropy the material textures are filtered with on `gpu`:
+    /// the chosen one (1 to 16) or the device's default.
+    pub fn texture_anisotropy(&self, gpu: &GpuContext) -> u16 {
+        self.anisotropy
+            .unwrap_or_else(|| gpu.default_anisotropy())
+            .clamp(1, 16)
+    }
+}
+
 impl Default for RenderSettings {
     fn default() -> Self {
         RenderSettings {

@@ -714,11 +714,7 @@ impl App {
                 frame,
                 timings: &timings,
                 adapter: gfx.gpu.adapter_summary(),
-                anisotropy: self
-                    .state
-                    .settings
-                    .anisotropy
-                    .unwrap_or_else(|| gfx.gpu.default_anisotropy()),
+                anisotropy: self.state.settings.texture_anisotropy(&gfx.gpu),
                 extra_timings: serde_json::json!({"supersampling": ss}),
             };
             std::fs::write(
