@@ -30,7 +30,7 @@ pub fn read_back(
     frame: &FrameTargets,
     light_count: usize,
 ) -> Result<FrameImages> {
-    let color = gpu.read_texture(frame.color(), 0, 4)?;
+    let color = frame.read_color_rgba(gpu)?;
     let masks = (0..light_count)
         .map(|i| {
             let raw = gpu.read_texture(frame.masks(), i as u32, 2)?;

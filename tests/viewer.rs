@@ -166,3 +166,63 @@ fn the_mask_overlay_shows_the_mask() {
         stderr(&o)
     );
 }
+
+/// The window shows exactly the frame `shadowlab render` makes of the same
+/// view: the view reaches the window by a copy in the window's colour
+/// format (BGRA here) or by a blit, with no change to any pixel.
+#[test]
+fn the_window_shows_the_rendered_frame_unchanged() {
+    let dir = tmpdir("viewer-exact");
+    let shot = dir.join("view.png");
+    let o = view_under_xvfb(
+        &[
+            "--scene",
+            "room",
+            "--technique",
+            "none",
+            "--light",
+            "spot",
+            "--size",
+            "800x450",
+            "--frames",
+            "3",
+        ],
+        &shot,
+    );
+    assert!(o.status.success(), "viewer failed: {}", stderr(&o));
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("view.json")).unwrap()).unwrap();
+    let (w, h) = (
+        j["size"]["width"].as_u64().unwrap() as u32,
+        j["size"]["height"].as_u64().unwrap() as u32,
+    );
+    assert!(w < 800 && h == 450, "view {w}x{h} beside the panel");
+    let out = dir.join("render");
+    let size = format!("{w}x{h}");
+    let o = shadowlab(&[
+        "render",
+        "--scene",
+        "room",
+        "--technique",
+        "none",
+        "--light",
+        "spot",
+        "--size",
+        &size,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "render failed: {}", stderr(&o));
+    let window = image::open(&shot).unwrap().to_rgba8();
+    let frame = image::open(out.join("image.png")).unwrap().to_rgba8();
+    let left = 800 - w;
+    let mut differing = 0;
+    for (x, y, p) in frame.enumerate_pixels() {
+        let q = window.get_pixel(left + x, y);
+        if (0..3).any(|c| p[c].abs_diff(q[c]) > 1) {
+            differing += 1;
+        }
+    }
+    // The viewer's FPS line does not reach the view; nothing else differs.
+    assert_eq!(differing, 0, "{differing} of {w}x{h} pixels differ");
+}

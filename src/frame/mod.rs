@@ -25,7 +25,15 @@ pub const MASK_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R16Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth24PlusStencil8;
 pub const GBUFFER_POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const GBUFFER_NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// The colour image's format unless a frame asks for another of
+/// [`COLOR_FORMATS`] (the viewer takes its window's, so that the view reaches
+/// the window by a plain copy).
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// The colour formats a frame can have: 8-bit sRGB, RGBA or BGRA order.
+pub const COLOR_FORMATS: [wgpu::TextureFormat; 2] = [
+    wgpu::TextureFormat::Rgba8UnormSrgb,
+    wgpu::TextureFormat::Bgra8UnormSrgb,
+];
 
 /// Bind group indices shared by every pass: the frame uniform, the object
 /// table, the pass's own resources, the G-buffer (technique passes).

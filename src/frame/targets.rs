@@ -4,7 +4,7 @@
 //! the uniform.
 
 use super::{
-    COLOR_FORMAT, DEPTH_FORMAT, FrameLayouts, FrameUniform, GBUFFER_NORMAL_FORMAT,
+    COLOR_FORMAT, COLOR_FORMATS, DEPTH_FORMAT, FrameLayouts, FrameUniform, GBUFFER_NORMAL_FORMAT,
     GBUFFER_POSITION_FORMAT, MASK_FORMAT, MAX_LIGHTS,
 };
 use crate::gpu::GpuContext;
@@ -33,9 +33,23 @@ pub struct FrameTargets {
 }
 
 impl FrameTargets {
-    /// Creates the targets for a `width × height` frame. Errors on a zero
-    /// or over-limit size.
+    /// Creates the targets for a `width × height` frame with a
+    /// [`COLOR_FORMAT`] colour image. Errors on a zero or over-limit size.
     pub fn new(gpu: &GpuContext, width: u32, height: u32) -> Result<FrameTargets> {
+        Self::with_color_format(gpu, width, height, COLOR_FORMAT)
+    }
+
+    /// As [`FrameTargets::new`], with a colour image of `color_format`, one
+    /// of [`COLOR_FORMATS`].
+    pub fn with_color_format(
+        gpu: &GpuContext,
+        width: u32,
+        height: u32,
+        color_format: wgpu::TextureFormat,
+    ) -> Result<FrameTargets> {
+        if !COLOR_FORMATS.contains(&color_format) {
+            bail!("{color_format:?} is not a colour format of frames (one of {COLOR_FORMATS:?})");
+        }
         let layouts = FrameLayouts::of(gpu);
         let max = gpu.max_texture_size();
         if width == 0 || height == 0 || width > max || height > max {
@@ -110,7 +124,7 @@ impl FrameTargets {
             width,
             height,
             1,
-            COLOR_FORMAT,
+            color_format,
             U::RENDER_ATTACHMENT | U::COPY_SRC | U::TEXTURE_BINDING,
         );
         let color_view = color.create_view(&Default::default());
@@ -233,6 +247,22 @@ impl FrameTargets {
 
     pub fn color_view(&self) -> &wgpu::TextureView {
         &self.color_view
+    }
+
+    pub fn color_format(&self) -> wgpu::TextureFormat {
+        self.color.format()
+    }
+
+    /// The colour image read back as RGBA8 (sRGB-encoded), whatever the
+    /// order of its channels on the GPU.
+    pub fn read_color_rgba(&self, gpu: &GpuContext) -> Result<Vec<u8>> {
+        let mut rgba = gpu.read_texture(&self.color, 0, 4)?;
+        if self.color_format() == wgpu::TextureFormat::Bgra8UnormSrgb {
+            for p in rgba.chunks_exact_mut(4) {
+                p.swap(0, 2);
+            }
+        }
+        Ok(rgba)
     }
 }
 

@@ -2,7 +2,7 @@
 //! directional lights, an arrow inside a cone for spot lights; unlit, in the
 //! light's colour, sized from the scene bounds.
 
-use crate::frame::MAX_LIGHTS;
+use crate::frame::{FrameTargets, MAX_LIGHTS};
 use crate::gpu::GpuContext;
 use crate::scene::{Aabb, Light, LightType, Mesh, shapes};
 use bytemuck::{Pod, Zeroable};
@@ -31,7 +31,8 @@ struct IconMesh {
 }
 
 pub struct LightIcons {
-    pipeline: wgpu::RenderPipeline,
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
     uniforms: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     /// point, directional, spot
@@ -114,44 +115,12 @@ impl LightIcons {
             bind_group_layouts: &[Some(frame_layout), None, Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = gpu.cache.render_pipeline("icons", &(), || {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("icons"),
-                layout: Some(&pl),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_icon"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: std::mem::size_of::<IconVertex>() as u64,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
-                    })],
-                },
-                primitive: Default::default(),
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: crate::frame::DEPTH_FORMAT,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_icon"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(crate::frame::COLOR_FORMAT.into())],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        });
         let mut spot = arrow();
         let cone = shapes::lathe("cone", &[Vec2::new(0.45, 0.0), Vec2::new(0.0, 0.9)], 24);
         spot.append(&cone, Mat4::from_translation(Vec3::new(0.0, -0.9, 0.0)));
         LightIcons {
-            pipeline,
+            module,
+            layout: pl,
             uniforms,
             bind_group,
             meshes: [
@@ -160,6 +129,49 @@ impl LightIcons {
                 upload(device, spot),
             ],
         }
+    }
+
+    /// The pipeline drawing into a colour image of `color_format`.
+    fn pipeline(
+        &self,
+        gpu: &GpuContext,
+        color_format: wgpu::TextureFormat,
+    ) -> wgpu::RenderPipeline {
+        let module = &self.module;
+        gpu.cache.render_pipeline("icons", &color_format, || {
+            gpu.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("icons"),
+                    layout: Some(&self.layout),
+                    vertex: wgpu::VertexState {
+                        module,
+                        entry_point: Some("vs_icon"),
+                        compilation_options: Default::default(),
+                        buffers: &[Some(wgpu::VertexBufferLayout {
+                            array_stride: std::mem::size_of::<IconVertex>() as u64,
+                            step_mode: wgpu::VertexStepMode::Vertex,
+                            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+                        })],
+                    },
+                    primitive: Default::default(),
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: crate::frame::DEPTH_FORMAT,
+                        depth_write_enabled: Some(false),
+                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module,
+                        entry_point: Some("fs_icon"),
+                        compilation_options: Default::default(),
+                        targets: &[Some(color_format.into())],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+        })
     }
 
     /// Model matrix of a light's icon: at the light (directional lights:
@@ -185,7 +197,7 @@ impl LightIcons {
         &self,
         gpu: &GpuContext,
         pass: &mut wgpu::RenderPass,
-        frame: &wgpu::BindGroup,
+        frame: &FrameTargets,
         lights: &[Light],
         bounds: &Aabb,
     ) {
@@ -201,8 +213,8 @@ impl LightIcons {
             .collect();
         gpu.queue
             .write_buffer(&self.uniforms, 0, bytemuck::cast_slice(&data));
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, frame, &[]);
+        pass.set_pipeline(&self.pipeline(gpu, frame.color_format()));
+        pass.set_bind_group(0, frame.frame_bind_group(), &[]);
         for (i, l) in lights.iter().enumerate() {
             let mesh = &self.meshes[match l.kind {
                 LightType::Point => 0,

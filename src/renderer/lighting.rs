@@ -139,46 +139,52 @@ impl Lighting {
         })
     }
 
-    fn pipeline(&self, gpu: &GpuContext, key: LitKey) -> wgpu::RenderPipeline {
-        gpu.cache.render_pipeline("lighting", &key, || {
-            let constants = key.constants();
-            let options = wgpu::PipelineCompilationOptions {
-                constants: &constants,
-                ..Default::default()
-            };
-            let (vs, fs) = key.entry_points();
-            gpu.device
-                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("lighting"),
-                    layout: Some(&self.layout),
-                    vertex: wgpu::VertexState {
-                        module: &self.module,
-                        entry_point: Some(vs),
-                        compilation_options: options.clone(),
-                        buffers: &[Some(frame::VERTEX_LAYOUT)],
-                    },
-                    primitive: wgpu::PrimitiveState {
-                        cull_mode: key.cull_back_faces.then_some(wgpu::Face::Back),
-                        ..Default::default()
-                    },
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: frame::DEPTH_FORMAT,
-                        depth_write_enabled: Some(false),
-                        depth_compare: Some(wgpu::CompareFunction::Equal),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &self.module,
-                        entry_point: Some(fs),
-                        compilation_options: options,
-                        targets: &[Some(frame::COLOR_FORMAT.into())],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
-        })
+    fn pipeline(
+        &self,
+        gpu: &GpuContext,
+        key: LitKey,
+        color_format: wgpu::TextureFormat,
+    ) -> wgpu::RenderPipeline {
+        gpu.cache
+            .render_pipeline("lighting", &(key, color_format), || {
+                let constants = key.constants();
+                let options = wgpu::PipelineCompilationOptions {
+                    constants: &constants,
+                    ..Default::default()
+                };
+                let (vs, fs) = key.entry_points();
+                gpu.device
+                    .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                        label: Some("lighting"),
+                        layout: Some(&self.layout),
+                        vertex: wgpu::VertexState {
+                            module: &self.module,
+                            entry_point: Some(vs),
+                            compilation_options: options.clone(),
+                            buffers: &[Some(frame::VERTEX_LAYOUT)],
+                        },
+                        primitive: wgpu::PrimitiveState {
+                            cull_mode: key.cull_back_faces.then_some(wgpu::Face::Back),
+                            ..Default::default()
+                        },
+                        depth_stencil: Some(wgpu::DepthStencilState {
+                            format: frame::DEPTH_FORMAT,
+                            depth_write_enabled: Some(false),
+                            depth_compare: Some(wgpu::CompareFunction::Equal),
+                            stencil: Default::default(),
+                            bias: Default::default(),
+                        }),
+                        multisample: Default::default(),
+                        fragment: Some(wgpu::FragmentState {
+                            module: &self.module,
+                            entry_point: Some(fs),
+                            compilation_options: options,
+                            targets: &[Some(color_format.into())],
+                        }),
+                        multiview_mask: None,
+                        cache: None,
+                    })
+            })
     }
 
     /// Draws every object with its material's variant.
@@ -213,7 +219,7 @@ impl Lighting {
                     material: scene_gpu.material_variants[d.material],
                 };
                 if bound_key != Some(key) {
-                    pass.set_pipeline(&self.pipeline(gpu, key));
+                    pass.set_pipeline(&self.pipeline(gpu, key, frame.color_format()));
                     bound_key = Some(key);
                 }
                 pass.set_bind_group(

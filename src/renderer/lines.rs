@@ -1,7 +1,7 @@
 //! Debug lines drawn over a rendered frame, depth-tested against the scene:
 //! what techniques offer as debug views (light frusta, silhouette edges).
 
-use crate::frame::{COLOR_FORMAT, DEPTH_FORMAT, FrameTargets};
+use crate::frame::{DEPTH_FORMAT, FrameTargets};
 use crate::gpu::GpuContext;
 use crate::technique::DebugLine;
 use wgpu::util::DeviceExt;
@@ -14,7 +14,8 @@ struct LineVertex {
 }
 
 pub struct LineRenderer {
-    pipeline: wgpu::RenderPipeline,
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
 }
 
 impl LineRenderer {
@@ -26,47 +27,57 @@ impl LineRenderer {
             bind_group_layouts: &[Some(frame_layout)],
             immediate_size: 0,
         });
-        let pipeline = gpu.cache.render_pipeline("lines", &(), || {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("lines"),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_line"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: std::mem::size_of::<LineVertex>() as u64,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
-                    })],
-                },
-                primitive: wgpu::PrimitiveState {
-                    topology: wgpu::PrimitiveTopology::LineList,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_line"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: COLOR_FORMAT,
-                        blend: Some(wgpu::BlendState::ALPHA_BLENDING),
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        });
-        LineRenderer { pipeline }
+        LineRenderer { module, layout }
+    }
+
+    /// The pipeline drawing into a colour image of `color_format`.
+    fn pipeline(
+        &self,
+        gpu: &GpuContext,
+        color_format: wgpu::TextureFormat,
+    ) -> wgpu::RenderPipeline {
+        let module = &self.module;
+        gpu.cache.render_pipeline("lines", &color_format, || {
+            gpu.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("lines"),
+                    layout: Some(&self.layout),
+                    vertex: wgpu::VertexState {
+                        module,
+                        entry_point: Some("vs_line"),
+                        compilation_options: Default::default(),
+                        buffers: &[Some(wgpu::VertexBufferLayout {
+                            array_stride: std::mem::size_of::<LineVertex>() as u64,
+                            step_mode: wgpu::VertexStepMode::Vertex,
+                            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
+                        })],
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        topology: wgpu::PrimitiveTopology::LineList,
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH_FORMAT,
+                        depth_write_enabled: Some(false),
+                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module,
+                        entry_point: Some("fs_line"),
+                        compilation_options: Default::default(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format: color_format,
+                            blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+        })
     }
 
     /// Draws `lines` onto the frame's colour image.
@@ -113,7 +124,7 @@ impl LineRenderer {
                 }),
                 ..Default::default()
             });
-            pass.set_pipeline(&self.pipeline);
+            pass.set_pipeline(&self.pipeline(gpu, frame.color_format()));
             pass.set_bind_group(0, frame.frame_bind_group(), &[]);
             pass.set_vertex_buffer(0, buffer.slice(..));
             pass.draw(0..vertices.len() as u32, 0..1);

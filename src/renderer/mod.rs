@@ -370,13 +370,8 @@ impl Renderer {
             settings,
         );
         if settings.show_light_icons {
-            self.icons.draw(
-                gpu,
-                &mut pass,
-                frame.frame_bind_group(),
-                lights,
-                &scene_gpu.bounds,
-            );
+            self.icons
+                .draw(gpu, &mut pass, frame, lights, &scene_gpu.bounds);
         }
     }
 }

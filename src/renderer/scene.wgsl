@@ -23,10 +23,14 @@ struct MaterialGpu {
 @group(3) @binding(0) var masks: texture_2d_array<f32>;
 @group(3) @binding(1) var tex_sampler: sampler;
 
+// Per-object values reach the fragment stage as flat varyings: one object
+// table read per vertex instead of one per pixel (a storage-buffer read per
+// pixel costs lavapipe more than the whole face normal).
 struct GOut {
     @invariant @builtin(position) clip: vec4f,
     @location(0) world_pos: vec3f,
     @location(1) @interpolate(flat) object: u32,
+    @location(2) @interpolate(flat) receives: u32,
 };
 
 @vertex
@@ -35,6 +39,7 @@ fn vs_gbuffer(v: VertexIn) -> GOut {
     o.clip = clip_position(v.object, v.position);
     o.world_pos = (objects[v.object].model * vec4f(v.position, 1.0)).xyz;
     o.object = v.object;
+    o.receives = objects[v.object].info.z;
     return o;
 }
 
@@ -58,7 +63,7 @@ struct GBuffer {
 fn fs_gbuffer(i: GOut) -> GBuffer {
     var g: GBuffer;
     g.position = vec4f(i.world_pos, f32(i.object + 1u));
-    g.normal = vec4f(face_normal(i.world_pos), f32(objects[i.object].info.z));
+    g.normal = vec4f(face_normal(i.world_pos), f32(i.receives));
     return g;
 }
 
@@ -87,7 +92,7 @@ struct LitOut {
     @location(2) uv: vec2f,
     @location(3) tangent: vec4f,
     @location(4) local_pos: vec3f,
-    @location(5) @interpolate(flat) object: u32,
+    @location(5) @interpolate(flat) receives: u32,
 };
 
 // Gouraud: the vertex's lighting terms ride along, per light diffuse (rgb)
@@ -97,7 +102,7 @@ struct GouraudOut {
     @location(0) world_pos: vec3f,
     @location(1) uv: vec2f,
     @location(2) local_pos: vec3f,
-    @location(3) @interpolate(flat) object: u32,
+    @location(3) @interpolate(flat) receives: u32,
     @location(4) diffuse0: vec3f,
     @location(5) diffuse1: vec3f,
     @location(6) diffuse2: vec3f,
@@ -182,7 +187,7 @@ fn vs_lit(v: VertexIn) -> LitOut {
     let mirror = sign(determinant(mat3x3f(obj.model[0].xyz, obj.model[1].xyz, obj.model[2].xyz)));
     o.tangent = vec4f(normalize((obj.model * vec4f(v.tangent.xyz, 0.0)).xyz), v.tangent.w * mirror);
     o.local_pos = v.position;
-    o.object = v.object;
+    o.receives = obj.info.z;
     return o;
 }
 
@@ -194,7 +199,7 @@ fn vs_lit_gouraud(v: VertexIn) -> GouraudOut {
     o.world_pos = (obj.model * vec4f(v.position, 1.0)).xyz;
     o.uv = v.uv;
     o.local_pos = v.position;
-    o.object = v.object;
+    o.receives = obj.info.z;
     // Intensities per vertex, interpolated (SEEDS §1).
     let n = world_normal(obj, v.normal);
     let view = normalize(frame.camera_pos.xyz - o.world_pos);
@@ -271,7 +276,7 @@ fn visibility(px: vec2i, l: u32, receives: bool) -> f32 {
 
 @fragment
 fn fs_lit(i: LitOut) -> @location(0) vec4f {
-    let receives = objects[i.object].info.z != 0u;
+    let receives = i.receives != 0u;
     let view = normalize(frame.camera_pos.xyz - i.world_pos);
     let uv = i.uv * material.ka.w;
     let surface = surface_colors(uv, i.local_pos);
@@ -301,7 +306,7 @@ fn fs_lit(i: LitOut) -> @location(0) vec4f {
 
 @fragment
 fn fs_lit_gouraud(i: GouraudOut) -> @location(0) vec4f {
-    let receives = objects[i.object].info.z != 0u;
+    let receives = i.receives != 0u;
     let surface = surface_colors(i.uv * material.ka.w, i.local_pos);
     let px = vec2i(i.clip.xy);
     var acc = Composed(frame.ambient.rgb * surface.ka, 1.0);

@@ -20,6 +20,15 @@ struct BlitUniform {
     mode: [u32; 4],
 }
 
+/// How [`Blit::draw_layer`] puts a layer on its target.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LayerBlend {
+    /// Blended over what the target holds (premultiplied alpha).
+    Over,
+    /// Over black, replacing what the target holds.
+    Opaque,
+}
+
 /// Draws a texture (or a mask layer) over a whole target.
 pub struct Blit {
     layout: wgpu::BindGroupLayout,
@@ -164,21 +173,26 @@ impl Blit {
         pass.draw(0..3, 0..1);
     }
 
-    /// Blends `layer` (premultiplied alpha, the target's size) over the
-    /// `scissor` rectangle (x, y, w, h) of `target`.
+    /// Draws `layer` (premultiplied alpha, the target's size) into the
+    /// `scissor` rectangle (x, y, w, h) of `target` (a view and its
+    /// format), keeping the rest of the target.
     #[allow(clippy::too_many_arguments)]
-    pub fn draw_over(
+    pub fn draw_layer(
         &mut self,
         gpu: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         scissor: [u32; 4],
-        target: &wgpu::TextureView,
-        format: wgpu::TextureFormat,
+        (target, format): (&wgpu::TextureView, wgpu::TextureFormat),
         layer: &wgpu::TextureView,
         masks: &wgpu::TextureView,
+        blend: LayerBlend,
     ) {
-        let bind_group = self.bind_group(gpu, layer, masks, [BLIT_LAYER, 0, 0, 0]);
-        let pipeline = self.pipeline(&gpu.device, format, true).clone();
+        let (mode, over) = match blend {
+            LayerBlend::Over => (BLIT_LAYER, true),
+            LayerBlend::Opaque => (BLIT_COPY, false),
+        };
+        let bind_group = self.bind_group(gpu, layer, masks, [mode, 0, 0, 0]);
+        let pipeline = self.pipeline(&gpu.device, format, over).clone();
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("blit over"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -354,6 +368,14 @@ pub fn primitives_bounds(
     (x1 > x0 && y1 > y0).then_some([x0, y0, x1 - x0, y1 - y0])
 }
 
+/// The part of `rect` (x, y, w, h) right of column `x0`; `None` when empty.
+pub fn right_of(rect: [u32; 4], x0: u32) -> Option<[u32; 4]> {
+    let [x, y, w, h] = rect;
+    let start = x.max(x0);
+    let end = x + w;
+    (end > start).then(|| [start, y, end - start, h])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -410,5 +432,13 @@ mod tests {
         // Within the target.
         assert_eq!(primitives_bounds(&p, 2.0, 30, 50), Some([2, 4, 28, 46]));
         assert_eq!(primitives_bounds(&[], 1.0, 100, 100), None);
+    }
+
+    #[test]
+    fn the_part_right_of_a_column_is_clipped_or_empty() {
+        assert_eq!(right_of([0, 5, 300, 40], 250), Some([250, 5, 50, 40]));
+        assert_eq!(right_of([260, 5, 30, 40], 250), Some([260, 5, 30, 40]));
+        assert_eq!(right_of([0, 5, 250, 40], 250), None);
+        assert_eq!(right_of([0, 5, 100, 40], 250), None);
     }
 }

@@ -14,7 +14,7 @@ use crate::renderer::{FrameTimings, RenderSettings, Renderer};
 use crate::scene::{self, Camera, Light, Scene};
 use crate::technique::{self, TechniqueChoice, TechniqueInstance};
 use anyhow::{Context as _, Result, anyhow};
-use blit::{Blit, EguiLayer};
+use blit::{Blit, EguiLayer, LayerBlend};
 use glam::Vec2;
 use std::path::PathBuf;
 use std::sync::{Arc, mpsc};
@@ -47,6 +47,7 @@ pub struct ViewerOptions {
 /// plain one. Frames are composed straight into the surface; a screenshot
 /// composes the same frame once more into a texture that can be read.
 struct WindowTarget<'a> {
+    texture: &'a wgpu::Texture,
     srgb: &'a wgpu::TextureView,
     plain: &'a wgpu::TextureView,
 }
@@ -112,6 +113,9 @@ struct Gfx {
     gpu: GpuContext,
     renderer: Renderer,
     frame: Option<FrameTargets>,
+    /// The frame's colour format: the window's (sRGB view) where the window
+    /// takes copies, so that the view reaches it by a plain copy.
+    frame_color_format: wgpu::TextureFormat,
     blit: Blit,
     /// egui's panels, drawn when they change and blended over every frame.
     egui_layer: Option<EguiLayer>,
@@ -287,6 +291,16 @@ impl App {
         }
         config.view_formats = vec![config.format.add_srgb_suffix()];
         config.present_mode = present_mode(self.state.vsync);
+        // The view is copied into the window when the window takes copies
+        // in a colour format of frames; otherwise it is drawn (a blit).
+        let frame_color_format = if caps.usages.contains(wgpu::TextureUsages::COPY_DST)
+            && crate::frame::COLOR_FORMATS.contains(&config.format.add_srgb_suffix())
+        {
+            config.usage |= wgpu::TextureUsages::COPY_DST;
+            config.format.add_srgb_suffix()
+        } else {
+            crate::frame::COLOR_FORMAT
+        };
         surface.configure(&gpu.device, &config);
         crate::frame::check_formats(&gpu)?;
         let renderer = Renderer::new(&gpu);
@@ -315,6 +329,7 @@ impl App {
             },
         );
         self.gfx = Some(Gfx {
+            frame_color_format,
             blit: Blit::new(&gpu.device),
             egui_layer: None,
             window,
@@ -406,7 +421,12 @@ impl App {
             .as_ref()
             .is_none_or(|f| (f.width(), f.height()) != (fw, fh))
         {
-            gfx.frame = Some(FrameTargets::new(&gfx.gpu, fw, fh)?);
+            gfx.frame = Some(FrameTargets::with_color_format(
+                &gfx.gpu,
+                fw,
+                fh,
+                gfx.frame_color_format,
+            )?);
         }
         if self.state.show_debug != self.state.debug_enabled {
             for t in &mut scene.techniques {
@@ -571,7 +591,51 @@ impl App {
         }
         let layer = gfx.egui_layer.as_ref().expect("created above");
         let panels = blit::primitives_bounds(&jobs, ppp, size.width, size.height);
+        // The view one texel per pixel in the window's format is copied (on
+        // a CPU adapter a draw costs about as much as the prepass), the panels
+        // left of it are drawn opaque and the panels over it blended.
+        let copy_view = mode[0] == blit::BLIT_COPY && frame.color_format() == srgb;
         let mut compose = |enc: &mut wgpu::CommandEncoder, target: WindowTarget| {
+            if copy_view {
+                enc.copy_texture_to_texture(
+                    frame.color().as_image_copy(),
+                    wgpu::TexelCopyTextureInfo {
+                        texture: target.texture,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d {
+                            x: left,
+                            y: 0,
+                            z: 0,
+                        },
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    frame.color().size(),
+                );
+                if left > 0 {
+                    let beside = [0, 0, left, size.height];
+                    gfx.blit.draw_layer(
+                        &gfx.gpu,
+                        enc,
+                        beside,
+                        (target.plain, plain),
+                        layer.view(),
+                        &mask_view,
+                        LayerBlend::Opaque,
+                    );
+                }
+                if let Some(over) = panels.and_then(|r| blit::right_of(r, left)) {
+                    gfx.blit.draw_layer(
+                        &gfx.gpu,
+                        enc,
+                        over,
+                        (target.plain, plain),
+                        layer.view(),
+                        &mask_view,
+                        LayerBlend::Over,
+                    );
+                }
+                return;
+            }
             gfx.blit.draw(
                 &gfx.gpu,
                 enc,
@@ -583,14 +647,14 @@ impl App {
                 mode,
             );
             if let Some(rect) = panels {
-                gfx.blit.draw_over(
+                gfx.blit.draw_layer(
                     &gfx.gpu,
                     enc,
                     rect,
-                    target.plain,
-                    plain,
+                    (target.plain, plain),
                     layer.view(),
                     &mask_view,
+                    LayerBlend::Over,
                 );
             }
         };
@@ -614,7 +678,9 @@ impl App {
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
                 format: plain,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::COPY_SRC
+                    | wgpu::TextureUsages::COPY_DST,
                 view_formats: &[srgb],
             });
             Composite {
@@ -630,6 +696,7 @@ impl App {
             compose(
                 &mut enc,
                 WindowTarget {
+                    texture: &c.texture,
                     srgb: &c.srgb,
                     plain: &c.plain,
                 },
@@ -653,6 +720,7 @@ impl App {
             compose(
                 &mut enc,
                 WindowTarget {
+                    texture: &st.texture,
                     srgb: &view_srgb,
                     plain: &view_plain,
                 },
@@ -772,7 +840,7 @@ impl App {
                 positions: gfx.gpu.read_texture(frame.gbuffer_position(), 0, 16)?,
                 normals: gfx.gpu.read_texture(frame.gbuffer_normal(), 0, 8)?,
                 mask: gfx.gpu.read_texture(frame.masks(), li as u32, 2)?,
-                color: gfx.gpu.read_texture(frame.color(), 0, 4)?,
+                color: frame.read_color_rgba(&gfx.gpu)?,
             })
         };
         let data = match read() {
