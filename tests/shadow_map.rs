@@ -375,3 +375,49 @@ fn debug_views_show_frusta_the_map_and_texels_per_pixel() {
         .count();
     assert!(coloured > 160 * 90 / 3, "{coloured}");
 }
+
+/// Cascades from the street: each cascade's texels are smaller than the
+/// one map's, so the interior errors fall well below the one map's at the
+/// same memory (4 × 1024² against one 2048²), and stay near the reference.
+#[test]
+fn cascades_beat_one_map_at_equal_memory_in_the_street() {
+    let mut scene = shadowlab::scene::load("city").unwrap();
+    scene.camera = scene.camera_preset("street").unwrap();
+    scene.lights = scene.light_preset("sun").unwrap();
+    let one = compare(&scene, "shadow-map:pcf", (320, 180)).mask;
+    for id in ["shadow-map:csm", "shadow-map:pssm"] {
+        let m = compare(&scene, id, (320, 180)).mask;
+        assert!(
+            m.interior.total_pct * 2.0 <= one.interior.total_pct && m.all.total_pct <= 0.8,
+            "{id}: {m:?}\none map: {one:?}"
+        );
+    }
+}
+
+/// Cascade selection and blending on a plane: squares spread along the
+/// view depth over a floor, seen at a grazing angle, so that every cascade
+/// and every blend band holds shadow edges; with or without blending the
+/// mask matches the reference away from the edges.
+#[test]
+fn cascade_selection_and_blending_on_a_plane_match_the_reference() {
+    let squares: Vec<(Vec3, f32)> = (0..5)
+        .map(|i| (Vec3::new(0.0, 0.6, 4.0 - 3.0 * i as f32), 0.8))
+        .collect();
+    let mut scene = squares_over_floor(
+        &squares,
+        Light::directional(Vec3::new(0.4, -1.0, 0.3), 1.0),
+        false,
+    );
+    scene.camera =
+        shadowlab::scene::Camera::new(Vec3::new(0.0, 2.0, 8.0), Vec3::new(0.0, 0.0, -6.0));
+    for set in [
+        "shadow-map:pcf[cascades=4,size=512]",
+        "shadow-map:pcf[cascades=4,size=512,blend=0.3]",
+        "shadow-map:pcf[cascades=3,size=512,stabilize=true,blend=0.2]",
+    ] {
+        let m = compare(&scene, set, (256, 256)).mask;
+        assert!(m.reference_shadowed_pct > 5.0, "{set}: {m:?}");
+        assert!(m.interior.total_pct <= 0.2, "{set}: {m:?}");
+        assert!(m.all.total_pct <= 2.0, "{set}: {m:?}");
+    }
+}

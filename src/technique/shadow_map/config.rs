@@ -311,6 +311,47 @@ pub const STAGE: ParamSpec = ParamSpec::choice_of::<Stage>(
     "full: maps and lookup; maps: the shadow-map pass alone (mask = 1); floor: a bare depth-only render of the same casters into the same map (position-only, no bias, no colour; mask = 1), what a shadow map cannot beat",
 );
 
+pub const CASCADES: ParamSpec = ParamSpec::int(
+    "cascades",
+    1,
+    1,
+    8,
+    "directional lights: maps partitioning the view depth (cascaded / parallel-split maps, Zhang et al. 2006), each `size`²",
+);
+
+pub const SPLIT_LAMBDA: ParamSpec = ParamSpec::float(
+    "split_lambda",
+    0.5,
+    0.0,
+    1.0,
+    0.05,
+    "cascade split scheme: z_i = λ·n·(f/n)^(i/N) + (1−λ)·(n + (f−n)·i/N); 1 logarithmic, 0 uniform",
+);
+
+pub const MAX_DISTANCE: ParamSpec = ParamSpec::float(
+    "max_distance",
+    0.0,
+    0.0,
+    100000.0,
+    1.0,
+    "cascades: view distance the last cascade ends at (0 = where the camera's view of the scene ends); beyond it the lookup is lit",
+);
+
+pub const STABILIZE: ParamSpec = ParamSpec::boolean(
+    "stabilize",
+    false,
+    "cascades: bounding-sphere maps snapped to whole texels, so that texel edges stay in place when the camera moves or turns",
+);
+
+pub const BLEND: ParamSpec = ParamSpec::float(
+    "blend",
+    0.0,
+    0.0,
+    0.5,
+    0.05,
+    "cascades: fraction of each cascade's depth range, at its far end, blended into the next cascade",
+);
+
 /// Every parameter, in table order.
 pub const PARAMS: &[ParamSpec] = &[
     FILTER,
@@ -340,6 +381,11 @@ pub const PARAMS: &[ParamSpec] = &[
     EXPONENT_NEGATIVE,
     MOMENT_BIAS,
     STAGE,
+    CASCADES,
+    SPLIT_LAMBDA,
+    MAX_DISTANCE,
+    STABILIZE,
+    BLEND,
 ];
 
 pub const PRESETS: &[Preset] = &[
@@ -404,6 +450,21 @@ pub const PRESETS: &[Preset] = &[
         values: &[("area", "true"), ("filter", "pcf2x2"), ("size", "1024")],
     },
     Preset {
+        name: "csm",
+        summary: "4 stabilised cascades of 1024² (the memory of one 2048² map), λ 0.5, 10 % blended",
+        values: &[
+            ("cascades", "4"),
+            ("size", "1024"),
+            ("stabilize", "true"),
+            ("blend", "0.1"),
+        ],
+    },
+    Preset {
+        name: "pssm",
+        summary: "parallel-split maps: 4 cascades of 1024² fitted to their slices, λ 0.6 (bgfx)",
+        values: &[("cascades", "4"), ("size", "1024"), ("split_lambda", "0.6")],
+    },
+    Preset {
         name: "8bit",
         summary: "depth stored in 8 bits: acne everywhere",
         values: &[("format", "r8"), ("filter", "hard")],
@@ -442,6 +503,22 @@ pub struct ShadowMapConfig {
     pub exponent_negative: f32,
     pub moment_bias: f32,
     pub stage: Stage,
+    pub cascades: Cascades,
+}
+
+/// How a directional light's map is partitioned along the view depth.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cascades {
+    /// Number of maps (1: one map fitted to the view of the scene).
+    pub count: u32,
+    /// Logarithmic (1) to uniform (0) split distances.
+    pub split_lambda: f32,
+    /// View distance of the last split (0: the camera's reach).
+    pub max_distance: f32,
+    /// Bounding-sphere maps snapped to whole texels.
+    pub stabilize: bool,
+    /// Fraction of each cascade blended into the next.
+    pub blend: f32,
 }
 
 impl ShadowMapConfig {
@@ -474,6 +551,13 @@ impl ShadowMapConfig {
             exponent_negative: p.float(&EXPONENT_NEGATIVE)?,
             moment_bias: p.float(&MOMENT_BIAS)?,
             stage: p.choice(&STAGE)?,
+            cascades: Cascades {
+                count: p.int(&CASCADES)?,
+                split_lambda: p.float(&SPLIT_LAMBDA)?,
+                max_distance: p.float(&MAX_DISTANCE)?,
+                stabilize: p.flag(&STABILIZE)?,
+                blend: p.float(&BLEND)?,
+            },
         })
     }
 

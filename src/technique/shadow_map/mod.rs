@@ -8,12 +8,13 @@
 //! outside the map is lit) and filters: nearest, hardware 2×2 PCF, N×N grid,
 //! rotated Vogel disk, PCSS, or the documents' variable-width PCF.
 
+pub mod cascades;
 pub mod config;
 mod pipelines;
 mod setup;
 
-pub use config::{CullFace, DepthFormat, Filter, Omni, ShadowMapConfig, Stage};
-pub use setup::{FrustumParams, LightSetup, cube_views, light_setup};
+pub use config::{Cascades, CullFace, DepthFormat, Filter, Omni, ShadowMapConfig, Stage};
+pub use setup::{CascadeSplit, FrustumParams, LightSetup, cube_views, light_setup};
 
 use super::{Family, MaskContext, ParamValues, ShadowTechnique};
 use crate::gpu::GpuContext;
@@ -38,10 +39,13 @@ pub static FAMILY: Family = Family {
     },
 };
 
+/// The most faces (cube) or cascades one light's maps have.
+const MAX_FACES: usize = 8;
+
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct ShadowMapUniform {
-    faces: [Mat4; 6],
+    faces: [Mat4; MAX_FACES],
     light: Vec4,
     kernel: Vec4,
     map: Vec4,
@@ -49,6 +53,12 @@ struct ShadowMapUniform {
     depth: Vec4,
     face: UVec4,
     moments: Vec4,
+    /// x cascades (0: not cascaded), y blend fraction.
+    cascade: Vec4,
+    /// View depth at which each cascade ends.
+    cascade_far: [Vec4; 2],
+    /// Each cascade's world texel size.
+    cascade_texel: [Vec4; 2],
 }
 
 struct Maps {
@@ -82,8 +92,8 @@ pub struct ShadowMapTechnique {
 }
 
 /// Uniform slots: per face, the depth pass (and lookup), blur along x, blur along y.
-const STRIDE: u64 = 512;
-const SLOTS: u64 = 18;
+const STRIDE: u64 = 768;
+const SLOTS: u64 = MAX_FACES as u64 * 3;
 impl ShadowMapTechnique {
     pub fn new(gpu: &GpuContext, config: ShadowMapConfig) -> ShadowMapTechnique {
         ShadowMapTechnique {
@@ -269,22 +279,36 @@ impl ShadowTechnique for ShadowMapTechnique {
             fov_deg: c.fov_deg,
             paraboloid: c.omni == Omni::DualParaboloid,
         };
+        let cascaded = ctx.light.kind == LightType::Directional
+            && (c.cascades.count > 1 || c.cascades.stabilize);
         let setups: Vec<LightSetup> = lights
             .iter()
             .map(|l| {
-                light_setup(
-                    l,
-                    &ctx.scene_gpu.bounds,
-                    ctx.camera,
-                    aspect,
-                    &frustum_params,
-                )
+                if cascaded {
+                    cascades::cascade_setup(
+                        l.direction,
+                        &ctx.scene_gpu.bounds,
+                        ctx.camera,
+                        aspect,
+                        &c.cascades,
+                        size,
+                    )
+                } else {
+                    light_setup(
+                        l,
+                        &ctx.scene_gpu.bounds,
+                        ctx.camera,
+                        aspect,
+                        &frustum_params,
+                    )
+                }
             })
             .collect();
         let layers = setups[0].faces.len() as u32;
         self.ensure_maps(ctx.gpu, size, layers, format, moments)?;
-        // Slot (s·6 + f)·3 + k: sample s, face f; k = 0 depth pass and lookup, 1 and 2 blur along x and y.
-        let slots = (lights.len() * 18) as u64;
+        // Slot (s·MAX_FACES + f)·3 + k: sample s, face f; k = 0 depth pass
+        // and lookup, 1 and 2 blur along x and y.
+        let slots = lights.len() as u64 * SLOTS;
         if self.uniforms.size() < slots * STRIDE {
             self.uniforms = ctx.gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("shadow map uniforms"),
@@ -295,8 +319,17 @@ impl ShadowTechnique for ShadowMapTechnique {
         }
         let mut data = vec![0u8; (slots * STRIDE) as usize];
         for (si, (light, setup)) in lights.iter().zip(&setups).enumerate() {
-            let mut faces = [Mat4::IDENTITY; 6];
+            let mut faces = [Mat4::IDENTITY; MAX_FACES];
             faces[..setup.faces.len()].copy_from_slice(&setup.faces);
+            let mut cascade_far = [0.0f32; MAX_FACES];
+            let mut cascade_texel = [0.0f32; MAX_FACES];
+            if let Some(split) = &setup.cascades {
+                cascade_far[..split.far.len()].copy_from_slice(&split.far);
+                for (t, s) in cascade_texel.iter_mut().zip(&split.texel_scales) {
+                    *t = s / size as f32;
+                }
+            }
+            let pack = |v: [f32; MAX_FACES]| [Vec4::from_slice(&v[..4]), Vec4::from_slice(&v[4..])];
             let base = ShadowMapUniform {
                 faces,
                 light: light.position.extend(layers as f32),
@@ -325,14 +358,23 @@ impl ShadowTechnique for ShadowMapTechnique {
                     c.exponent_negative,
                     c.moment_bias,
                 ),
+                cascade: Vec4::new(
+                    setup.cascades.as_ref().map_or(0, |s| s.far.len()) as f32,
+                    c.cascades.blend,
+                    0.0,
+                    0.0,
+                ),
+                cascade_far: pack(cascade_far),
+                cascade_texel: pack(cascade_texel),
             };
-            for f in 0..6u32 {
+            for f in 0..MAX_FACES as u32 {
                 for k in 0..3u32 {
                     let u = ShadowMapUniform {
                         face: UVec4::new(f, k.saturating_sub(1), blur, 0),
                         ..base
                     };
-                    let at = (((si as u32 * 6 + f) * 3 + k) as u64 * STRIDE) as usize;
+                    let at =
+                        (((si as u32 * MAX_FACES as u32 + f) * 3 + k) as u64 * STRIDE) as usize;
                     data[at..at + std::mem::size_of::<ShadowMapUniform>()]
                         .copy_from_slice(bytemuck::bytes_of(&u));
                 }
@@ -363,8 +405,9 @@ impl ShadowTechnique for ShadowMapTechnique {
             accumulate: false,
         };
         let maps = self.maps.as_ref().expect("ensured above");
-        let slot =
-            |s: usize, f: u32, k: u32| ((((s as u32) * 6 + f) * 3 + k) as u64 * STRIDE) as u32;
+        let slot = |s: usize, f: u32, k: u32| {
+            ((((s as u32) * MAX_FACES as u32 + f) * 3 + k) as u64 * STRIDE) as u32
+        };
         // Bind groups: none of the maps while they are rendered; the moment
         // maps as blur sources; everything for the lookup.
         let shared = &self.shared;

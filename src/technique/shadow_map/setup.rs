@@ -15,8 +15,31 @@ pub struct LightSetup {
     pub orthographic: bool,
     /// `faces` are the two hemispheres' view matrices of a dual paraboloid.
     pub paraboloid: bool,
-    /// World size of a texel at unit distance (perspective) or anywhere (orthographic), for a 1-texel map.
+    /// World size of a texel at unit distance (perspective) or anywhere
+    /// (orthographic), for a 1-texel map (cascades: of the first).
     pub texel_scale: f32,
+    /// Cascaded maps: where each face's slice of the view ends.
+    pub cascades: Option<CascadeSplit>,
+}
+
+/// The view-depth partition of cascaded maps, one entry per face.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CascadeSplit {
+    /// View depth at which each cascade ends (the first starts at the
+    /// camera's near plane).
+    pub far: Vec<f32>,
+    /// Each cascade's world texel size for a 1-texel map.
+    pub texel_scales: Vec<f32>,
+}
+
+/// A directional light's view (looking along `dir` from outside the scene)
+/// and the scene's bounds in that view.
+pub fn light_view_of_scene(dir: Vec3, scene_bounds: &Aabb) -> (Mat4, Aabb) {
+    let dir = dir.normalize();
+    let c = scene_bounds.center();
+    let r = scene_bounds.size().length() * 0.5 + 1e-3;
+    let view = glam::camera::rh::view::look_to_mat4(c - dir * (2.0 * r), dir, up_for(dir));
+    (view, scene_bounds.transformed(view))
 }
 
 fn up_for(dir: Vec3) -> Vec3 {
@@ -107,6 +130,7 @@ pub fn light_setup(
                 orthographic: false,
                 paraboloid: false,
                 texel_scale: 2.0 * (fov * 0.5).tan(),
+                cascades: None,
             }
         }
         LightType::Point if paraboloid => {
@@ -120,6 +144,7 @@ pub fn light_setup(
                 paraboloid: true,
                 // At the centre of a hemisphere, uv changes by 1/2 per radian.
                 texel_scale: 4.0,
+                cascades: None,
             }
         }
         LightType::Point => {
@@ -135,14 +160,13 @@ pub fn light_setup(
                 orthographic: false,
                 paraboloid: false,
                 texel_scale: 2.0,
+                cascades: None,
             }
         }
         LightType::Directional => {
-            let dir = light.direction.normalize();
+            let (view, scene_ls) = light_view_of_scene(light.direction, scene_bounds);
             let c = scene_bounds.center();
             let r = scene_bounds.size().length() * 0.5 + 1e-3;
-            let view = glam::camera::rh::view::look_to_mat4(c - dir * (2.0 * r), dir, up_for(dir));
-            let scene_ls = scene_bounds.transformed(view);
             // The camera frustum, its far plane pulled in to the scene, in light space.
             let vp = camera.projection(aspect) * camera.view();
             let inv = vp.inverse();
@@ -186,6 +210,7 @@ pub fn light_setup(
                 orthographic: true,
                 paraboloid: false,
                 texel_scale: 2.0 * half,
+                cascades: None,
             }
         }
     }

@@ -12,8 +12,9 @@ override BYTE_MAP: bool = false;
 override RECEIVER_PLANE: bool = false;
 
 struct ShadowMap {
-    // world → light clip, one per face (1 for spot/directional, 6 for point)
-    faces: array<mat4x4f, 6>,
+    // world → light clip, one per face (1 for spot/directional, 6 for point,
+    // one per cascade)
+    faces: array<mat4x4f, 8>,
     // xyz light position, w faces: 1, 6 (cube) or 2 (dual paraboloid, whose
     // `faces` are the two hemispheres' view matrices)
     light: vec4f,
@@ -35,6 +36,12 @@ struct ShadowMap {
     // moments: x light-bleeding reduction, y exponent c (esm, evsm +),
     // z exponent c− (evsm), w moment bias (msm)
     moments: vec4f,
+    // x cascades (0: not cascaded), y fraction of each cascade blended into the next
+    cascade: vec4f,
+    // view depth at which cascade i ends: [i / 4][i % 4]
+    cascade_far: array<vec4f, 2>,
+    // world size of a texel of cascade i: [i / 4][i % 4]
+    cascade_texel: array<vec4f, 2>,
 };
 
 @group(2) @binding(0) var<uniform> sm: ShadowMap;
@@ -167,8 +174,45 @@ fn fs_depth_byte(i: DepthOut) -> @location(0) vec4f {
 
 // ---- lookup
 
+fn cascade_far(i: u32) -> f32 {
+    return sm.cascade_far[i / 4u][i % 4u];
+}
+
+// The cascade of a point at view depth d (the cascade count beyond the
+// last), and the weight of the next cascade in the blend band at the far
+// end of this one.
+struct CascadePick {
+    index: u32,
+    next_weight: f32,
+};
+
+fn cascade_of(p: vec3f) -> CascadePick {
+    let d = -(frame.view * vec4f(p, 1.0)).z;
+    let count = u32(sm.cascade.x);
+    var i = 0u;
+    while i < count && d > cascade_far(i) {
+        i++;
+    }
+    var pick = CascadePick(i, 0.0);
+    if i + 1u < count && sm.cascade.y > 0.0 {
+        let start = select(frame_near(), cascade_far(i - 1u), i > 0u);
+        let band = sm.cascade.y * (cascade_far(i) - start);
+        pick.next_weight = clamp((d - (cascade_far(i) - band)) / band, 0.0, 1.0);
+    }
+    return pick;
+}
+
+// The camera's near plane, from the projection matrix (wgpu depth [0, 1]:
+// z_ndc = P22 + P32 / z_view, zero at the near plane).
+fn frame_near() -> f32 {
+    return frame.proj[3][2] / frame.proj[2][2];
+}
+
 // Face of a point light's six 90° frusta: the major axis of p − light.
 fn face_of(p: vec3f) -> u32 {
+    if sm.cascade.x > 0.5 {
+        return min(cascade_of(p).index, u32(sm.cascade.x) - 1u);
+    }
     if sm.light.w < 1.5 {
         return 0u;
     }
@@ -399,12 +443,34 @@ fn blockers(uv: vec2f, face: u32, z: f32, radius_texels: f32, n: u32, phi: f32) 
 fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let g = textureLoad(gbuffer_position, vec2i(frag.xy), 0);
     let n = normalize(textureLoad(gbuffer_normal, vec2i(frag.xy), 0).xyz);
-    let face = face_of(g.xyz);
+    if sm.cascade.x < 0.5 {
+        return vec4f(visibility_in(face_of(g.xyz), g, n, frag.xy));
+    }
+    // Cascades: this pixel's, blended into the next one's over the band
+    // (both looked up in uniform control flow, for the derivatives).
+    let pick = cascade_of(g.xyz);
+    let count = u32(sm.cascade.x);
+    let v = visibility_in(min(pick.index, count - 1u), g, n, frag.xy);
+    var blended = v;
+    if sm.cascade.y > 0.0 {
+        let next = visibility_in(min(pick.index + 1u, count - 1u), g, n, frag.xy);
+        blended = mix(v, next, pick.next_weight);
+    }
+    if pick.index >= count {
+        return vec4f(1.0); // beyond the last cascade
+    }
+    return vec4f(blended);
+}
+
+// The visibility of G-buffer point g (normal n) in `face` of the map.
+fn visibility_in(face: u32, g: vec4f, n: vec3f, frag: vec2f) -> f32 {
     // Normal offset: move the lookup point along the geometric normal by a
     // number of shadow-map texels (their world size grows with distance for
-    // perspective maps).
+    // perspective maps, and with each cascade).
     var texel_world = sm.map.z;
-    if sm.map.w < 0.5 || is_paraboloid() {
+    if sm.cascade.x > 0.5 {
+        texel_world = sm.cascade_texel[face / 4u][face % 4u];
+    } else if sm.map.w < 0.5 || is_paraboloid() {
         texel_world = sm.map.z * length(g.xyz - sm.light.xyz);
     }
     let p = g.xyz + n * sm.kernel.y * texel_world;
@@ -417,24 +483,24 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     rp_gradient = receiver_plane(vec3f(uv, ndc.z));
     rp_origin = uv;
     if g.w < 0.5 {
-        return vec4f(1.0);
+        return 1.0;
     }
     if c.w <= 0.0 {
-        return vec4f(1.0);
+        return 1.0;
     }
     if any(uv < vec2f(0.0)) || any(uv > vec2f(1.0)) || ndc.z > 1.0 || ndc.z < 0.0 {
-        return vec4f(1.0); // outside the map counts as lit
+        return 1.0; // outside the map counts as lit
     }
     // With the receiver plane, a 2×2 comparison still sees texels up to one
     // texel away at a single depth: take off that slope (Isidoro's
     // fractional sampling error), capped.
     let z = ndc.z - min(2.0 * dot(vec2f(sm.map.y), abs(rp_gradient)), 0.01);
     if FILTER_KIND >= FILTER_VSM {
-        return vec4f(moment_visibility(moments_at(uv, face), linear01(c)));
+        return moment_visibility(moments_at(uv, face), linear01(c));
     }
     let count = max(TAPS, 1u);
     let radius = sm.kernel.x;
-    let phi = ign(frag.xy) * 6.2831853;
+    let phi = ign(frag) * 6.2831853;
     var v = 1.0;
     switch FILTER_KIND {
         case FILTER_HARD: {
@@ -478,7 +544,7 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
             }
         }
     }
-    return vec4f(v);
+    return v;
 }
 
 // Debug view: face 0 of the map as grey (near dark, far light), in linear depth.

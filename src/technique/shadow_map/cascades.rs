@@ -1,0 +1,257 @@
+//! Cascaded (parallel-split) shadow maps for directional lights (Zhang et
+//! al. 2006, SEEDS §5): the view depth [n, f] cut at
+//! z_i = λ·n·(f/n)^(i/N) + (1−λ)·(n + (f−n)·i/N), one orthographic map per
+//! slice. A stabilised cascade bounds its slice by a sphere, whose radius
+//! does not change when the camera moves or turns, and snaps its centre to
+//! whole texels of the light's view, so that texel edges stay in place.
+
+use super::config::Cascades;
+use super::setup::{CascadeSplit, LightSetup, light_view_of_scene};
+use crate::scene::{Aabb, Camera};
+use glam::{Mat4, Vec3, Vec4};
+
+/// The `count + 1` split distances from `near` to `far` (view depth).
+pub fn split_distances(near: f32, far: f32, count: u32, lambda: f32) -> Vec<f32> {
+    (0..=count)
+        .map(|i| {
+            let s = i as f32 / count as f32;
+            let log = near * (far / near).powf(s);
+            let uniform = near + (far - near) * s;
+            lambda * log + (1.0 - lambda) * uniform
+        })
+        .collect()
+}
+
+/// The eight world-space corners of the camera's view between view depths
+/// `z0` and `z1`.
+pub fn slice_corners(camera: &Camera, aspect: f32, z0: f32, z1: f32) -> [Vec3; 8] {
+    let inv_view = camera.view().inverse();
+    let ty = (camera.fov_y_deg.to_radians() * 0.5).tan();
+    let tx = ty * aspect;
+    let mut out = [Vec3::ZERO; 8];
+    for (k, z) in [z0, z1].into_iter().enumerate() {
+        for (j, (sx, sy)) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)]
+            .into_iter()
+            .enumerate()
+        {
+            out[k * 4 + j] = inv_view.transform_point3(Vec3::new(sx * tx * z, sy * ty * z, -z));
+        }
+    }
+    out
+}
+
+/// A stabilised cascade's square half-extent and centre (light view xy):
+/// the slice's bounding sphere, its radius rounded up to 1/64 of a unit
+/// (float noise must not resize it) and its centre snapped to the texel
+/// grid of a `size`² map.
+pub fn stable_square(corners_ls: &[Vec3; 8], size: u32) -> (f32, f32, f32) {
+    let centre = corners_ls.iter().copied().sum::<Vec3>() / 8.0;
+    let radius = corners_ls
+        .iter()
+        .map(|c| c.distance(centre))
+        .fold(0.0f32, f32::max);
+    let half = ((radius * 64.0).ceil() / 64.0).max(1.0 / 64.0);
+    let texel = 2.0 * half / size as f32;
+    let snap = |v: f32| (v / texel).floor() * texel;
+    (half, snap(centre.x), snap(centre.y))
+}
+
+/// The light setup of a directional light travelling along `dir` with
+/// `cascades.count` maps of `size`².
+pub fn cascade_setup(
+    dir: Vec3,
+    scene_bounds: &Aabb,
+    camera: &Camera,
+    aspect: f32,
+    cascades: &Cascades,
+    size: u32,
+) -> LightSetup {
+    use glam::camera::rh::proj::directx::orthographic;
+    let (view, scene_ls) = light_view_of_scene(dir, scene_bounds);
+    let c = scene_bounds.center();
+    let r = scene_bounds.size().length() * 0.5 + 1e-3;
+    let reach = (camera.eye.distance(c) + r).min(camera.far);
+    let far = if cascades.max_distance > 0.0 {
+        cascades.max_distance.min(camera.far)
+    } else {
+        reach
+    }
+    .max(camera.near * 1.01);
+    let splits = split_distances(camera.near, far, cascades.count, cascades.split_lambda);
+    // View space looks down −z: depth range from the scene's z extent, so
+    // that every caster is in every cascade's depth range.
+    let (n, f) = ((-scene_ls.max.z - 1e-3).max(0.0), -scene_ls.min.z + 1e-3);
+    let mut faces = vec![];
+    let mut texel_scales = vec![];
+    for w in splits.windows(2) {
+        let corners = slice_corners(camera, aspect, w[0], w[1]).map(|p| view.transform_point3(p));
+        let (half, cx, cy) = if cascades.stabilize {
+            stable_square(&corners, size)
+        } else {
+            let b = Aabb::from_points(corners);
+            let (min_x, max_x) = (b.min.x.max(scene_ls.min.x), b.max.x.min(scene_ls.max.x));
+            let (min_y, max_y) = (b.min.y.max(scene_ls.min.y), b.max.y.min(scene_ls.max.y));
+            let (min_x, max_x, min_y, max_y) = if min_x < max_x && min_y < max_y {
+                (min_x, max_x, min_y, max_y)
+            } else {
+                (b.min.x, b.max.x, b.min.y, b.max.y)
+            };
+            (
+                ((max_x - min_x).max(max_y - min_y) * 0.5).max(1e-3),
+                (min_x + max_x) * 0.5,
+                (min_y + max_y) * 0.5,
+            )
+        };
+        faces.push(orthographic(cx - half, cx + half, cy - half, cy + half, n, f) * view);
+        texel_scales.push(2.0 * half);
+    }
+    LightSetup {
+        texel_scale: texel_scales[0],
+        faces,
+        near: n,
+        far: f,
+        orthographic: true,
+        paraboloid: false,
+        cascades: Some(CascadeSplit {
+            far: splits[1..].to_vec(),
+            texel_scales,
+        }),
+    }
+}
+
+/// The light-clip position of `p` in `face` (for tests and debug lines).
+pub fn project(face: Mat4, p: Vec3) -> Vec3 {
+    let c = face * Vec4::new(p.x, p.y, p.z, 1.0);
+    c.truncate() / c.w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn split_distances_for_uniform_practical_and_logarithmic_schemes() {
+        // n = 1, f = 16, N = 4: uniform 1, 4.75, 8.5, 12.25, 16; logarithmic
+        // 1, 2, 4, 8, 16; λ = 0.5 their mean.
+        let uniform = split_distances(1.0, 16.0, 4, 0.0);
+        let log = split_distances(1.0, 16.0, 4, 1.0);
+        let half = split_distances(1.0, 16.0, 4, 0.5);
+        let close = |a: &[f32], b: &[f32]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-4);
+        assert!(
+            close(&uniform, &[1.0, 4.75, 8.5, 12.25, 16.0]),
+            "{uniform:?}"
+        );
+        assert!(close(&log, &[1.0, 2.0, 4.0, 8.0, 16.0]), "{log:?}");
+        assert!(close(&half, &[1.0, 3.375, 6.25, 10.125, 16.0]), "{half:?}");
+    }
+
+    #[test]
+    fn slice_corners_lie_at_their_view_depths() {
+        let cam = Camera::new(Vec3::new(1.0, 2.0, 3.0), Vec3::new(4.0, 0.0, -2.0));
+        let view = cam.view();
+        let c = slice_corners(&cam, 1.5, 2.0, 7.0);
+        for (i, p) in c.iter().enumerate() {
+            let z = -view.transform_point3(*p).z;
+            assert!((z - if i < 4 { 2.0 } else { 7.0 }).abs() < 1e-4, "{i}: {z}");
+        }
+        // The corners project onto the corners of the camera's NDC square.
+        let vp = cam.projection(1.5) * view;
+        let ndc = project(vp, c[7]);
+        assert!(
+            (ndc.x - 1.0).abs() < 1e-4 && (ndc.y - 1.0).abs() < 1e-4,
+            "{ndc}"
+        );
+    }
+
+    /// A stabilised cascade keeps its texel grid when the camera moves by a
+    /// fraction of a texel: every world point keeps its texel coordinates
+    /// (up to float rounding), and the map keeps its size.
+    #[test]
+    fn a_stabilised_cascade_keeps_its_texel_grid_under_small_camera_moves() {
+        let bounds = Aabb {
+            min: Vec3::new(-50.0, 0.0, -50.0),
+            max: Vec3::new(50.0, 20.0, 50.0),
+        };
+        let dir = Vec3::new(-0.5, -1.0, -0.35);
+        let stable = Cascades {
+            count: 3,
+            split_lambda: 0.5,
+            max_distance: 60.0,
+            stabilize: true,
+            blend: 0.0,
+        };
+        let size = 512;
+        let cam = Camera::new(Vec3::new(0.0, 1.7, 30.0), Vec3::new(0.0, 3.0, 0.0));
+        let a = cascade_setup(dir, &bounds, &cam, 16.0 / 9.0, &stable, size);
+        let probe = Vec3::new(0.3, 0.0, 25.0);
+        for step in [0.013f32, 0.21, 0.37] {
+            let moved = Camera {
+                eye: cam.eye + Vec3::new(step, 0.0, -step),
+                target: cam.target + Vec3::new(step, 0.0, -step),
+                ..cam
+            };
+            let b = cascade_setup(dir, &bounds, &moved, 16.0 / 9.0, &stable, size);
+            let (sa, sb) = (a.cascades.as_ref().unwrap(), b.cascades.as_ref().unwrap());
+            assert_eq!(sa.texel_scales, sb.texel_scales);
+            // The probe's texel coordinate in cascade 0 moves by whole texels.
+            let texel = |m: Mat4| (project(m, probe).truncate() * 0.5 * size as f32);
+            let d = texel(b.faces[0]) - texel(a.faces[0]);
+            let frac = (d - d.round()).abs();
+            assert!(frac.max_element() < 1e-2, "step {step}: grid moved by {d}");
+        }
+        // Unstabilised cascades refit and slide by fractions of a texel.
+        let fitted = Cascades {
+            stabilize: false,
+            ..stable
+        };
+        let a = cascade_setup(dir, &bounds, &cam, 16.0 / 9.0, &fitted, size);
+        let moved = Camera {
+            eye: cam.eye + Vec3::new(0.21, 0.0, -0.21),
+            target: cam.target + Vec3::new(0.21, 0.0, -0.21),
+            ..cam
+        };
+        let b = cascade_setup(dir, &bounds, &moved, 16.0 / 9.0, &fitted, size);
+        let texel = |m: Mat4| (project(m, probe).truncate() * 0.5 * size as f32);
+        let d = texel(b.faces[0]) - texel(a.faces[0]);
+        assert!((d - d.round()).abs().max_element() > 1e-2, "{d}");
+    }
+
+    #[test]
+    fn each_cascade_covers_its_slice_and_the_last_ends_at_max_distance() {
+        let bounds = Aabb {
+            min: Vec3::new(-50.0, 0.0, -50.0),
+            max: Vec3::new(50.0, 20.0, 50.0),
+        };
+        let cam = Camera::new(Vec3::new(0.0, 1.7, 30.0), Vec3::new(0.0, 3.0, 0.0));
+        for stabilize in [false, true] {
+            let c = Cascades {
+                count: 4,
+                split_lambda: 0.5,
+                max_distance: 40.0,
+                stabilize,
+                blend: 0.1,
+            };
+            let s = cascade_setup(Vec3::new(0.2, -1.0, 0.1), &bounds, &cam, 1.5, &c, 1024);
+            let split = s.cascades.as_ref().unwrap();
+            assert_eq!(s.faces.len(), 4);
+            assert!((split.far[3] - 40.0).abs() < 1e-4);
+            let d = split_distances(cam.near, 40.0, 4, 0.5);
+            for (i, face) in s.faces.iter().enumerate() {
+                for p in slice_corners(&cam, 1.5, d[i], d[i + 1]) {
+                    let q = project(*face, p);
+                    // Inside the map's square (stabilised: the sphere's)
+                    // unless clipped to the scene.
+                    let inside = q.x.abs() <= 1.0 + 1e-3 && q.y.abs() <= 1.0 + 1e-3;
+                    let in_scene = p.x.abs() < 50.0 && p.z.abs() < 50.0 && p.y.abs() < 20.0;
+                    assert!(inside || !in_scene, "cascade {i} misses {p}: {q}");
+                }
+            }
+            // Nearer cascades have smaller texels.
+            assert!(
+                split.texel_scales.windows(2).all(|w| w[0] < w[1]),
+                "{:?}",
+                split.texel_scales
+            );
+        }
+    }
+}
