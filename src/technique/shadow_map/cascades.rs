@@ -8,7 +8,7 @@
 use super::config::Cascades;
 use super::setup::{CascadeSplit, LightSetup, light_view_of_scene};
 use crate::scene::{Aabb, Camera};
-use glam::{Mat4, Vec3, Vec4};
+use glam::Vec3;
 
 /// The `count + 1` split distances from `near` to `far` (view depth).
 pub fn split_distances(near: f32, far: f32, count: u32, lambda: f32) -> Vec<f32> {
@@ -119,15 +119,16 @@ pub fn cascade_setup(
     }
 }
 
-/// The light-clip position of `p` in `face` (for tests and debug lines).
-pub fn project(face: Mat4, p: Vec3) -> Vec3 {
-    let c = face * Vec4::new(p.x, p.y, p.z, 1.0);
-    c.truncate() / c.w
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::{Mat4, Vec4};
+
+    /// The NDC position of `p` in `face`.
+    fn project(face: Mat4, p: Vec3) -> Vec3 {
+        let c = face * Vec4::new(p.x, p.y, p.z, 1.0);
+        c.truncate() / c.w
+    }
 
     #[test]
     fn split_distances_for_uniform_practical_and_logarithmic_schemes() {
@@ -163,6 +164,11 @@ mod tests {
         );
     }
 
+    /// Texel coordinates (NDC scaled by half the map size) of `p` in `face`.
+    fn texel_of(face: Mat4, p: Vec3, size: u32) -> glam::Vec2 {
+        project(face, p).truncate() * 0.5 * size as f32
+    }
+
     /// A stabilised cascade keeps its texel grid when the camera moves by a
     /// fraction of a texel: every world point keeps its texel coordinates
     /// (up to float rounding), and the map keeps its size.
@@ -194,8 +200,7 @@ mod tests {
             let (sa, sb) = (a.cascades.as_ref().unwrap(), b.cascades.as_ref().unwrap());
             assert_eq!(sa.texel_scales, sb.texel_scales);
             // The probe's texel coordinate in cascade 0 moves by whole texels.
-            let texel = |m: Mat4| (project(m, probe).truncate() * 0.5 * size as f32);
-            let d = texel(b.faces[0]) - texel(a.faces[0]);
+            let d = texel_of(b.faces[0], probe, size) - texel_of(a.faces[0], probe, size);
             let frac = (d - d.round()).abs();
             assert!(frac.max_element() < 1e-2, "step {step}: grid moved by {d}");
         }
@@ -211,8 +216,7 @@ mod tests {
             ..cam
         };
         let b = cascade_setup(dir, &bounds, &moved, 16.0 / 9.0, &fitted, size);
-        let texel = |m: Mat4| (project(m, probe).truncate() * 0.5 * size as f32);
-        let d = texel(b.faces[0]) - texel(a.faces[0]);
+        let d = texel_of(b.faces[0], probe, size) - texel_of(a.faces[0], probe, size);
         assert!((d - d.round()).abs().max_element() > 1e-2, "{d}");
     }
 
