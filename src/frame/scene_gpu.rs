@@ -38,6 +38,8 @@ pub struct DrawCall {
     pub material: usize,
     pub casts_shadow: bool,
     pub shadow_plane: bool,
+    /// World-space bounds of the object (for culling against light views).
+    pub bounds: Aabb,
 }
 
 /// The scene's GPU buffers: all meshes in one vertex and one index buffer,
@@ -126,6 +128,7 @@ impl SceneGpu {
                     material: o.material,
                     casts_shadow: o.casts_shadow,
                     shadow_plane: o.shadow_plane,
+                    bounds: scene.meshes[o.mesh].bounds().transformed(o.transform),
                 }
             })
             .collect();
@@ -228,15 +231,24 @@ impl SceneGpu {
     /// Binds the vertex and index buffers and draws every non-plane object
     /// that `filter` accepts, with `instance_index` = object id. The caller
     /// sets pipeline and bind groups 0 and 1.
-    pub fn draw_objects(&self, pass: &mut wgpu::RenderPass, filter: impl Fn(&DrawCall) -> bool) {
+    /// Draws every object but shadow planes that `filter` keeps; returns
+    /// the number of triangles drawn.
+    pub fn draw_objects(
+        &self,
+        pass: &mut wgpu::RenderPass,
+        filter: impl Fn(&DrawCall) -> bool,
+    ) -> u64 {
         pass.set_vertex_buffer(0, self.vertex_buffer.slice(..));
         pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+        let mut triangles = 0;
         for d in self.draws.iter().filter(|d| !d.shadow_plane && filter(d)) {
             pass.draw_indexed(
                 d.first_index..d.first_index + d.index_count,
                 d.base_vertex,
                 d.object..d.object + 1,
             );
+            triangles += d.index_count as u64 / 3;
         }
+        triangles
     }
 }

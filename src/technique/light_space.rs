@@ -187,3 +187,24 @@ mod tests {
         assert!(fit_bounds(&Light::point(Vec3::new(0.0, 1.0, 0.0), 1.0), &b, 0.0).is_none());
     }
 }
+
+/// Whether `bounds` lies wholly outside the clip volume of `view_proj`
+/// (wgpu: −w ≤ x, y ≤ w, 0 ≤ z ≤ w): all eight corners outside one of its
+/// planes, tested in homogeneous coordinates (exact for corners behind the
+/// eye too). Conservative: a box beside a frustum corner is kept.
+pub fn outside_clip_volume(bounds: &Aabb, view_proj: Mat4) -> bool {
+    let corners = bounds
+        .corners()
+        .map(|c| view_proj * Vec4::new(c.x, c.y, c.z, 1.0));
+    let planes: [fn(Vec4) -> f32; 6] = [
+        |c| c.w + c.x,
+        |c| c.w - c.x,
+        |c| c.w + c.y,
+        |c| c.w - c.y,
+        |c| c.z,
+        |c| c.w - c.z,
+    ];
+    planes
+        .iter()
+        .any(|inside| corners.iter().all(|c| inside(*c) < 0.0))
+}

@@ -16,6 +16,7 @@ mod setup;
 pub use config::{Cascades, CullFace, DepthFormat, Filter, Omni, ShadowMapConfig, Stage};
 pub use setup::{CascadeSplit, FrustumParams, LightSetup, cube_views, light_setup};
 
+use super::light_space::outside_clip_volume;
 use super::{Family, MaskContext, ParamValues, ShadowTechnique};
 use crate::gpu::GpuContext;
 use crate::scene::LightType;
@@ -89,6 +90,8 @@ pub struct ShadowMapTechnique {
     last_faces: Vec<Mat4>,
     last_paraboloid: bool,
     want_debug: bool,
+    /// Triangles drawn into the maps last frame (after culling per face).
+    map_triangles: u64,
 }
 
 /// Uniform slots: per face, the depth pass (and lookup), blur along x, blur along y.
@@ -112,6 +115,7 @@ impl ShadowMapTechnique {
             last_faces: vec![],
             last_paraboloid: false,
             want_debug: false,
+            map_triangles: 0,
         }
     }
 
@@ -436,6 +440,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             .as_ref()
             .map_or(&shared.placeholder_moments, |m| &m[0].1);
         let lookup_group = self.bind_group(ctx, &maps.depth_array, byte_array, moment_array);
+        let mut map_triangles = 0;
         for si in 0..lights.len() {
             for face in 0..layers {
                 let f = face as usize;
@@ -467,7 +472,13 @@ impl ShadowTechnique for ShadowMapTechnique {
                 pass.set_pipeline(&pipeline);
                 ctx.bind_frame_groups(&mut pass);
                 pass.set_bind_group(crate::frame::OWN_GROUP, &render_group, &[slot(si, face, 0)]);
-                ctx.scene_gpu.draw_objects(&mut pass, |d| d.casts_shadow);
+                // Casters outside this face's (or cascade's) view are not
+                // drawn; paraboloid faces are view matrices, not frusta.
+                let view_proj = setups[si].faces[f];
+                let paraboloid = setups[si].paraboloid;
+                map_triangles += ctx.scene_gpu.draw_objects(&mut pass, |d| {
+                    d.casts_shadow && (paraboloid || !outside_clip_volume(&d.bounds, view_proj))
+                });
             }
             if let (Some(m), Some(groups), true) = (&maps.moment, &blur_groups, blur > 0 && !floor)
             {
@@ -599,6 +610,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             pass.draw(0..3, 0..1);
         }
         self.samples = lights.len();
+        self.map_triangles = map_triangles;
         self.last_faces = setups.iter().flat_map(|s| s.faces.clone()).collect();
         self.last_paraboloid = frustum_params.paraboloid && ctx.light.kind == LightType::Point;
         Ok(())
@@ -657,6 +669,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     ("map_size", m.size as f64),
                     ("faces", m.layers as f64),
                     ("maps_per_face", self.samples as f64),
+                    ("map_triangles", self.map_triangles as f64),
                 ]
             })
             .unwrap_or_default()

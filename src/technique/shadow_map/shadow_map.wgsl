@@ -444,26 +444,42 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let g = textureLoad(gbuffer_position, vec2i(frag.xy), 0);
     let n = normalize(textureLoad(gbuffer_normal, vec2i(frag.xy), 0).xyz);
     if sm.cascade.x < 0.5 {
-        return vec4f(visibility_in(face_of(g.xyz), g, n, frag.xy));
+        let face = face_of(g.xyz);
+        return vec4f(filtered(face, projected(face, g, n), frag.xy));
     }
-    // Cascades: this pixel's, blended into the next one's over the band
-    // (both looked up in uniform control flow, for the derivatives).
+    // Cascades: this pixel's, blended into the next one's over the band.
+    // Both projections run in uniform control flow (their screen
+    // derivatives); the next cascade is filtered only inside the band.
     let pick = cascade_of(g.xyz);
     let count = u32(sm.cascade.x);
-    let v = visibility_in(min(pick.index, count - 1u), g, n, frag.xy);
-    var blended = v;
-    if sm.cascade.y > 0.0 {
-        let next = visibility_in(min(pick.index + 1u, count - 1u), g, n, frag.xy);
-        blended = mix(v, next, pick.next_weight);
-    }
+    let face = min(pick.index, count - 1u);
+    let next_face = min(pick.index + 1u, count - 1u);
+    let here = projected(face, g, n);
+    let next = projected(next_face, g, n);
     if pick.index >= count {
         return vec4f(1.0); // beyond the last cascade
     }
-    return vec4f(blended);
+    var v = filtered(face, here, frag.xy);
+    if pick.next_weight > 0.0 {
+        v = mix(v, filtered(next_face, next, frag.xy), pick.next_weight);
+    }
+    return vec4f(v);
 }
 
-// The visibility of G-buffer point g (normal n) in `face` of the map.
-fn visibility_in(face: u32, g: vec4f, n: vec3f, frag: vec2f) -> f32 {
+// A G-buffer point in one face of the map: its light-clip position, map uv
+// and depth, the receiver plane's depth gradient there, and whether it is
+// looked up at all (a receiver, in front of the light, inside the map).
+struct Projected {
+    clip: vec4f,
+    uv: vec2f,
+    z: f32,
+    gradient: vec2f,
+    inside: bool,
+};
+
+// Projects G-buffer point g (normal n) into `face`. Must run in uniform
+// control flow (the receiver plane's derivatives).
+fn projected(face: u32, g: vec4f, n: vec3f) -> Projected {
     // Normal offset: move the lookup point along the geometric normal by a
     // number of shadow-map texels (their world size grows with distance for
     // perspective maps, and with each cascade).
@@ -480,21 +496,26 @@ fn visibility_in(face: u32, g: vec4f, n: vec3f, frag: vec2f) -> f32 {
     }
     let ndc = c.xyz / select(c.w, 1e-6, abs(c.w) < 1e-6);
     let uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-    rp_gradient = receiver_plane(vec3f(uv, ndc.z));
-    rp_origin = uv;
-    if g.w < 0.5 {
+    let gradient = receiver_plane(vec3f(uv, ndc.z));
+    // Outside the map counts as lit.
+    let inside = g.w >= 0.5 && c.w > 0.0 && all(uv >= vec2f(0.0)) && all(uv <= vec2f(1.0))
+        && ndc.z <= 1.0 && ndc.z >= 0.0;
+    return Projected(c, uv, ndc.z, gradient, inside);
+}
+
+// The filtered visibility of a projected point in `face`.
+fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
+    if !pr.inside {
         return 1.0;
     }
-    if c.w <= 0.0 {
-        return 1.0;
-    }
-    if any(uv < vec2f(0.0)) || any(uv > vec2f(1.0)) || ndc.z > 1.0 || ndc.z < 0.0 {
-        return 1.0; // outside the map counts as lit
-    }
+    rp_gradient = pr.gradient;
+    rp_origin = pr.uv;
+    let uv = pr.uv;
+    let c = pr.clip;
     // With the receiver plane, a 2×2 comparison still sees texels up to one
     // texel away at a single depth: take off that slope (Isidoro's
     // fractional sampling error), capped.
-    let z = ndc.z - min(2.0 * dot(vec2f(sm.map.y), abs(rp_gradient)), 0.01);
+    let z = pr.z - min(2.0 * dot(vec2f(sm.map.y), abs(rp_gradient)), 0.01);
     if FILTER_KIND >= FILTER_VSM {
         return moment_visibility(moments_at(uv, face), linear01(c));
     }
@@ -505,7 +526,7 @@ fn visibility_in(face: u32, g: vec4f, n: vec3f, frag: vec2f) -> f32 {
     switch FILTER_KIND {
         case FILTER_HARD: {
             let t = floor(uv * sm.map.x);
-            v = lit_at(vec2i(t), face, tap_z(ndc.z, (t + 0.5) * sm.map.y));
+            v = lit_at(vec2i(t), face, tap_z(pr.z, (t + 0.5) * sm.map.y));
         }
         case FILTER_PCF2X2: {
             v = pcf2x2(uv, face, z);
