@@ -92,6 +92,13 @@ pub struct CompareArgs {
     /// Output directory.
     #[arg(long, default_value = "out/compare")]
     pub out: PathBuf,
+    /// Measure flicker instead: follow this camera path for `--frames`
+    /// frames (DIR/flicker.{md,csv,json}).
+    #[arg(long, value_enum)]
+    pub path: Option<measure::flicker::CameraPath>,
+    /// Frames along `--path` (2 to 1000).
+    #[arg(long, default_value_t = 5)]
+    pub frames: u32,
 }
 
 #[derive(Args)]
@@ -272,6 +279,32 @@ fn compare(a: CompareArgs) -> Result<()> {
         bail!("--reference takes one technique, got '{}'", a.reference);
     };
     let gpu = a.view.gpu()?;
+    if let Some(path) = a.path {
+        let rows = measure::flicker::run(
+            &gpu,
+            &scene,
+            &camera,
+            &lights,
+            a.view.size,
+            &techniques,
+            reference,
+            path,
+            a.frames,
+            &a.out,
+        )?;
+        println!(
+            "{:<44} {:>5} {:>10} {:>10}",
+            "technique", "light", "flicker%", "edge%"
+        );
+        for r in &rows {
+            println!(
+                "{:<44} {:>5} {:>10.4} {:>10.4}",
+                r.technique, r.light, r.flicker_pct, r.edge_flicker_pct
+            );
+        }
+        println!("wrote {}", a.out.join("flicker.md").display());
+        return Ok(());
+    }
     let rows = measure::compare::run(
         &gpu,
         &scene,

@@ -4,7 +4,7 @@
 
 use crate::frame::{FrameTargets, SceneGpu};
 use crate::gpu::GpuContext;
-use crate::renderer::{FrameTimings, RenderSettings, Renderer};
+use crate::renderer::{FrameCameras, FrameTimings, RenderSettings, Renderer};
 use crate::scene::{Camera, Light, Scene};
 use crate::technique::{TechniqueChoice, TechniqueInstance};
 use anyhow::{Context, Result};
@@ -223,13 +223,30 @@ impl HeadlessFrame {
         lights: &[Light],
         settings: &RenderSettings,
     ) -> Result<FrameTimings> {
+        let cameras = FrameCameras {
+            view: camera,
+            fit: camera,
+        };
+        self.render_fitted(gpu, scene, cameras, lights, settings)
+    }
+
+    /// As [`HeadlessFrame::render`], the techniques fitting their light
+    /// views to `cameras.fit`.
+    pub fn render_fitted(
+        &mut self,
+        gpu: &GpuContext,
+        scene: &Scene,
+        cameras: FrameCameras,
+        lights: &[Light],
+        settings: &RenderSettings,
+    ) -> Result<FrameTimings> {
         gpu.checked("rendering", || {
-            self.renderer.render(
+            self.renderer.render_fitted(
                 gpu,
                 scene,
                 &self.scene_gpu,
                 &mut self.frame,
-                camera,
+                cameras,
                 lights,
                 &mut self.techniques,
                 settings,

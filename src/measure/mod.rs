@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod compare;
+pub mod flicker;
 pub mod quality;
 
 use crate::technique::{self, FAMILIES, TechniqueChoice};

@@ -94,6 +94,14 @@ impl Default for RenderSettings {
     }
 }
 
+/// The camera a frame is seen from and the one its techniques fit their
+/// light views to (the same but when measuring flicker).
+#[derive(Clone, Copy)]
+pub struct FrameCameras<'a> {
+    pub view: &'a Camera,
+    pub fit: &'a Camera,
+}
+
 /// The renderer's passes; their pipelines come from the device's cache.
 pub struct Renderer {
     gbuffer_layout: wgpu::PipelineLayout,
@@ -190,6 +198,30 @@ impl Renderer {
         techniques: &mut [TechniqueInstance],
         settings: &RenderSettings,
     ) -> Result<FrameTimings> {
+        let cameras = FrameCameras {
+            view: camera,
+            fit: camera,
+        };
+        self.render_fitted(
+            gpu, scene, scene_gpu, frame, cameras, lights, techniques, settings,
+        )
+    }
+
+    /// As [`Renderer::render`], with the techniques' light views fitted to
+    /// `cameras.fit` while the frame is seen from `cameras.view`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_fitted(
+        &mut self,
+        gpu: &GpuContext,
+        scene: &Scene,
+        scene_gpu: &SceneGpu,
+        frame: &mut FrameTargets,
+        cameras: FrameCameras,
+        lights: &[Light],
+        techniques: &mut [TechniqueInstance],
+        settings: &RenderSettings,
+    ) -> Result<FrameTimings> {
+        let camera = cameras.view;
         if lights.len() > MAX_LIGHTS {
             bail!(
                 "{} lights given; at most {MAX_LIGHTS} are supported",
@@ -251,6 +283,7 @@ impl Renderer {
                 light_index: i,
                 light,
                 camera,
+                fit_camera: cameras.fit,
                 target: frame.mask_layer(i),
             };
             techniques[i].technique.render_mask(&ctx, &mut enc)?;

@@ -8,7 +8,14 @@ use anyhow::Result;
 use glam::{Mat4, Quat, Vec2, Vec3};
 
 pub const NAMES: &[&str] = &[
-    "room", "bunny", "floating", "curved", "teapot", "columns", "city",
+    "room",
+    "bunny",
+    "floating",
+    "curved",
+    "teapot",
+    "columns",
+    "city",
+    "landscape",
 ];
 
 /// One-line descriptions, in the order of [`NAMES`].
@@ -20,6 +27,7 @@ pub const DESCRIPTIONS: &[&str] = &[
     "the open Utah teapot on a floor",
     "a colonnade under a roof; preset camera `in-shadow` stands inside the roof's shadow",
     "procedural city of >1,000,000 triangles under a directional sun",
+    "2 km x 2 km of rolling hills with trees and rocks; a ground camera sees shadows from 1 m to the horizon",
 ];
 
 /// Builds a built-in scene, or `Ok(None)` when `name` is not one.
@@ -32,6 +40,7 @@ pub fn by_name(name: &str) -> Result<Option<Scene>> {
         "teapot" => teapot()?,
         "columns" => columns(),
         "city" => city(),
+        "landscape" => super::landscape::landscape(),
         _ => return Ok(None),
     };
     s.source = format!("builtin:{name}");

@@ -6,6 +6,7 @@ pub mod area;
 pub mod builtin;
 pub mod bvh;
 pub mod gltf_io;
+pub mod landscape;
 pub mod obj;
 pub mod planes;
 pub mod shapes;

@@ -30,6 +30,10 @@ pub struct MaskContext<'a> {
     pub light: &'a Light,
     /// The camera of the frame.
     pub camera: &'a crate::scene::Camera,
+    /// The camera light views are fitted to (cascade splits, the view of
+    /// the scene a map covers): the frame's, except when measuring how maps
+    /// move with the camera over fixed surface points (`compare --path`).
+    pub fit_camera: &'a crate::scene::Camera,
     /// The mask layer to write (format [`crate::frame::MASK_FORMAT`]).
     pub target: &'a wgpu::TextureView,
 }

@@ -43,7 +43,8 @@ pub fn slice_corners(camera: &Camera, aspect: f32, z0: f32, z1: f32) -> [Vec3; 8
 /// A stabilised cascade's square half-extent and centre (light view xy):
 /// the slice's bounding sphere, its radius rounded up to 1/64 of a unit
 /// (float noise must not resize it) and its centre snapped to the texel
-/// grid of a `size`² map.
+/// grid of a `size`² map. (A single map keeps its fitted square instead,
+/// made stable by `setup::stable_fit`.)
 pub fn stable_square(corners_ls: &[Vec3; 8], size: u32) -> (f32, f32, f32) {
     let centre = corners_ls.iter().copied().sum::<Vec3>() / 8.0;
     let radius = corners_ls

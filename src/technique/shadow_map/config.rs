@@ -339,8 +339,8 @@ pub const MAX_DISTANCE: ParamSpec = ParamSpec::float(
 
 pub const STABILIZE: ParamSpec = ParamSpec::boolean(
     "stabilize",
-    false,
-    "cascades: bounding-sphere maps snapped to whole texels, so that texel edges stay in place when the camera moves or turns",
+    true,
+    "directional lights: texel edges stay in place when the camera moves or turns — cascades are bounding spheres snapped to whole texels; one map keeps its fitted square, its size rounded up to eighths of an octave and its centre snapped",
 );
 
 pub const BLEND: ParamSpec = ParamSpec::float(
@@ -451,18 +451,23 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "csm",
-        summary: "4 stabilised cascades of 1024² (the memory of one 2048² map), λ 0.5, 10 % blended",
+        summary: "4 stabilised cascades of 1024² (the memory of one 2048² map), λ 0.95 (Sascha Willems' sample), 10 % blended",
         values: &[
             ("cascades", "4"),
             ("size", "1024"),
-            ("stabilize", "true"),
+            ("split_lambda", "0.95"),
             ("blend", "0.1"),
         ],
     },
     Preset {
         name: "pssm",
         summary: "parallel-split maps: 4 cascades of 1024² fitted to their slices, λ 0.6 (bgfx)",
-        values: &[("cascades", "4"), ("size", "1024"), ("split_lambda", "0.6")],
+        values: &[
+            ("cascades", "4"),
+            ("size", "1024"),
+            ("split_lambda", "0.6"),
+            ("stabilize", "false"),
+        ],
     },
     Preset {
         name: "8bit",

@@ -54,12 +54,16 @@ struct ShadowMapUniform {
     depth: Vec4,
     face: UVec4,
     moments: Vec4,
-    /// x cascades (0: not cascaded), y blend fraction.
+    /// x cascades (0: not cascaded), y blend fraction, z view depth where
+    /// the first cascade starts.
     cascade: Vec4,
     /// View depth at which each cascade ends.
     cascade_far: [Vec4; 2],
     /// Each cascade's world texel size.
     cascade_texel: [Vec4; 2],
+    /// Row z of the view matrix of the camera the cascades were fitted to:
+    /// a point's view depth is −dot(row, (p, 1)).
+    cascade_view_z: Vec4,
 }
 
 struct Maps {
@@ -282,9 +286,9 @@ impl ShadowTechnique for ShadowMapTechnique {
             far: c.far,
             fov_deg: c.fov_deg,
             paraboloid: c.omni == Omni::DualParaboloid,
+            stabilize_size: c.cascades.stabilize.then_some(size),
         };
-        let cascaded = ctx.light.kind == LightType::Directional
-            && (c.cascades.count > 1 || c.cascades.stabilize);
+        let cascaded = ctx.light.kind == LightType::Directional && c.cascades.count > 1;
         let setups: Vec<LightSetup> = lights
             .iter()
             .map(|l| {
@@ -292,7 +296,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     cascades::cascade_setup(
                         l.direction,
                         &ctx.scene_gpu.bounds,
-                        ctx.camera,
+                        ctx.fit_camera,
                         aspect,
                         &c.cascades,
                         size,
@@ -301,7 +305,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     light_setup(
                         l,
                         &ctx.scene_gpu.bounds,
-                        ctx.camera,
+                        ctx.fit_camera,
                         aspect,
                         &frustum_params,
                     )
@@ -365,11 +369,12 @@ impl ShadowTechnique for ShadowMapTechnique {
                 cascade: Vec4::new(
                     setup.cascades.as_ref().map_or(0, |s| s.far.len()) as f32,
                     c.cascades.blend,
-                    0.0,
+                    ctx.fit_camera.near,
                     0.0,
                 ),
                 cascade_far: pack(cascade_far),
                 cascade_texel: pack(cascade_texel),
+                cascade_view_z: ctx.fit_camera.view().row(2),
             };
             for f in 0..MAX_FACES as u32 {
                 for k in 0..3u32 {

@@ -90,6 +90,20 @@ pub struct FrustumParams {
     pub fov_deg: f32,
     /// Point lights: two paraboloid hemispheres instead of six faces.
     pub paraboloid: bool,
+    /// Directional lights: the fitted square's size rounded up to eighths
+    /// of an octave and its centre snapped to whole texels of a map of
+    /// `size`², so that small camera moves leave the texel grid in place.
+    pub stabilize_size: Option<u32>,
+}
+
+/// A fitted square (half-extent, centre) made stable for a `size`² map:
+/// the half-extent rounded up to 2^(k/8) (at most 9 % larger), the centre
+/// snapped to the texel grid that extent gives.
+pub fn stable_fit(half: f32, cx: f32, cy: f32, size: u32) -> (f32, f32, f32) {
+    let half = 2f32.powf((half.max(1e-6).log2() * 8.0).ceil() / 8.0);
+    let texel = 2.0 * half / size as f32;
+    let snap = |v: f32| (v / texel).floor() * texel;
+    (half, snap(cx), snap(cy))
 }
 
 /// Light matrices: spot (perspective over the cone), point (six faces),
@@ -107,6 +121,7 @@ pub fn light_setup(
         far,
         fov_deg,
         paraboloid,
+        stabilize_size,
     } = *fp;
     use glam::camera::rh::proj::directx::{orthographic, perspective};
     match light.kind {
@@ -199,6 +214,10 @@ pub fn light_setup(
             // Square texels: the larger extent on both axes.
             let half = ((max_x - min_x).max(max_y - min_y) * 0.5).max(1e-3);
             let (cx, cy) = ((min_x + max_x) * 0.5, (min_y + max_y) * 0.5);
+            let (half, cx, cy) = match stabilize_size {
+                Some(size) => stable_fit(half, cx, cy, size),
+                None => (half, cx, cy),
+            };
             // View space looks down −z: depth range from the scene's z extent.
             let (n, f) = (-scene_ls.max.z - 1e-3, -scene_ls.min.z + 1e-3);
             LightSetup {

@@ -36,12 +36,15 @@ struct ShadowMap {
     // moments: x light-bleeding reduction, y exponent c (esm, evsm +),
     // z exponent c− (evsm), w moment bias (msm)
     moments: vec4f,
-    // x cascades (0: not cascaded), y fraction of each cascade blended into the next
+    // x cascades (0: not cascaded), y fraction of each cascade blended into
+    // the next, z view depth where the first cascade starts
     cascade: vec4f,
     // view depth at which cascade i ends: [i / 4][i % 4]
     cascade_far: array<vec4f, 2>,
     // world size of a texel of cascade i: [i / 4][i % 4]
     cascade_texel: array<vec4f, 2>,
+    // row z of the view matrix of the camera the cascades were fitted to
+    cascade_view_z: vec4f,
 };
 
 @group(2) @binding(0) var<uniform> sm: ShadowMap;
@@ -187,7 +190,7 @@ struct CascadePick {
 };
 
 fn cascade_of(p: vec3f) -> CascadePick {
-    let d = -(frame.view * vec4f(p, 1.0)).z;
+    let d = -dot(sm.cascade_view_z, vec4f(p, 1.0));
     let count = u32(sm.cascade.x);
     var i = 0u;
     while i < count && d > cascade_far(i) {
@@ -195,17 +198,11 @@ fn cascade_of(p: vec3f) -> CascadePick {
     }
     var pick = CascadePick(i, 0.0);
     if i + 1u < count && sm.cascade.y > 0.0 {
-        let start = select(frame_near(), cascade_far(i - 1u), i > 0u);
+        let start = select(sm.cascade.z, cascade_far(i - 1u), i > 0u);
         let band = sm.cascade.y * (cascade_far(i) - start);
         pick.next_weight = clamp((d - (cascade_far(i) - band)) / band, 0.0, 1.0);
     }
     return pick;
-}
-
-// The camera's near plane, from the projection matrix (wgpu depth [0, 1]:
-// z_ndc = P22 + P32 / z_view, zero at the near plane).
-fn frame_near() -> f32 {
-    return frame.proj[3][2] / frame.proj[2][2];
 }
 
 // Face of a point light's six 90° frusta: the major axis of p − light.

@@ -1,0 +1,301 @@
+//! `shadowlab compare --path NAME --frames N`: shimmer, measured. The camera
+//! follows a short deterministic path. For each step, the surface points
+//! seen from the earlier camera are held fixed and every technique renders
+//! its mask there twice: with its light views fitted to the earlier camera
+//! and to the later one. A point flickers when its shadow state (visibility
+//! at 0.5) differs between the two: the shadow moved on the surface because
+//! the map moved with the camera — what stabilisation removes. The
+//! reference's state at a fixed point never changes, so every change is the
+//! technique's. Reported per technique and light as the mean over the
+//! path's steps, in % of the considered pixels, and over the reference's
+//! shadow edges (2 px band) alone.
+
+use super::compare::considered_pixels;
+use super::quality::edge_band;
+use super::{choice_label, write_csv};
+use crate::gpu::GpuContext;
+use crate::headless::{self, HeadlessFrame};
+use crate::renderer::{FrameCameras, RenderSettings};
+use crate::scene::{Camera, Light, Scene};
+use crate::technique::TechniqueChoice;
+use anyhow::{Context, Result, bail};
+use glam::Quat;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// A camera path, one small step per frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum CameraPath {
+    /// Forward along the view direction.
+    Dolly,
+    /// Sideways, to the camera's right.
+    Strafe,
+    /// Turning left about the up vector, in place.
+    Turn,
+    /// Around the target, about the up vector.
+    Orbit,
+}
+
+/// Dolly and strafe step: this fraction of the eye–target distance.
+pub const MOVE_STEP: f32 = 0.0025;
+/// Turn and orbit step, degrees.
+pub const TURN_STEP_DEG: f32 = 0.1;
+
+/// The camera at frame `frame` of `path` from `start`.
+pub fn path_camera(start: &Camera, path: CameraPath, frame: u32) -> Camera {
+    let f = frame as f32;
+    let to_target = start.target - start.eye;
+    let forward = to_target.normalize();
+    let right = forward.cross(start.up).normalize();
+    let step = to_target.length() * MOVE_STEP * f;
+    let spin = Quat::from_axis_angle(start.up.normalize(), (TURN_STEP_DEG * f).to_radians());
+    match path {
+        CameraPath::Dolly => Camera {
+            eye: start.eye + forward * step,
+            target: start.target + forward * step,
+            ..*start
+        },
+        CameraPath::Strafe => Camera {
+            eye: start.eye + right * step,
+            target: start.target + right * step,
+            ..*start
+        },
+        CameraPath::Turn => Camera {
+            target: start.eye + spin * to_target,
+            ..*start
+        },
+        CameraPath::Orbit => Camera {
+            eye: start.target - spin * to_target,
+            ..*start
+        },
+    }
+}
+
+/// One technique's flicker for one light along the path.
+#[derive(Clone, Debug, Serialize)]
+pub struct FlickerRow {
+    pub technique: String,
+    pub light: usize,
+    /// Mean over the path's steps of the flickering pixels, % of the
+    /// considered pixels.
+    pub flicker_pct: f64,
+    /// The same over the reference's shadow edges.
+    pub edge_flicker_pct: f64,
+    /// Per step, `flicker_pct`'s terms.
+    pub per_step_pct: Vec<f64>,
+}
+
+/// Flicker of one step: of the `considered` pixels, the percentage whose
+/// shadow state differs between the masks `before` and `after` (the same
+/// surface points), over all of them and over the `edges`.
+pub fn step_flicker(
+    considered: &[bool],
+    before: &[f32],
+    after: &[f32],
+    edges: &[bool],
+) -> (f64, f64) {
+    let (mut n, mut flicker, mut edge_n, mut edge_flicker) = (0usize, 0usize, 0usize, 0usize);
+    for i in 0..considered.len() {
+        if !considered[i] {
+            continue;
+        }
+        let flickers = (before[i] < 0.5) != (after[i] < 0.5);
+        n += 1;
+        flicker += flickers as usize;
+        if edges[i] {
+            edge_n += 1;
+            edge_flicker += flickers as usize;
+        }
+    }
+    let pct = |a: usize, b: usize| {
+        if b == 0 {
+            0.0
+        } else {
+            100.0 * a as f64 / b as f64
+        }
+    };
+    (pct(flicker, n), pct(edge_flicker, edge_n))
+}
+
+/// Follows `frames` frames of `path` with the reference and every
+/// technique, writes `flicker.{md,csv,json}` into `out` and returns the rows.
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    gpu: &GpuContext,
+    scene: &Scene,
+    start: &Camera,
+    lights: &[Light],
+    size: (u32, u32),
+    techniques: &[TechniqueChoice],
+    reference: &TechniqueChoice,
+    path: CameraPath,
+    frames: u32,
+    out: &Path,
+) -> Result<Vec<FlickerRow>> {
+    if !(2..=1000).contains(&frames) {
+        bail!("--frames {frames}: a path needs 2 to 1000 frames");
+    }
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let cameras: Vec<Camera> = (0..frames).map(|f| path_camera(start, path, f)).collect();
+    for c in &cameras {
+        c.validate()?;
+    }
+    let settings = RenderSettings {
+        show_light_icons: false,
+        ..Default::default()
+    };
+    let (w, h) = (size.0 as usize, size.1 as usize);
+    let frame_of = |choice: &TechniqueChoice| {
+        let choices = vec![choice.clone(); lights.len().max(1)];
+        HeadlessFrame::new(gpu, scene, &choices, size.0, size.1)
+    };
+    // Per step: the considered pixels and the reference's edges, per light.
+    let mut reference_frame = frame_of(reference)?;
+    let mut considered = vec![];
+    let mut edges = vec![];
+    for camera in &cameras[..cameras.len() - 1] {
+        reference_frame.render(gpu, scene, camera, lights, &settings)?;
+        let cons = considered_pixels(gpu, &reference_frame, lights)?;
+        let images = headless::read_back(gpu, &reference_frame.frame, lights.len())?;
+        edges.push(
+            cons.iter()
+                .zip(&images.masks)
+                .map(|(c, m)| edge_band(w, h, c, m, 2))
+                .collect::<Vec<_>>(),
+        );
+        considered.push(cons);
+    }
+    let mut rows = vec![];
+    for choice in techniques {
+        let mut hf = frame_of(choice)?;
+        let mut per_light: Vec<(Vec<f64>, Vec<f64>)> = vec![(vec![], vec![]); lights.len()];
+        for step in 0..cameras.len() - 1 {
+            let view = &cameras[step];
+            let mut masks = vec![];
+            for fit in [view, &cameras[step + 1]] {
+                hf.render_fitted(gpu, scene, FrameCameras { view, fit }, lights, &settings)?;
+                masks.push(headless::read_back(gpu, &hf.frame, lights.len())?.masks);
+            }
+            for (li, (all, edge)) in per_light.iter_mut().enumerate() {
+                let (a, e) = step_flicker(
+                    &considered[step][li],
+                    &masks[0][li],
+                    &masks[1][li],
+                    &edges[step][li],
+                );
+                all.push(a);
+                edge.push(e);
+            }
+        }
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        for (li, (all, edge)) in per_light.into_iter().enumerate() {
+            rows.push(FlickerRow {
+                technique: choice_label(choice),
+                light: li,
+                flicker_pct: mean(&all),
+                edge_flicker_pct: mean(&edge),
+                per_step_pct: all,
+            });
+        }
+    }
+    let meta = serde_json::json!({
+        "scene": scene.name,
+        "size": {"width": size.0, "height": size.1},
+        "path": path,
+        "frames": frames,
+        "move_step": format!("{MOVE_STEP} of the eye–target distance per frame"),
+        "turn_step_deg": TURN_STEP_DEG,
+        "start_camera": start,
+        "lights": lights,
+        "reference": choice_label(reference),
+        "adapter": gpu.adapter_summary(),
+        "pixels": "per step, the surface points seen from the earlier camera are held fixed; a pixel flickers when the technique's shadow state (visibility < 0.5) there differs between light views fitted to the earlier and to the later camera; % of considered pixels (receiving, N·L > 0), mean over the steps; edge = within 2 px of a reference shadow boundary",
+    });
+    std::fs::write(
+        out.join("flicker.json"),
+        serde_json::to_string_pretty(&serde_json::json!({"meta": meta, "rows": rows}))?,
+    )?;
+    write_csv(
+        &out.join("flicker.csv"),
+        &["technique", "light", "flicker_pct", "edge_flicker_pct"],
+        rows.iter().map(|r| {
+            vec![
+                r.technique.clone(),
+                r.light.to_string(),
+                format!("{:.4}", r.flicker_pct),
+                format!("{:.4}", r.edge_flicker_pct),
+            ]
+        }),
+    )?;
+    let mut md = format!(
+        "# Flicker on `{}` along `{:?}` ({frames} frames) against `{}`\n\n{} × {}, adapter {}. {}.\n\n| technique | light | flicker % | edge flicker % |\n|---|---:|---:|---:|\n",
+        scene.name,
+        path,
+        choice_label(reference),
+        size.0,
+        size.1,
+        gpu.adapter_summary(),
+        meta["pixels"].as_str().unwrap_or("")
+    );
+    for r in &rows {
+        let _ = writeln!(
+            md,
+            "| `{}` | {} | {:.4} | {:.4} |",
+            r.technique, r.light, r.flicker_pct, r.edge_flicker_pct
+        );
+    }
+    std::fs::write(out.join("flicker.md"), md)?;
+    Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    fn camera() -> Camera {
+        Camera::new(Vec3::new(0.0, 2.0, 10.0), Vec3::new(0.0, 2.0, 0.0))
+    }
+
+    #[test]
+    fn paths_step_as_documented() {
+        let c = camera();
+        assert_eq!(path_camera(&c, CameraPath::Dolly, 0).eye, c.eye);
+        let d = path_camera(&c, CameraPath::Dolly, 4);
+        assert!((d.eye - Vec3::new(0.0, 2.0, 10.0 - 4.0 * 10.0 * MOVE_STEP)).length() < 1e-5);
+        assert!((d.target - d.eye).length() - 10.0 < 1e-4);
+        let s = path_camera(&c, CameraPath::Strafe, 2);
+        assert!(
+            (s.eye - Vec3::new(2.0 * 10.0 * MOVE_STEP, 2.0, 10.0)).length() < 1e-5,
+            "{}",
+            s.eye
+        );
+        let t = path_camera(&c, CameraPath::Turn, 10);
+        assert_eq!(t.eye, c.eye);
+        let angle = (t.target - t.eye)
+            .angle_between(c.target - c.eye)
+            .to_degrees();
+        assert!((angle - 10.0 * TURN_STEP_DEG).abs() < 1e-3, "{angle}");
+        let o = path_camera(&c, CameraPath::Orbit, 10);
+        assert_eq!(o.target, c.target);
+        assert!(((o.eye - o.target).length() - 10.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn a_pixel_flickers_when_its_shadow_state_changes() {
+        let considered = [true, true, true, false];
+        let before = [0.0, 1.0, 0.4, 0.0];
+        let after = [1.0, 1.0, 0.45, 1.0];
+        let edges = [true, false, true, false];
+        // Pixel 0 changes; 1 and 2 keep their state; 3 is not considered.
+        let (all, edge) = step_flicker(&considered, &before, &after, &edges);
+        assert!((all - 100.0 / 3.0).abs() < 1e-9, "{all}");
+        assert_eq!(edge, 50.0);
+        assert_eq!(
+            step_flicker(&[false; 4], &before, &after, &edges),
+            (0.0, 0.0)
+        );
+    }
+}
