@@ -422,3 +422,48 @@ fn cascade_selection_and_blending_on_a_plane_match_the_reference() {
         assert!(m.all.total_pct <= 2.0, "{set}: {m:?}");
     }
 }
+
+/// Stabilised maps keep their texel grid while the camera strafes and
+/// turns: no surface point changes its shadow state; refitted maps slide.
+#[test]
+fn stabilised_maps_do_not_flicker_along_a_camera_path() {
+    use shadowlab::measure::flicker::{self, CameraPath};
+    let squares: Vec<(Vec3, f32)> = (0..5)
+        .map(|i| {
+            (
+                Vec3::new(0.5 * i as f32 - 1.0, 0.6, 4.0 - 3.0 * i as f32),
+                0.8,
+            )
+        })
+        .collect();
+    let mut scene = squares_over_floor(
+        &squares,
+        Light::directional(Vec3::new(0.4, -1.0, 0.3), 1.0),
+        false,
+    );
+    scene.camera =
+        shadowlab::scene::Camera::new(Vec3::new(0.0, 2.0, 8.0), Vec3::new(0.0, 0.0, -6.0));
+    let list = shadowlab::measure::parse_technique_list(
+        "shadow-map:pcf[size=256],shadow-map:pcf[size=256,stabilize=false],shadow-map:csm[size=256],shadow-map:csm[size=256,stabilize=false]",
+    )
+    .unwrap();
+    let reference = shadowlab::technique::resolve("raytraced").unwrap();
+    for path in [CameraPath::Strafe, CameraPath::Turn] {
+        let rows = flicker::run(
+            gpu(),
+            &scene,
+            &scene.camera,
+            &scene.lights,
+            (200, 150),
+            &list,
+            &reference,
+            path,
+            4,
+            &tmpdir("flicker"),
+        )
+        .unwrap();
+        let pct: Vec<f64> = rows.iter().map(|r| r.flicker_pct).collect();
+        assert!(pct[0] <= 0.01 && pct[2] <= 0.01, "{path:?}: {pct:?}");
+        assert!(pct[1] > pct[0] && pct[3] > pct[2], "{path:?}: {pct:?}");
+    }
+}

@@ -123,7 +123,7 @@ pub fn landscape() -> Scene {
         crowns[k].append(
             &crown,
             Mat4::from_translation(p + Vec3::Y * trunk_h)
-                * Mat4::from_rotation_y(lean * 6.28)
+                * Mat4::from_rotation_y(lean * std::f32::consts::TAU)
                 * Mat4::from_scale(Vec3::new(r, h - trunk_h, r)),
         );
     }
@@ -135,7 +135,7 @@ pub fn landscape() -> Scene {
             &boulder,
             Mat4::from_scale_rotation_translation(
                 Vec3::new(r * 1.3, r * sy, r),
-                Quat::from_rotation_y(turn * 6.28),
+                Quat::from_rotation_y(turn * std::f32::consts::TAU),
                 p - Vec3::Y * r * sy * 0.3,
             ),
         );

@@ -99,6 +99,27 @@ pub fn fit_bounds(light: &Light, bounds: &Aabb, margin: f32) -> Option<LightFrus
     }
 }
 
+/// Whether `bounds` lies wholly outside the clip volume of `view_proj`
+/// (wgpu: −w ≤ x, y ≤ w, 0 ≤ z ≤ w): all eight corners outside one of its
+/// planes, tested in homogeneous coordinates (exact for corners behind the
+/// eye too). Conservative: a box beside a frustum corner is kept.
+pub fn outside_clip_volume(bounds: &Aabb, view_proj: Mat4) -> bool {
+    let corners = bounds
+        .corners()
+        .map(|c| view_proj * Vec4::new(c.x, c.y, c.z, 1.0));
+    let planes: [fn(Vec4) -> f32; 6] = [
+        |c| c.w + c.x,
+        |c| c.w - c.x,
+        |c| c.w + c.y,
+        |c| c.w - c.y,
+        |c| c.z,
+        |c| c.w - c.z,
+    ];
+    planes
+        .iter()
+        .any(|inside| corners.iter().all(|c| inside(*c) < 0.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -186,25 +207,48 @@ mod tests {
         }
         assert!(fit_bounds(&Light::point(Vec3::new(0.0, 1.0, 0.0), 1.0), &b, 0.0).is_none());
     }
-}
 
-/// Whether `bounds` lies wholly outside the clip volume of `view_proj`
-/// (wgpu: −w ≤ x, y ≤ w, 0 ≤ z ≤ w): all eight corners outside one of its
-/// planes, tested in homogeneous coordinates (exact for corners behind the
-/// eye too). Conservative: a box beside a frustum corner is kept.
-pub fn outside_clip_volume(bounds: &Aabb, view_proj: Mat4) -> bool {
-    let corners = bounds
-        .corners()
-        .map(|c| view_proj * Vec4::new(c.x, c.y, c.z, 1.0));
-    let planes: [fn(Vec4) -> f32; 6] = [
-        |c| c.w + c.x,
-        |c| c.w - c.x,
-        |c| c.w + c.y,
-        |c| c.w - c.y,
-        |c| c.z,
-        |c| c.w - c.z,
-    ];
-    planes
-        .iter()
-        .any(|inside| corners.iter().all(|c| inside(*c) < 0.0))
+    #[test]
+    fn boxes_outside_a_clip_volume_are_culled_and_others_kept() {
+        use glam::camera::rh::proj::directx::orthographic;
+        // An orthographic box x, y in [-1, 1], depth 0..10 along −z.
+        let vp = orthographic(-1.0, 1.0, -1.0, 1.0, 0.0, 10.0);
+        let b = |min: Vec3, max: Vec3| Aabb { min, max };
+        assert!(!outside_clip_volume(
+            &b(Vec3::splat(-0.5), Vec3::splat(0.5) - Vec3::Z),
+            vp
+        ));
+        // Straddling an edge: kept.
+        assert!(!outside_clip_volume(
+            &b(Vec3::new(0.9, 0.0, -2.0), Vec3::new(3.0, 0.5, -1.0)),
+            vp
+        ));
+        // Wholly right of x = 1, above y = 1, behind the near plane, past the far plane.
+        assert!(outside_clip_volume(
+            &b(Vec3::new(1.1, 0.0, -2.0), Vec3::new(3.0, 0.5, -1.0)),
+            vp
+        ));
+        assert!(outside_clip_volume(
+            &b(Vec3::new(0.0, 1.5, -2.0), Vec3::new(0.5, 2.0, -1.0)),
+            vp
+        ));
+        assert!(outside_clip_volume(
+            &b(Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.5, 0.5, 2.0)),
+            vp
+        ));
+        assert!(outside_clip_volume(
+            &b(Vec3::new(0.0, 0.0, -12.0), Vec3::new(0.5, 0.5, -11.0)),
+            vp
+        ));
+        // Perspective: a box behind the eye is culled, one in front kept.
+        let persp = glam::camera::rh::proj::directx::perspective(1.0, 1.0, 0.1, 100.0);
+        assert!(outside_clip_volume(
+            &b(Vec3::new(-1.0, -1.0, 1.0), Vec3::new(1.0, 1.0, 3.0)),
+            persp
+        ));
+        assert!(!outside_clip_volume(
+            &b(Vec3::new(-1.0, -1.0, -3.0), Vec3::new(1.0, 1.0, -1.0)),
+            persp
+        ));
+    }
 }

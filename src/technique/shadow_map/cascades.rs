@@ -6,7 +6,7 @@
 //! whole texels of the light's view, so that texel edges stay in place.
 
 use super::config::Cascades;
-use super::setup::{CascadeSplit, LightSetup, light_view_of_scene};
+use super::setup::{CascadeSplit, LightSetup, light_view_of_scene, quantize_up};
 use crate::scene::{Aabb, Camera};
 use glam::Vec3;
 
@@ -72,6 +72,14 @@ pub fn cascade_setup(
     let c = scene_bounds.center();
     let r = scene_bounds.size().length() * 0.5 + 1e-3;
     let reach = (camera.eye.distance(c) + r).min(camera.far);
+    // Stabilised: the reach rounded up to eighths of an octave, so that the
+    // splits (and with them each cascade's size) stay put while the
+    // camera's distance to the scene changes a little.
+    let reach = if cascades.stabilize {
+        quantize_up(reach).min(camera.far)
+    } else {
+        reach
+    };
     let far = if cascades.max_distance > 0.0 {
         cascades.max_distance.min(camera.far)
     } else {
@@ -219,6 +227,24 @@ mod tests {
         let b = cascade_setup(dir, &bounds, &moved, 16.0 / 9.0, &fitted, size);
         let d = texel_of(b.faces[0], probe, size) - texel_of(a.faces[0], probe, size);
         assert!((d - d.round()).abs().max_element() > 1e-2, "{d}");
+    }
+
+    #[test]
+    fn stable_sizes_are_eighth_octaves_and_centres_whole_texels() {
+        use crate::technique::shadow_map::setup::{quantize_up, stable_fit};
+        assert!((quantize_up(1.0) - 1.0).abs() < 1e-6);
+        assert!((quantize_up(1.01) - 2f32.powf(0.125)).abs() < 1e-5);
+        // log2 100 = 6.644: the next eighth is 54/8.
+        assert!((quantize_up(100.0) - 2f32.powf(54.0 / 8.0)).abs() < 1e-3);
+        // Small changes of the fitted square leave size and grid in place.
+        let a = stable_fit(10.0, 3.21, -7.72, 512);
+        let b = stable_fit(10.02, 3.2101, -7.721, 512);
+        assert_eq!(a, b);
+        let texel = 2.0 * a.0 / 512.0;
+        for v in [a.1, a.2] {
+            assert!(((v / texel) - (v / texel).round()).abs() < 1e-3, "{v}");
+        }
+        assert!(a.0 >= 10.0 && a.0 < 10.0 * 1.091);
     }
 
     #[test]

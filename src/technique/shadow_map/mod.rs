@@ -446,7 +446,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             .map_or(&shared.placeholder_moments, |m| &m[0].1);
         let lookup_group = self.bind_group(ctx, &maps.depth_array, byte_array, moment_array);
         let mut map_triangles = 0;
-        for si in 0..lights.len() {
+        for (si, setup) in setups.iter().enumerate() {
             for face in 0..layers {
                 let f = face as usize;
                 let color = match (&maps.moment, &maps.byte, floor) {
@@ -479,8 +479,8 @@ impl ShadowTechnique for ShadowMapTechnique {
                 pass.set_bind_group(crate::frame::OWN_GROUP, &render_group, &[slot(si, face, 0)]);
                 // Casters outside this face's (or cascade's) view are not
                 // drawn; paraboloid faces are view matrices, not frusta.
-                let view_proj = setups[si].faces[f];
-                let paraboloid = setups[si].paraboloid;
+                let view_proj = setup.faces[f];
+                let paraboloid = setup.paraboloid;
                 map_triangles += ctx.scene_gpu.draw_objects(&mut pass, |d| {
                     d.casts_shadow && (paraboloid || !outside_clip_volume(&d.bounds, view_proj))
                 });

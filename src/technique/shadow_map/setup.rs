@@ -96,11 +96,17 @@ pub struct FrustumParams {
     pub stabilize_size: Option<u32>,
 }
 
+/// `v` rounded up to the next 2^(k/8) (at most 9 % more): sizes that stay
+/// put under small changes.
+pub fn quantize_up(v: f32) -> f32 {
+    2f32.powf((v.max(1e-6).log2() * 8.0).ceil() / 8.0)
+}
+
 /// A fitted square (half-extent, centre) made stable for a `size`² map:
 /// the half-extent rounded up to 2^(k/8) (at most 9 % larger), the centre
 /// snapped to the texel grid that extent gives.
 pub fn stable_fit(half: f32, cx: f32, cy: f32, size: u32) -> (f32, f32, f32) {
-    let half = 2f32.powf((half.max(1e-6).log2() * 8.0).ceil() / 8.0);
+    let half = quantize_up(half);
     let texel = 2.0 * half / size as f32;
     let snap = |v: f32| (v / texel).floor() * texel;
     (half, snap(cx), snap(cy))
