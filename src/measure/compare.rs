@@ -2,7 +2,7 @@
 //! `raytraced` reference, over pixels that show shadow-receiving geometry
 //! facing the light (N·L > 0).
 
-use super::quality::{self, FlipStats, MaskMetrics};
+use super::quality::{self, FlipStats, FootprintStats, MaskMetrics};
 use super::{choice_label, file_stem};
 use crate::gpu::GpuContext;
 use crate::headless::{self, FrameImages, HeadlessFrame};
@@ -27,6 +27,9 @@ pub struct QualityRow {
     /// ...and over the other pixels.
     pub off_planes: MaskMetrics,
     pub flip: FlipStats,
+    /// Screen pixels per shadow-map texel over the considered pixels
+    /// (techniques with a map).
+    pub aliasing: Option<FootprintStats>,
     pub frame_ms: f64,
     pub image: String,
     pub heatmap: String,
@@ -79,6 +82,17 @@ pub fn considered_pixels(
         .collect())
 }
 
+/// What one technique renders for `compare`: its frame, the frame's time,
+/// and per light the texel footprint of its map (when it has one).
+struct Rendered {
+    images: FrameImages,
+    ms: f64,
+    footprints: Vec<Option<Vec<f32>>>,
+}
+
+/// Renders one frame with `choice` for every light; `debug` turns the
+/// techniques' debug views on (they carry the texel footprint).
+#[allow(clippy::too_many_arguments)]
 fn render_with(
     gpu: &GpuContext,
     hf: &mut HeadlessFrame,
@@ -87,15 +101,24 @@ fn render_with(
     lights: &[Light],
     settings: &RenderSettings,
     choice: &TechniqueChoice,
-) -> Result<(FrameImages, f64)> {
+    debug: bool,
+) -> Result<Rendered> {
     hf.techniques = (0..lights.len().max(1))
         .map(|_| TechniqueInstance::new(gpu, choice.clone()))
         .collect::<Result<_>>()?;
+    for t in &mut hf.techniques {
+        t.technique.enable_debug(debug);
+    }
     let t = hf.render(gpu, scene, camera, lights, settings)?;
-    Ok((
-        headless::read_back(gpu, &hf.frame, lights.len())?,
-        t.total_ms,
-    ))
+    let footprints = hf.techniques[..lights.len()]
+        .iter()
+        .map(|t| t.technique.texel_footprint(gpu))
+        .collect::<Result<_>>()?;
+    Ok(Rendered {
+        images: headless::read_back(gpu, &hf.frame, lights.len())?,
+        ms: t.total_ms,
+        footprints,
+    })
 }
 
 /// Renders the reference and every technique, writes images, heatmaps and
@@ -121,7 +144,13 @@ pub fn run(
     };
     let (w, h) = size;
     let mut hf = HeadlessFrame::new(gpu, scene, std::slice::from_ref(reference), w, h)?;
-    let (ref_img, ref_ms) = render_with(gpu, &mut hf, scene, camera, lights, &settings, reference)?;
+    let Rendered {
+        images: ref_img,
+        ms: ref_ms,
+        ..
+    } = render_with(
+        gpu, &mut hf, scene, camera, lights, &settings, reference, false,
+    )?;
     headless::write_images(&out.join("reference"), &ref_img)?;
     let considered = considered_pixels(gpu, &hf, lights)?;
     let on_plane = plane_pixels(gpu, &hf, scene)?;
@@ -135,7 +164,11 @@ pub fn run(
     for choice in techniques {
         let label = choice_label(choice);
         let stem = file_stem(&label);
-        let (img, ms) = render_with(gpu, &mut hf, scene, camera, lights, &settings, choice)?;
+        let Rendered {
+            images: img,
+            ms,
+            footprints,
+        } = render_with(gpu, &mut hf, scene, camera, lights, &settings, choice, true)?;
         let image_name = format!("{stem}.png");
         image::save_buffer(
             out.join(&image_name),
@@ -171,9 +204,13 @@ pub fn run(
                 h,
                 image::ExtendedColorType::Rgba8,
             )?;
+            let aliasing = footprints[li]
+                .as_ref()
+                .and_then(|f| quality::footprint_stats(cons, f));
             rows.push(QualityRow {
                 technique: label.clone(),
                 light: li,
+                aliasing,
                 mask,
                 on_planes,
                 off_planes,
@@ -207,6 +244,7 @@ pub fn run(
 fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
     let pct = |v: f64| format!("{v:.4}");
     let err = |v: f64| format!("{v:.5}");
+    let footprint = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.3}"));
     super::write_csv(
         path,
         &[
@@ -226,6 +264,9 @@ fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
             "flip_mean",
             "flip_p95",
             "flip_p99",
+            "footprint_mean_px",
+            "footprint_p95_px",
+            "footprint_max_px",
             "frame_ms",
         ],
         rows.iter().map(|r| {
@@ -247,6 +288,9 @@ fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
                 err(r.flip.mean),
                 err(r.flip.p95),
                 err(r.flip.p99),
+                footprint(r.aliasing.map(|a| a.mean)),
+                footprint(r.aliasing.map(|a| a.p95)),
+                footprint(r.aliasing.map(|a| a.max)),
                 format!("{:.2}", r.frame_ms),
             ]
         }),
@@ -263,13 +307,14 @@ fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[QualityRow]) -> Str
         meta["adapter"].as_str().unwrap_or(""),
         meta["pixels"].as_str().unwrap_or("")
     );
-    s += "| technique | light | ref. shadowed % | false shadow % | false lit % | total % | edge FS % | edge FL % | interior FS % | interior FL % | MAE | RMSE | FLIP mean | FLIP p95 | FLIP p99 |\n";
-    s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    s += "| technique | light | ref. shadowed % | false shadow % | false lit % | total % | edge FS % | edge FL % | interior FS % | interior FL % | MAE | RMSE | FLIP mean | FLIP p95 | FLIP p99 | px/texel mean | p95 | max |\n";
+    s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    let px = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.2}"));
     for r in rows {
         let m = &r.mask;
         let _ = writeln!(
             s,
-            "| `{}` | {} | {:.2} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} |",
+            "| `{}` | {} | {:.2} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {} | {} | {} |",
             r.technique,
             r.light,
             m.reference_shadowed_pct,
@@ -284,7 +329,10 @@ fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[QualityRow]) -> Str
             m.rms_error,
             r.flip.mean,
             r.flip.p95,
-            r.flip.p99
+            r.flip.p99,
+            px(r.aliasing.map(|a| a.mean)),
+            px(r.aliasing.map(|a| a.p95)),
+            px(r.aliasing.map(|a| a.max))
         );
     }
     s += "\nSplit by receiver planes (the scene's ShadowPlane objects, else its largest planar receiver); % of the pixels of each region.\n\n";

@@ -30,6 +30,36 @@ pub struct MaskMetrics {
     pub rms_error: f64,
 }
 
+/// Screen pixels per shadow-map texel (the aliasing measure) over the
+/// considered pixels where a map was looked up.
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+pub struct FootprintStats {
+    pub mean: f64,
+    pub p95: f64,
+    pub max: f64,
+}
+
+/// [`FootprintStats`] of `footprint` (0 where no map was looked up) over
+/// the `considered` pixels; `None` when no considered pixel has one.
+pub fn footprint_stats(considered: &[bool], footprint: &[f32]) -> Option<FootprintStats> {
+    let mut v: Vec<f64> = considered
+        .iter()
+        .zip(footprint)
+        .filter(|(c, f)| **c && **f > 0.0 && f.is_finite())
+        .map(|(_, f)| *f as f64)
+        .collect();
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let p95 = v[((v.len() as f64 * 0.95).ceil() as usize).clamp(1, v.len()) - 1];
+    Some(FootprintStats {
+        mean: v.iter().sum::<f64>() / v.len() as f64,
+        p95,
+        max: v[v.len() - 1],
+    })
+}
+
 /// Pixels within Chebyshev distance `radius` of a considered pixel whose
 /// reference class (shadow/lit at 0.5) differs.
 pub fn edge_band(
@@ -247,5 +277,17 @@ mod tests {
         let (fb, fc) = (flip(&a, &b, 64, 64), flip(&a, &c, 64, 64));
         assert!(fb.mean > 0.0 && fc.mean > fb.mean);
         assert!(fc.p99 >= fc.p95);
+    }
+
+    #[test]
+    fn footprint_stats_over_considered_looked_up_pixels() {
+        let considered = [true, true, true, true, false, true];
+        let footprint = [1.0, 3.0, 2.0, 0.0, 100.0, 4.0];
+        let s = footprint_stats(&considered, &footprint).unwrap();
+        assert_eq!(s.mean, 2.5);
+        assert_eq!(s.p95, 4.0);
+        assert_eq!(s.max, 4.0);
+        assert!(footprint_stats(&[false; 6], &footprint).is_none());
+        assert!(footprint_stats(&considered, &[0.0; 6]).is_none());
     }
 }

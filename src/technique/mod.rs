@@ -109,6 +109,14 @@ pub trait ShadowTechnique: Send {
     fn debug_views(&self, _gpu: &GpuContext) -> Result<DebugViews> {
         Ok(DebugViews::default())
     }
+
+    /// With debug views on, per pixel of the last frame (row-major), the
+    /// screen pixels one texel of the technique's map spans (SEEDS §5's
+    /// aliasing measure d; > 1: a texel covers more than a pixel), 0 where
+    /// no map is looked up; `None` for techniques without a map.
+    fn texel_footprint(&self, _gpu: &GpuContext) -> Result<Option<Vec<f32>>> {
+        Ok(None)
+    }
 }
 
 /// A world-space line segment of a debug view (RGBA colour).

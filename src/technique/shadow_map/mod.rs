@@ -24,7 +24,7 @@ use crate::scene::area::area_samples;
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec4};
-use pipelines::{DepthPassKey, LookupKey, MOMENT_FORMAT, ShadowMapShared};
+use pipelines::{DepthPassKey, FOOTPRINT_FORMAT, LookupKey, MOMENT_FORMAT, ShadowMapShared};
 use std::sync::Arc;
 
 pub static FAMILY: Family = Family {
@@ -90,7 +90,7 @@ pub struct ShadowMapTechnique {
     /// Debug views: a 256² picture of face 0 and the last light matrices.
     debug: Option<wgpu::Texture>,
     /// Frame-sized debug views: the map projected onto the scene, texels per pixel.
-    debug_frame: Option<[wgpu::Texture; 2]>,
+    debug_frame: Option<[wgpu::Texture; 3]>,
     last_faces: Vec<Mat4>,
     last_paraboloid: bool,
     want_debug: bool,
@@ -574,14 +574,19 @@ impl ShadowTechnique for ShadowMapTechnique {
                 .as_ref()
                 .is_none_or(|t| (t[0].width(), t[0].height()) != (w, h))
             {
-                self.debug_frame = Some([0, 1].map(|_| {
+                let formats = [
+                    wgpu::TextureFormat::Rgba8Unorm,
+                    wgpu::TextureFormat::Rgba8Unorm,
+                    FOOTPRINT_FORMAT,
+                ];
+                self.debug_frame = Some(formats.map(|format| {
                     crate::gpu::texture_2d(
                         &ctx.gpu.device,
                         "shadow map debug frame",
                         w,
                         h,
                         1,
-                        wgpu::TextureFormat::Rgba8Unorm,
+                        format,
                         wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
                     )
                 }));
@@ -644,7 +649,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 rgba: gpu.read_texture(t, 0, 4)?,
             });
         }
-        if let Some([projection, texels]) = &self.debug_frame {
+        if let Some([projection, texels, _]) = &self.debug_frame {
             for (t, label) in [
                 (
                     projection,
@@ -664,6 +669,14 @@ impl ShadowTechnique for ShadowMapTechnique {
             }
         }
         Ok(views)
+    }
+
+    fn texel_footprint(&self, gpu: &GpuContext) -> Result<Option<Vec<f32>>> {
+        let Some([_, _, footprint]) = &self.debug_frame else {
+            return Ok(None);
+        };
+        let raw = gpu.read_texture(footprint, 0, 4)?;
+        Ok(Some(bytemuck::cast_slice(&raw).to_vec()))
     }
 
     fn counters(&self) -> Vec<(&'static str, f64)> {

@@ -10,6 +10,8 @@ use crate::frame::{MASK_FORMAT, VERTEX_LAYOUT};
 use crate::gpu::GpuContext;
 use crate::technique::params::Choice;
 
+/// The debug frame's numeric texel footprint (pixels per texel).
+pub const FOOTPRINT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 /// Format of the moment maps (vsm, esm, evsm, msm).
 pub const MOMENT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
@@ -232,6 +234,7 @@ impl ShadowMapShared {
             &[
                 Some(wgpu::TextureFormat::Rgba8Unorm.into()),
                 Some(wgpu::TextureFormat::Rgba8Unorm.into()),
+                Some(FOOTPRINT_FORMAT.into()),
             ],
             None,
         )

@@ -596,7 +596,24 @@ struct DebugFrame {
     // d = ds·rs/ri·cosα/cosβ, measured with screen derivatives), log2-coloured:
     // blue < 1/4 (undersampled: aliasing), green 1, red > 4 (oversampled).
     @location(1) texels: vec4f,
+    // The same as a number for `compare`: screen pixels one map texel spans
+    // along its longer axis (> 1: a texel covers more than a pixel), 0 where
+    // nothing is looked up.
+    @location(2) footprint: f32,
 };
+
+// Screen pixels a texel spans along its longer axis: the longer column of
+// the inverse of J = ∂(texel)/∂(pixel), at most the frame's diagonal (a
+// texel seen edge-on spans the whole view).
+fn texel_footprint(dx: vec2f, dy: vec2f) -> f32 {
+    let diagonal = length(frame.size.xy);
+    let det = dx.x * dy.y - dy.x * dx.y;
+    let span = max(length(vec2f(dy.y, dx.y)), length(vec2f(dy.x, dx.x)));
+    if abs(det) * diagonal <= span {
+        return diagonal;
+    }
+    return span / abs(det);
+}
 
 @fragment
 fn fs_debug_frame(@builtin(position) frag: vec4f) -> DebugFrame {
@@ -612,6 +629,7 @@ fn fs_debug_frame(@builtin(position) frag: vec4f) -> DebugFrame {
     // Derivatives first, in uniform control flow.
     let texel = uv * sm.map.x;
     let footprint = max(length(dpdx(texel)), length(dpdy(texel)));
+    let pixels_per_texel = texel_footprint(dpdx(texel), dpdy(texel));
     var o: DebugFrame;
     let inside = g.w > 0.5 && c.w > 0.0 && all(uv >= vec2f(0.0)) && all(uv <= vec2f(1.0));
     var d = stored(vec2i(floor(texel)), face);
@@ -622,5 +640,6 @@ fn fs_debug_frame(@builtin(position) frag: vec4f) -> DebugFrame {
     let t = clamp(log2(max(footprint, 1e-6)) / 2.0, -1.0, 1.0);
     let colour = select(mix(vec3f(0.0, 1.0, 0.0), vec3f(1.0, 0.0, 0.0), t), mix(vec3f(0.0, 1.0, 0.0), vec3f(0.0, 0.2, 1.0), -t), t < 0.0);
     o.texels = select(vec4f(0.0, 0.0, 0.0, 1.0), vec4f(colour, 1.0), inside);
+    o.footprint = select(0.0, pixels_per_texel, inside);
     return o;
 }
