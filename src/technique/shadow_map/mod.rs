@@ -653,7 +653,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             for (t, label) in [
                 (
                     projection,
-                    "map projected onto the scene (red: outside the map)",
+                    "map projected onto the scene (depth, tinted per cascade; dark red: outside the map)",
                 ),
                 (
                     texels,

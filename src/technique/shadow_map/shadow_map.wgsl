@@ -590,7 +590,8 @@ fn fs_debug_map(@builtin(position) frag: vec4f) -> @location(0) vec4f {
 }
 
 struct DebugFrame {
-    // The map's stored depth where each pixel projects (grey; red outside the map).
+    // The map's stored depth where each pixel projects (grey, tinted by
+    // cascade: red, green, blue, yellow, …; dark red outside the map).
     @location(0) projection: vec4f,
     // Shadow-map texels per screen pixel (SEEDS §5's aliasing measure
     // d = ds·rs/ri·cosα/cosβ, measured with screen derivatives), log2-coloured:
@@ -601,6 +602,15 @@ struct DebugFrame {
     // nothing is looked up.
     @location(2) footprint: f32,
 };
+
+// A colour per cascade for the debug view.
+fn cascade_tint(i: u32) -> vec3f {
+    let tints = array<vec3f, 8>(
+        vec3f(1.0, 0.45, 0.45), vec3f(0.45, 1.0, 0.45), vec3f(0.5, 0.6, 1.0), vec3f(1.0, 1.0, 0.4),
+        vec3f(1.0, 0.5, 1.0), vec3f(0.4, 1.0, 1.0), vec3f(1.0, 0.75, 0.4), vec3f(0.8, 0.8, 0.8),
+    );
+    return tints[min(i, 7u)];
+}
 
 // Screen pixels a texel spans along its longer axis: the longer column of
 // the inverse of J = ∂(texel)/∂(pixel), at most the frame's diagonal (a
@@ -636,7 +646,11 @@ fn fs_debug_frame(@builtin(position) frag: vec4f) -> DebugFrame {
     if sm.map.w < 0.5 {
         d = (linear_depth(d) - sm.depth.x) / (sm.depth.y - sm.depth.x);
     }
-    o.projection = select(vec4f(0.5, 0.0, 0.0, 1.0), vec4f(vec3f(d), 1.0), inside);
+    var tint = vec3f(1.0);
+    if sm.cascade.x > 0.5 {
+        tint = cascade_tint(face);
+    }
+    o.projection = select(vec4f(0.5, 0.0, 0.0, 1.0), vec4f(tint * (0.35 + 0.65 * d), 1.0), inside);
     let t = clamp(log2(max(footprint, 1e-6)) / 2.0, -1.0, 1.0);
     let colour = select(mix(vec3f(0.0, 1.0, 0.0), vec3f(1.0, 0.0, 0.0), t), mix(vec3f(0.0, 1.0, 0.0), vec3f(0.0, 0.2, 1.0), -t), t < 0.0);
     o.texels = select(vec4f(0.0, 0.0, 0.0, 1.0), vec4f(colour, 1.0), inside);
