@@ -77,6 +77,10 @@ pub struct ViewCmdArgs {
     /// (the M key toggles it).
     #[arg(long, value_name = "N")]
     pub mask: Option<usize>,
+    /// Start moving the camera along this path, one step per frame (the
+    /// steps of `compare --path`), to watch shadows shimmer or stay put.
+    #[arg(long, value_enum)]
+    pub camera_path: Option<measure::flicker::CameraPath>,
 }
 
 #[derive(Args)]
@@ -190,6 +194,7 @@ pub fn run(cli: Cli) -> Result<()> {
                 heatmap: a.heatmap,
                 debug_views: a.debug_views,
                 mask: a.mask,
+                camera_path: a.camera_path,
             })
         }
     }

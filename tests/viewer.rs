@@ -226,3 +226,51 @@ fn the_window_shows_the_rendered_frame_unchanged() {
     // The viewer's FPS line does not reach the view; nothing else differs.
     assert_eq!(differing, 0, "{differing} of {w}x{h} pixels differ");
 }
+
+/// `--camera-path strafe` moves the camera one step per frame to its right
+/// (the steps of `compare --path`), keeping its direction.
+#[test]
+fn the_camera_follows_a_path() {
+    let dir = tmpdir("viewer-path");
+    let shot = dir.join("path.png");
+    let o = view_under_xvfb(
+        &[
+            "--scene",
+            "floating",
+            "--camera-path",
+            "strafe",
+            "--size",
+            "400x300",
+            "--frames",
+            "5",
+        ],
+        &shot,
+    );
+    assert!(o.status.success(), "viewer failed: {}", stderr(&o));
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("path.json")).unwrap()).unwrap();
+    let v = |k: &str| -> Vec<f64> {
+        j["camera"][k]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    let scene = shadowlab::scene::load("floating").unwrap();
+    let start = scene.camera;
+    let (eye, target) = (v("eye"), v("target"));
+    let moved = glam::Vec3::new(eye[0] as f32, eye[1] as f32, eye[2] as f32) - start.eye;
+    let forward = (start.target - start.eye).normalize();
+    let right = forward.cross(start.up).normalize();
+    let step = (start.target - start.eye).length() * shadowlab::measure::flicker::MOVE_STEP;
+    let steps = moved.dot(right) / step;
+    assert!(
+        (3.0..=6.0).contains(&steps),
+        "moved {moved} = {steps} steps"
+    );
+    assert!(moved.dot(forward).abs() < 1e-3 * step.max(1.0), "{moved}");
+    let look = glam::Vec3::new(target[0] as f32, target[1] as f32, target[2] as f32)
+        - glam::Vec3::new(eye[0] as f32, eye[1] as f32, eye[2] as f32);
+    assert!(look.normalize().dot(forward) > 0.9999);
+}

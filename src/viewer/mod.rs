@@ -10,6 +10,7 @@ use crate::args::ViewArgs;
 use crate::frame::{FrameTargets, SceneGpu};
 use crate::gpu::GpuContext;
 use crate::headless;
+use crate::measure::flicker::{CameraPath, path_camera};
 use crate::renderer::{FrameTimings, RenderSettings, Renderer};
 use crate::scene::{self, Camera, Light, Scene};
 use crate::technique::{self, TechniqueChoice, TechniqueInstance};
@@ -40,6 +41,16 @@ pub struct ViewerOptions {
     pub debug_views: bool,
     /// Start showing this light's visibility mask instead of the image.
     pub mask: Option<usize>,
+    /// Start moving the camera along this path.
+    pub camera_path: Option<CameraPath>,
+}
+
+/// The camera moving along a path: where it started and the frame reached.
+#[derive(Clone, Copy, Debug)]
+pub struct PathMotion {
+    pub path: CameraPath,
+    pub start: crate::scene::Camera,
+    pub frame: u32,
 }
 
 /// A window image holds sRGB-encoded bytes: the 3D view is written
@@ -151,6 +162,10 @@ pub struct ViewerState {
     pub view_left: u32,
     /// Show the selected light's technique debug views (frusta, depth map).
     pub show_debug: bool,
+    /// The camera path being followed, one step per frame.
+    pub camera_motion: Option<PathMotion>,
+    /// The path the panel's selector shows (applied when it changes).
+    pub camera_path: Option<CameraPath>,
     /// Whether the technique instances were told to prepare them.
     debug_enabled: bool,
     /// The technique's debug images as egui textures.
@@ -223,6 +238,8 @@ pub fn run(options: ViewerOptions) -> Result<()> {
             screenshot_requested: false,
             view_left: 0,
             show_debug: options.debug_views,
+            camera_motion: None,
+            camera_path: options.camera_path,
             debug_enabled: false,
             debug_images: vec![],
             pending_scene: None,
@@ -361,6 +378,19 @@ impl App {
 
     fn update_camera(&mut self, dt: f32) {
         let Some(s) = &mut self.scene else { return };
+        // The path selector: (re)start from the current camera, or stop.
+        let motion = &mut self.state.camera_motion;
+        if motion.map(|m| m.path) != self.state.camera_path {
+            *motion = self.state.camera_path.map(|path| PathMotion {
+                path,
+                start: s.camera,
+                frame: 0,
+            });
+        }
+        if let Some(m) = motion {
+            m.frame += 1;
+            s.camera = path_camera(&m.start, m.path, m.frame);
+        }
         let speed = (s.camera.eye - s.camera.target).length().max(1.0) * dt;
         let k = |c: KeyCode| self.keys.contains(&c) as i32 as f32;
         let (f, r, u) = (

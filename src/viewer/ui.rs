@@ -5,6 +5,7 @@
 use super::{Overlay, SceneState, ViewerState};
 use crate::frame::MAX_LIGHTS;
 use crate::gpu::GpuContext;
+use crate::measure::flicker::CameraPath;
 use crate::renderer::{LightingModel, Shading};
 use crate::scene::{Light, LightArea, LightType, builtin};
 use crate::technique::TechniqueInstance;
@@ -269,6 +270,19 @@ fn scene_panel(
         }
     });
     ui.add(egui::Slider::new(&mut scene.camera.fov_y_deg, 10.0..=120.0).text("fov°"));
+    ui.horizontal(|ui| {
+        ui.label("camera path")
+            .on_hover_text("move the camera one small step per frame (the steps of `compare --path`) to watch shadows shimmer or stay put");
+        let label = |p: Option<CameraPath>| p.map_or("off".to_string(), |p| format!("{p:?}").to_lowercase());
+        egui::ComboBox::from_id_salt("camera path")
+            .selected_text(label(state.camera_path))
+            .show_ui(ui, |ui| {
+                ui.selectable_value(&mut state.camera_path, None, "off");
+                for p in [CameraPath::Dolly, CameraPath::Strafe, CameraPath::Turn, CameraPath::Orbit] {
+                    ui.selectable_value(&mut state.camera_path, Some(p), label(Some(p)));
+                }
+            });
+    });
     let mut bg = state
         .settings
         .background
