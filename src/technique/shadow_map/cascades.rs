@@ -6,7 +6,7 @@
 //! whole texels of the light's view, so that texel edges stay in place.
 
 use super::config::Cascades;
-use super::setup::{CascadeSplit, LightSetup, light_view_of_scene, quantize_up};
+use super::setup::{CascadeSplit, LightSetup, light_view_of_scene, quantize_up, slice_corners};
 use crate::scene::{Aabb, Camera};
 use glam::Vec3;
 
@@ -20,24 +20,6 @@ pub fn split_distances(near: f32, far: f32, count: u32, lambda: f32) -> Vec<f32>
             lambda * log + (1.0 - lambda) * uniform
         })
         .collect()
-}
-
-/// The eight world-space corners of the camera's view between view depths
-/// `z0` and `z1`.
-pub fn slice_corners(camera: &Camera, aspect: f32, z0: f32, z1: f32) -> [Vec3; 8] {
-    let inv_view = camera.view().inverse();
-    let ty = (camera.fov_y_deg.to_radians() * 0.5).tan();
-    let tx = ty * aspect;
-    let mut out = [Vec3::ZERO; 8];
-    for (k, z) in [z0, z1].into_iter().enumerate() {
-        for (j, (sx, sy)) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)]
-            .into_iter()
-            .enumerate()
-        {
-            out[k * 4 + j] = inv_view.transform_point3(Vec3::new(sx * tx * z, sy * ty * z, -z));
-        }
-    }
-    out
 }
 
 /// A stabilised cascade's square half-extent and centre (light view xy):
@@ -125,6 +107,7 @@ pub fn cascade_setup(
             far: splits[1..].to_vec(),
             texel_scales,
         }),
+        warped: false,
     }
 }
 

@@ -89,6 +89,11 @@ choice_enum! {
 }
 
 choice_enum! {
+    /// Warping of a directional light's maps.
+    pub enum Warp { None = "none", Lispsm = "lispsm" }
+}
+
+choice_enum! {
     /// What the technique runs: everything, the maps alone, or the floor.
     pub enum Stage { Full = "full", Maps = "maps", Floor = "floor" }
 }
@@ -352,6 +357,21 @@ pub const BLEND: ParamSpec = ParamSpec::float(
     "cascades: fraction of each cascade's depth range, at its far end, blended into the next cascade",
 );
 
+pub const WARP: ParamSpec = ParamSpec::choice_of::<Warp>(
+    "warp",
+    Warp::None as usize,
+    "directional lights: none, or lispsm — a perspective inside the light's view along the view direction (Wimmer, Scherzer & Purgathofer 2004) that gives the surfaces near the camera more of the map; one per cascade with cascades > 1; warped maps are not stabilised, and the depth and slope biases and the normal offset are not yet adapted to the warp (low suns lose shadows: see the issue notes)",
+);
+
+pub const LISPSM_N: ParamSpec = ParamSpec::float(
+    "lispsm_n",
+    0.0,
+    0.0,
+    100000.0,
+    0.5,
+    "lispsm: distance of the projection centre before the view (0 = n_opt = (z_n + √(z_n·z_f)) / sin γ); larger is closer to the uniform map",
+);
+
 /// Every parameter, in table order.
 pub const PARAMS: &[ParamSpec] = &[
     FILTER,
@@ -386,6 +406,8 @@ pub const PARAMS: &[ParamSpec] = &[
     MAX_DISTANCE,
     STABILIZE,
     BLEND,
+    WARP,
+    LISPSM_N,
 ];
 
 pub const PRESETS: &[Preset] = &[
@@ -460,6 +482,11 @@ pub const PRESETS: &[Preset] = &[
         ],
     },
     Preset {
+        name: "lispsm",
+        summary: "one 2048² map warped by a light-space perspective (LiSPSM, n_opt)",
+        values: &[("warp", "lispsm")],
+    },
+    Preset {
         name: "pssm",
         summary: "parallel-split maps: 4 cascades of 1024² fitted to their slices, λ 0.6 (bgfx)",
         values: &[
@@ -509,6 +536,9 @@ pub struct ShadowMapConfig {
     pub moment_bias: f32,
     pub stage: Stage,
     pub cascades: Cascades,
+    pub warp: Warp,
+    /// LiSPSM's projection-centre distance (0: n_opt).
+    pub lispsm_n: f32,
 }
 
 /// How a directional light's map is partitioned along the view depth.
@@ -563,6 +593,8 @@ impl ShadowMapConfig {
                 stabilize: p.flag(&STABILIZE)?,
                 blend: p.float(&BLEND)?,
             },
+            warp: p.choice(&WARP)?,
+            lispsm_n: p.float(&LISPSM_N)?,
         })
     }
 

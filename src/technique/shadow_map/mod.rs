@@ -12,8 +12,9 @@ pub mod cascades;
 pub mod config;
 mod pipelines;
 mod setup;
+pub mod warp;
 
-pub use config::{Cascades, CullFace, DepthFormat, Filter, Omni, ShadowMapConfig, Stage};
+pub use config::{Cascades, CullFace, DepthFormat, Filter, Omni, ShadowMapConfig, Stage, Warp};
 pub use setup::{CascadeSplit, FrustumParams, LightSetup, cube_views, light_setup};
 
 use super::light_space::outside_clip_volume;
@@ -64,6 +65,8 @@ struct ShadowMapUniform {
     /// Row z of the view matrix of the camera the cascades were fitted to:
     /// a point's view depth is −dot(row, (p, 1)).
     cascade_view_z: Vec4,
+    /// xyz the direction the light travels, w 1 when the faces are warped.
+    warp: Vec4,
 }
 
 struct Maps {
@@ -286,19 +289,24 @@ impl ShadowTechnique for ShadowMapTechnique {
             far: c.far,
             fov_deg: c.fov_deg,
             paraboloid: c.omni == Omni::DualParaboloid,
-            stabilize_size: c.cascades.stabilize.then_some(size),
+            // Warped maps are not stabilised.
+            stabilize_size: (c.cascades.stabilize && c.warp == Warp::None).then_some(size),
         };
         let cascaded = ctx.light.kind == LightType::Directional && c.cascades.count > 1;
         let setups: Vec<LightSetup> = lights
             .iter()
             .map(|l| {
-                if cascaded {
+                let mut setup = if cascaded {
+                    let stable = c.cascades.stabilize && c.warp == Warp::None;
                     cascades::cascade_setup(
                         l.direction,
                         &ctx.scene_gpu.bounds,
                         ctx.fit_camera,
                         aspect,
-                        &c.cascades,
+                        &Cascades {
+                            stabilize: stable,
+                            ..c.cascades
+                        },
                         size,
                     )
                 } else {
@@ -309,7 +317,18 @@ impl ShadowTechnique for ShadowMapTechnique {
                         aspect,
                         &frustum_params,
                     )
+                };
+                if l.kind == LightType::Directional && c.warp == Warp::Lispsm {
+                    warp::warp_setup(
+                        &mut setup,
+                        ctx.fit_camera,
+                        aspect,
+                        l.direction,
+                        &ctx.scene_gpu.bounds,
+                        c.lispsm_n,
+                    );
                 }
+                setup
             })
             .collect();
         let layers = setups[0].faces.len() as u32;
@@ -375,6 +394,10 @@ impl ShadowTechnique for ShadowMapTechnique {
                 cascade_far: pack(cascade_far),
                 cascade_texel: pack(cascade_texel),
                 cascade_view_z: ctx.fit_camera.view().row(2),
+                warp: light
+                    .direction
+                    .normalize_or_zero()
+                    .extend(setup.warped as u32 as f32),
             };
             for f in 0..MAX_FACES as u32 {
                 for k in 0..3u32 {

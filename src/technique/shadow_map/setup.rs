@@ -20,6 +20,8 @@ pub struct LightSetup {
     pub texel_scale: f32,
     /// Cascaded maps: where each face's slice of the view ends.
     pub cascades: Option<CascadeSplit>,
+    /// The faces are warped (LiSPSM): texel sizes vary over the map.
+    pub warped: bool,
 }
 
 /// The view-depth partition of cascaded maps, one entry per face.
@@ -96,6 +98,24 @@ pub struct FrustumParams {
     pub stabilize_size: Option<u32>,
 }
 
+/// The eight world-space corners of the camera's view between view depths
+/// `z0` and `z1`.
+pub fn slice_corners(camera: &Camera, aspect: f32, z0: f32, z1: f32) -> [Vec3; 8] {
+    let inv_view = camera.view().inverse();
+    let ty = (camera.fov_y_deg.to_radians() * 0.5).tan();
+    let tx = ty * aspect;
+    let mut out = [Vec3::ZERO; 8];
+    for (k, z) in [z0, z1].into_iter().enumerate() {
+        for (j, (sx, sy)) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)]
+            .into_iter()
+            .enumerate()
+        {
+            out[k * 4 + j] = inv_view.transform_point3(Vec3::new(sx * tx * z, sy * ty * z, -z));
+        }
+    }
+    out
+}
+
 /// `v` rounded up to the next 2^(k/8) (at most 9 % more): sizes that stay
 /// put under small changes.
 pub fn quantize_up(v: f32) -> f32 {
@@ -152,6 +172,7 @@ pub fn light_setup(
                 paraboloid: false,
                 texel_scale: 2.0 * (fov * 0.5).tan(),
                 cascades: None,
+                warped: false,
             }
         }
         LightType::Point if paraboloid => {
@@ -166,6 +187,7 @@ pub fn light_setup(
                 // At the centre of a hemisphere, uv changes by 1/2 per radian.
                 texel_scale: 4.0,
                 cascades: None,
+                warped: false,
             }
         }
         LightType::Point => {
@@ -182,6 +204,7 @@ pub fn light_setup(
                 paraboloid: false,
                 texel_scale: 2.0,
                 cascades: None,
+                warped: false,
             }
         }
         LightType::Directional => {
@@ -236,6 +259,7 @@ pub fn light_setup(
                 paraboloid: false,
                 texel_scale: 2.0 * half,
                 cascades: None,
+                warped: false,
             }
         }
     }

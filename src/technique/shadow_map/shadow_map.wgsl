@@ -45,6 +45,9 @@ struct ShadowMap {
     cascade_texel: array<vec4f, 2>,
     // row z of the view matrix of the camera the cascades were fitted to
     cascade_view_z: vec4f,
+    // xyz the direction the light travels, w 1 when the faces are warped
+    // (LiSPSM: the texel size varies over the map)
+    warp: vec4f,
 };
 
 @group(2) @binding(0) var<uniform> sm: ShadowMap;
@@ -463,6 +466,31 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     return vec4f(v);
 }
 
+// The map uv of world point p in `face`.
+fn map_uv(face: u32, p: vec3f) -> vec2f {
+    let c = sm.faces[face] * vec4f(p, 1.0);
+    let ndc = c.xy / select(c.w, 1e-6, abs(c.w) < 1e-6);
+    return vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+}
+
+// A warped map's world texel size at p, across the light: the larger of
+// the texel's extents along two directions perpendicular to the light,
+// from the uv change over a short step.
+fn warped_texel_world(face: u32, p: vec3f) -> f32 {
+    let l = normalize(sm.warp.xyz);
+    var t = cross(l, vec3f(0.0, 1.0, 0.0));
+    if length(t) < 1e-3 {
+        t = cross(l, vec3f(1.0, 0.0, 0.0));
+    }
+    t = normalize(t);
+    let b = cross(l, t);
+    let step = 1e-3 * max(length(p - frame.camera_pos.xyz), 1e-3);
+    let uv = map_uv(face, p);
+    let along_t = length(map_uv(face, p + t * step) - uv);
+    let along_b = length(map_uv(face, p + b * step) - uv);
+    return step / max(min(along_t, along_b) * sm.map.x, 1e-9);
+}
+
 // A G-buffer point in one face of the map: its light-clip position, map uv
 // and depth, the receiver plane's depth gradient there, and whether it is
 // looked up at all (a receiver, in front of the light, inside the map).
@@ -481,7 +509,9 @@ fn projected(face: u32, g: vec4f, n: vec3f) -> Projected {
     // number of shadow-map texels (their world size grows with distance for
     // perspective maps, and with each cascade).
     var texel_world = sm.map.z;
-    if sm.cascade.x > 0.5 {
+    if sm.warp.w > 0.5 {
+        texel_world = warped_texel_world(face, g.xyz);
+    } else if sm.cascade.x > 0.5 {
         texel_world = sm.cascade_texel[face / 4u][face % 4u];
     } else if sm.map.w < 0.5 || is_paraboloid() {
         texel_world = sm.map.z * length(g.xyz - sm.light.xyz);
