@@ -395,14 +395,17 @@ fn cascades_beat_one_map_at_equal_memory_in_the_street() {
     }
 }
 
-/// Cascade selection and blending on a plane: squares spread along the
-/// view depth over a floor, seen at a grazing angle, so that every cascade
-/// and every blend band holds shadow edges; with or without blending the
-/// mask matches the reference away from the edges.
-#[test]
-fn cascade_selection_and_blending_on_a_plane_match_the_reference() {
+/// Five squares along the view depth over a floor under a sun, seen from
+/// `eye_height` at a grazing angle (each square `shift` further along x):
+/// every cascade and every blend band holds shadow edges.
+fn squares_along_the_view(shift: f32, eye_height: f32) -> shadowlab::scene::Scene {
     let squares: Vec<(Vec3, f32)> = (0..5)
-        .map(|i| (Vec3::new(0.0, 0.6, 4.0 - 3.0 * i as f32), 0.8))
+        .map(|i| {
+            (
+                Vec3::new(shift * (i as f32 - 2.0), 0.6, 4.0 - 3.0 * i as f32),
+                0.8,
+            )
+        })
         .collect();
     let mut scene = squares_over_floor(
         &squares,
@@ -410,7 +413,17 @@ fn cascade_selection_and_blending_on_a_plane_match_the_reference() {
         false,
     );
     scene.camera =
-        shadowlab::scene::Camera::new(Vec3::new(0.0, 2.0, 8.0), Vec3::new(0.0, 0.0, -6.0));
+        shadowlab::scene::Camera::new(Vec3::new(0.0, eye_height, 8.0), Vec3::new(0.0, 0.0, -6.0));
+    scene
+}
+
+/// Cascade selection and blending on a plane: squares spread along the
+/// view depth over a floor, seen at a grazing angle, so that every cascade
+/// and every blend band holds shadow edges; with or without blending the
+/// mask matches the reference away from the edges.
+#[test]
+fn cascade_selection_and_blending_on_a_plane_match_the_reference() {
+    let scene = squares_along_the_view(0.0, 2.0);
     for set in [
         "shadow-map:pcf[cascades=4,size=512]",
         "shadow-map:pcf[cascades=4,size=512,blend=0.3]",
@@ -428,21 +441,7 @@ fn cascade_selection_and_blending_on_a_plane_match_the_reference() {
 #[test]
 fn stabilised_maps_do_not_flicker_along_a_camera_path() {
     use shadowlab::measure::flicker::{self, CameraPath};
-    let squares: Vec<(Vec3, f32)> = (0..5)
-        .map(|i| {
-            (
-                Vec3::new(0.5 * i as f32 - 1.0, 0.6, 4.0 - 3.0 * i as f32),
-                0.8,
-            )
-        })
-        .collect();
-    let mut scene = squares_over_floor(
-        &squares,
-        Light::directional(Vec3::new(0.4, -1.0, 0.3), 1.0),
-        false,
-    );
-    scene.camera =
-        shadowlab::scene::Camera::new(Vec3::new(0.0, 2.0, 8.0), Vec3::new(0.0, 0.0, -6.0));
+    let scene = squares_along_the_view(0.5, 2.0);
     let list = shadowlab::measure::parse_technique_list(
         "shadow-map:pcf[size=256],shadow-map:pcf[size=256,stabilize=false],shadow-map:csm[size=256],shadow-map:csm[size=256,stabilize=false]",
     )
@@ -473,16 +472,7 @@ fn stabilised_maps_do_not_flicker_along_a_camera_path() {
 /// memory bring its 95th percentile under a quarter of the one map's.
 #[test]
 fn texel_footprint_halves_with_twice_the_map_and_shrinks_with_cascades() {
-    let squares: Vec<(Vec3, f32)> = (0..5)
-        .map(|i| (Vec3::new(0.0, 0.6, 4.0 - 3.0 * i as f32), 0.8))
-        .collect();
-    let mut scene = squares_over_floor(
-        &squares,
-        Light::directional(Vec3::new(0.4, -1.0, 0.3), 1.0),
-        false,
-    );
-    scene.camera =
-        shadowlab::scene::Camera::new(Vec3::new(0.0, 1.0, 8.0), Vec3::new(0.0, 0.0, -6.0));
+    let scene = squares_along_the_view(0.0, 1.0);
     let p95 = |scene: &shadowlab::scene::Scene, id: &str, size| {
         compare(scene, id, size)
             .aliasing

@@ -2,6 +2,7 @@
 //! directional lights, an arrow inside a cone for spot lights; unlit, in the
 //! light's colour, sized from the scene bounds.
 
+use super::overlay::OverlayPipeline;
 use crate::frame::{FrameTargets, MAX_LIGHTS};
 use crate::gpu::GpuContext;
 use crate::scene::{Aabb, Light, LightType, Mesh, shapes};
@@ -137,41 +138,21 @@ impl LightIcons {
         gpu: &GpuContext,
         color_format: wgpu::TextureFormat,
     ) -> wgpu::RenderPipeline {
-        let module = &self.module;
-        gpu.cache.render_pipeline("icons", &color_format, || {
-            gpu.device
-                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("icons"),
-                    layout: Some(&self.layout),
-                    vertex: wgpu::VertexState {
-                        module,
-                        entry_point: Some("vs_icon"),
-                        compilation_options: Default::default(),
-                        buffers: &[Some(wgpu::VertexBufferLayout {
-                            array_stride: std::mem::size_of::<IconVertex>() as u64,
-                            step_mode: wgpu::VertexStepMode::Vertex,
-                            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
-                        })],
-                    },
-                    primitive: Default::default(),
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: crate::frame::DEPTH_FORMAT,
-                        depth_write_enabled: Some(false),
-                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module,
-                        entry_point: Some("fs_icon"),
-                        compilation_options: Default::default(),
-                        targets: &[Some(color_format.into())],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
-        })
+        OverlayPipeline {
+            label: "icons",
+            layout: &self.layout,
+            module: &self.module,
+            vertex_entry: "vs_icon",
+            fragment_entry: "fs_icon",
+            vertex_buffer: wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<IconVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+            },
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            blend: None,
+        }
+        .get(gpu, color_format)
     }
 
     /// Model matrix of a light's icon: at the light (directional lights:

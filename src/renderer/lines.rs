@@ -1,7 +1,8 @@
 //! Debug lines drawn over a rendered frame, depth-tested against the scene:
 //! what techniques offer as debug views (light frusta, silhouette edges).
 
-use crate::frame::{DEPTH_FORMAT, FrameTargets};
+use super::overlay::OverlayPipeline;
+use crate::frame::FrameTargets;
 use crate::gpu::GpuContext;
 use crate::technique::DebugLine;
 use wgpu::util::DeviceExt;
@@ -36,48 +37,21 @@ impl LineRenderer {
         gpu: &GpuContext,
         color_format: wgpu::TextureFormat,
     ) -> wgpu::RenderPipeline {
-        let module = &self.module;
-        gpu.cache.render_pipeline("lines", &color_format, || {
-            gpu.device
-                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("lines"),
-                    layout: Some(&self.layout),
-                    vertex: wgpu::VertexState {
-                        module,
-                        entry_point: Some("vs_line"),
-                        compilation_options: Default::default(),
-                        buffers: &[Some(wgpu::VertexBufferLayout {
-                            array_stride: std::mem::size_of::<LineVertex>() as u64,
-                            step_mode: wgpu::VertexStepMode::Vertex,
-                            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
-                        })],
-                    },
-                    primitive: wgpu::PrimitiveState {
-                        topology: wgpu::PrimitiveTopology::LineList,
-                        ..Default::default()
-                    },
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: DEPTH_FORMAT,
-                        depth_write_enabled: Some(false),
-                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module,
-                        entry_point: Some("fs_line"),
-                        compilation_options: Default::default(),
-                        targets: &[Some(wgpu::ColorTargetState {
-                            format: color_format,
-                            blend: Some(wgpu::BlendState::ALPHA_BLENDING),
-                            write_mask: wgpu::ColorWrites::ALL,
-                        })],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
-        })
+        OverlayPipeline {
+            label: "lines",
+            layout: &self.layout,
+            module: &self.module,
+            vertex_entry: "vs_line",
+            fragment_entry: "fs_line",
+            vertex_buffer: wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<LineVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
+            },
+            topology: wgpu::PrimitiveTopology::LineList,
+            blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+        }
+        .get(gpu, color_format)
     }
 
     /// Draws `lines` onto the frame's colour image.

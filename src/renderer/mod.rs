@@ -9,6 +9,7 @@
 mod icons;
 mod lighting;
 mod lines;
+mod overlay;
 mod timing;
 
 pub use lighting::LitKey;
