@@ -29,11 +29,10 @@ impl Stat {
             return Stat::default();
         }
         v.sort_by(|a, b| a.total_cmp(b));
-        let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
         Stat {
-            median: q(0.5),
-            p5: q(0.05),
-            p95: q(0.95),
+            median: super::percentile(&v, 0.5),
+            p5: super::percentile(&v, 0.05),
+            p95: super::percentile(&v, 0.95),
         }
     }
 }

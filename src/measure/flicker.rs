@@ -12,7 +12,7 @@
 
 use super::compare::considered_pixels;
 use super::quality::edge_band;
-use super::{choice_label, write_csv};
+use super::{choice_label, percent, write_csv};
 use crate::gpu::GpuContext;
 use crate::headless::{self, HeadlessFrame};
 use crate::renderer::{FrameCameras, RenderSettings};
@@ -109,14 +109,7 @@ pub fn step_flicker(
             edge_flicker += flickers as usize;
         }
     }
-    let pct = |a: usize, b: usize| {
-        if b == 0 {
-            0.0
-        } else {
-            100.0 * a as f64 / b as f64
-        }
-    };
-    (pct(flicker, n), pct(edge_flicker, edge_n))
+    (percent(flicker, n), percent(edge_flicker, edge_n))
 }
 
 /// Follows `frames` frames of `path` with the reference and every

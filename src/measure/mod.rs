@@ -9,6 +9,21 @@ pub mod quality;
 use crate::technique::{self, FAMILIES, TechniqueChoice};
 use anyhow::{Result, bail};
 
+/// `part` as a percentage of `whole` (0 when `whole` is 0).
+pub fn percent(part: usize, whole: usize) -> f64 {
+    if whole == 0 {
+        0.0
+    } else {
+        100.0 * part as f64 / whole as f64
+    }
+}
+
+/// The `q`-quantile (0 to 1) of ascending `sorted` values, nearest rank:
+/// the value at index round((n − 1)·q). `sorted` must not be empty.
+pub fn percentile<T: Copy>(sorted: &[T], q: f64) -> T {
+    sorted[((sorted.len() - 1) as f64 * q).round() as usize]
+}
+
 /// Parses a technique list: `all`, or comma-separated ids, each optionally
 /// with parameter values in brackets: `none,raytraced:reference[samples=64]`.
 /// `all` is every preset of every family except the reference itself.

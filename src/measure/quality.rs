@@ -52,10 +52,9 @@ pub fn footprint_stats(considered: &[bool], footprint: &[f32]) -> Option<Footpri
         return None;
     }
     v.sort_by(f64::total_cmp);
-    let p95 = v[((v.len() as f64 * 0.95).ceil() as usize).clamp(1, v.len()) - 1];
     Some(FootprintStats {
         mean: v.iter().sum::<f64>() / v.len() as f64,
-        p95,
+        p95: super::percentile(&v, 0.95),
         max: v[v.len() - 1],
     })
 }
@@ -119,13 +118,7 @@ pub fn mask_metrics(
         abs += d.abs();
         sq += d * d;
     }
-    let pct = |c: usize| {
-        if n == 0 {
-            0.0
-        } else {
-            100.0 * c as f64 / n as f64
-        }
-    };
+    let pct = |c: usize| super::percent(c, n);
     let mm = |fs: usize, fl: usize| Mismatch {
         false_shadow_pct: pct(fs),
         false_lit_pct: pct(fl),
@@ -163,11 +156,10 @@ pub fn flip(reference_rgba: &[u8], test_rgba: &[u8], width: u32, height: u32) ->
     let err = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
     let mut v = err.to_vec();
     v.sort_by(|a, b| a.total_cmp(b));
-    let pick = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize] as f64;
     FlipStats {
         mean: v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64,
-        p95: pick(0.95),
-        p99: pick(0.99),
+        p95: super::percentile(&v, 0.95) as f64,
+        p99: super::percentile(&v, 0.99) as f64,
     }
 }
 

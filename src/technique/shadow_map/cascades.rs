@@ -6,7 +6,10 @@
 //! whole texels of the light's view, so that texel edges stay in place.
 
 use super::config::Cascades;
-use super::setup::{CascadeSplit, LightSetup, light_view_of_scene, quantize_up, slice_corners};
+use super::setup::{
+    CascadeSplit, LightSetup, light_view_of_scene, quantize_up, slice_corners, snap_to_texels,
+    view_reach,
+};
 use crate::scene::{Aabb, Camera};
 use glam::Vec3;
 
@@ -34,9 +37,7 @@ pub fn stable_square(corners_ls: &[Vec3; 8], size: u32) -> (f32, f32, f32) {
         .map(|c| c.distance(centre))
         .fold(0.0f32, f32::max);
     let half = ((radius * 64.0).ceil() / 64.0).max(1.0 / 64.0);
-    let texel = 2.0 * half / size as f32;
-    let snap = |v: f32| (v / texel).floor() * texel;
-    (half, snap(centre.x), snap(centre.y))
+    snap_to_texels(half, centre.x, centre.y, size)
 }
 
 /// The light setup of a directional light travelling along `dir` with
@@ -51,9 +52,7 @@ pub fn cascade_setup(
 ) -> LightSetup {
     use glam::camera::rh::proj::directx::orthographic;
     let (view, scene_ls) = light_view_of_scene(dir, scene_bounds);
-    let c = scene_bounds.center();
-    let r = scene_bounds.size().length() * 0.5 + 1e-3;
-    let reach = (camera.eye.distance(c) + r).min(camera.far);
+    let reach = view_reach(camera, scene_bounds);
     // Stabilised: the reach rounded up to eighths of an octave, so that the
     // splits (and with them each cascade's size) stay put while the
     // camera's distance to the scene changes a little.

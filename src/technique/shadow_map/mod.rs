@@ -284,27 +284,27 @@ impl ShadowTechnique for ShadowMapTechnique {
             }
             _ => 0.0,
         };
+        // Warped maps are not stabilised.
+        let stabilize = c.cascades.stabilize && c.warp == Warp::None;
         let frustum_params = FrustumParams {
             near: c.near,
             far: c.far,
             fov_deg: c.fov_deg,
             paraboloid: c.omni == Omni::DualParaboloid,
-            // Warped maps are not stabilised.
-            stabilize_size: (c.cascades.stabilize && c.warp == Warp::None).then_some(size),
+            stabilize_size: stabilize.then_some(size),
         };
         let cascaded = ctx.light.kind == LightType::Directional && c.cascades.count > 1;
         let setups: Vec<LightSetup> = lights
             .iter()
             .map(|l| {
                 let mut setup = if cascaded {
-                    let stable = c.cascades.stabilize && c.warp == Warp::None;
                     cascades::cascade_setup(
                         l.direction,
                         &ctx.scene_gpu.bounds,
                         ctx.fit_camera,
                         aspect,
                         &Cascades {
-                            stabilize: stable,
+                            stabilize,
                             ..c.cascades
                         },
                         size,

@@ -126,10 +126,22 @@ pub fn quantize_up(v: f32) -> f32 {
 /// the half-extent rounded up to 2^(k/8) (at most 9 % larger), the centre
 /// snapped to the texel grid that extent gives.
 pub fn stable_fit(half: f32, cx: f32, cy: f32, size: u32) -> (f32, f32, f32) {
-    let half = quantize_up(half);
+    snap_to_texels(quantize_up(half), cx, cy, size)
+}
+
+/// A square of half-extent `half` with its centre (cx, cy) moved down to
+/// the nearest corner of the texel grid of a `size`² map over it.
+pub fn snap_to_texels(half: f32, cx: f32, cy: f32, size: u32) -> (f32, f32, f32) {
     let texel = 2.0 * half / size as f32;
     let snap = |v: f32| (v / texel).floor() * texel;
     (half, snap(cx), snap(cy))
+}
+
+/// How far from the camera its view of the scene can reach: to the far
+/// side of the scene's bounding sphere, at most the far plane.
+pub fn view_reach(camera: &Camera, scene_bounds: &Aabb) -> f32 {
+    let r = scene_bounds.size().length() * 0.5 + 1e-3;
+    (camera.eye.distance(scene_bounds.center()) + r).min(camera.far)
 }
 
 /// Light matrices: spot (perspective over the cone), point (six faces),
@@ -209,12 +221,10 @@ pub fn light_setup(
         }
         LightType::Directional => {
             let (view, scene_ls) = light_view_of_scene(light.direction, scene_bounds);
-            let c = scene_bounds.center();
-            let r = scene_bounds.size().length() * 0.5 + 1e-3;
             // The camera frustum, its far plane pulled in to the scene, in light space.
             let vp = camera.projection(aspect) * camera.view();
             let inv = vp.inverse();
-            let reach = (camera.eye.distance(c) + r).min(camera.far);
+            let reach = view_reach(camera, scene_bounds);
             let far_z = {
                 let p = camera.projection(aspect) * Vec4::new(0.0, 0.0, -reach, 1.0);
                 (p.z / p.w).clamp(0.0, 1.0)

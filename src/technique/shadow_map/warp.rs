@@ -6,7 +6,7 @@
 //! between view and light directions); as γ → 0 (light along the view) n
 //! grows without bound and the warp relaxes to the uniform map.
 
-use super::setup::{LightSetup, slice_corners};
+use super::setup::{LightSetup, slice_corners, view_reach};
 use crate::scene::{Aabb, Camera};
 use glam::{Mat4, Vec3, Vec4};
 
@@ -134,9 +134,7 @@ pub fn warp_setup(
             .map(|w| (w[0], w[1]))
             .collect(),
         None => {
-            let reach = (camera.eye.distance(scene.center()) + scene.size().length() * 0.5)
-                .min(camera.far)
-                .max(camera.near * 1.01);
+            let reach = view_reach(camera, scene).max(camera.near * 1.01);
             vec![(camera.near, reach)]
         }
     };
