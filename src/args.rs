@@ -2,7 +2,7 @@
 //! which scene, camera, lights, frame size, backend and render settings.
 
 use crate::gpu::GpuContext;
-use crate::renderer::{LightingModel, RenderSettings, Shading};
+use crate::renderer::{LightingModel, MipFilter, RenderSettings, Shading};
 use crate::scene::{self, Camera, Light, LightType, Scene};
 use anyhow::{Result, anyhow, bail};
 use clap::Args;
@@ -79,6 +79,11 @@ pub struct ViewArgs {
     /// anisotropy more than doubles the cost of the lighting pass).
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..=16))]
     pub anisotropy: Option<u16>,
+    /// Mip-level blending of material textures (linear = trilinear);
+    /// default linear on GPUs, nearest on CPU adapters; anisotropy above 1
+    /// implies linear.
+    #[arg(long, value_enum)]
+    pub mip_filter: Option<MipFilter>,
 }
 
 pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
@@ -176,6 +181,7 @@ impl ViewArgs {
             gpu_timing: false,
             stage_waits: false,
             anisotropy: self.anisotropy,
+            mip_filter: self.mip_filter,
         }
     }
 }

@@ -410,6 +410,7 @@ fn render(a: RenderArgs) -> Result<()> {
         timings: &timings,
         adapter: gpu.adapter_summary(),
         anisotropy: settings.texture_anisotropy(&gpu),
+        mip_filter: settings.texture_mip_filter(&gpu),
         extra_timings: serde_json::json!({
             "scene_load": t_scene.as_secs_f64() * 1e3,
             "gpu_init": t_gpu.as_secs_f64() * 1e3,

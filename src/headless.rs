@@ -108,6 +108,8 @@ pub struct FrameRecord<'a> {
     pub adapter: String,
     /// Anisotropic filtering of the material textures.
     pub anisotropy: u16,
+    /// Mip-level blending of the material textures.
+    pub mip_filter: crate::renderer::MipFilter,
     pub extra_timings: serde_json::Value,
 }
 
@@ -132,6 +134,7 @@ pub fn frame_json(r: &FrameRecord) -> serde_json::Value {
         }).collect::<Vec<_>>(),
         "render_settings": r.settings,
         "texture_anisotropy": r.anisotropy,
+        "texture_mip_filter": r.mip_filter,
         "camera": {
             "eye": r.camera.eye.to_array(),
             "target": r.camera.target.to_array(),

@@ -218,11 +218,12 @@ impl GpuContext {
     /// sample costs shader time (on lavapipe any anisotropy more than
     /// doubles the lighting pass of `room`).
     pub fn default_anisotropy(&self) -> u16 {
-        if self.info.device_type == wgpu::DeviceType::Cpu {
-            1
-        } else {
-            8
-        }
+        if self.is_cpu_adapter() { 1 } else { 8 }
+    }
+
+    /// Whether the adapter rasterises on the CPU (lavapipe, WARP, SwiftShader).
+    pub fn is_cpu_adapter(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
     }
 
     /// One-line description of the adapter for logs and frame.json.

@@ -4,7 +4,7 @@
 //! a pixel runs only its own variant's code; Gouraud has its own entry
 //! points and is the only variant that carries per-vertex lighting.
 
-use super::{LightingModel, RenderSettings, Shading};
+use super::{LightingModel, MipFilter, RenderSettings, Shading};
 use crate::frame::{self, FrameLayouts, FrameTargets, MaterialVariant, SceneGpu};
 use crate::gpu::GpuContext;
 
@@ -78,8 +78,8 @@ pub struct Lighting {
     layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
     group_layout: wgpu::BindGroupLayout,
-    /// Material samplers by anisotropy.
-    samplers: std::sync::Mutex<std::collections::HashMap<u16, wgpu::Sampler>>,
+    /// Material samplers by anisotropy and mip filter.
+    samplers: std::sync::Mutex<std::collections::HashMap<(u16, MipFilter), wgpu::Sampler>>,
 }
 
 impl Lighting {
@@ -109,16 +109,20 @@ impl Lighting {
         gpu: &GpuContext,
         frame: &FrameTargets,
         anisotropy: u16,
+        mip_filter: MipFilter,
     ) -> wgpu::BindGroup {
         let mut samplers = self.samplers.lock().unwrap_or_else(|e| e.into_inner());
-        let sampler = samplers.entry(anisotropy).or_insert_with(|| {
+        let sampler = samplers.entry((anisotropy, mip_filter)).or_insert_with(|| {
             gpu.device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some("material"),
                 address_mode_u: wgpu::AddressMode::Repeat,
                 address_mode_v: wgpu::AddressMode::Repeat,
                 mag_filter: wgpu::FilterMode::Linear,
                 min_filter: wgpu::FilterMode::Linear,
-                mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                mipmap_filter: match mip_filter {
+                    MipFilter::Nearest => wgpu::MipmapFilterMode::Nearest,
+                    MipFilter::Linear => wgpu::MipmapFilterMode::Linear,
+                },
                 anisotropy_clamp: anisotropy,
                 ..Default::default()
             })
@@ -199,10 +203,14 @@ impl Lighting {
     ) {
         pass.set_bind_group(frame::FRAME_GROUP, frame.frame_bind_group(), &[]);
         pass.set_bind_group(frame::OBJECTS_GROUP, &scene_gpu.object_bind_group, &[]);
-        let anisotropy = settings.texture_anisotropy(gpu);
         pass.set_bind_group(
             LIGHTING_GROUP,
-            &self.bind_group(gpu, frame, anisotropy),
+            &self.bind_group(
+                gpu,
+                frame,
+                settings.texture_anisotropy(gpu),
+                settings.texture_mip_filter(gpu),
+            ),
             &[],
         );
         pass.set_vertex_buffer(0, scene_gpu.vertex_buffer.slice(..));

@@ -11,7 +11,7 @@ use crate::frame::{FrameTargets, SceneGpu};
 use crate::gpu::GpuContext;
 use crate::headless;
 use crate::measure::flicker::{CameraPath, path_camera};
-use crate::renderer::{FrameTimings, RenderSettings, Renderer};
+use crate::renderer::{FrameTimings, MipFilter, RenderSettings, Renderer};
 use crate::scene::{self, Camera, Light, Scene};
 use crate::technique::{self, TechniqueChoice, TechniqueInstance};
 use anyhow::{Context as _, Result, anyhow};
@@ -144,6 +144,8 @@ pub struct ViewerState {
     pub supersampling: u32,
     /// The device's texture anisotropy, shown until one is chosen.
     pub default_anisotropy: u16,
+    /// The device's mip filter, shown until one is chosen.
+    pub default_mip_filter: MipFilter,
     pub overlay: Overlay,
     pub selected_light: usize,
     pub same_technique_for_all: bool,
@@ -223,6 +225,7 @@ pub fn run(options: ViewerOptions) -> Result<()> {
             vsync: options.vsync,
             supersampling: 1,
             default_anisotropy: 1,
+            default_mip_filter: MipFilter::Linear,
             overlay: options.mask.map_or(Overlay::Image, Overlay::Mask),
             selected_light: 0,
             same_technique_for_all: true,
@@ -297,6 +300,7 @@ impl App {
         let mut gpu = GpuContext::with_instance(instance, backends, Some(&surface))?;
         gpu.memory_budget = self.options.view.memory_budget << 20;
         self.state.default_anisotropy = gpu.default_anisotropy();
+        self.state.default_mip_filter = MipFilter::default_for(&gpu);
         let size = window.inner_size();
         let mut config = surface
             .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
@@ -813,6 +817,7 @@ impl App {
                 timings: &timings,
                 adapter: gfx.gpu.adapter_summary(),
                 anisotropy: self.state.settings.texture_anisotropy(&gfx.gpu),
+                mip_filter: self.state.settings.texture_mip_filter(&gfx.gpu),
                 extra_timings: serde_json::json!({"supersampling": ss}),
             };
             std::fs::write(

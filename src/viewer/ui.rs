@@ -6,7 +6,7 @@ use super::{Overlay, SceneState, ViewerState};
 use crate::frame::MAX_LIGHTS;
 use crate::gpu::GpuContext;
 use crate::measure::flicker::CameraPath;
-use crate::renderer::{LightingModel, Shading};
+use crate::renderer::{LightingModel, MipFilter, Shading};
 use crate::scene::{Light, LightArea, LightType, builtin};
 use crate::technique::TechniqueInstance;
 use crate::technique::{self, FAMILIES, ParamKind, ParamSpec, ParamValues};
@@ -328,6 +328,27 @@ fn render_panel(ui: &mut egui::Ui, state: &mut ViewerState) {
     {
         state.settings.anisotropy = Some(anisotropy);
     }
+    // Anisotropic filtering needs linear mip blending: the choice applies at 1.
+    let mut mip_filter = state
+        .settings
+        .mip_filter
+        .unwrap_or(state.default_mip_filter);
+    ui.add_enabled_ui(anisotropy == 1, |ui| {
+        egui::ComboBox::from_label("mip filter")
+            .selected_text(format!("{mip_filter:?}"))
+            .show_ui(ui, |ui| {
+                for m in [MipFilter::Nearest, MipFilter::Linear] {
+                    if ui
+                        .selectable_value(&mut mip_filter, m, format!("{m:?}"))
+                        .changed()
+                    {
+                        state.settings.mip_filter = Some(mip_filter);
+                    }
+                }
+            })
+            .response
+            .on_hover_text("blending between mip levels of material textures (linear = trilinear)");
+    });
     ui.checkbox(&mut state.settings.cull_back_faces, "back-face culling");
     ui.checkbox(&mut state.settings.show_light_icons, "light icons");
     ui.checkbox(&mut state.vsync, "vsync");
