@@ -2,14 +2,14 @@
 //! `raytraced` reference, over pixels that show shadow-receiving geometry
 //! facing the light (N·L > 0).
 
-use super::quality::{self, FlipStats, FootprintStats, MaskMetrics};
+use super::quality::{self, FlipStats, FootprintStats, MaskMetrics, SeamStats};
 use super::{choice_label, file_stem};
 use crate::gpu::GpuContext;
 use crate::headless::{self, FrameImages, HeadlessFrame};
 use crate::renderer::RenderSettings;
 use crate::scene::{Camera, Light, Scene};
-use crate::technique::TechniqueChoice;
 use crate::technique::TechniqueInstance;
+use crate::technique::{MapLookup, TechniqueChoice};
 use anyhow::{Context, Result};
 use glam::Vec3;
 use serde::Serialize;
@@ -30,6 +30,9 @@ pub struct QualityRow {
     /// Screen pixels per shadow-map texel over the considered pixels
     /// (techniques with a map).
     pub aliasing: Option<FootprintStats>,
+    /// Mismatch near the borders between the map's cascades or faces
+    /// against elsewhere (maps with more than one partition in view).
+    pub seams: Option<SeamStats>,
     pub frame_ms: f64,
     pub image: String,
     pub heatmap: String,
@@ -83,15 +86,15 @@ pub fn considered_pixels(
 }
 
 /// What one technique renders for `compare`: its frame, the frame's time,
-/// and per light the texel footprint of its map (when it has one).
+/// and per light where it looked up its map (when it has one).
 struct Rendered {
     images: FrameImages,
     ms: f64,
-    footprints: Vec<Option<Vec<f32>>>,
+    lookups: Vec<Option<MapLookup>>,
 }
 
 /// Renders one frame with `choice` for every light; `debug` turns the
-/// techniques' debug views on (they carry the texel footprint).
+/// techniques' debug views on (they carry the map lookups).
 #[allow(clippy::too_many_arguments)]
 fn render_with(
     gpu: &GpuContext,
@@ -110,14 +113,14 @@ fn render_with(
         t.technique.enable_debug(debug);
     }
     let t = hf.render(gpu, scene, camera, lights, settings)?;
-    let footprints = hf.techniques[..lights.len()]
+    let lookups = hf.techniques[..lights.len()]
         .iter()
-        .map(|t| t.technique.texel_footprint(gpu))
+        .map(|t| t.technique.map_lookup(gpu))
         .collect::<Result<_>>()?;
     Ok(Rendered {
         images: headless::read_back(gpu, &hf.frame, lights.len())?,
         ms: t.total_ms,
-        footprints,
+        lookups,
     })
 }
 
@@ -167,7 +170,7 @@ pub fn run(
         let Rendered {
             images: img,
             ms,
-            footprints,
+            lookups,
         } = render_with(gpu, &mut hf, scene, camera, lights, &settings, choice, true)?;
         let image_name = format!("{stem}.png");
         image::save_buffer(
@@ -204,13 +207,23 @@ pub fn run(
                 h,
                 image::ExtendedColorType::Rgba8,
             )?;
-            let aliasing = footprints[li]
-                .as_ref()
-                .and_then(|f| quality::footprint_stats(cons, f));
+            let lookup = lookups[li].as_ref();
+            let aliasing = lookup.and_then(|l| quality::footprint_stats(cons, &l.footprint));
+            let seams = lookup.and_then(|l| {
+                quality::seam_stats(
+                    w as usize,
+                    h as usize,
+                    cons,
+                    &l.partition,
+                    &ref_img.masks[li],
+                    &img.masks[li],
+                )
+            });
             rows.push(QualityRow {
                 technique: label.clone(),
                 light: li,
                 aliasing,
+                seams,
                 mask,
                 on_planes,
                 off_planes,
@@ -267,6 +280,10 @@ fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
             "footprint_mean_px",
             "footprint_p95_px",
             "footprint_max_px",
+            "seam_pixels",
+            "seam_mismatch_pct",
+            "elsewhere_mismatch_pct",
+            "seam_same_partitions_pct",
             "frame_ms",
         ],
         rows.iter().map(|r| {
@@ -291,6 +308,12 @@ fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
                 footprint(r.aliasing.map(|a| a.mean)),
                 footprint(r.aliasing.map(|a| a.p95)),
                 footprint(r.aliasing.map(|a| a.max)),
+                r.seams.map_or(String::new(), |s| s.seam_pixels.to_string()),
+                r.seams.map_or(String::new(), |s| pct(s.seam_mismatch_pct)),
+                r.seams
+                    .map_or(String::new(), |s| pct(s.elsewhere_mismatch_pct)),
+                r.seams
+                    .map_or(String::new(), |s| pct(s.same_partitions_pct)),
                 format!("{:.2}", r.frame_ms),
             ]
         }),
@@ -334,6 +357,36 @@ fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[QualityRow]) -> Str
             px(r.aliasing.map(|a| a.p95)),
             px(r.aliasing.map(|a| a.max))
         );
+    }
+    if rows.iter().any(|r| r.seams.is_some()) {
+        s += &format!(
+            "\nSeams: mismatch within {} px of a border between the map's cascades or faces, against elsewhere (% of each region's considered pixels), and against what the band's pixels would show at their own partition's rate outside the band (same partitions).\n\n",
+            quality::SEAM_RADIUS
+        );
+        s += "| technique | light | seam pixels | seam mismatch % | elsewhere % | ratio | same partitions % | ratio |\n|---|---:|---:|---:|---:|---:|---:|---:|\n";
+        for r in rows {
+            if let Some(seam) = r.seams {
+                let ratio = |of: f64| {
+                    if of > 0.0 {
+                        format!("{:.2}", seam.seam_mismatch_pct / of)
+                    } else {
+                        "–".into()
+                    }
+                };
+                let _ = writeln!(
+                    s,
+                    "| `{}` | {} | {} | {:.3} | {:.3} | {} | {:.3} | {} |",
+                    r.technique,
+                    r.light,
+                    seam.seam_pixels,
+                    seam.seam_mismatch_pct,
+                    seam.elsewhere_mismatch_pct,
+                    ratio(seam.elsewhere_mismatch_pct),
+                    seam.same_partitions_pct,
+                    ratio(seam.same_partitions_pct)
+                );
+            }
+        }
     }
     s += "\nSplit by receiver planes (the scene's ShadowPlane objects, else its largest planar receiver); % of the pixels of each region.\n\n";
     s += "| technique | light | plane pixels | plane FS % | plane FL % | plane total % | plane edge % | other pixels | other FS % | other FL % | other total % | other edge % |\n";

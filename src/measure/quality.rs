@@ -68,25 +68,96 @@ pub fn edge_band(
     reference: &[f32],
     radius: usize,
 ) -> Vec<bool> {
-    let shadow = |i: usize| reference[i] < 0.5;
+    let class = |i: usize| considered[i].then_some(reference[i] < 0.5);
+    band_where_class_changes(width, height, radius, class)
+}
+
+/// Pixels of some class (`class(i)` is `Some`) within Chebyshev distance
+/// `radius` of a pixel of another class.
+fn band_where_class_changes<K: PartialEq>(
+    width: usize,
+    height: usize,
+    radius: usize,
+    class: impl Fn(usize) -> Option<K>,
+) -> Vec<bool> {
     let mut band = vec![false; width * height];
     for y in 0..height {
         for x in 0..width {
             let i = y * width + x;
-            if !considered[i] {
+            let Some(own) = class(i) else {
                 continue;
-            }
+            };
             let (x0, x1) = (x.saturating_sub(radius), (x + radius).min(width - 1));
             let (y0, y1) = (y.saturating_sub(radius), (y + radius).min(height - 1));
-            band[i] = (y0..=y1).any(|yy| {
-                (x0..=x1).any(|xx| {
-                    let j = yy * width + xx;
-                    considered[j] && shadow(j) != shadow(i)
-                })
-            });
+            band[i] = (y0..=y1)
+                .any(|yy| (x0..=x1).any(|xx| class(yy * width + xx).is_some_and(|k| k != own)));
         }
     }
     band
+}
+
+/// Mismatch near the borders between a map's partitions (cascades, cube
+/// faces) against the mismatch elsewhere, in % of each region's considered
+/// pixels.
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+pub struct SeamStats {
+    /// Considered pixels within [`SEAM_RADIUS`] px of another partition.
+    pub seam_pixels: usize,
+    pub seam_mismatch_pct: f64,
+    pub elsewhere_mismatch_pct: f64,
+    /// What the seam band would show if each of its pixels failed as often
+    /// as the pixels of its own partition outside the band: the seam's
+    /// effect without the partitions' different resolutions (a far cascade
+    /// is coarser everywhere, not only at its border).
+    pub same_partitions_pct: f64,
+}
+
+/// The seam band's half-width in pixels.
+pub const SEAM_RADIUS: usize = 4;
+
+/// [`SeamStats`] of `test` against `reference`, where `partition` is the
+/// map partition each pixel looked up (0: none); `None` when no considered
+/// pixel lies near a partition border.
+pub fn seam_stats(
+    width: usize,
+    height: usize,
+    considered: &[bool],
+    partition: &[u32],
+    reference: &[f32],
+    test: &[f32],
+) -> Option<SeamStats> {
+    let class = |i: usize| (partition[i] > 0).then_some(partition[i]);
+    let band = band_where_class_changes(width, height, SEAM_RADIUS, class);
+    let mut counts = [[0usize; 2]; 2]; // [in band?][pixels, mismatched]
+    // Outside the band, per partition: [pixels, mismatched].
+    let mut per_partition = std::collections::HashMap::<u32, [usize; 2]>::new();
+    for i in (0..width * height).filter(|&i| considered[i]) {
+        let wrong = ((reference[i] < 0.5) != (test[i] < 0.5)) as usize;
+        let region = &mut counts[band[i] as usize];
+        region[0] += 1;
+        region[1] += wrong;
+        if !band[i] {
+            let p = per_partition.entry(partition[i]).or_default();
+            p[0] += 1;
+            p[1] += wrong;
+        }
+    }
+    let [elsewhere, seam] = counts;
+    let rate = |p: u32| {
+        per_partition
+            .get(&p)
+            .map_or(0.0, |c| c[1] as f64 / c[0] as f64)
+    };
+    let expected: f64 = (0..width * height)
+        .filter(|&i| considered[i] && band[i])
+        .map(|i| rate(partition[i]))
+        .sum();
+    (seam[0] > 0).then(|| SeamStats {
+        seam_pixels: seam[0],
+        seam_mismatch_pct: super::percent(seam[1], seam[0]),
+        elsewhere_mismatch_pct: super::percent(elsewhere[1], elsewhere[0]),
+        same_partitions_pct: 100.0 * expected / seam[0] as f64,
+    })
 }
 
 /// Compares `test` against `reference` over the `considered` pixels.
@@ -191,6 +262,31 @@ pub fn heatmap(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Two partitions split at column 5: the band holds columns 1 to 8
+    /// (within 4 px of the other side), elsewhere columns 0 and 9.
+    #[test]
+    fn seam_stats_split_mismatch_at_partition_borders_from_the_rest() {
+        let partition: Vec<u32> = (0..100).map(|i| if i % 10 < 5 { 1 } else { 2 }).collect();
+        let reference = vec![1.0; 100];
+        let mut test = reference.clone();
+        for row in 0..10 {
+            test[row * 10 + 5] = 0.0; // on the border: 10 of 80 band pixels
+        }
+        test[0] = 0.0; // column 0: 1 of 20 pixels elsewhere
+        let s = seam_stats(10, 10, &[true; 100], &partition, &reference, &test).unwrap();
+        assert_eq!(s.seam_pixels, 80);
+        assert!((s.seam_mismatch_pct - 12.5).abs() < 1e-9, "{s:?}");
+        assert!((s.elsewhere_mismatch_pct - 5.0).abs() < 1e-9, "{s:?}");
+        // Partition 1 fails on 1 of its 10 outside pixels, partition 2 on
+        // none of its 10: 40 band pixels at 10 %, 40 at 0 %.
+        assert!((s.same_partitions_pct - 5.0).abs() < 1e-9, "{s:?}");
+        let one = vec![1u32; 100];
+        assert_eq!(
+            seam_stats(10, 10, &[true; 100], &one, &reference, &test),
+            None
+        );
+    }
 
     /// A 10×10 frame whose left half is in shadow in the reference.
     fn half_shadow() -> (Vec<bool>, Vec<f32>) {

@@ -110,13 +110,22 @@ pub trait ShadowTechnique: Send {
         Ok(DebugViews::default())
     }
 
-    /// With debug views on, per pixel of the last frame (row-major), the
-    /// screen pixels one texel of the technique's map spans (SEEDS §5's
-    /// aliasing measure d; > 1: a texel covers more than a pixel), 0 where
-    /// no map is looked up; `None` for techniques without a map.
-    fn texel_footprint(&self, _gpu: &GpuContext) -> Result<Option<Vec<f32>>> {
+    /// With debug views on, where each pixel of the last frame looked up
+    /// the technique's map; `None` for techniques without a map.
+    fn map_lookup(&self, _gpu: &GpuContext) -> Result<Option<MapLookup>> {
         Ok(None)
     }
+}
+
+/// Per pixel of a frame (row-major), what a shadow-map lookup saw.
+#[derive(Clone, Debug, Default)]
+pub struct MapLookup {
+    /// Screen pixels one map texel spans (SEEDS §5's aliasing measure d;
+    /// > 1: a texel covers more than a pixel), 0 where no map is looked up.
+    pub footprint: Vec<f32>,
+    /// The map partition looked up, counted from 1 (cascade or cube face);
+    /// 0 where none is.
+    pub partition: Vec<u32>,
 }
 
 /// A world-space line segment of a debug view (RGBA colour).

@@ -25,7 +25,7 @@ use crate::scene::area::area_samples;
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec4};
-use pipelines::{DepthPassKey, FOOTPRINT_FORMAT, LookupKey, MOMENT_FORMAT, ShadowMapShared};
+use pipelines::{DepthPassKey, LOOKUP_FORMAT, LookupKey, MOMENT_FORMAT, ShadowMapShared};
 use std::sync::Arc;
 
 pub static FAMILY: Family = Family {
@@ -600,7 +600,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 let formats = [
                     wgpu::TextureFormat::Rgba8Unorm,
                     wgpu::TextureFormat::Rgba8Unorm,
-                    FOOTPRINT_FORMAT,
+                    LOOKUP_FORMAT,
                 ];
                 self.debug_frame = Some(formats.map(|format| {
                     crate::gpu::texture_2d(
@@ -694,12 +694,16 @@ impl ShadowTechnique for ShadowMapTechnique {
         Ok(views)
     }
 
-    fn texel_footprint(&self, gpu: &GpuContext) -> Result<Option<Vec<f32>>> {
-        let Some([_, _, footprint]) = &self.debug_frame else {
+    fn map_lookup(&self, gpu: &GpuContext) -> Result<Option<super::MapLookup>> {
+        let Some([_, _, lookup]) = &self.debug_frame else {
             return Ok(None);
         };
-        let raw = gpu.read_texture(footprint, 0, 4)?;
-        Ok(Some(bytemuck::cast_slice(&raw).to_vec()))
+        let raw = gpu.read_texture(lookup, 0, 8)?;
+        let pairs: &[[f32; 2]] = bytemuck::cast_slice(&raw);
+        Ok(Some(super::MapLookup {
+            footprint: pairs.iter().map(|p| p[0]).collect(),
+            partition: pairs.iter().map(|p| p[1] as u32).collect(),
+        }))
     }
 
     fn counters(&self) -> Vec<(&'static str, f64)> {

@@ -10,8 +10,9 @@ use crate::frame::{MASK_FORMAT, VERTEX_LAYOUT};
 use crate::gpu::GpuContext;
 use crate::technique::params::Choice;
 
-/// The debug frame's numeric texel footprint (pixels per texel).
-pub const FOOTPRINT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+/// The debug frame's numbers per pixel: texel footprint (pixels per texel)
+/// and the partition looked up (see [`crate::technique::MapLookup`]).
+pub const LOOKUP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 /// Format of the moment maps (vsm, esm, evsm, msm).
 pub const MOMENT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
@@ -234,7 +235,7 @@ impl ShadowMapShared {
             &[
                 Some(wgpu::TextureFormat::Rgba8Unorm.into()),
                 Some(wgpu::TextureFormat::Rgba8Unorm.into()),
-                Some(FOOTPRINT_FORMAT.into()),
+                Some(LOOKUP_FORMAT.into()),
             ],
             None,
         )

@@ -627,10 +627,10 @@ struct DebugFrame {
     // d = ds·rs/ri·cosα/cosβ, measured with screen derivatives), log2-coloured:
     // blue < 1/4 (undersampled: aliasing), green 1, red > 4 (oversampled).
     @location(1) texels: vec4f,
-    // The same as a number for `compare`: screen pixels one map texel spans
-    // along its longer axis (> 1: a texel covers more than a pixel), 0 where
-    // nothing is looked up.
-    @location(2) footprint: f32,
+    // Numbers for `compare`: x the screen pixels one map texel spans along
+    // its longer axis (> 1: a texel covers more than a pixel), y the face or
+    // cascade looked up + 1; both 0 where nothing is looked up.
+    @location(2) lookup: vec2f,
 };
 
 // A colour per cascade for the debug view.
@@ -684,6 +684,6 @@ fn fs_debug_frame(@builtin(position) frag: vec4f) -> DebugFrame {
     let t = clamp(log2(max(footprint, 1e-6)) / 2.0, -1.0, 1.0);
     let colour = select(mix(vec3f(0.0, 1.0, 0.0), vec3f(1.0, 0.0, 0.0), t), mix(vec3f(0.0, 1.0, 0.0), vec3f(0.0, 0.2, 1.0), -t), t < 0.0);
     o.texels = select(vec4f(0.0, 0.0, 0.0, 1.0), vec4f(colour, 1.0), inside);
-    o.footprint = select(0.0, pixels_per_texel, inside);
+    o.lookup = select(vec2f(0.0), vec2f(pixels_per_texel, f32(face + 1u)), inside);
     return o;
 }
