@@ -180,6 +180,7 @@ impl ViewArgs {
             show_light_icons: !self.no_icons,
             gpu_timing: false,
             stage_waits: false,
+            feedback: Default::default(),
             anisotropy: self.anisotropy,
             mip_filter: self.mip_filter,
         }

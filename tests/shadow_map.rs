@@ -490,3 +490,123 @@ fn texel_footprint_halves_with_twice_the_map_and_shrinks_with_cascades() {
     let cascades = p95(&land, "shadow-map:csm", (320, 180));
     assert!(cascades * 4.0 <= one, "csm {cascades}, one map {one}");
 }
+
+/// SDSM's reduction finds the nearest and farthest view depths of the
+/// receiving pixels, as a CPU pass over the read-back G-buffer does.
+#[test]
+fn sdsm_depth_bounds_are_the_seen_view_depths() {
+    use shadowlab::technique::Feedback;
+    let gpu = gpu();
+    let scene = squares_along_the_view(0.0, 2.0);
+    let hf = frame_with_debug_views(&scene, "shadow-map:sdsm", 256, 192);
+    let counter = |name: &str| {
+        hf.techniques[0]
+            .technique
+            .counters()
+            .into_iter()
+            .find(|(n, _)| *n == name)
+            .unwrap_or_else(|| panic!("no counter {name}"))
+            .1
+    };
+    let position = gpu
+        .read_texture(hf.frame.gbuffer_position(), 0, 16)
+        .unwrap();
+    let normal = gpu.read_texture(hf.frame.gbuffer_normal(), 0, 8).unwrap();
+    let position: &[[f32; 4]] = bytemuck::cast_slice(&position);
+    let receives: Vec<bool> = bytemuck::cast_slice::<u8, [half::f16; 4]>(&normal)
+        .iter()
+        .map(|n| n[3].to_f32() > 0.5)
+        .collect();
+    let view = scene.camera.view();
+    let depths: Vec<f32> = position
+        .iter()
+        .zip(&receives)
+        .filter(|(p, r)| p[3] > 0.5 && **r)
+        .map(|(p, _)| -view.transform_point3(Vec3::new(p[0], p[1], p[2])).z)
+        .collect();
+    let near = depths.iter().copied().fold(f32::MAX, f32::min) as f64;
+    let far = depths.iter().copied().fold(0.0, f32::max) as f64;
+    assert!(
+        (counter("sdsm_near") - near).abs() < 1e-4 * near,
+        "{} vs {near}",
+        counter("sdsm_near")
+    );
+    assert!(
+        (counter("sdsm_far") - far).abs() < 1e-4 * far,
+        "{} vs {far}",
+        counter("sdsm_far")
+    );
+    // Frame-late feedback (the viewer): the first frame has no result yet
+    // and fits the frustum; the next one uses the first one's bounds.
+    let choice = shadowlab::measure::parse_technique_list("shadow-map:sdsm")
+        .unwrap()
+        .remove(0);
+    let mut late =
+        shadowlab::headless::HeadlessFrame::new(gpu, &scene, &[choice], 256, 192).unwrap();
+    let settings = shadowlab::renderer::RenderSettings {
+        feedback: Feedback::PreviousFrame,
+        ..Default::default()
+    };
+    let has_bounds = |hf: &shadowlab::headless::HeadlessFrame| {
+        hf.techniques[0]
+            .technique
+            .counters()
+            .iter()
+            .any(|(n, _)| *n == "sdsm_near")
+    };
+    late.render(gpu, &scene, &scene.camera, &scene.lights, &settings)
+        .unwrap();
+    assert!(!has_bounds(&late), "the first frame cannot have waited");
+    late.render(gpu, &scene, &scene.camera, &scene.lights, &settings)
+        .unwrap();
+    assert!(
+        has_bounds(&late),
+        "the second frame has the first one's bounds"
+    );
+}
+
+/// SDSM's cascades fitted to the pixels they shade: every receiving pixel
+/// finds its surface inside the map it looks up, the texels are smaller
+/// than the frustum-fitted cascades', and the mask matches the reference.
+#[test]
+fn sdsm_cascades_cover_every_pixel_with_smaller_texels() {
+    let gpu = gpu();
+    let scene = squares_along_the_view(0.0, 2.0);
+    let lookup = |id: &str| {
+        frame_with_debug_views(&scene, id, 256, 192).techniques[0]
+            .technique
+            .map_lookup(gpu)
+            .unwrap()
+            .unwrap()
+    };
+    let hf = frame_with_debug_views(&scene, "shadow-map:sdsm", 256, 192);
+    let normal = gpu.read_texture(hf.frame.gbuffer_normal(), 0, 8).unwrap();
+    let receives: Vec<bool> = bytemuck::cast_slice::<u8, [half::f16; 4]>(&normal)
+        .iter()
+        .map(|n| n[3].to_f32() > 0.5)
+        .collect();
+    let sdsm = lookup("shadow-map:sdsm");
+    let outside = receives
+        .iter()
+        .zip(&sdsm.partition)
+        .filter(|(r, p)| **r && **p == 0)
+        .count();
+    assert_eq!(outside, 0, "receiving pixels outside their cascade's map");
+    let mean = |l: &shadowlab::technique::MapLookup| {
+        let v: Vec<f32> = l.footprint.iter().copied().filter(|f| *f > 0.0).collect();
+        v.iter().sum::<f32>() / v.len() as f32
+    };
+    let frustum = lookup("shadow-map:sdsm[fit=frustum]");
+    assert!(
+        mean(&sdsm) < 0.8 * mean(&frustum),
+        "sdsm {} px/texel, frustum-fitted {}",
+        mean(&sdsm),
+        mean(&frustum)
+    );
+    let m = compare(&scene, "shadow-map:sdsm", (256, 256)).mask;
+    assert!(m.reference_shadowed_pct > 5.0, "{m:?}");
+    assert!(
+        m.interior.total_pct <= 0.2 && m.all.total_pct <= 2.0,
+        "{m:?}"
+    );
+}

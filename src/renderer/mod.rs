@@ -18,7 +18,7 @@ pub use timing::{FrameTimings, GpuPassTimes};
 use crate::frame::{self, FrameLayouts, FrameTargets, MAX_LIGHTS, SceneGpu};
 use crate::gpu::GpuContext;
 use crate::scene::{Camera, Light, Scene};
-use crate::technique::{MaskContext, TechniqueInstance, TechniqueNeeds};
+use crate::technique::{Feedback, MaskContext, TechniqueInstance, TechniqueNeeds};
 use anyhow::{Result, bail};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -87,6 +87,10 @@ pub struct RenderSettings {
     /// last frame whose timestamps have arrived.
     #[serde(default)]
     pub stage_waits: bool,
+    /// How techniques read back GPU results they need on the CPU: this
+    /// frame's (waiting) or the latest arrived (the viewer, no stall).
+    #[serde(default)]
+    pub feedback: Feedback,
     /// Anisotropic filtering of material textures, 1 (trilinear) to 16;
     /// `None`: the device's default ([`GpuContext::default_anisotropy`]).
     #[serde(default)]
@@ -128,6 +132,7 @@ impl Default for RenderSettings {
             show_light_icons: true,
             gpu_timing: false,
             stage_waits: false,
+            feedback: Feedback::ThisFrame,
             anisotropy: None,
             mip_filter: None,
         }
@@ -325,6 +330,7 @@ impl Renderer {
                 camera,
                 fit_camera: cameras.fit,
                 target: frame.mask_layer(i),
+                feedback: settings.feedback,
             };
             techniques[i].technique.render_mask(&ctx, &mut enc)?;
         }

@@ -36,6 +36,20 @@ pub struct MaskContext<'a> {
     pub fit_camera: &'a crate::scene::Camera,
     /// The mask layer to write (format [`crate::frame::MASK_FORMAT`]).
     pub target: &'a wgpu::TextureView,
+    /// How results the GPU computes for the CPU reach it this frame.
+    pub feedback: Feedback,
+}
+
+/// How a technique reads back what the GPU computed from this frame for
+/// its own CPU-side set-up (SDSM's depth bounds).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Feedback {
+    /// Wait for this frame's result (one stall per frame; every measurement).
+    #[default]
+    ThisFrame,
+    /// Use the latest result that has arrived, without waiting (the viewer).
+    PreviousFrame,
 }
 
 impl MaskContext<'_> {

@@ -220,6 +220,8 @@ pub fn run(options: ViewerOptions) -> Result<()> {
             scene_name,
             settings: RenderSettings {
                 gpu_timing: true,
+                // The viewer never waits for a technique's read-back.
+                feedback: crate::technique::Feedback::PreviousFrame,
                 ..options.view.settings()
             },
             vsync: options.vsync,

@@ -5,10 +5,11 @@
 //! does not change when the camera moves or turns, and snaps its centre to
 //! whole texels of the light's view, so that texel edges stay in place.
 
-use super::config::Cascades;
+use super::depth_bounds::SeenBounds;
+use super::partition_params::{Cascades, Fit};
 use super::setup::{
-    CascadeSplit, LightSetup, light_view_of_scene, quantize_up, slice_corners, snap_to_texels,
-    view_reach,
+    CascadeSplit, LightSetup, light_view_of_scene, quantize_down, quantize_up, slice_corners,
+    snap_to_texels, view_reach,
 };
 use crate::scene::{Aabb, Camera};
 use glam::Vec3;
@@ -40,8 +41,62 @@ pub fn stable_square(corners_ls: &[Vec3; 8], size: u32) -> (f32, f32, f32) {
     snap_to_texels(half, centre.x, centre.y, size)
 }
 
+/// SDSM's fitted cascades reach this many texels past their samples' box
+/// on each side (filter kernels, normal offset and blending look there).
+const SAMPLE_FIT_MARGIN_TEXELS: f32 = 16.0;
+
+/// The view depths the cascades partition: the camera's near plane to the
+/// last split of `cascades` (its `max_distance`, else the camera's view of
+/// the scene), or with SDSM what the camera saw within the same limit
+/// (stabilised: rounded outwards to eighths of an octave).
+fn partitioned_depths(
+    camera: &Camera,
+    scene_bounds: &Aabb,
+    cascades: &Cascades,
+    seen: Option<&SeenBounds>,
+) -> (f32, f32) {
+    let limit = if cascades.max_distance > 0.0 {
+        cascades.max_distance.min(camera.far)
+    } else {
+        camera.far
+    };
+    let (near, far) = match seen.filter(|_| cascades.fit != Fit::Frustum) {
+        Some(s) => {
+            let near = s.near.max(camera.near);
+            let far = s.far.min(limit);
+            if cascades.stabilize && cascades.fit == Fit::Depth {
+                (
+                    quantize_down(near).max(camera.near),
+                    quantize_up(far).min(limit),
+                )
+            } else {
+                (near, far)
+            }
+        }
+        None => {
+            let reach = view_reach(camera, scene_bounds);
+            // Stabilised: the reach rounded up to eighths of an octave, so
+            // that the splits (and with them each cascade's size) stay put
+            // while the camera's distance to the scene changes a little.
+            let reach = if cascades.stabilize {
+                quantize_up(reach).min(camera.far)
+            } else {
+                reach
+            };
+            let far = if cascades.max_distance > 0.0 {
+                limit
+            } else {
+                reach
+            };
+            (camera.near, far)
+        }
+    };
+    (near, far.max(near * 1.01))
+}
+
 /// The light setup of a directional light travelling along `dir` with
-/// `cascades.count` maps of `size`².
+/// `cascades.count` maps of `size`², fitted to the camera's frustum or, with
+/// `seen` (SDSM), to what the camera saw.
 pub fn cascade_setup(
     dir: Vec3,
     scene_bounds: &Aabb,
@@ -49,33 +104,30 @@ pub fn cascade_setup(
     aspect: f32,
     cascades: &Cascades,
     size: u32,
+    seen: Option<&SeenBounds>,
 ) -> LightSetup {
     use glam::camera::rh::proj::directx::orthographic;
     let (view, scene_ls) = light_view_of_scene(dir, scene_bounds);
-    let reach = view_reach(camera, scene_bounds);
-    // Stabilised: the reach rounded up to eighths of an octave, so that the
-    // splits (and with them each cascade's size) stay put while the
-    // camera's distance to the scene changes a little.
-    let reach = if cascades.stabilize {
-        quantize_up(reach).min(camera.far)
-    } else {
-        reach
-    };
-    let far = if cascades.max_distance > 0.0 {
-        cascades.max_distance.min(camera.far)
-    } else {
-        reach
-    }
-    .max(camera.near * 1.01);
-    let splits = split_distances(camera.near, far, cascades.count, cascades.split_lambda);
+    let (near, far) = partitioned_depths(camera, scene_bounds, cascades, seen);
+    let splits = split_distances(near, far, cascades.count, cascades.split_lambda);
+    let samples = seen
+        .filter(|_| cascades.fit == Fit::Samples)
+        .map(|s| s.cascades_xy.as_slice())
+        .unwrap_or_default();
     // View space looks down −z: depth range from the scene's z extent, so
     // that every caster is in every cascade's depth range.
     let (n, f) = ((-scene_ls.max.z - 1e-3).max(0.0), -scene_ls.min.z + 1e-3);
     let mut faces = vec![];
     let mut texel_scales = vec![];
-    for w in splits.windows(2) {
+    for (i, w) in splits.windows(2).enumerate() {
         let corners = slice_corners(camera, aspect, w[0], w[1]).map(|p| view.transform_point3(p));
-        let (half, cx, cy) = if cascades.stabilize {
+        let (half, cx, cy) = if let Some(Some([x0, y0, x1, y1])) = samples.get(i) {
+            // The box of the pixels this cascade shades, widened by the
+            // margin in its own texels: half · (1 − 2m/size) = box half.
+            let half = ((x1 - x0).max(y1 - y0) * 0.5).max(1e-3)
+                / (1.0 - 2.0 * SAMPLE_FIT_MARGIN_TEXELS / size as f32).max(0.5);
+            (half, (x0 + x1) * 0.5, (y0 + y1) * 0.5)
+        } else if cascades.stabilize && cascades.fit != Fit::Samples {
             stable_square(&corners, size)
         } else {
             let b = Aabb::from_points(corners);
@@ -103,6 +155,7 @@ pub fn cascade_setup(
         orthographic: true,
         paraboloid: false,
         cascades: Some(CascadeSplit {
+            near,
             far: splits[1..].to_vec(),
             texel_scales,
         }),
@@ -176,10 +229,11 @@ mod tests {
             max_distance: 60.0,
             stabilize: true,
             blend: 0.0,
+            fit: Fit::Frustum,
         };
         let size = 512;
         let cam = Camera::new(Vec3::new(0.0, 1.7, 30.0), Vec3::new(0.0, 3.0, 0.0));
-        let a = cascade_setup(dir, &bounds, &cam, 16.0 / 9.0, &stable, size);
+        let a = cascade_setup(dir, &bounds, &cam, 16.0 / 9.0, &stable, size, None);
         let probe = Vec3::new(0.3, 0.0, 25.0);
         for step in [0.013f32, 0.21, 0.37] {
             let moved = Camera {
@@ -187,7 +241,7 @@ mod tests {
                 target: cam.target + Vec3::new(step, 0.0, -step),
                 ..cam
             };
-            let b = cascade_setup(dir, &bounds, &moved, 16.0 / 9.0, &stable, size);
+            let b = cascade_setup(dir, &bounds, &moved, 16.0 / 9.0, &stable, size, None);
             let (sa, sb) = (a.cascades.as_ref().unwrap(), b.cascades.as_ref().unwrap());
             assert_eq!(sa.texel_scales, sb.texel_scales);
             // The probe's texel coordinate in cascade 0 moves by whole texels.
@@ -200,13 +254,13 @@ mod tests {
             stabilize: false,
             ..stable
         };
-        let a = cascade_setup(dir, &bounds, &cam, 16.0 / 9.0, &fitted, size);
+        let a = cascade_setup(dir, &bounds, &cam, 16.0 / 9.0, &fitted, size, None);
         let moved = Camera {
             eye: cam.eye + Vec3::new(0.21, 0.0, -0.21),
             target: cam.target + Vec3::new(0.21, 0.0, -0.21),
             ..cam
         };
-        let b = cascade_setup(dir, &bounds, &moved, 16.0 / 9.0, &fitted, size);
+        let b = cascade_setup(dir, &bounds, &moved, 16.0 / 9.0, &fitted, size, None);
         let d = texel_of(b.faces[0], probe, size) - texel_of(a.faces[0], probe, size);
         assert!((d - d.round()).abs().max_element() > 1e-2, "{d}");
     }
@@ -243,8 +297,17 @@ mod tests {
                 max_distance: 40.0,
                 stabilize,
                 blend: 0.1,
+                fit: Fit::Frustum,
             };
-            let s = cascade_setup(Vec3::new(0.2, -1.0, 0.1), &bounds, &cam, 1.5, &c, 1024);
+            let s = cascade_setup(
+                Vec3::new(0.2, -1.0, 0.1),
+                &bounds,
+                &cam,
+                1.5,
+                &c,
+                1024,
+                None,
+            );
             let split = s.cascades.as_ref().unwrap();
             assert_eq!(s.faces.len(), 4);
             assert!((split.far[3] - 40.0).abs() < 1e-4);

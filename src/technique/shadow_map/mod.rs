@@ -10,11 +10,15 @@
 
 pub mod cascades;
 pub mod config;
+mod depth_bounds;
+pub mod partition_params;
 mod pipelines;
 mod setup;
 pub mod warp;
 
-pub use config::{Cascades, CullFace, DepthFormat, Filter, Omni, ShadowMapConfig, Stage, Warp};
+pub use config::{
+    Cascades, CullFace, DepthFormat, Filter, Fit, Omni, ShadowMapConfig, Stage, Warp,
+};
 pub use setup::{CascadeSplit, FrustumParams, LightSetup, cube_views, light_setup};
 
 use super::light_space::outside_clip_volume;
@@ -24,6 +28,7 @@ use crate::scene::LightType;
 use crate::scene::area::area_samples;
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
+use depth_bounds::{DepthReduction, ReduceInputs, SeenBounds};
 use glam::{Mat4, UVec4, Vec4};
 use pipelines::{DepthPassKey, LOOKUP_FORMAT, LookupKey, MOMENT_FORMAT, ShadowMapShared};
 use std::sync::Arc;
@@ -99,6 +104,10 @@ pub struct ShadowMapTechnique {
     want_debug: bool,
     /// Triangles drawn into the maps last frame (after culling per face).
     map_triangles: u64,
+    /// SDSM's reduction (`fit=depth|samples`), made on first use.
+    depth_reduction: Option<DepthReduction>,
+    /// What the cascades were fitted to last frame with SDSM.
+    last_seen: Option<SeenBounds>,
 }
 
 /// Uniform slots: per face, the depth pass (and lookup), blur along x, blur along y.
@@ -123,6 +132,8 @@ impl ShadowMapTechnique {
             last_paraboloid: false,
             want_debug: false,
             map_triangles: 0,
+            depth_reduction: None,
+            last_seen: None,
         }
     }
 
@@ -294,6 +305,26 @@ impl ShadowTechnique for ShadowMapTechnique {
             stabilize_size: stabilize.then_some(size),
         };
         let cascaded = ctx.light.kind == LightType::Directional && c.cascades.count > 1;
+        self.last_seen = if cascaded && c.cascades.fit != Fit::Frustum {
+            let reduction = self
+                .depth_reduction
+                .get_or_insert_with(|| DepthReduction::new(gpu));
+            let inputs = ReduceInputs {
+                fit: c.cascades.fit,
+                light_view: setup::light_view_of_scene(ctx.light.direction, &ctx.scene_gpu.bounds)
+                    .0,
+                cascades: c.cascades.count,
+                split_lambda: c.cascades.split_lambda,
+                far_limit: if c.cascades.max_distance > 0.0 {
+                    c.cascades.max_distance.min(ctx.fit_camera.far)
+                } else {
+                    ctx.fit_camera.far
+                },
+            };
+            reduction.seen(ctx, encoder, &inputs)?
+        } else {
+            None
+        };
         let setups: Vec<LightSetup> = lights
             .iter()
             .map(|l| {
@@ -308,6 +339,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                             ..c.cascades
                         },
                         size,
+                        self.last_seen.as_ref(),
                     )
                 } else {
                     light_setup(
@@ -388,7 +420,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 cascade: Vec4::new(
                     setup.cascades.as_ref().map_or(0, |s| s.far.len()) as f32,
                     c.cascades.blend,
-                    ctx.fit_camera.near,
+                    setup.cascades.as_ref().map_or(0.0, |s| s.near),
                     0.0,
                 ),
                 cascade_far: pack(cascade_far),
@@ -649,6 +681,13 @@ impl ShadowTechnique for ShadowMapTechnique {
         Ok(())
     }
 
+    fn after_frame(&mut self, _gpu: &GpuContext) -> Result<()> {
+        if let Some(r) = &mut self.depth_reduction {
+            r.after_frame();
+        }
+        Ok(())
+    }
+
     fn enable_debug(&mut self, on: bool) {
         self.debug = None;
         self.debug_frame = None;
@@ -716,6 +755,18 @@ impl ShadowTechnique for ShadowMapTechnique {
                     ("maps_per_face", self.samples as f64),
                     ("map_triangles", self.map_triangles as f64),
                 ]
+                .into_iter()
+                .chain(self.last_seen.as_ref().map_or(vec![], |s| {
+                    vec![
+                        ("sdsm_near", s.near as f64),
+                        ("sdsm_far", s.far as f64),
+                        (
+                            "sdsm_reduction_ms",
+                            self.depth_reduction.as_ref().map_or(0.0, |r| r.last_ms),
+                        ),
+                    ]
+                }))
+                .collect()
             })
             .unwrap_or_default()
     }

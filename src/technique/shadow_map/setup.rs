@@ -27,8 +27,10 @@ pub struct LightSetup {
 /// The view-depth partition of cascaded maps, one entry per face.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CascadeSplit {
-    /// View depth at which each cascade ends (the first starts at the
-    /// camera's near plane).
+    /// View depth at which the first cascade starts (the camera's near
+    /// plane, or the nearest depth seen with SDSM).
+    pub near: f32,
+    /// View depth at which each cascade ends.
     pub far: Vec<f32>,
     /// Each cascade's world texel size for a 1-texel map.
     pub texel_scales: Vec<f32>,
@@ -120,6 +122,11 @@ pub fn slice_corners(camera: &Camera, aspect: f32, z0: f32, z1: f32) -> [Vec3; 8
 /// put under small changes.
 pub fn quantize_up(v: f32) -> f32 {
     2f32.powf((v.max(1e-6).log2() * 8.0).ceil() / 8.0)
+}
+
+/// `v` rounded down to the previous 2^(k/8).
+pub fn quantize_down(v: f32) -> f32 {
+    2f32.powf((v.max(1e-6).log2() * 8.0).floor() / 8.0)
 }
 
 /// A fitted square (half-extent, centre) made stable for a `size`² map:

@@ -127,7 +127,7 @@ pub fn warp_setup(
     n_override: f32,
 ) {
     let ranges: Vec<(f32, f32)> = match &setup.cascades {
-        Some(split) => std::iter::once(camera.near)
+        Some(split) => std::iter::once(split.near)
             .chain(split.far.iter().copied())
             .collect::<Vec<_>>()
             .windows(2)

@@ -1,0 +1,353 @@
+//! SDSM's depth bounds (Lauritzen, Salvi & Lefohn 2011): a GPU reduction
+//! of the prepass G-buffer to the view depths the camera actually sees and,
+//! per cascade, the light-view x/y bounds of the pixels it shades
+//! (`depth_bounds.wgsl`). Measurements wait for this frame's result; the
+//! viewer reads the latest that has arrived, a frame late, without a stall
+//! ([`Feedback`]), and widens it for the camera's motion in between.
+
+use super::partition_params::Fit;
+use crate::gpu::{AsyncReadback, GpuContext};
+use crate::technique::{Feedback, MaskContext};
+use anyhow::Result;
+use glam::{Mat4, Vec4};
+use std::sync::Arc;
+
+/// At most this many cascades (the uniform's split arrays).
+const MAX_CASCADES: usize = 8;
+/// Result words: least and greatest depth, then 4 per cascade.
+const WORDS: usize = 2 + 4 * MAX_CASCADES;
+const RESULT_BYTES: u64 = (WORDS * 4) as u64;
+/// Pixels per workgroup along each axis: 8×8 invocations of 4×4 pixels.
+const WORKGROUP_PIXELS: u32 = 32;
+
+/// A frame-late result covers this much more depth (factor on far, its
+/// inverse on near) and x/y extent (fraction of each half-extent per side).
+const LATE_DEPTH_FACTOR: f32 = 1.25;
+const LATE_XY_MARGIN: f32 = 0.1;
+
+/// What the camera saw: view depths of the receiving pixels and, with
+/// `fit=samples`, per cascade the light-view x/y box of its pixels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SeenBounds {
+    pub near: f32,
+    pub far: f32,
+    /// Per cascade `[min x, min y, max x, max y]`; `None` for a cascade
+    /// that shades no pixel. Empty unless the fit is `samples`.
+    pub cascades_xy: Vec<Option<[f32; 4]>>,
+}
+
+impl SeenBounds {
+    /// Widened for a camera that may have moved since it was measured.
+    fn widened(&self) -> SeenBounds {
+        SeenBounds {
+            near: self.near / LATE_DEPTH_FACTOR,
+            far: self.far * LATE_DEPTH_FACTOR,
+            cascades_xy: self
+                .cascades_xy
+                .iter()
+                .map(|b| {
+                    b.map(|[x0, y0, x1, y1]| {
+                        let (mx, my) = (
+                            (x1 - x0) * 0.5 * LATE_XY_MARGIN,
+                            (y1 - y0) * 0.5 * LATE_XY_MARGIN,
+                        );
+                        [x0 - mx, y0 - my, x1 + mx, y1 + my]
+                    })
+                })
+                .collect(),
+        }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ReduceParams {
+    view_z: Vec4,
+    light_view: Mat4,
+    split: Vec4,
+}
+
+/// What the reduction needs from the light set-up.
+pub struct ReduceInputs {
+    pub fit: Fit,
+    pub light_view: Mat4,
+    pub cascades: u32,
+    pub split_lambda: f32,
+    /// The farthest split allowed (`max_distance`, else the camera's far).
+    pub far_limit: f32,
+}
+
+/// The device's reduction programs.
+struct ReduceShared {
+    layout: wgpu::BindGroupLayout,
+    depth_range: wgpu::ComputePipeline,
+    cascade_bounds: wgpu::ComputePipeline,
+}
+
+impl ReduceShared {
+    fn new(gpu: &GpuContext) -> ReduceShared {
+        let device = &gpu.device;
+        let texture = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("sdsm reduction"),
+            entries: &[
+                texture(0),
+                texture(1),
+                crate::gpu::uniform_entry(2, wgpu::ShaderStages::COMPUTE, false),
+                crate::gpu::storage_entry(3, wgpu::ShaderStages::COMPUTE, false),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("sdsm reduction"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = crate::gpu::compose_shader(
+            device,
+            "sdsm reduction",
+            &[include_str!("depth_bounds.wgsl")],
+        );
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        ReduceShared {
+            depth_range: pipeline("depth_range"),
+            cascade_bounds: pipeline("cascade_bounds"),
+            layout,
+        }
+    }
+}
+
+/// One light's reduction: its buffers and the latest result.
+pub struct DepthReduction {
+    shared: Arc<ReduceShared>,
+    params: wgpu::Buffer,
+    result: wgpu::Buffer,
+    /// This frame's result, waited for (measurements).
+    staging: wgpu::Buffer,
+    /// The viewer's frame-late result.
+    late: AsyncReadback,
+    late_pending: bool,
+    latest: Option<SeenBounds>,
+    /// Wall time of the last waited-for reduction (dispatch to result).
+    pub last_ms: f64,
+}
+
+impl DepthReduction {
+    pub fn new(gpu: &GpuContext) -> DepthReduction {
+        let buffer = |label, usage| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: RESULT_BYTES,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        use wgpu::BufferUsages as U;
+        DepthReduction {
+            shared: gpu.cache.shared(|| ReduceShared::new(gpu)),
+            params: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("sdsm reduction parameters"),
+                size: std::mem::size_of::<ReduceParams>() as u64,
+                usage: U::UNIFORM | U::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            result: buffer("sdsm bounds", U::STORAGE | U::COPY_SRC | U::COPY_DST),
+            staging: buffer("sdsm bounds read-back", U::MAP_READ | U::COPY_DST),
+            late: AsyncReadback::new(&gpu.device, "sdsm bounds, frame late", RESULT_BYTES),
+            late_pending: false,
+            latest: None,
+            last_ms: 0.0,
+        }
+    }
+
+    /// What the camera sees for this frame's set-up: this frame's (waiting
+    /// for the GPU) or, with [`Feedback::PreviousFrame`], the latest arrived,
+    /// widened; `None` while nothing has arrived or nothing receives.
+    pub fn seen(
+        &mut self,
+        ctx: &MaskContext,
+        encoder: &mut wgpu::CommandEncoder,
+        inputs: &ReduceInputs,
+    ) -> Result<Option<SeenBounds>> {
+        let gpu = ctx.gpu;
+        let cascades = inputs.cascades.min(MAX_CASCADES as u32);
+        let samples = inputs.fit == Fit::Samples;
+        match ctx.feedback {
+            Feedback::ThisFrame => {
+                let start = std::time::Instant::now();
+                let mut own = gpu.device.create_command_encoder(&Default::default());
+                self.record(ctx, &mut own, inputs, samples);
+                own.copy_buffer_to_buffer(&self.result, 0, &self.staging, 0, RESULT_BYTES);
+                gpu.queue.submit([own.finish()]);
+                let bytes = gpu.read_buffer(&self.staging)?;
+                self.latest = decode(&bytes, cascades as usize, samples);
+                self.last_ms = start.elapsed().as_secs_f64() * 1e3;
+                Ok(self.latest.clone())
+            }
+            Feedback::PreviousFrame => {
+                if let Some(bytes) = self.late.try_read(gpu)? {
+                    self.latest = decode(&bytes, cascades as usize, samples);
+                }
+                self.record(ctx, encoder, inputs, samples);
+                if let Some(target) = self.late.target() {
+                    encoder.copy_buffer_to_buffer(&self.result, 0, target, 0, RESULT_BYTES);
+                    self.late_pending = true;
+                }
+                Ok(self.latest.as_ref().map(SeenBounds::widened))
+            }
+        }
+    }
+
+    /// After the frame's submission: asks for the frame-late result.
+    pub fn after_frame(&mut self) {
+        if std::mem::take(&mut self.late_pending) {
+            self.late.request();
+        }
+    }
+
+    /// Records the reduction of the frame's G-buffer into `encoder`.
+    fn record(
+        &self,
+        ctx: &MaskContext,
+        encoder: &mut wgpu::CommandEncoder,
+        inputs: &ReduceInputs,
+        samples: bool,
+    ) {
+        let gpu = ctx.gpu;
+        let params = ReduceParams {
+            view_z: ctx.fit_camera.view().row(2),
+            light_view: inputs.light_view,
+            split: Vec4::new(
+                inputs.cascades.min(MAX_CASCADES as u32) as f32,
+                inputs.split_lambda,
+                ctx.fit_camera.near,
+                inputs.far_limit,
+            ),
+        };
+        gpu.queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        // Empty bounds: least values at the top of the order, greatest at 0.
+        let mut empty = [0u32; WORDS];
+        empty[0] = u32::MAX;
+        for c in 0..MAX_CASCADES {
+            empty[2 + 4 * c] = u32::MAX;
+            empty[3 + 4 * c] = u32::MAX;
+        }
+        gpu.queue
+            .write_buffer(&self.result, 0, bytemuck::cast_slice(&empty));
+        let [position, normal] = ctx.frame.gbuffer_views();
+        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("sdsm reduction"),
+            layout: &self.shared.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(position),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(normal),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: self.params.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: self.result.as_entire_binding(),
+                },
+            ],
+        });
+        let groups = |n: u32| n.div_ceil(WORKGROUP_PIXELS);
+        let (w, h) = (groups(ctx.frame.width()), groups(ctx.frame.height()));
+        let mut passes = vec![&self.shared.depth_range];
+        if samples {
+            passes.push(&self.shared.cascade_bounds);
+        }
+        // One pass per step: the second reads what the first wrote.
+        for pipeline in passes {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("sdsm reduction"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(w, h, 1);
+        }
+    }
+}
+
+/// The float of `depth_bounds.wgsl`'s order-preserving bits.
+fn from_ordered(u: u32) -> f32 {
+    f32::from_bits(if u & 0x8000_0000 != 0 {
+        u ^ 0x8000_0000
+    } else {
+        !u
+    })
+}
+
+/// The bounds in a result buffer; `None` when no pixel receives.
+fn decode(bytes: &[u8], cascades: usize, samples: bool) -> Option<SeenBounds> {
+    let words: &[u32] = bytemuck::cast_slice(&bytes[..RESULT_BYTES as usize]);
+    if words[0] == u32::MAX {
+        return None;
+    }
+    let cascades_xy = if samples {
+        (0..cascades)
+            .map(|c| {
+                let w = &words[2 + 4 * c..6 + 4 * c];
+                (w[0] != u32::MAX).then(|| [0, 1, 2, 3].map(|k| from_ordered(w[k])))
+            })
+            .collect()
+    } else {
+        vec![]
+    };
+    Some(SeenBounds {
+        near: from_ordered(words[0]),
+        far: from_ordered(words[1]),
+        cascades_xy,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The WGSL's `ordered` mapping, for the test.
+    fn ordered(f: f32) -> u32 {
+        let b = f.to_bits();
+        if b & 0x8000_0000 != 0 {
+            !b
+        } else {
+            b ^ 0x8000_0000
+        }
+    }
+
+    #[test]
+    fn ordered_bits_sort_like_their_floats_and_decode_back() {
+        let v = [-1e9f32, -3.5, -1e-20, 0.0, 1e-20, 0.25, 7.0, 1e9];
+        for w in v.windows(2) {
+            assert!(ordered(w[0]) < ordered(w[1]), "{} {}", w[0], w[1]);
+        }
+        for x in v {
+            assert_eq!(from_ordered(ordered(x)), x);
+        }
+    }
+}

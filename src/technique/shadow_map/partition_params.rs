@@ -1,0 +1,109 @@
+//! The parameters that partition and warp a directional light's map:
+//! cascades (count, split scheme, reach, stabilisation, blending), what
+//! they are fitted to (SDSM), and LiSPSM's warp.
+
+use crate::technique::params::choice_enum;
+use crate::technique::{ParamSpec, ParamValues};
+use anyhow::Result;
+
+choice_enum! {
+    /// Warping of a directional light's maps.
+    pub enum Warp { None = "none", Lispsm = "lispsm" }
+}
+
+choice_enum! {
+    /// What a directional light's cascades are fitted to.
+    pub enum Fit { Frustum = "frustum", Depth = "depth", Samples = "samples" }
+}
+
+pub const CASCADES: ParamSpec = ParamSpec::int(
+    "cascades",
+    1,
+    1,
+    8,
+    "directional lights: maps partitioning the view depth (cascaded / parallel-split maps, Zhang et al. 2006), each `size`²",
+);
+
+pub const SPLIT_LAMBDA: ParamSpec = ParamSpec::float(
+    "split_lambda",
+    0.5,
+    0.0,
+    1.0,
+    0.05,
+    "cascade split scheme: z_i = λ·n·(f/n)^(i/N) + (1−λ)·(n + (f−n)·i/N); 1 logarithmic, 0 uniform",
+);
+
+pub const MAX_DISTANCE: ParamSpec = ParamSpec::float(
+    "max_distance",
+    0.0,
+    0.0,
+    100000.0,
+    1.0,
+    "cascades: view distance the last cascade ends at (0 = where the camera's view of the scene ends); beyond it the lookup is lit",
+);
+
+pub const STABILIZE: ParamSpec = ParamSpec::boolean(
+    "stabilize",
+    true,
+    "directional lights: texel edges stay in place when the camera moves or turns — cascades are bounding spheres snapped to whole texels; one map keeps its fitted square, its size rounded up to eighths of an octave and its centre snapped",
+);
+
+pub const BLEND: ParamSpec = ParamSpec::float(
+    "blend",
+    0.0,
+    0.0,
+    0.5,
+    0.05,
+    "cascades: fraction of each cascade's depth range, at its far end, blended into the next cascade",
+);
+
+pub const FIT: ParamSpec = ParamSpec::choice_of::<Fit>(
+    "fit",
+    Fit::Frustum as usize,
+    "cascades: what they are fitted to — frustum: the view frustum up to max_distance; depth: the view depths the camera sees (SDSM, Lauritzen, Salvi & Lefohn 2011: min/max of a GPU reduction of the prepass depth); samples: those depths and, per cascade, the light-view x/y bounds of the pixels it shades (not stabilised)",
+);
+
+pub const WARP: ParamSpec = ParamSpec::choice_of::<Warp>(
+    "warp",
+    Warp::None as usize,
+    "directional lights: none, or lispsm — a perspective inside the light's view along the view direction (Wimmer, Scherzer & Purgathofer 2004) that gives the surfaces near the camera more of the map; one per cascade with cascades > 1; warped maps are not stabilised, and the depth and slope biases and the normal offset are not yet adapted to the warp (low suns lose shadows: see the issue notes)",
+);
+
+pub const LISPSM_N: ParamSpec = ParamSpec::float(
+    "lispsm_n",
+    0.0,
+    0.0,
+    100000.0,
+    0.5,
+    "lispsm: distance of the projection centre before the view (0 = n_opt = (z_n + √(z_n·z_f)) / sin γ); larger is closer to the uniform map",
+);
+
+/// How a directional light's map is partitioned along the view depth.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cascades {
+    /// Number of maps (1: one map fitted to the view of the scene).
+    pub count: u32,
+    /// Logarithmic (1) to uniform (0) split distances.
+    pub split_lambda: f32,
+    /// View distance of the last split (0: the camera's reach).
+    pub max_distance: f32,
+    /// Bounding-sphere maps snapped to whole texels.
+    pub stabilize: bool,
+    /// Fraction of each cascade blended into the next.
+    pub blend: f32,
+    /// The view frustum, or what the camera sees (SDSM).
+    pub fit: Fit,
+}
+
+impl Cascades {
+    pub fn parse(p: &ParamValues) -> Result<Cascades> {
+        Ok(Cascades {
+            count: p.int(&CASCADES)?,
+            split_lambda: p.float(&SPLIT_LAMBDA)?,
+            max_distance: p.float(&MAX_DISTANCE)?,
+            stabilize: p.flag(&STABILIZE)?,
+            blend: p.float(&BLEND)?,
+            fit: p.choice(&FIT)?,
+        })
+    }
+}
