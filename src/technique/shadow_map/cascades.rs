@@ -159,7 +159,7 @@ pub fn cascade_setup(
             far: splits[1..].to_vec(),
             texel_scales,
         }),
-        warped: false,
+        warp_depth: None,
     }
 }
 

@@ -63,6 +63,16 @@ impl DepthFormat {
         }
     }
 
+    /// The depth of one of the format's smallest steps, the unit of the
+    /// constant depth bias (Vulkan's r: 2^−24 for floats near 1).
+    pub fn depth_step(self) -> f32 {
+        match self {
+            DepthFormat::D16 | DepthFormat::R8 => 1.0 / 65535.0,
+            DepthFormat::D24 => 1.0 / 16_777_215.0,
+            DepthFormat::D32f => 2f32.powi(-24),
+        }
+    }
+
     /// Bytes per texel of the depth attachment and the 8-bit copy.
     pub fn bytes_per_texel(self) -> u64 {
         match self {

@@ -72,6 +72,8 @@ struct ShadowMapUniform {
     cascade_view_z: Vec4,
     /// xyz the direction the light travels, w 1 when the faces are warped.
     warp: Vec4,
+    /// Warped faces: the row giving a point's stored (linear) depth.
+    warp_depth: Vec4,
 }
 
 struct Maps {
@@ -392,7 +394,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             let base = ShadowMapUniform {
                 faces,
                 light: light.position.extend(layers as f32),
-                kernel: Vec4::new(c.radius, normal_offset, 0.0, 0.0),
+                kernel: Vec4::new(c.radius, normal_offset, c.slope_bias, 0.0),
                 map: Vec4::new(
                     size as f32,
                     1.0 / size as f32,
@@ -409,7 +411,12 @@ impl ShadowTechnique for ShadowMapTechnique {
                     c.varwidth_exponent,
                     c.blocker_search,
                 ),
-                depth: Vec4::new(setup.near, setup.far, area_radius, 0.0),
+                depth: Vec4::new(
+                    setup.near,
+                    setup.far,
+                    area_radius,
+                    c.depth_bias as f32 * format.depth_step(),
+                ),
                 face: UVec4::ZERO,
                 moments: Vec4::new(
                     c.bleeding_reduction,
@@ -429,7 +436,8 @@ impl ShadowTechnique for ShadowMapTechnique {
                 warp: light
                     .direction
                     .normalize_or_zero()
-                    .extend(setup.warped as u32 as f32),
+                    .extend(setup.warp_depth.is_some() as u32 as f32),
+                warp_depth: setup.warp_depth.unwrap_or(Vec4::ZERO),
             };
             for f in 0..MAX_FACES as u32 {
                 for k in 0..3u32 {
@@ -458,6 +466,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     slope_bits: c.slope_bias.to_bits(),
                     moments: moments.then_some(c.filter),
                     paraboloid: frustum_params.paraboloid,
+                    linear_depth: setups.iter().any(|s| s.warp_depth.is_some()),
                 },
             )
         };

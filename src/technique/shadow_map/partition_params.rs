@@ -66,7 +66,7 @@ pub const FIT: ParamSpec = ParamSpec::choice_of::<Fit>(
 pub const WARP: ParamSpec = ParamSpec::choice_of::<Warp>(
     "warp",
     Warp::None as usize,
-    "directional lights: none, or lispsm — a perspective inside the light's view along the view direction (Wimmer, Scherzer & Purgathofer 2004) that gives the surfaces near the camera more of the map; one per cascade with cascades > 1; warped maps are not stabilised, and the depth and slope biases and the normal offset are not yet adapted to the warp (low suns lose shadows: see the issue notes)",
+    "directional lights: none, or lispsm — a perspective inside the light's view along the view direction (Wimmer, Scherzer & Purgathofer 2004) that gives the surfaces near the camera more of the map; one per cascade with cascades > 1, over the part of the view inside the scene; warped maps store depth linear along the light (biased in the depth pass's fragment stage) and are not stabilised",
 );
 
 pub const LISPSM_N: ParamSpec = ParamSpec::float(

@@ -26,6 +26,9 @@ pub struct DepthPassKey {
     /// The moment filter whose moments the pass stores, if any.
     pub moments: Option<Filter>,
     pub paraboloid: bool,
+    /// Warped faces: the fragment stage writes the linear depth and applies
+    /// the bias itself (`fs_depth_linear`).
+    pub linear_depth: bool,
 }
 
 /// What a lookup pipeline depends on.
@@ -250,6 +253,8 @@ impl ShadowMapShared {
                 (Some("fs_depth_byte"), Some(wgpu::TextureFormat::R8Unorm))
             } else if key.paraboloid {
                 (Some("fs_depth_paraboloid"), None)
+            } else if key.linear_depth {
+                (Some("fs_depth_linear"), None)
             } else {
                 (None, None)
             };
@@ -281,10 +286,16 @@ impl ShadowMapShared {
                         depth_write_enabled: Some(true),
                         depth_compare: Some(wgpu::CompareFunction::LessEqual),
                         stencil: Default::default(),
-                        bias: wgpu::DepthBiasState {
-                            constant: key.bias,
-                            slope_scale: f32::from_bits(key.slope_bits),
-                            clamp: 0.0,
+                        // Written depth takes no polygon offset: the
+                        // linear pass biases in its fragment stage.
+                        bias: if key.linear_depth && key.moments.is_none() {
+                            wgpu::DepthBiasState::default()
+                        } else {
+                            wgpu::DepthBiasState {
+                                constant: key.bias,
+                                slope_scale: f32::from_bits(key.slope_bits),
+                                clamp: 0.0,
+                            }
                         },
                     }),
                     multisample: Default::default(),

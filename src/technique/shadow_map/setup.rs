@@ -20,8 +20,9 @@ pub struct LightSetup {
     pub texel_scale: f32,
     /// Cascaded maps: where each face's slice of the view ends.
     pub cascades: Option<CascadeSplit>,
-    /// The faces are warped (LiSPSM): texel sizes vary over the map.
-    pub warped: bool,
+    /// Warped faces (LiSPSM): texel sizes vary over the map, and depth is
+    /// stored linear along the light as dot(row, (p, 1)), 0 nearest it.
+    pub warp_depth: Option<Vec4>,
 }
 
 /// The view-depth partition of cascaded maps, one entry per face.
@@ -118,6 +119,74 @@ pub fn slice_corners(camera: &Camera, aspect: f32, z0: f32, z1: f32) -> [Vec3; 8
     out
 }
 
+/// The points spanning the intersection of a hexahedron (corner `i` at
+/// bit 0: x side, bit 1: y side, bit 2: z side, as [`slice_corners`] and
+/// [`Aabb::corners`] number them; convex) with `bounds`: each solid's
+/// corners inside the other and each one's edges through the other's faces.
+/// Empty when they do not meet.
+pub fn clip_to_bounds(corners: &[Vec3; 8], bounds: &Aabb) -> Vec<Vec3> {
+    const EPS: f32 = 1e-4;
+    let centre = corners.iter().copied().sum::<Vec3>() / 8.0;
+    // The hexahedron's six planes (normal outwards, offset).
+    let planes: Vec<(Vec3, f32)> = (0..3)
+        .flat_map(|axis| [0, 1].map(move |side| (axis, side)))
+        .map(|(axis, side)| {
+            let on: Vec<Vec3> = (0..8)
+                .filter(|i| (i >> axis) & 1 == side)
+                .map(|i| corners[i])
+                .collect();
+            // Face corners in bit order; the diagonal pairs span the face.
+            let mut n = (on[3] - on[0]).cross(on[2] - on[1]).normalize_or_zero();
+            if n.dot(on[0] - centre) < 0.0 {
+                n = -n;
+            }
+            (n, n.dot(on[0]))
+        })
+        .collect();
+    let scale = (bounds.size().length() + (corners[7] - corners[0]).length()).max(1.0);
+    let in_hexahedron = |p: Vec3| planes.iter().all(|(n, d)| n.dot(p) - d <= EPS * scale);
+    let in_bounds = |p: Vec3| {
+        let slack = Vec3::splat(EPS * scale);
+        p.cmpge(bounds.min - slack).all() && p.cmple(bounds.max + slack).all()
+    };
+    let edges = |c: [Vec3; 8]| {
+        (0..8usize).flat_map(move |i| {
+            (0..3)
+                .filter(move |axis| (i >> axis) & 1 == 0)
+                .map(move |axis| (c[i], c[i | (1 << axis)]))
+        })
+    };
+    let through = |(a, b): (Vec3, Vec3), n: Vec3, d: f32| {
+        let (da, db) = (n.dot(a) - d, n.dot(b) - d);
+        (da * db < 0.0).then(|| a + (b - a) * (da / (da - db)))
+    };
+    let box_planes: Vec<(Vec3, f32)> = (0..3)
+        .flat_map(|axis| {
+            let n = Vec3::AXES[axis];
+            [(n, bounds.max[axis]), (-n, -bounds.min[axis])]
+        })
+        .collect();
+    let mut out: Vec<Vec3> = corners.iter().copied().filter(|&p| in_bounds(p)).collect();
+    out.extend(bounds.corners().into_iter().filter(|&p| in_hexahedron(p)));
+    for e in edges(*corners) {
+        out.extend(
+            box_planes
+                .iter()
+                .filter_map(|&(n, d)| through(e, n, d))
+                .filter(|&p| in_bounds(p)),
+        );
+    }
+    for e in edges(bounds.corners()) {
+        out.extend(
+            planes
+                .iter()
+                .filter_map(|&(n, d)| through(e, n, d))
+                .filter(|&p| in_hexahedron(p)),
+        );
+    }
+    out
+}
+
 /// `v` rounded up to the next 2^(k/8) (at most 9 % more): sizes that stay
 /// put under small changes.
 pub fn quantize_up(v: f32) -> f32 {
@@ -191,7 +260,7 @@ pub fn light_setup(
                 paraboloid: false,
                 texel_scale: 2.0 * (fov * 0.5).tan(),
                 cascades: None,
-                warped: false,
+                warp_depth: None,
             }
         }
         LightType::Point if paraboloid => {
@@ -206,7 +275,7 @@ pub fn light_setup(
                 // At the centre of a hemisphere, uv changes by 1/2 per radian.
                 texel_scale: 4.0,
                 cascades: None,
-                warped: false,
+                warp_depth: None,
             }
         }
         LightType::Point => {
@@ -223,7 +292,7 @@ pub fn light_setup(
                 paraboloid: false,
                 texel_scale: 2.0,
                 cascades: None,
-                warped: false,
+                warp_depth: None,
             }
         }
         LightType::Directional => {
@@ -276,8 +345,54 @@ pub fn light_setup(
                 paraboloid: false,
                 texel_scale: 2.0 * half,
                 cascades: None,
-                warped: false,
+                warp_depth: None,
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The view of a camera at the origin looking down −z with a 90° field
+    /// and a square frame, between depths 1 and 10.
+    fn slice() -> [Vec3; 8] {
+        let mut cam = Camera::new(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0));
+        cam.fov_y_deg = 90.0;
+        slice_corners(&cam, 1.0, 1.0, 10.0)
+    }
+
+    #[test]
+    fn clipping_a_view_slice_to_bounds_keeps_what_lies_in_both() {
+        // A box inside the slice: its own corners.
+        let inner = Aabb {
+            min: Vec3::new(-1.0, -1.0, -5.0),
+            max: Vec3::new(1.0, 1.0, -2.0),
+        };
+        assert_eq!(Aabb::from_points(clip_to_bounds(&slice(), &inner)), inner);
+        // A box the slice cuts: at depth z the slice spans |x|, |y| ≤ z, so
+        // y ≥ 0 above a floor at y = 0 up to depth 10 spans x ∈ [−10, 10],
+        // y ∈ [0, 10], z ∈ [−10, −1] — capped by the box's y ≤ 3.
+        let floor = Aabb {
+            min: Vec3::new(-100.0, 0.0, -100.0),
+            max: Vec3::new(100.0, 3.0, 100.0),
+        };
+        let b = Aabb::from_points(clip_to_bounds(&slice(), &floor));
+        let want = Aabb {
+            min: Vec3::new(-10.0, 0.0, -10.0),
+            max: Vec3::new(10.0, 3.0, -1.0),
+        };
+        assert!(
+            (b.min - want.min).abs().max_element() < 1e-3
+                && (b.max - want.max).abs().max_element() < 1e-3,
+            "{b:?}"
+        );
+        // A box behind the camera: nothing.
+        let behind = Aabb {
+            min: Vec3::new(-1.0, -1.0, 2.0),
+            max: Vec3::new(1.0, 1.0, 4.0),
+        };
+        assert!(clip_to_bounds(&slice(), &behind).is_empty());
     }
 }

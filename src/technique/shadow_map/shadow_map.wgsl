@@ -18,7 +18,8 @@ struct ShadowMap {
     // xyz light position, w faces: 1, 6 (cube) or 2 (dual paraboloid, whose
     // `faces` are the two hemispheres' view matrices)
     light: vec4f,
-    // x filter radius (texels), y normal offset (texels), zw unused
+    // x filter radius (texels), y normal offset (texels), z slope-scaled
+    // bias of warped depth passes (per depth slope per pixel), w unused
     kernel: vec4f,
     // x map size, y 1/size, z world size of a texel at unit distance
     // (perspective, paraboloid) or of any texel (orthographic),
@@ -28,7 +29,7 @@ struct ShadowMap {
     // z variable-width exponent, w blocker-search radius (texels)
     soft: vec4f,
     // x near, y far (to linearise perspective depth), z area-light radius
-    // for pcss (0 = use soft.x), w unused
+    // for pcss (0 = use soft.x), w constant bias of warped depth passes
     depth: vec4f,
     // x face rendered by the depth pass (or blurred), y blur axis (0 x, 1 y),
     // z blur radius (texels), w unused
@@ -48,6 +49,10 @@ struct ShadowMap {
     // xyz the direction the light travels, w 1 when the faces are warped
     // (LiSPSM: the texel size varies over the map)
     warp: vec4f,
+    // Warped faces store depth linear along the light, 0 nearest it:
+    // dot(row, (p, 1)) — a perspective's z/w would tilt every surface and
+    // the slope bias with it.
+    warp_depth: vec4f,
 };
 
 @group(2) @binding(0) var<uniform> sm: ShadowMap;
@@ -78,6 +83,10 @@ fn is_paraboloid() -> bool {
     return sm.map.w > 1.5;
 }
 
+fn is_warped() -> bool {
+    return sm.warp.w > 0.5;
+}
+
 // Dual-paraboloid projection (Brabec et al. 2002) of a world point for
 // hemisphere `face`: xy = n.xy / (1 + n_forward), z = linear depth, w = 1;
 // returns the forward cosine in `hemisphere`.
@@ -101,8 +110,17 @@ fn vs_depth(v: VertexIn) -> DepthOut {
     } else {
         o.clip = sm.faces[sm.face.x] * world;
     }
-    o.linear = linear01(o.clip);
+    o.linear = select(linear01(o.clip), dot(sm.warp_depth, world), is_warped());
     return o;
+}
+
+// Warped faces: the linear depth with the depth pass's bias applied here,
+// as polygon offset would (constant + slope factor × the larger screen
+// slope of the depth).
+@fragment
+fn fs_depth_linear(i: DepthOut) -> @builtin(frag_depth) f32 {
+    let slope = max(abs(dpdx(i.linear)), abs(dpdy(i.linear)));
+    return clamp(i.linear + sm.depth.w + sm.kernel.z * slope, 0.0, 1.0);
 }
 
 // The floor: a bare depth-only transform (no varyings, no fragment stage).
@@ -175,7 +193,7 @@ fn fs_depth_byte(i: DepthOut) -> @location(0) vec4f {
     if i.hemisphere < 0.0 {
         discard;
     }
-    return vec4f(i.clip.z);
+    return vec4f(select(i.clip.z, i.linear, is_warped()));
 }
 
 // ---- lookup
@@ -509,7 +527,7 @@ fn projected(face: u32, g: vec4f, n: vec3f) -> Projected {
     // number of shadow-map texels (their world size grows with distance for
     // perspective maps, and with each cascade).
     var texel_world = sm.map.z;
-    if sm.warp.w > 0.5 {
+    if is_warped() {
         texel_world = warped_texel_world(face, g.xyz);
     } else if sm.cascade.x > 0.5 {
         texel_world = sm.cascade_texel[face / 4u][face % 4u];
@@ -523,11 +541,12 @@ fn projected(face: u32, g: vec4f, n: vec3f) -> Projected {
     }
     let ndc = c.xyz / select(c.w, 1e-6, abs(c.w) < 1e-6);
     let uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-    let gradient = receiver_plane(vec3f(uv, ndc.z));
+    let z = select(ndc.z, dot(sm.warp_depth, vec4f(p, 1.0)), is_warped());
+    let gradient = receiver_plane(vec3f(uv, z));
     // Outside the map counts as lit.
     let inside = g.w >= 0.5 && c.w > 0.0 && all(uv >= vec2f(0.0)) && all(uv <= vec2f(1.0))
-        && ndc.z <= 1.0 && ndc.z >= 0.0;
-    return Projected(c, uv, ndc.z, gradient, inside);
+        && z <= 1.0 && z >= 0.0;
+    return Projected(c, uv, z, gradient, inside);
 }
 
 // The filtered visibility of a projected point in `face`.
@@ -544,7 +563,7 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
     // fractional sampling error), capped.
     let z = pr.z - min(2.0 * dot(vec2f(sm.map.y), abs(rp_gradient)), 0.01);
     if FILTER_KIND >= FILTER_VSM {
-        return moment_visibility(moments_at(uv, face), linear01(c));
+        return moment_visibility(moments_at(uv, face), select(linear01(c), pr.z, is_warped()));
     }
     let count = max(TAPS, 1u);
     let radius = sm.kernel.x;

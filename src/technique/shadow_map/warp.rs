@@ -6,19 +6,22 @@
 //! between view and light directions); as γ → 0 (light along the view) n
 //! grows without bound and the warp relaxes to the uniform map.
 
-use super::setup::{LightSetup, slice_corners, view_reach};
+use super::setup::{LightSetup, clip_to_bounds, slice_corners, view_reach};
 use crate::scene::{Aabb, Camera};
 use glam::{Mat4, Vec3, Vec4};
 
 /// Below this sin γ the light runs along the view: no warp (uniform map).
 pub const MIN_SIN_GAMMA: f32 = 1e-3;
 
-/// A warped map: its world → light-clip matrix (wgpu depth [0, 1]) and the
-/// projection-centre distance n it used.
+/// A warped map: its world → light-clip matrix (wgpu depth [0, 1]), the
+/// projection-centre distance n it used, and the row that gives a point's
+/// depth linear along the light (0 nearest it, 1 farthest, over the scene)
+/// — what the map stores instead of the perspective's z/w.
 #[derive(Clone, Copy, Debug)]
 pub struct Warped {
     pub view_proj: Mat4,
     pub n: f32,
+    pub depth_row: Vec4,
 }
 
 /// sin γ between the camera's view direction and the light direction.
@@ -109,9 +112,14 @@ pub fn lispsm(
             1.0,
         ),
     );
+    // Linear depth: (z_max − z) / (z_max − z_min) of the light-view z,
+    // the scene's extent widened by its margin.
+    let (z_min, z_max) = (scene_ls.min.z - 1e-3, scene_ls.max.z + 1e-3);
+    let depth_row = (Vec4::W * z_max - view.row(2)) / (z_max - z_min);
     Some(Warped {
         view_proj: to_clip * perspective * view,
         n,
+        depth_row,
     })
 }
 
@@ -138,11 +146,17 @@ pub fn warp_setup(
             vec![(camera.near, reach)]
         }
     };
+    let view = camera.view();
     for (face, (z0, z1)) in setup.faces.iter_mut().zip(ranges) {
-        let body = slice_corners(camera, aspect, z0, z1);
-        if let Some(w) = lispsm(camera, light_dir, scene, &body, (z0, z1), n_override) {
+        // The body: the part of the view inside the scene (Wimmer et al.'s
+        // convex body B), and its view depths for n_opt.
+        let body = clip_to_bounds(&slice_corners(camera, aspect, z0, z1), scene);
+        let depths = body.iter().map(|p| -view.transform_point3(*p).z);
+        let near = depths.clone().fold(f32::MAX, f32::min).max(camera.near);
+        let far = depths.fold(0.0f32, f32::max).max(near * 1.001);
+        if let Some(w) = lispsm(camera, light_dir, scene, &body, (near, far), n_override) {
             *face = w.view_proj;
-            setup.warped = true;
+            setup.warp_depth = Some(w.depth_row);
         }
     }
 }
@@ -227,6 +241,31 @@ mod tests {
         assert!(
             (a.truncate() - b.truncate()).length() < 1e-4,
             "same texel: {a} {b}"
+        );
+        // The stored depth is linear along the light: 3 m towards the light
+        // is 3 / (the scene's extent along the light) less, anywhere.
+        let lin = |p: Vec3| w.depth_row.dot(p.extend(1.0));
+        let extent = scene
+            .transformed(warp_light_view(&cam, light, &scene))
+            .size()
+            .z
+            + 2e-3;
+        for ground in [Vec3::new(5.0, 0.0, 10.0), Vec3::new(-30.0, 4.0, -40.0)] {
+            let step = lin(ground) - lin(ground - light.normalize() * 3.0);
+            assert!(
+                (step - 3.0 / extent).abs() < 1e-4,
+                "{step} vs {}",
+                3.0 / extent
+            );
+        }
+        // Over the scene it spans [0, 1], 0 at the corner nearest the light.
+        let depths: Vec<f32> = scene.corners().iter().map(|c| lin(*c)).collect();
+        let (lo, hi) = depths
+            .iter()
+            .fold((f32::MAX, f32::MIN), |(a, b), &d| (a.min(d), b.max(d)));
+        assert!(
+            lo > 0.0 && lo < 1e-3 && hi < 1.0 && hi > 1.0 - 1e-3,
+            "{lo} {hi}"
         );
         // The light along the view direction: no warp.
         let along = cam.target - cam.eye;
