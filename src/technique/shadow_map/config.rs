@@ -9,9 +9,9 @@ use crate::technique::{ParamSpec, ParamValues, Preset};
 use anyhow::Result;
 
 use super::partition_params::{
-    BLEND, CASCADES, FIT, LISPSM_N, MAX_DISTANCE, SPLIT_LAMBDA, STABILIZE, WARP,
+    BLEND, CASCADES, FIT, LISPSM_N, MAX_DISTANCE, SPLIT_LAMBDA, STABILIZE, TSM_FOCUS, WARP,
 };
-pub use super::partition_params::{Cascades, Fit, Warp};
+pub use super::partition_params::{Cascades, Fit, Warp, WarpParams};
 
 choice_enum! {
     /// The lookup's filter.
@@ -363,6 +363,7 @@ pub const PARAMS: &[ParamSpec] = &[
     FIT,
     WARP,
     LISPSM_N,
+    TSM_FOCUS,
 ];
 
 pub const PRESETS: &[Preset] = &[
@@ -442,6 +443,11 @@ pub const PRESETS: &[Preset] = &[
         values: &[("warp", "lispsm")],
     },
     Preset {
+        name: "tsm",
+        summary: "one 2048² map warped by the trapezoid around the view (TSM, the 80 % rule, focus up to √(z_n·z_f))",
+        values: &[("warp", "tsm")],
+    },
+    Preset {
         name: "pssm",
         summary: "parallel-split maps: 4 cascades of 1024² fitted to their slices, λ 0.6 (bgfx)",
         values: &[
@@ -502,9 +508,7 @@ pub struct ShadowMapConfig {
     pub moment_bias: f32,
     pub stage: Stage,
     pub cascades: Cascades,
-    pub warp: Warp,
-    /// LiSPSM's projection-centre distance (0: n_opt).
-    pub lispsm_n: f32,
+    pub warp: WarpParams,
 }
 
 impl ShadowMapConfig {
@@ -538,8 +542,7 @@ impl ShadowMapConfig {
             moment_bias: p.float(&MOMENT_BIAS)?,
             stage: p.choice(&STAGE)?,
             cascades: Cascades::parse(p)?,
-            warp: p.choice(&WARP)?,
-            lispsm_n: p.float(&LISPSM_N)?,
+            warp: WarpParams::parse(p)?,
         })
     }
 

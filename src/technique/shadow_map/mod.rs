@@ -14,6 +14,7 @@ mod depth_bounds;
 pub mod partition_params;
 mod pipelines;
 mod setup;
+mod trapezoid;
 pub mod warp;
 
 pub use config::{
@@ -298,7 +299,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             _ => 0.0,
         };
         // Warped maps are not stabilised.
-        let stabilize = c.cascades.stabilize && c.warp == Warp::None;
+        let stabilize = c.cascades.stabilize && c.warp.kind == Warp::None;
         let frustum_params = FrustumParams {
             near: c.near,
             far: c.far,
@@ -352,14 +353,14 @@ impl ShadowTechnique for ShadowMapTechnique {
                         &frustum_params,
                     )
                 };
-                if l.kind == LightType::Directional && c.warp == Warp::Lispsm {
+                if l.kind == LightType::Directional && c.warp.kind != Warp::None {
                     warp::warp_setup(
                         &mut setup,
                         ctx.fit_camera,
                         aspect,
                         l.direction,
                         &ctx.scene_gpu.bounds,
-                        c.lispsm_n,
+                        &c.warp,
                     );
                 }
                 setup

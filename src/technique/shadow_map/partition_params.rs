@@ -1,6 +1,6 @@
 //! The parameters that partition and warp a directional light's map:
 //! cascades (count, split scheme, reach, stabilisation, blending), what
-//! they are fitted to (SDSM), and LiSPSM's warp.
+//! they are fitted to (SDSM), and the warps (LiSPSM, TSM).
 
 use crate::technique::params::choice_enum;
 use crate::technique::{ParamSpec, ParamValues};
@@ -8,7 +8,7 @@ use anyhow::Result;
 
 choice_enum! {
     /// Warping of a directional light's maps.
-    pub enum Warp { None = "none", Lispsm = "lispsm" }
+    pub enum Warp { None = "none", Lispsm = "lispsm", Tsm = "tsm" }
 }
 
 choice_enum! {
@@ -66,7 +66,7 @@ pub const FIT: ParamSpec = ParamSpec::choice_of::<Fit>(
 pub const WARP: ParamSpec = ParamSpec::choice_of::<Warp>(
     "warp",
     Warp::None as usize,
-    "directional lights: none, or lispsm — a perspective inside the light's view along the view direction (Wimmer, Scherzer & Purgathofer 2004) that gives the surfaces near the camera more of the map; one per cascade with cascades > 1, over the part of the view inside the scene; warped maps store depth linear along the light (biased in the depth pass's fragment stage) and are not stabilised",
+    "directional lights: none; lispsm — a perspective inside the light's view along the view direction (Wimmer, Scherzer & Purgathofer 2004) that gives the surfaces near the camera more of the map; tsm — the trapezoid around the view in the light's image mapped onto the square (Martin & Tan 2004); one per cascade with cascades > 1, over the part of the view inside the scene; warped maps store depth linear along the light (biased in the depth pass's fragment stage) and are not stabilised",
 );
 
 pub const LISPSM_N: ParamSpec = ParamSpec::float(
@@ -77,6 +77,35 @@ pub const LISPSM_N: ParamSpec = ParamSpec::float(
     0.5,
     "lispsm: distance of the projection centre before the view (0 = n_opt = (z_n + √(z_n·z_f)) / sin γ); larger is closer to the uniform map",
 );
+
+pub const TSM_FOCUS: ParamSpec = ParamSpec::float(
+    "tsm_focus",
+    0.0,
+    0.0,
+    1.0,
+    0.01,
+    "tsm: where the focus region that the trapezoid maps onto 80 % of the map (Martin & Tan's 80 % rule) ends, as a fraction of the view's depth range inside the scene; 0 = at √(z_n·z_f), the depth LiSPSM's n_opt balances around, whatever the scene's scale",
+);
+
+/// A directional light's warp and its parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WarpParams {
+    pub kind: Warp,
+    /// LiSPSM's projection-centre distance (0: n_opt).
+    pub lispsm_n: f32,
+    /// TSM's focus region (fraction of the view's depth range; 0: √(z_n·z_f)).
+    pub tsm_focus: f32,
+}
+
+impl WarpParams {
+    pub fn parse(p: &ParamValues) -> Result<WarpParams> {
+        Ok(WarpParams {
+            kind: p.choice(&WARP)?,
+            lispsm_n: p.float(&LISPSM_N)?,
+            tsm_focus: p.float(&TSM_FOCUS)?,
+        })
+    }
+}
 
 /// How a directional light's map is partitioned along the view depth.
 #[derive(Clone, Copy, Debug, PartialEq)]

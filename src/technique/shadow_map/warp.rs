@@ -6,7 +6,9 @@
 //! between view and light directions); as γ → 0 (light along the view) n
 //! grows without bound and the warp relaxes to the uniform map.
 
-use super::setup::{LightSetup, clip_to_bounds, slice_corners, view_reach};
+use super::partition_params::{Warp, WarpParams};
+use super::setup::{LightSetup, clip_to_bounds, light_view_of_scene, slice_corners, view_reach};
+use super::trapezoid::tsm;
 use crate::scene::{Aabb, Camera};
 use glam::{Mat4, Vec3, Vec4};
 
@@ -124,15 +126,15 @@ pub fn lispsm(
 }
 
 /// Warps a directional light's setup in place: each face (the one map, or
-/// each cascade) by LiSPSM over its part of the view of `camera`; faces
-/// whose light runs along the view stay uniform.
+/// each cascade) by LiSPSM or TSM over its part of the view of `camera`;
+/// faces whose light runs along the view stay uniform.
 pub fn warp_setup(
     setup: &mut LightSetup,
     camera: &Camera,
     aspect: f32,
     light_dir: Vec3,
     scene: &Aabb,
-    n_override: f32,
+    params: &WarpParams,
 ) {
     let ranges: Vec<(f32, f32)> = match &setup.cascades {
         Some(split) => std::iter::once(split.near)
@@ -154,7 +156,26 @@ pub fn warp_setup(
         let depths = body.iter().map(|p| -view.transform_point3(*p).z);
         let near = depths.clone().fold(f32::MAX, f32::min).max(camera.near);
         let far = depths.fold(0.0f32, f32::max).max(near * 1.001);
-        if let Some(w) = lispsm(camera, light_dir, scene, &body, (near, far), n_override) {
+        let warped = match params.kind {
+            Warp::None => None,
+            Warp::Lispsm => lispsm(
+                camera,
+                light_dir,
+                scene,
+                &body,
+                (near, far),
+                params.lispsm_n,
+            ),
+            Warp::Tsm => tsm(
+                camera,
+                light_view_of_scene(light_dir, scene).0,
+                scene,
+                &body,
+                (near, far),
+                params.tsm_focus,
+            ),
+        };
+        if let Some(w) = warped {
             *face = w.view_proj;
             setup.warp_depth = Some(w.depth_row);
         }
