@@ -50,7 +50,7 @@ pub struct ViewArgs {
     /// Frame size WxH.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Graphics backend (vulkan, gl, metal, dx12); default: WGPU_BACKEND or all.
+    /// Graphics backend (vulkan, metal, dx12); default: WGPU_BACKEND or all.
     #[arg(long)]
     pub backend: Option<String>,
     /// Shading mode.

@@ -20,7 +20,7 @@ use anyhow::{Result, bail};
     "no graphics adapter found for backend(s) {backends}. Without a GPU, install Mesa's CPU \
      Vulkan driver (lavapipe): `sudo apt-get install mesa-vulkan-drivers` on Debian/Ubuntu; with a \
      GPU, install its Vulkan driver (e.g. `mesa-vulkan-drivers` for AMD/Intel, the NVIDIA \
-     driver's Vulkan ICD), or choose another backend with --backend vulkan|gl|metal|dx12"
+     driver's Vulkan ICD), or choose another backend with --backend vulkan|metal|dx12"
 )]
 pub struct NoAdapter {
     pub backends: String,
@@ -59,11 +59,13 @@ pub struct GpuContext {
 pub fn parse_backend(name: &str) -> Result<wgpu::Backends> {
     Ok(match name.to_ascii_lowercase().as_str() {
         "vulkan" | "vk" => wgpu::Backends::VULKAN,
-        "gl" | "gles" | "opengl" => wgpu::Backends::GL,
+        "gl" | "gles" | "opengl" => bail!(
+            "the OpenGL backend is not built into shadowlab: wgpu's GL backend cannot render to Rgba32Float, the G-buffer's position format; use --backend vulkan (Mesa's lavapipe runs on any machine)"
+        ),
         "metal" | "mtl" => wgpu::Backends::METAL,
         "dx12" | "d3d12" => wgpu::Backends::DX12,
         "all" | "auto" => wgpu::Backends::all(),
-        _ => bail!("unknown backend '{name}' (valid: vulkan, gl, metal, dx12, auto)"),
+        _ => bail!("unknown backend '{name}' (valid: vulkan, metal, dx12, auto)"),
     })
 }
 
