@@ -104,20 +104,8 @@ impl FrameTargets {
             MASK_FORMAT,
             gusage | U::COPY_DST,
         );
-        let mask_layer_views = (0..MAX_LIGHTS as u32)
-            .map(|i| {
-                masks.create_view(&wgpu::TextureViewDescriptor {
-                    dimension: Some(wgpu::TextureViewDimension::D2),
-                    base_array_layer: i,
-                    array_layer_count: Some(1),
-                    ..Default::default()
-                })
-            })
-            .collect();
-        let mask_array_view = masks.create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
+        let (mask_layer_views, mask_array_view) =
+            crate::gpu::layer_views(&masks, MAX_LIGHTS as u32);
         let color = crate::gpu::texture_2d(
             device,
             "color",

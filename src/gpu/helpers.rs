@@ -97,3 +97,23 @@ pub fn texture_2d(
         view_formats: &[],
     })
 }
+
+/// Views of a 2D array texture's first `layers` layers, one each (to
+/// render into), and of the whole array (to read).
+pub fn layer_views(t: &wgpu::Texture, layers: u32) -> (Vec<wgpu::TextureView>, wgpu::TextureView) {
+    let each = (0..layers)
+        .map(|i| {
+            t.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2),
+                base_array_layer: i,
+                array_layer_count: Some(1),
+                ..Default::default()
+            })
+        })
+        .collect();
+    let array = t.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    (each, array)
+}

@@ -10,9 +10,12 @@
 
 pub mod cascades;
 pub mod config;
+mod debug;
 mod depth_bounds;
+mod maps;
 pub mod partition_params;
 mod pipelines;
+mod projection;
 mod setup;
 mod trapezoid;
 pub mod warp;
@@ -29,9 +32,10 @@ use crate::scene::LightType;
 use crate::scene::area::area_samples;
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
-use depth_bounds::{DepthReduction, ReduceInputs, SeenBounds};
+use depth_bounds::{DepthReduction, SeenBounds};
 use glam::{Mat4, UVec4, Vec4};
-use pipelines::{DepthPassKey, LOOKUP_FORMAT, LookupKey, MOMENT_FORMAT, ShadowMapShared};
+use maps::Maps;
+use pipelines::{DepthPassKey, LookupKey, ShadowMapShared};
 use std::sync::Arc;
 
 pub static FAMILY: Family = Family {
@@ -75,20 +79,6 @@ struct ShadowMapUniform {
     warp: Vec4,
     /// Warped faces: the row giving a point's stored (linear) depth.
     warp_depth: Vec4,
-}
-
-struct Maps {
-    size: u32,
-    layers: u32,
-    format: DepthFormat,
-    moments: bool,
-    depth_layer_views: Vec<wgpu::TextureView>,
-    depth_array: wgpu::TextureView,
-    /// The 8-bit map: per-layer views and the array view.
-    byte: Option<(Vec<wgpu::TextureView>, wgpu::TextureView)>,
-    /// Moment maps A (result) and B (blur scratch): per-layer views and array views.
-    moment: Option<[(Vec<wgpu::TextureView>, wgpu::TextureView); 2]>,
-    bytes: u64,
 }
 
 pub struct ShadowMapTechnique {
@@ -140,6 +130,8 @@ impl ShadowMapTechnique {
         }
     }
 
+    /// Keeps the maps when their size, layers, format and moments match;
+    /// otherwise frees them and allocates new ones.
     fn ensure_maps(
         &mut self,
         gpu: &GpuContext,
@@ -148,70 +140,16 @@ impl ShadowMapTechnique {
         format: DepthFormat,
         moments: bool,
     ) -> Result<()> {
-        if self.maps.as_ref().is_some_and(|m| {
-            (m.size, m.layers, m.format, m.moments) == (size, layers, format, moments)
-        }) {
+        if self
+            .maps
+            .as_ref()
+            .is_some_and(|m| m.matches(size, layers, format, moments))
+        {
             return Ok(());
         }
-        let texels = size as u64 * size as u64 * layers as u64;
-        let bytes = texels * (format.bytes_per_texel() + if moments { 32 } else { 0 });
-        gpu.check_allocation(
-            &format!(
-                "shadow-map: {layers} map(s) of {size}x{size} (--set size=N; largest texture {})",
-                gpu.max_texture_size()
-            ),
-            (size, size, layers),
-            bytes,
-        )?;
         // Free the old maps first; keep the new ones only once created.
         self.maps = None;
-        let make = |f: wgpu::TextureFormat| {
-            crate::gpu::texture_2d(
-                &gpu.device,
-                "shadow map",
-                size,
-                size,
-                layers,
-                f,
-                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            )
-        };
-        let views = |t: &wgpu::Texture| -> (Vec<wgpu::TextureView>, wgpu::TextureView) {
-            let layer_views = (0..layers)
-                .map(|i| {
-                    t.create_view(&wgpu::TextureViewDescriptor {
-                        dimension: Some(wgpu::TextureViewDimension::D2),
-                        base_array_layer: i,
-                        array_layer_count: Some(1),
-                        ..Default::default()
-                    })
-                })
-                .collect();
-            let array = t.create_view(&wgpu::TextureViewDescriptor {
-                dimension: Some(wgpu::TextureViewDimension::D2Array),
-                ..Default::default()
-            });
-            (layer_views, array)
-        };
-        let maps = gpu.checked("allocating the shadow maps", || {
-            let (depth_layer_views, depth_array) = views(&make(format.depth_texture()));
-            let byte =
-                (format == DepthFormat::R8).then(|| views(&make(wgpu::TextureFormat::R8Unorm)));
-            let moment =
-                moments.then(|| [views(&make(MOMENT_FORMAT)), views(&make(MOMENT_FORMAT))]);
-            Ok(Maps {
-                size,
-                layers,
-                format,
-                moments,
-                depth_layer_views,
-                depth_array,
-                byte,
-                moment,
-                bytes,
-            })
-        })?;
-        self.maps = Some(maps);
+        self.maps = Some(Maps::allocate(gpu, size, layers, format, moments)?);
         Ok(())
     }
 
@@ -265,17 +203,6 @@ impl ShadowTechnique for ShadowMapTechnique {
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
         let c = self.config;
         let gpu = ctx.gpu;
-        if self.want_debug && self.debug.is_none() {
-            self.debug = Some(crate::gpu::texture_2d(
-                &ctx.gpu.device,
-                "shadow map debug",
-                256,
-                256,
-                1,
-                wgpu::TextureFormat::Rgba8Unorm,
-                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            ));
-        }
         let aspect = ctx.frame.width() as f32 / ctx.frame.height() as f32;
         let (size, format) = (c.size, c.format);
         let moments = c.filter.is_moment();
@@ -298,74 +225,8 @@ impl ShadowTechnique for ShadowMapTechnique {
             }
             _ => 0.0,
         };
-        // Warped maps are not stabilised.
-        let stabilize = c.cascades.stabilize && c.warp.kind == Warp::None;
-        let frustum_params = FrustumParams {
-            near: c.near,
-            far: c.far,
-            fov_deg: c.fov_deg,
-            paraboloid: c.omni == Omni::DualParaboloid,
-            stabilize_size: stabilize.then_some(size),
-        };
-        let cascaded = ctx.light.kind == LightType::Directional && c.cascades.count > 1;
-        self.last_seen = if cascaded && c.cascades.fit != Fit::Frustum {
-            let reduction = self
-                .depth_reduction
-                .get_or_insert_with(|| DepthReduction::new(gpu));
-            let inputs = ReduceInputs {
-                fit: c.cascades.fit,
-                light_view: setup::light_view_of_scene(ctx.light.direction, &ctx.scene_gpu.bounds)
-                    .0,
-                cascades: c.cascades.count,
-                split_lambda: c.cascades.split_lambda,
-                far_limit: if c.cascades.max_distance > 0.0 {
-                    c.cascades.max_distance.min(ctx.fit_camera.far)
-                } else {
-                    ctx.fit_camera.far
-                },
-            };
-            reduction.seen(ctx, encoder, &inputs)?
-        } else {
-            None
-        };
-        let setups: Vec<LightSetup> = lights
-            .iter()
-            .map(|l| {
-                let mut setup = if cascaded {
-                    cascades::cascade_setup(
-                        l.direction,
-                        &ctx.scene_gpu.bounds,
-                        ctx.fit_camera,
-                        aspect,
-                        &Cascades {
-                            stabilize,
-                            ..c.cascades
-                        },
-                        size,
-                        self.last_seen.as_ref(),
-                    )
-                } else {
-                    light_setup(
-                        l,
-                        &ctx.scene_gpu.bounds,
-                        ctx.fit_camera,
-                        aspect,
-                        &frustum_params,
-                    )
-                };
-                if l.kind == LightType::Directional && c.warp.kind != Warp::None {
-                    warp::warp_setup(
-                        &mut setup,
-                        ctx.fit_camera,
-                        aspect,
-                        l.direction,
-                        &ctx.scene_gpu.bounds,
-                        &c.warp,
-                    );
-                }
-                setup
-            })
-            .collect();
+        let setups = self.light_setups(ctx, encoder, &lights, aspect)?;
+        let paraboloid = c.omni == Omni::DualParaboloid;
         let layers = setups[0].faces.len() as u32;
         self.ensure_maps(ctx.gpu, size, layers, format, moments)?;
         // Slot (s·MAX_FACES + f)·3 + k: sample s, face f; k = 0 depth pass
@@ -466,7 +327,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     bias: c.depth_bias,
                     slope_bits: c.slope_bias.to_bits(),
                     moments: moments.then_some(c.filter),
-                    paraboloid: frustum_params.paraboloid,
+                    paraboloid,
                     linear_depth: setups.iter().any(|s| s.warp_depth.is_some()),
                 },
             )
@@ -610,84 +471,17 @@ impl ShadowTechnique for ShadowMapTechnique {
             // The maps alone: no lookup, a lit mask.
             crate::frame::clear_mask(encoder, ctx.target, 1.0);
         }
-        if let Some(t) = &self.debug {
-            // Face 0 of the (last) map, for the viewer.
-            let view = t.create_view(&Default::default());
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("shadow map debug"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: clear_op(wgpu::Color::BLACK),
-                })],
-                ..Default::default()
-            });
-            pass.set_pipeline(&shared.debug_map(gpu, lookup_key));
-            ctx.bind_frame_groups(&mut pass);
-            pass.set_bind_group(
-                crate::frame::OWN_GROUP,
-                &lookup_group,
-                &[slot(lights.len() - 1, 0, 0)],
-            );
-            pass.draw(0..3, 0..1);
-            drop(pass);
-            // The frame-sized views, (re)made at the frame's size.
-            let (w, h) = (ctx.frame.width(), ctx.frame.height());
-            if self
-                .debug_frame
-                .as_ref()
-                .is_none_or(|t| (t[0].width(), t[0].height()) != (w, h))
-            {
-                let formats = [
-                    wgpu::TextureFormat::Rgba8Unorm,
-                    wgpu::TextureFormat::Rgba8Unorm,
-                    LOOKUP_FORMAT,
-                ];
-                self.debug_frame = Some(formats.map(|format| {
-                    crate::gpu::texture_2d(
-                        &ctx.gpu.device,
-                        "shadow map debug frame",
-                        w,
-                        h,
-                        1,
-                        format,
-                        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-                    )
-                }));
-            }
-            let views = self
-                .debug_frame
-                .as_ref()
-                .expect("made above")
-                .each_ref()
-                .map(|t| t.create_view(&Default::default()));
-            let attachments = views.each_ref().map(|v| {
-                Some(wgpu::RenderPassColorAttachment {
-                    view: v,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: clear_op(wgpu::Color::BLACK),
-                })
-            });
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("shadow map debug frame"),
-                color_attachments: &attachments,
-                ..Default::default()
-            });
-            pass.set_pipeline(&shared.debug_frame(gpu, lookup_key));
-            ctx.bind_frame_groups(&mut pass);
-            pass.set_bind_group(
-                crate::frame::OWN_GROUP,
-                &lookup_group,
-                &[slot(lights.len() - 1, 0, 0)],
-            );
-            pass.draw(0..3, 0..1);
-        }
+        self.render_debug(
+            ctx,
+            encoder,
+            &lookup_group,
+            lookup_key,
+            slot(lights.len() - 1, 0, 0),
+        );
         self.samples = lights.len();
         self.map_triangles = map_triangles;
         self.last_faces = setups.iter().flat_map(|s| s.faces.clone()).collect();
-        self.last_paraboloid = frustum_params.paraboloid && ctx.light.kind == LightType::Point;
+        self.last_paraboloid = paraboloid && ctx.light.kind == LightType::Point;
         Ok(())
     }
 
@@ -705,54 +499,11 @@ impl ShadowTechnique for ShadowMapTechnique {
     }
 
     fn debug_views(&self, gpu: &GpuContext) -> Result<super::DebugViews> {
-        let mut views = super::DebugViews::default();
-        if !self.last_paraboloid {
-            for m in &self.last_faces {
-                views
-                    .lines
-                    .extend(super::frustum_lines(*m, [1.0, 0.85, 0.2, 1.0]));
-            }
-        }
-        if let Some(t) = &self.debug {
-            views.images.push(super::DebugImage {
-                label: "shadow map (face 0, linear depth)".into(),
-                width: t.width(),
-                height: t.height(),
-                rgba: gpu.read_texture(t, 0, 4)?,
-            });
-        }
-        if let Some([projection, texels, _]) = &self.debug_frame {
-            for (t, label) in [
-                (
-                    projection,
-                    "map projected onto the scene (depth, tinted per cascade; dark red: outside the map)",
-                ),
-                (
-                    texels,
-                    "shadow-map texels per pixel (blue < 1/4: aliasing, green 1, red > 4)",
-                ),
-            ] {
-                views.images.push(super::DebugImage {
-                    label: label.into(),
-                    width: t.width(),
-                    height: t.height(),
-                    rgba: gpu.read_texture(t, 0, 4)?,
-                });
-            }
-        }
-        Ok(views)
+        self.read_debug_views(gpu)
     }
 
     fn map_lookup(&self, gpu: &GpuContext) -> Result<Option<super::MapLookup>> {
-        let Some([_, _, lookup]) = &self.debug_frame else {
-            return Ok(None);
-        };
-        let raw = gpu.read_texture(lookup, 0, 8)?;
-        let pairs: &[[f32; 2]] = bytemuck::cast_slice(&raw);
-        Ok(Some(super::MapLookup {
-            footprint: pairs.iter().map(|p| p[0]).collect(),
-            partition: pairs.iter().map(|p| p[1] as u32).collect(),
-        }))
+        self.read_map_lookup(gpu)
     }
 
     fn counters(&self) -> Vec<(&'static str, f64)> {

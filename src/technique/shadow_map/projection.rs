@@ -1,0 +1,98 @@
+//! The light-projection step: a light (or an area light's samples), the
+//! camera and the scene's bounds become this frame's shadow views — the
+//! spot, point or directional frusta of `setup`, cascades fitted to the
+//! view frustum or, with SDSM, to what the camera saw (`cascades`,
+//! `depth_bounds`), and the warps (`warp`, `trapezoid`).
+
+use super::depth_bounds::{DepthReduction, ReduceInputs};
+use super::{
+    Cascades, Fit, FrustumParams, LightSetup, Omni, ShadowMapTechnique, Warp, cascades,
+    light_setup, setup, warp,
+};
+use crate::scene::{Light, LightType};
+use crate::technique::MaskContext;
+use anyhow::Result;
+
+impl ShadowMapTechnique {
+    /// The setups of `lights` for this frame, seen with `aspect`; with
+    /// SDSM, records (or waits for) the reduction of the frame's G-buffer.
+    pub(super) fn light_setups(
+        &mut self,
+        ctx: &MaskContext,
+        encoder: &mut wgpu::CommandEncoder,
+        lights: &[Light],
+        aspect: f32,
+    ) -> Result<Vec<LightSetup>> {
+        let c = self.config;
+        let size = c.size;
+        // Warped maps are not stabilised.
+        let stabilize = c.cascades.stabilize && c.warp.kind == Warp::None;
+        let frustum_params = FrustumParams {
+            near: c.near,
+            far: c.far,
+            fov_deg: c.fov_deg,
+            paraboloid: c.omni == Omni::DualParaboloid,
+            stabilize_size: stabilize.then_some(size),
+        };
+        let cascaded = ctx.light.kind == LightType::Directional && c.cascades.count > 1;
+        self.last_seen = if cascaded && c.cascades.fit != Fit::Frustum {
+            let reduction = self
+                .depth_reduction
+                .get_or_insert_with(|| DepthReduction::new(ctx.gpu));
+            let inputs = ReduceInputs {
+                fit: c.cascades.fit,
+                light_view: setup::light_view_of_scene(ctx.light.direction, &ctx.scene_gpu.bounds)
+                    .0,
+                cascades: c.cascades.count,
+                split_lambda: c.cascades.split_lambda,
+                far_limit: if c.cascades.max_distance > 0.0 {
+                    c.cascades.max_distance.min(ctx.fit_camera.far)
+                } else {
+                    ctx.fit_camera.far
+                },
+            };
+            reduction.seen(ctx, encoder, &inputs)?
+        } else {
+            None
+        };
+        let setups = lights
+            .iter()
+            .map(|l| {
+                let mut setup = if cascaded {
+                    cascades::cascade_setup(
+                        l.direction,
+                        &ctx.scene_gpu.bounds,
+                        ctx.fit_camera,
+                        aspect,
+                        &Cascades {
+                            stabilize,
+                            ..c.cascades
+                        },
+                        size,
+                        self.last_seen.as_ref(),
+                    )
+                } else {
+                    light_setup(
+                        l,
+                        &ctx.scene_gpu.bounds,
+                        ctx.fit_camera,
+                        aspect,
+                        &frustum_params,
+                    )
+                };
+                if l.kind == LightType::Directional && c.warp.kind != Warp::None {
+                    warp::warp_setup(
+                        &mut setup,
+                        ctx.fit_camera,
+                        aspect,
+                        l.direction,
+                        &ctx.scene_gpu.bounds,
+                        &c.warp,
+                    );
+                }
+                setup
+            })
+            .collect();
+        Ok(setups)
+    }
+}
