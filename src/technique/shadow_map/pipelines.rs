@@ -115,7 +115,14 @@ impl ShadowMapShared {
         let module = crate::frame::technique_shader(
             device,
             "shadow map",
-            &[&filter_constants, include_str!("shadow_map.wgsl")],
+            &[
+                &filter_constants,
+                include_str!("shadow_map.wgsl"),
+                include_str!("depth_pass.wgsl"),
+                include_str!("filters.wgsl"),
+                include_str!("lookup.wgsl"),
+                include_str!("debug.wgsl"),
+            ],
         );
         ShadowMapShared {
             pipeline_layout: crate::technique::pipeline_layout(gpu, "shadow map", &layout),

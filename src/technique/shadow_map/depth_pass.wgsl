@@ -1,0 +1,100 @@
+// The depth pass from the light: depth (linear for warped faces), the
+// moments of the moment filters and their blur, the 8-bit map.
+
+@vertex
+fn vs_depth(v: VertexIn) -> DepthOut {
+    var o: DepthOut;
+    let world = objects[v.object].model * vec4f(v.position, 1.0);
+    o.hemisphere = 1.0;
+    if is_paraboloid() {
+        o.clip = paraboloid(world, sm.face.x);
+        let p = (sm.faces[sm.face.x] * world).xyz;
+        o.hemisphere = -p.z / max(length(p), 1e-6);
+    } else {
+        o.clip = sm.faces[sm.face.x] * world;
+    }
+    o.linear = select(linear01(o.clip), dot(sm.warp_depth, world), is_warped());
+    return o;
+}
+
+// Warped faces: the linear depth with the depth pass's bias applied here,
+// as polygon offset would (constant + slope factor × the larger screen
+// slope of the depth).
+@fragment
+fn fs_depth_linear(i: DepthOut) -> @builtin(frag_depth) f32 {
+    let slope = max(abs(dpdx(i.linear)), abs(dpdy(i.linear)));
+    return clamp(i.linear + sm.depth.w + sm.kernel.z * slope, 0.0, 1.0);
+}
+
+// The floor: a bare depth-only transform (no varyings, no fragment stage).
+@vertex
+fn vs_floor(v: VertexIn) -> @builtin(position) vec4f {
+    let world = objects[v.object].model * vec4f(v.position, 1.0);
+    if is_paraboloid() {
+        return paraboloid(world, sm.face.x);
+    }
+    return sm.faces[sm.face.x] * world;
+}
+
+// Depth-only pass of a dual paraboloid: drop what lies behind the hemisphere.
+@fragment
+fn fs_depth_paraboloid(i: DepthOut) {
+    if i.hemisphere < 0.0 {
+        discard;
+    }
+}
+
+// The moments each filter stores (Donnelly & Lauritzen 2006; Annen 2008;
+// Lauritzen & McCool 2008; Peters & Klein 2015).
+fn moments_of(z: f32) -> vec4f {
+    let cp = sm.moments.y;
+    let cn = sm.moments.z;
+    switch FILTER_KIND {
+        case FILTER_VSM: {
+            return vec4f(z, z * z, 0.0, 0.0);
+        }
+        case FILTER_ESM: {
+            return vec4f(exp(cp * (z - 1.0)), 0.0, 0.0, 0.0);
+        }
+        case FILTER_EVSM2, FILTER_EVSM4: {
+            let p = exp(cp * (z - 1.0));
+            let n = -exp(-cn * z);
+            return vec4f(p, p * p, n, n * n);
+        }
+        default: {
+            let z2 = z * z;
+            return vec4f(z, z2, z2 * z, z2 * z2);
+        }
+    }
+}
+
+@fragment
+fn fs_depth_moments(i: DepthOut) -> @location(0) vec4f {
+    if i.hemisphere < 0.0 {
+        discard;
+    }
+    return moments_of(clamp(i.linear, 0.0, 1.0));
+}
+
+// Separable box blur of one moment layer along one axis.
+@fragment
+fn fs_blur(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    let r = i32(sm.face.z);
+    let axis = select(vec2i(1, 0), vec2i(0, 1), sm.face.y == 1u);
+    let size = i32(sm.map.x);
+    var sum = vec4f(0.0);
+    for (var k = -r; k <= r; k++) {
+        let t = clamp(vec2i(frag.xy) + axis * k, vec2i(0), vec2i(size - 1));
+        sum += textureLoad(moment_map, t, i32(sm.face.x), 0);
+    }
+    return sum / f32(2 * r + 1);
+}
+
+// The 8-bit preset stores the depth in an R8 colour target.
+@fragment
+fn fs_depth_byte(i: DepthOut) -> @location(0) vec4f {
+    if i.hemisphere < 0.0 {
+        discard;
+    }
+    return vec4f(select(i.clip.z, i.linear, is_warped()));
+}

@@ -1,0 +1,200 @@
+// The lookup's filters over one map face: nearest texel, hardware 2×2
+// comparison, N×N grid and rotated Vogel disk of 2×2 taps, the blocker
+// search of PCSS and variable-width PCF, and the moment filters.
+
+// Stored depth at a texel (nearest), from the depth map or the 8-bit map.
+fn stored(texel: vec2i, face: u32) -> f32 {
+    let size = i32(sm.map.x);
+    let t = clamp(texel, vec2i(0), vec2i(size - 1));
+    if BYTE_MAP {
+        return textureLoad(byte_map, t, i32(face), 0).r;
+    }
+    return textureLoad(depth_map, t, i32(face), 0);
+}
+
+// Receiver-plane depth bias (Isidoro 2006): d(depth)/d(uv) of the receiver's
+// plane, and the uv it was measured at; taps compare against that plane.
+var<private> rp_gradient: vec2f;
+var<private> rp_origin: vec2f;
+
+// d(depth)/d(uv) from the screen derivatives of (u, v, depth): solve
+// [du/dx dv/dx; du/dy dv/dy] · g = [dz/dx; dz/dy]. Must run in uniform
+// control flow; 0 when off or degenerate (silhouettes, face seams), and
+// clamped so that a derivative across an edge cannot swing a tap far.
+fn receiver_plane(t: vec3f) -> vec2f {
+    let dx = dpdx(t);
+    let dy = dpdy(t);
+    let det = dx.x * dy.y - dx.y * dy.x;
+    let g = vec2f(dy.y * dx.z - dx.y * dy.z, dx.x * dy.z - dy.x * dx.z) / det;
+    if !RECEIVER_PLANE || abs(det) < 1e-20 || any(g != g) {
+        return vec2f(0.0);
+    }
+    return clamp(g, vec2f(-4.0), vec2f(4.0));
+}
+
+// The receiver depth to compare at a tap's uv.
+fn tap_z(z: f32, uv: vec2f) -> f32 {
+    return z + dot(uv - rp_origin, rp_gradient);
+}
+
+// 1 where the receiver depth z is not behind the stored depth.
+fn lit_at(texel: vec2i, face: u32, z: f32) -> f32 {
+    return select(0.0, 1.0, z <= stored(texel, face));
+}
+
+// Bilinear (hardware-style 2×2) comparison at uv.
+fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
+    if !BYTE_MAP {
+        return textureSampleCompareLevel(depth_map, compare_sampler, uv, i32(face), z);
+    }
+    let p = uv * sm.map.x - 0.5;
+    let b = vec2i(floor(p));
+    let f = fract(p);
+    let a = mix(lit_at(b, face, z), lit_at(b + vec2i(1, 0), face, z), f.x);
+    let c = mix(lit_at(b + vec2i(0, 1), face, z), lit_at(b + vec2i(1, 1), face, z), f.x);
+    return mix(a, c, f.y);
+}
+
+fn moment_texel(t: vec2i, face: u32) -> vec4f {
+    let size = i32(sm.map.x);
+    return textureLoad(moment_map, clamp(t, vec2i(0), vec2i(size - 1)), i32(face), 0);
+}
+
+// Bilinear moments at uv (the map is 32-bit float, filtered by hand).
+fn moments_at(uv: vec2f, face: u32) -> vec4f {
+    let p = uv * sm.map.x - 0.5;
+    let b = vec2i(floor(p));
+    let f = fract(p);
+    let top = mix(moment_texel(b, face), moment_texel(b + vec2i(1, 0), face), f.x);
+    let bottom = mix(moment_texel(b + vec2i(0, 1), face), moment_texel(b + vec2i(1, 1), face), f.x);
+    return mix(top, bottom, f.y);
+}
+
+// Chebyshev's upper bound P(x ≥ t) ≤ σ² / (σ² + (t − μ)²), with light-bleeding
+// reduction (linstep from `amount` to 1).
+fn chebyshev(m: vec2f, t: f32, min_variance: f32) -> f32 {
+    if t <= m.x {
+        return 1.0;
+    }
+    let variance = max(m.y - m.x * m.x, min_variance);
+    let d = t - m.x;
+    let p = variance / (variance + d * d);
+    let amount = sm.moments.x;
+    return clamp((p - amount) / (1.0 - amount), 0.0, 1.0);
+}
+
+// Hamburger 4-moment shadow mapping (Peters & Klein 2015, algorithm 2).
+fn msm_hamburger(moments: vec4f, z: f32) -> f32 {
+    let b = mix(moments, vec4f(0.5), sm.moments.w);
+    let l32_d22 = -b.x * b.y + b.z;
+    let d22 = -b.x * b.x + b.y;
+    let squared_depth_variance = -b.y * b.y + b.w;
+    let d33_d22 = dot(vec2f(squared_depth_variance, -l32_d22), vec2f(d22, l32_d22));
+    let inv_d22 = 1.0 / d22;
+    let l32 = l32_d22 * inv_d22;
+    var c = vec3f(1.0, z, z * z);
+    c.y -= b.x;
+    c.z -= b.y + l32 * c.y;
+    c.y *= inv_d22;
+    c.z *= d22 / d33_d22;
+    c.y -= l32 * c.z;
+    c.x -= dot(c.yz, b.xy);
+    let p = c.y / c.z;
+    let q = c.x / c.z;
+    let r = sqrt(max(p * p * 0.25 - q, 0.0));
+    let z1 = -p * 0.5 - r;
+    let z2 = -p * 0.5 + r;
+    var sw = vec4f(0.0);
+    if z2 < z {
+        sw = vec4f(z1, z, 1.0, 1.0);
+    } else if z1 < z {
+        sw = vec4f(z, z1, 0.0, 1.0);
+    }
+    let quotient = (sw.x * z2 - b.x * (sw.x + z2) + b.y) / ((z2 - sw.y) * (z - z1));
+    return 1.0 - clamp(sw.z + sw.w * quotient, 0.0, 1.0);
+}
+
+// Visibility from filtered moments for receiver depth z (linear, [0, 1]).
+fn moment_visibility(m: vec4f, z: f32) -> f32 {
+    let cp = sm.moments.y;
+    let cn = sm.moments.z;
+    switch FILTER_KIND {
+        case FILTER_VSM: {
+            return chebyshev(m.xy, z, 1e-6);
+        }
+        case FILTER_ESM: {
+            return clamp(m.x * exp(-cp * (z - 1.0)), 0.0, 1.0);
+        }
+        case FILTER_EVSM2: {
+            let p = exp(cp * (z - 1.0));
+            return chebyshev(m.xy, p, 1e-6 * p * p * cp * cp);
+        }
+        case FILTER_EVSM4: {
+            let p = exp(cp * (z - 1.0));
+            let n = -exp(-cn * z);
+            return min(chebyshev(m.xy, p, 1e-6 * p * p * cp * cp), chebyshev(m.zw, n, 1e-6 * n * n * cn * cn));
+        }
+        default: {
+            return msm_hamburger(m, z);
+        }
+    }
+}
+
+// Interleaved gradient noise (Jimenez 2014): a per-pixel rotation.
+fn ign(p: vec2f) -> f32 {
+    return fract(52.9829189 * fract(dot(p, vec2f(0.06711056, 0.00583715))));
+}
+
+// Vogel disk sample i of n, rotated by phi, radius ≤ 1.
+fn vogel(i: u32, n: u32, phi: f32) -> vec2f {
+    let r = sqrt((f32(i) + 0.5) / f32(n));
+    let theta = f32(i) * 2.4 + phi;
+    return r * vec2f(cos(theta), sin(theta));
+}
+
+fn pcf_disk(uv: vec2f, face: u32, z: f32, radius_texels: f32, n: u32, phi: f32) -> f32 {
+    var sum = 0.0;
+    for (var i = 0u; i < n; i++) {
+        let t = uv + vogel(i, n, phi) * radius_texels * sm.map.y;
+        sum += pcf2x2(t, face, tap_z(z, t));
+    }
+    return sum / f32(n);
+}
+
+fn pcf_grid(uv: vec2f, face: u32, z: f32, radius_texels: f32, k: u32) -> f32 {
+    var sum = 0.0;
+    for (var y = 0u; y < k; y++) {
+        for (var x = 0u; x < k; x++) {
+            let o = (vec2f(f32(x), f32(y)) + 0.5) / f32(k) * 2.0 - 1.0;
+            let t = uv + o * radius_texels * sm.map.y;
+            sum += pcf2x2(t, face, tap_z(z, t));
+        }
+    }
+    return sum / f32(k * k);
+}
+
+// Half-width in texels of the penumbra that a blocker at linear depth db
+// casts on a receiver at dr from an area light of radius sm.depth.z (world
+// units; for directional lights the tangent of the angular radius): the
+// segment from the receiver to the light's rim, seen from the light centre.
+fn penumbra_texels(dr: f32, db: f32) -> f32 {
+    if sm.map.w > 0.5 && !is_paraboloid() {
+        return sm.depth.z * (dr - db) * (sm.depth.y - sm.depth.x) / sm.map.z;
+    }
+    return sm.depth.z * (dr - db) / (dr * max(db, 1e-4)) / sm.map.z;
+}
+
+// Mean linear depth of the blockers (stored < z) in a disk, and their count.
+fn blockers(uv: vec2f, face: u32, z: f32, radius_texels: f32, n: u32, phi: f32) -> vec2f {
+    var sum = 0.0;
+    var count = 0.0;
+    for (var i = 0u; i < n; i++) {
+        let tap = uv + vogel(i, n, phi) * radius_texels * sm.map.y;
+        let d = stored(vec2i(floor(tap * sm.map.x)), face);
+        if d < tap_z(z, tap) {
+            sum += linear_depth(d);
+            count += 1.0;
+        }
+    }
+    return vec2f(sum / max(count, 1.0), count);
+}

@@ -1,0 +1,222 @@
+// The screen-space lookup: each G-buffer point's face or cascade, its
+// projection into the map (with normal offset), and the filtered,
+// cascade-blended visibility written to the mask.
+
+fn cascade_far(i: u32) -> f32 {
+    return sm.cascade_far[i / 4u][i % 4u];
+}
+
+// The cascade of a point at view depth d (the cascade count beyond the
+// last), and the weight of the next cascade in the blend band at the far
+// end of this one.
+struct CascadePick {
+    index: u32,
+    next_weight: f32,
+};
+
+fn cascade_of(p: vec3f) -> CascadePick {
+    let d = -dot(sm.cascade_view_z, vec4f(p, 1.0));
+    let count = u32(sm.cascade.x);
+    var i = 0u;
+    while i < count && d > cascade_far(i) {
+        i++;
+    }
+    var pick = CascadePick(i, 0.0);
+    if i + 1u < count && sm.cascade.y > 0.0 {
+        let start = select(sm.cascade.z, cascade_far(i - 1u), i > 0u);
+        let band = sm.cascade.y * (cascade_far(i) - start);
+        pick.next_weight = clamp((d - (cascade_far(i) - band)) / band, 0.0, 1.0);
+    }
+    return pick;
+}
+
+// Face of a point light's six 90° frusta: the major axis of p − light.
+fn face_of(p: vec3f) -> u32 {
+    if sm.cascade.x > 0.5 {
+        return min(cascade_of(p).index, u32(sm.cascade.x) - 1u);
+    }
+    if sm.light.w < 1.5 {
+        return 0u;
+    }
+    if sm.light.w < 2.5 {
+        return select(1u, 0u, (sm.faces[0] * vec4f(p, 1.0)).z <= 0.0);
+    }
+    let d = p - sm.light.xyz;
+    let a = abs(d);
+    if a.x >= a.y && a.x >= a.z {
+        return select(1u, 0u, d.x > 0.0);
+    }
+    if a.y >= a.z {
+        return select(3u, 2u, d.y > 0.0);
+    }
+    return select(5u, 4u, d.z > 0.0);
+}
+
+fn linear_depth(z: f32) -> f32 {
+    if is_paraboloid() {
+        return sm.depth.x + z * (sm.depth.y - sm.depth.x);
+    }
+    if sm.map.w > 0.5 {
+        return z;
+    }
+    let n = sm.depth.x;
+    let f = sm.depth.y;
+    return n * f / (f - z * (f - n));
+}
+
+@fragment
+fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    let g = textureLoad(gbuffer_position, vec2i(frag.xy), 0);
+    let n = normalize(textureLoad(gbuffer_normal, vec2i(frag.xy), 0).xyz);
+    if sm.cascade.x < 0.5 {
+        let face = face_of(g.xyz);
+        return vec4f(filtered(face, projected(face, g, n), frag.xy));
+    }
+    // Cascades: this pixel's, blended into the next one's over the band.
+    // Both projections run in uniform control flow (their screen
+    // derivatives); the next cascade is filtered only inside the band.
+    let pick = cascade_of(g.xyz);
+    let count = u32(sm.cascade.x);
+    let face = min(pick.index, count - 1u);
+    let next_face = min(pick.index + 1u, count - 1u);
+    let here = projected(face, g, n);
+    let next = projected(next_face, g, n);
+    if pick.index >= count {
+        return vec4f(1.0); // beyond the last cascade
+    }
+    var v = filtered(face, here, frag.xy);
+    if pick.next_weight > 0.0 {
+        v = mix(v, filtered(next_face, next, frag.xy), pick.next_weight);
+    }
+    return vec4f(v);
+}
+
+// The map uv of world point p in `face`.
+fn map_uv(face: u32, p: vec3f) -> vec2f {
+    let c = sm.faces[face] * vec4f(p, 1.0);
+    let ndc = c.xy / select(c.w, 1e-6, abs(c.w) < 1e-6);
+    return vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+}
+
+// A warped map's world texel size at p, across the light: the larger of
+// the texel's extents along two directions perpendicular to the light,
+// from the uv change over a short step.
+fn warped_texel_world(face: u32, p: vec3f) -> f32 {
+    let l = normalize(sm.warp.xyz);
+    var t = cross(l, vec3f(0.0, 1.0, 0.0));
+    if length(t) < 1e-3 {
+        t = cross(l, vec3f(1.0, 0.0, 0.0));
+    }
+    t = normalize(t);
+    let b = cross(l, t);
+    let step = 1e-3 * max(length(p - frame.camera_pos.xyz), 1e-3);
+    let uv = map_uv(face, p);
+    let along_t = length(map_uv(face, p + t * step) - uv);
+    let along_b = length(map_uv(face, p + b * step) - uv);
+    return step / max(min(along_t, along_b) * sm.map.x, 1e-9);
+}
+
+// A G-buffer point in one face of the map: its light-clip position, map uv
+// and depth, the receiver plane's depth gradient there, and whether it is
+// looked up at all (a receiver, in front of the light, inside the map).
+struct Projected {
+    clip: vec4f,
+    uv: vec2f,
+    z: f32,
+    gradient: vec2f,
+    inside: bool,
+};
+
+// Projects G-buffer point g (normal n) into `face`. Must run in uniform
+// control flow (the receiver plane's derivatives).
+fn projected(face: u32, g: vec4f, n: vec3f) -> Projected {
+    // Normal offset: move the lookup point along the geometric normal by a
+    // number of shadow-map texels (their world size grows with distance for
+    // perspective maps, and with each cascade).
+    var texel_world = sm.map.z;
+    if is_warped() {
+        texel_world = warped_texel_world(face, g.xyz);
+    } else if sm.cascade.x > 0.5 {
+        texel_world = sm.cascade_texel[face / 4u][face % 4u];
+    } else if sm.map.w < 0.5 || is_paraboloid() {
+        texel_world = sm.map.z * length(g.xyz - sm.light.xyz);
+    }
+    let p = g.xyz + n * sm.kernel.y * texel_world;
+    var c = sm.faces[face] * vec4f(p, 1.0);
+    if is_paraboloid() {
+        c = paraboloid(vec4f(p, 1.0), face);
+    }
+    let ndc = c.xyz / select(c.w, 1e-6, abs(c.w) < 1e-6);
+    let uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    let z = select(ndc.z, dot(sm.warp_depth, vec4f(p, 1.0)), is_warped());
+    let gradient = receiver_plane(vec3f(uv, z));
+    // Outside the map counts as lit.
+    let inside = g.w >= 0.5 && c.w > 0.0 && all(uv >= vec2f(0.0)) && all(uv <= vec2f(1.0))
+        && z <= 1.0 && z >= 0.0;
+    return Projected(c, uv, z, gradient, inside);
+}
+
+// The filtered visibility of a projected point in `face`.
+fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
+    if !pr.inside {
+        return 1.0;
+    }
+    rp_gradient = pr.gradient;
+    rp_origin = pr.uv;
+    let uv = pr.uv;
+    let c = pr.clip;
+    // With the receiver plane, a 2×2 comparison still sees texels up to one
+    // texel away at a single depth: take off that slope (Isidoro's
+    // fractional sampling error), capped.
+    let z = pr.z - min(2.0 * dot(vec2f(sm.map.y), abs(rp_gradient)), 0.01);
+    if FILTER_KIND >= FILTER_VSM {
+        return moment_visibility(moments_at(uv, face), select(linear01(c), pr.z, is_warped()));
+    }
+    let count = max(TAPS, 1u);
+    let radius = sm.kernel.x;
+    let phi = ign(frag) * 6.2831853;
+    var v = 1.0;
+    switch FILTER_KIND {
+        case FILTER_HARD: {
+            let t = floor(uv * sm.map.x);
+            v = lit_at(vec2i(t), face, tap_z(pr.z, (t + 0.5) * sm.map.y));
+        }
+        case FILTER_PCF2X2: {
+            v = pcf2x2(uv, face, z);
+        }
+        case FILTER_GRID: {
+            v = pcf_grid(uv, face, z, radius, count);
+        }
+        case FILTER_DISK: {
+            v = pcf_disk(uv, face, z, radius, count * count, phi);
+        }
+        case FILTER_PCSS: {
+            // PCSS (Fernando 2005): blocker search, then a penumbra
+            // w = (d_receiver − d_blocker) / d_blocker · light size; from the
+            // light's own area when it has one.
+            let dr = linear_depth(z);
+            let physical = sm.depth.z > 0.0;
+            var search = sm.soft.w;
+            if physical {
+                search = clamp(penumbra_texels(dr, select(sm.depth.x, 0.0, sm.map.w > 0.5 && !is_paraboloid())), 1.0, 64.0);
+            }
+            let b = blockers(uv, face, z, search, 16u, phi);
+            if b.y > 0.0 {
+                var w = (dr - b.x) / max(b.x, 1e-4) * sm.soft.x;
+                if physical {
+                    w = penumbra_texels(dr, b.x);
+                }
+                v = pcf_disk(uv, face, z, clamp(w, 0.5, 64.0), count * count, phi);
+            }
+        }
+        default: {
+            // Variable-width PCF (002): radius ∝ |d_blocker − d_receiver|^exponent.
+            let b = blockers(uv, face, z, sm.soft.w, 16u, phi);
+            if b.y > 0.0 {
+                let w = sm.soft.y * pow(abs(linear_depth(z) - b.x), sm.soft.z);
+                v = pcf_disk(uv, face, z, clamp(w, 0.5, 64.0), count * count, phi);
+            }
+        }
+    }
+    return v;
+}
