@@ -59,6 +59,7 @@ fn cpu_and_gpu_extrusion_give_the_same_volumes() {
                     kind,
                     zfail,
                     light: c.model.inverse() * l.homogeneous(),
+                    capped: true,
                 })
                 .collect();
             let dark_cap = l.kind != LightType::Directional;
@@ -259,4 +260,20 @@ fn singular_transforms_are_refused() {
         e.contains("object 'Squashed' has a singular transform"),
         "{e}"
     );
+}
+
+/// The documents' z-fail failure cases, reproducible: volumes left open
+/// (`caps=false`) and volumes cut by a finite far plane (`far_plane=clip`,
+/// which loses a point light's dark cap at infinity) miss shadows that
+/// capped z-fail with the far plane at infinity gets right.
+#[test]
+fn zfail_fails_without_caps_and_with_a_clipping_far_plane() {
+    let scene = preset("columns", "default", "point");
+    let exact = compare(&scene, "shadow-volume:zfail", (320, 180)).mask;
+    assert!(exact.reference_shadowed_pct > 10.0, "{exact:?}");
+    assert!(exact.all.total_pct <= 0.05, "{exact:?}");
+    for id in ["shadow-volume:zfail-open", "shadow-volume:zfail-far-clip"] {
+        let m = compare(&scene, id, (320, 180)).mask;
+        assert!(m.all.total_pct > 10.0, "{id} should fail here: {m:?}");
+    }
 }

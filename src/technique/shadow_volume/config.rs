@@ -20,7 +20,7 @@ choice_enum! {
 }
 choice_enum! {
     /// How volumes extruded to infinity escape far-plane clipping.
-    pub enum FarPlane { Infinite = "infinite", DepthClamp = "depth-clamp" }
+    pub enum FarPlane { Infinite = "infinite", DepthClamp = "depth-clamp", Clip = "clip" }
 }
 choice_enum! {
     /// One two-sided stencil draw or two single-sided ones.
@@ -53,7 +53,13 @@ pub const LENGTH: ParamSpec = ParamSpec::float(
 pub const FAR_PLANE: ParamSpec = ParamSpec::choice_of::<FarPlane>(
     "far_plane",
     FarPlane::Infinite as usize,
-    "how volumes extruded to infinity escape far-plane clipping: a projection with the far plane at infinity, or depth clamping (unclipped_depth; falls back to infinite where the adapter lacks it)",
+    "how volumes extruded to infinity escape far-plane clipping: a projection with the far plane at infinity, or depth clamping (unclipped_depth; falls back to infinite where the adapter lacks it); clip: they do not — the camera's finite far plane cuts them, z-fail's documented failure",
+);
+
+pub const CAPS: ParamSpec = ParamSpec::boolean(
+    "caps",
+    true,
+    "close z-fail volumes with their light and dark caps; false leaves them open — z-fail's documented failure (counts go wrong wherever a cap was needed)",
 );
 pub const STENCIL: ParamSpec = ParamSpec::choice_of::<StencilMode>(
     "stencil",
@@ -80,6 +86,8 @@ pub struct VolumeConfig {
     /// World units; 0 = to infinity.
     pub length: f32,
     pub far_plane: FarPlane,
+    /// Light and dark caps on volumes that need them (false: the failure case).
+    pub caps: bool,
     pub stencil: StencilMode,
     pub scissor: bool,
     pub cull_casters: bool,
@@ -96,6 +104,7 @@ impl VolumeConfig {
             extrusion: p.choice(&EXTRUSION)?,
             length: p.float(&LENGTH)?,
             far_plane: p.choice(&FAR_PLANE)?,
+            caps: p.flag(&CAPS)?,
             stencil: p.choice(&STENCIL)?,
             scissor: p.flag(&SCISSOR)?,
             cull_casters: p.flag(&CULL_CASTERS)?,
@@ -112,6 +121,7 @@ pub const PARAMS: &[ParamSpec] = &[
     EXTRUSION,
     LENGTH,
     FAR_PLANE,
+    CAPS,
     STENCIL,
     SCISSOR,
     CULL_CASTERS,
@@ -134,6 +144,16 @@ pub const PRESETS: &[Preset] = &[
         name: "zfail",
         summary: "z-fail counting (Carmack's reverse) with caps",
         values: &[("method", "zfail")],
+    },
+    Preset {
+        name: "zfail-open",
+        summary: "z-fail without caps: the documents' failure case for open volumes",
+        values: &[("method", "zfail"), ("caps", "false")],
+    },
+    Preset {
+        name: "zfail-far-clip",
+        summary: "z-fail with the camera's far plane clipping the volumes: the documents' failure case for a finite far plane",
+        values: &[("method", "zfail"), ("far_plane", "clip")],
     },
     Preset {
         name: "edges",

@@ -557,6 +557,7 @@ impl ShadowVolumeRenderer {
                     kind,
                     zfail,
                     light: object_light,
+                    capped: config.caps,
                 }
             })
             .collect();
@@ -606,7 +607,12 @@ impl ShadowTechnique for ShadowVolumeRenderer {
 
     fn infinite_far_plane(&self) -> bool {
         let c = &self.config;
-        c.length <= 0.0 && (c.far_plane == FarPlane::Infinite || !self.depth_clamp)
+        c.length <= 0.0
+            && match c.far_plane {
+                FarPlane::Infinite => true,
+                FarPlane::DepthClamp => !self.depth_clamp,
+                FarPlane::Clip => false,
+            }
     }
 
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {

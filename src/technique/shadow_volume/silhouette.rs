@@ -124,6 +124,9 @@ pub struct CasterPlan {
     pub zfail: bool,
     /// The light in the caster's object space (w = 0: directional, towards the light).
     pub light: Vec4,
+    /// Caps are drawn where the volume needs them; false only for
+    /// `caps=false`, which leaves z-fail volumes open to show that failure.
+    pub capped: bool,
 }
 
 impl CasterPlan {
@@ -131,6 +134,9 @@ impl CasterPlan {
     /// per-triangle volume always has them (it must be closed on its own);
     /// a skipped caster has none.
     pub fn caps(&self) -> bool {
+        if !self.capped {
+            return false;
+        }
         match self.kind {
             VolumeKind::Skip => false,
             VolumeKind::Silhouette => self.zfail,
@@ -354,6 +360,7 @@ mod tests {
             kind: VolumeKind::Silhouette,
             zfail: false,
             light: Vec4::new(0.0, 10.0, 0.0, 1.0),
+            capped: true,
         };
         let ([zpass, zfail], silhouettes) = volumes(&vm, &[plan], true);
         // Only the top face is lit: its 4 edges (2 triangles) are the silhouette.
@@ -385,6 +392,7 @@ mod tests {
                 kind,
                 zfail: true,
                 light,
+                capped: true,
             };
             let ([_, idx], _) = volumes(&vm, &[plan], true);
             let pos = |i: u32| {
