@@ -141,7 +141,13 @@ fn projected(face: u32, g: vec4f, n: vec3f) -> Projected {
     } else if sm.map.w < 0.5 || is_paraboloid() {
         texel_world = sm.map.z * length(g.xyz - sm.light.xyz);
     }
-    let p = g.xyz + n * sm.kernel.y * texel_world;
+    var offset = sm.kernel.y * texel_world;
+    if sm.kernel.w > 0.5 {
+        let to_light = select(normalize(sm.light.xyz - g.xyz), -normalize(sm.warp.xyz), sm.map.w > 0.5 && !is_paraboloid());
+        let cos_theta = clamp(dot(n, to_light), 0.0, 1.0);
+        offset *= sqrt(1.0 - cos_theta * cos_theta);
+    }
+    let p = g.xyz + n * offset;
     var c = sm.faces[face] * vec4f(p, 1.0);
     if is_paraboloid() {
         c = paraboloid(vec4f(p, 1.0), face);

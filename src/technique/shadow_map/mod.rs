@@ -256,7 +256,12 @@ impl ShadowTechnique for ShadowMapTechnique {
             let base = ShadowMapUniform {
                 faces,
                 light: light.position.extend(layers as f32),
-                kernel: Vec4::new(c.radius, normal_offset, c.slope_bias, 0.0),
+                kernel: Vec4::new(
+                    c.radius,
+                    normal_offset,
+                    c.slope_bias,
+                    c.normal_offset_slope as u32 as f32,
+                ),
                 map: Vec4::new(
                     size as f32,
                     1.0 / size as f32,

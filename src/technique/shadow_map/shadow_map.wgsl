@@ -21,7 +21,8 @@ struct ShadowMap {
     // `faces` are the two hemispheres' view matrices)
     light: vec4f,
     // x filter radius (texels), y normal offset (texels), z slope-scaled
-    // bias of warped depth passes (per depth slope per pixel), w unused
+    // bias of warped depth passes (per depth slope per pixel), w 1 when the
+    // normal offset scales with sin θ between normal and light
     kernel: vec4f,
     // x map size, y 1/size, z world size of a texel at unit distance
     // (perspective, paraboloid) or of any texel (orthographic),
