@@ -55,11 +55,7 @@ fn partitioned_depths(
     cascades: &Cascades,
     seen: Option<&SeenBounds>,
 ) -> (f32, f32) {
-    let limit = if cascades.max_distance > 0.0 {
-        cascades.max_distance.min(camera.far)
-    } else {
-        camera.far
-    };
+    let limit = cascades.far_limit(camera.far);
     let (near, far) = match seen.filter(|_| cascades.fit != Fit::Frustum) {
         Some(s) => {
             let near = s.near.max(camera.near);

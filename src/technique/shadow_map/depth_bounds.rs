@@ -193,7 +193,7 @@ impl DepthReduction {
             Feedback::ThisFrame => {
                 let start = std::time::Instant::now();
                 let mut own = gpu.device.create_command_encoder(&Default::default());
-                self.record(ctx, &mut own, inputs, samples);
+                self.record(ctx, &mut own, inputs);
                 own.copy_buffer_to_buffer(&self.result, 0, &self.staging, 0, RESULT_BYTES);
                 gpu.queue.submit([own.finish()]);
                 let bytes = gpu.read_buffer(&self.staging)?;
@@ -205,7 +205,7 @@ impl DepthReduction {
                 if let Some(bytes) = self.late.try_read(gpu)? {
                     self.latest = decode(&bytes, cascades as usize, samples);
                 }
-                self.record(ctx, encoder, inputs, samples);
+                self.record(ctx, encoder, inputs);
                 if let Some(target) = self.late.target() {
                     encoder.copy_buffer_to_buffer(&self.result, 0, target, 0, RESULT_BYTES);
                     self.late_pending = true;
@@ -223,13 +223,7 @@ impl DepthReduction {
     }
 
     /// Records the reduction of the frame's G-buffer into `encoder`.
-    fn record(
-        &self,
-        ctx: &MaskContext,
-        encoder: &mut wgpu::CommandEncoder,
-        inputs: &ReduceInputs,
-        samples: bool,
-    ) {
+    fn record(&self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder, inputs: &ReduceInputs) {
         let gpu = ctx.gpu;
         let params = ReduceParams {
             view_z: ctx.fit_camera.view().row(2),
@@ -278,7 +272,7 @@ impl DepthReduction {
         let groups = |n: u32| n.div_ceil(WORKGROUP_PIXELS);
         let (w, h) = (groups(ctx.frame.width()), groups(ctx.frame.height()));
         let mut passes = vec![&self.shared.depth_range];
-        if samples {
+        if inputs.fit == Fit::Samples {
             passes.push(&self.shared.cascade_bounds);
         }
         // One pass per step: the second reads what the first wrote.

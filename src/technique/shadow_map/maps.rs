@@ -60,7 +60,7 @@ impl Maps {
                 wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
             )
         };
-        let views = |t: &wgpu::Texture| -> LayeredViews { crate::gpu::layer_views(t, layers) };
+        let views = |t: &wgpu::Texture| crate::gpu::layer_views(t, layers);
         gpu.checked("allocating the shadow maps", || {
             let (depth_layer_views, depth_array) = views(&make(format.depth_texture()));
             let byte =

@@ -125,6 +125,17 @@ pub struct Cascades {
 }
 
 impl Cascades {
+    /// The farthest view depth a split may take: `max_distance` when set,
+    /// else the camera's far plane (SDSM's reduction on the GPU and the
+    /// split on the CPU must agree on it).
+    pub fn far_limit(&self, camera_far: f32) -> f32 {
+        if self.max_distance > 0.0 {
+            self.max_distance.min(camera_far)
+        } else {
+            camera_far
+        }
+    }
+
     pub fn parse(p: &ParamValues) -> Result<Cascades> {
         Ok(Cascades {
             count: p.int(&CASCADES)?,

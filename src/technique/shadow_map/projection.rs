@@ -45,11 +45,7 @@ impl ShadowMapTechnique {
                     .0,
                 cascades: c.cascades.count,
                 split_lambda: c.cascades.split_lambda,
-                far_limit: if c.cascades.max_distance > 0.0 {
-                    c.cascades.max_distance.min(ctx.fit_camera.far)
-                } else {
-                    ctx.fit_camera.far
-                },
+                far_limit: c.cascades.far_limit(ctx.fit_camera.far),
             };
             reduction.seen(ctx, encoder, &inputs)?
         } else {

@@ -187,6 +187,14 @@ pub fn clip_to_bounds(corners: &[Vec3; 8], bounds: &Aabb) -> Vec<Vec3> {
     out
 }
 
+/// The row over light-view (x, y, z, 1) that gives a warped map's stored
+/// depth: linear along the light, 0 nearest it and 1 farthest over the
+/// scene's light-view bounds `scene_ls` (widened by 1 mm each way).
+pub fn linear_depth_row(scene_ls: &Aabb) -> Vec4 {
+    let (z_min, z_max) = (scene_ls.min.z - 1e-3, scene_ls.max.z + 1e-3);
+    (Vec4::W * z_max - Vec4::Z) / (z_max - z_min)
+}
+
 /// `v` rounded up to the next 2^(k/8) (at most 9 % more): sizes that stay
 /// put under small changes.
 pub fn quantize_up(v: f32) -> f32 {

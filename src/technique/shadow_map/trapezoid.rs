@@ -10,6 +10,7 @@
 //! ξ = 0.6 when η = λδ'(1 − ξ) / ((1 + ξ)λ − 2δ') (their η with the sign
 //! of ξ flipped: their y runs the other way).
 
+use super::setup::linear_depth_row;
 use super::warp::Warped;
 use crate::scene::{Aabb, Camera};
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -102,9 +103,7 @@ pub fn tsm(
     // T and s as rows over the light view's (x, y, z, 1).
     let t_row = Vec4::new(u.x, u.y, 0.0, -c0.dot(u) - apex);
     let s_row = Vec4::new(v.x, v.y, 0.0, -c0.dot(v));
-    let scene_ls = scene.transformed(light_view);
-    let (z_lo, z_hi) = (scene_ls.min.z - 1e-3, scene_ls.max.z + 1e-3);
-    let depth_row_ls = (Vec4::W * z_hi - Vec4::Z) / (z_hi - z_lo);
+    let depth_row_ls = linear_depth_row(&scene.transformed(light_view));
     let rows = [
         (s_row - t_row * mid) / half,
         t_row * a + Vec4::W * b,
@@ -123,11 +122,7 @@ pub fn tsm(
 mod tests {
     use super::*;
     use crate::technique::shadow_map::setup::{clip_to_bounds, light_view_of_scene, slice_corners};
-
-    fn ndc(m: Mat4, p: Vec3) -> Vec3 {
-        let c = m * p.extend(1.0);
-        c.truncate() / c.w
-    }
+    use crate::technique::shadow_map::warp::tests::{assert_magnifies_near_the_camera, ndc};
 
     fn setting() -> (Camera, Aabb, Vec3) {
         let scene = Aabb {
@@ -159,19 +154,7 @@ mod tests {
         let focus = cam.eye + forward * (0.5 + 0.3 * 79.5);
         let y = ndc(w.view_proj, focus).y;
         assert!((y - FOCUS_LINE).abs() < 1e-3, "{y}");
-        // A 1 m step beside the camera spans more of the map than one 60 m away.
-        let span = |p: Vec3| {
-            (ndc(w.view_proj, p + Vec3::X) - ndc(w.view_proj, p))
-                .truncate()
-                .length()
-        };
-        let (near, far) = (Vec3::new(0.0, 0.0, 35.0), Vec3::new(0.0, 0.0, -20.0));
-        assert!(
-            span(near) > 3.0 * span(far),
-            "{} vs {}",
-            span(near),
-            span(far)
-        );
+        assert_magnifies_near_the_camera(w.view_proj);
         // Points on one light ray share a texel; the stored depth grows
         // linearly along the ray.
         let ground = Vec3::new(5.0, 0.0, 10.0);

@@ -7,7 +7,9 @@
 //! grows without bound and the warp relaxes to the uniform map.
 
 use super::partition_params::{Warp, WarpParams};
-use super::setup::{LightSetup, clip_to_bounds, light_view_of_scene, slice_corners, view_reach};
+use super::setup::{
+    LightSetup, clip_to_bounds, light_view_of_scene, linear_depth_row, slice_corners, view_reach,
+};
 use super::trapezoid::tsm;
 use crate::scene::{Aabb, Camera};
 use glam::{Mat4, Vec3, Vec4};
@@ -114,14 +116,10 @@ pub fn lispsm(
             1.0,
         ),
     );
-    // Linear depth: (z_max − z) / (z_max − z_min) of the light-view z,
-    // the scene's extent widened by its margin.
-    let (z_min, z_max) = (scene_ls.min.z - 1e-3, scene_ls.max.z + 1e-3);
-    let depth_row = (Vec4::W * z_max - view.row(2)) / (z_max - z_min);
     Some(Warped {
         view_proj: to_clip * perspective * view,
         n,
-        depth_row,
+        depth_row: view.transpose() * linear_depth_row(&scene_ls),
     })
 }
 
@@ -183,12 +181,29 @@ pub fn warp_setup(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
-    fn ndc(m: Mat4, p: Vec3) -> Vec3 {
+    pub(in crate::technique::shadow_map) fn ndc(m: Mat4, p: Vec3) -> Vec3 {
         let c = m * p.extend(1.0);
         c.truncate() / c.w
+    }
+
+    /// A 1 m step on the ground beside a camera at (0, 2, 40) looking at the
+    /// origin spans more than 3× the map that the same step 60 m away does.
+    pub(in crate::technique::shadow_map) fn assert_magnifies_near_the_camera(view_proj: Mat4) {
+        let span = |p: Vec3| {
+            (ndc(view_proj, p + Vec3::X) - ndc(view_proj, p))
+                .truncate()
+                .length()
+        };
+        let (near, far) = (Vec3::new(0.0, 0.0, 35.0), Vec3::new(0.0, 0.0, -20.0));
+        assert!(
+            span(near) > 3.0 * span(far),
+            "{} vs {}",
+            span(near),
+            span(far)
+        );
     }
 
     #[test]
@@ -239,21 +254,7 @@ mod tests {
                 "{p} → {q}"
             );
         }
-        // A 1 m step on the ground beside the camera spans more of the map
-        // than the same step 60 m away.
-        let near = Vec3::new(0.0, 0.0, 35.0);
-        let far = Vec3::new(0.0, 0.0, -20.0);
-        let span = |p: Vec3| {
-            (ndc(w.view_proj, p + Vec3::X) - ndc(w.view_proj, p))
-                .truncate()
-                .length()
-        };
-        assert!(
-            span(near) > 3.0 * span(far),
-            "{} vs {}",
-            span(near),
-            span(far)
-        );
+        assert_magnifies_near_the_camera(w.view_proj);
         // Depth still orders points along the light: nearer the light, smaller.
         let ground = Vec3::new(5.0, 0.0, 10.0);
         let above = ground - light.normalize() * 3.0;
