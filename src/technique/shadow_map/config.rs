@@ -445,6 +445,11 @@ pub const PRESETS: &[Preset] = &[
         ],
     },
     Preset {
+        name: "psm",
+        summary: "one 2048² map in the camera's post-perspective space (PSM, virtual camera behind the casters)",
+        values: &[("warp", "psm")],
+    },
+    Preset {
         name: "lispsm",
         summary: "one 2048² map warped by a light-space perspective (LiSPSM, n_opt)",
         values: &[("warp", "lispsm")],

@@ -14,6 +14,7 @@ mod debug;
 mod depth_bounds;
 mod maps;
 pub mod partition_params;
+mod perspective;
 mod pipelines;
 mod projection;
 mod setup;

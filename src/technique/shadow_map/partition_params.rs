@@ -1,6 +1,6 @@
 //! The parameters that partition and warp a directional light's map:
 //! cascades (count, split scheme, reach, stabilisation, blending), what
-//! they are fitted to (SDSM), and the warps (LiSPSM, TSM).
+//! they are fitted to (SDSM), and the warps (PSM, LiSPSM, TSM).
 
 use crate::technique::params::choice_enum;
 use crate::technique::{ParamSpec, ParamValues};
@@ -8,7 +8,7 @@ use anyhow::Result;
 
 choice_enum! {
     /// Warping of a directional light's maps.
-    pub enum Warp { None = "none", Lispsm = "lispsm", Tsm = "tsm" }
+    pub enum Warp { None = "none", Psm = "psm", Lispsm = "lispsm", Tsm = "tsm" }
 }
 
 choice_enum! {
@@ -66,7 +66,7 @@ pub const FIT: ParamSpec = ParamSpec::choice_of::<Fit>(
 pub const WARP: ParamSpec = ParamSpec::choice_of::<Warp>(
     "warp",
     Warp::None as usize,
-    "directional lights: none; lispsm — a perspective inside the light's view along the view direction (Wimmer, Scherzer & Purgathofer 2004) that gives the surfaces near the camera more of the map; tsm — the trapezoid around the view in the light's image mapped onto the square (Martin & Tan 2004); one per cascade with cascades > 1, over the part of the view inside the scene; warped maps store depth linear along the light (biased in the depth pass's fragment stage) and are not stabilised",
+    "directional lights: none; psm — the map in the camera's post-perspective space, where the light becomes a point (Stamminger & Drettakis 2002), from a virtual camera moved back behind every caster; lispsm — a perspective inside the light's view along the view direction (Wimmer, Scherzer & Purgathofer 2004) that gives the surfaces near the camera more of the map; tsm — the trapezoid around the view in the light's image mapped onto the square (Martin & Tan 2004); one per cascade with cascades > 1, over the part of the view inside the scene; warped maps store depth linear along the light (biased in the depth pass's fragment stage) and are not stabilised",
 );
 
 pub const LISPSM_N: ParamSpec = ParamSpec::float(

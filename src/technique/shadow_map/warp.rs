@@ -7,6 +7,7 @@
 //! grows without bound and the warp relaxes to the uniform map.
 
 use super::partition_params::{Warp, WarpParams};
+use super::perspective::psm;
 use super::setup::{
     LightSetup, clip_to_bounds, light_view_of_scene, linear_depth_row, slice_corners, view_reach,
 };
@@ -124,7 +125,7 @@ pub fn lispsm(
 }
 
 /// Warps a directional light's setup in place: each face (the one map, or
-/// each cascade) by LiSPSM or TSM over its part of the view of `camera`;
+/// each cascade) by PSM, LiSPSM or TSM over its part of the view of `camera`;
 /// faces whose light runs along the view stay uniform.
 pub fn warp_setup(
     setup: &mut LightSetup,
@@ -156,6 +157,7 @@ pub fn warp_setup(
         let far = depths.fold(0.0f32, f32::max).max(near * 1.001);
         let warped = match params.kind {
             Warp::None => None,
+            Warp::Psm => psm(camera, aspect, light_dir, scene, &body, (near, far)).map(|(w, _)| w),
             Warp::Lispsm => lispsm(
                 camera,
                 light_dir,
