@@ -43,8 +43,33 @@ pub enum Command {
     /// Time techniques on one frame: median/p5/p95 per pass, ratio to `none`
     /// (DIR/bench.{md,csv,json}).
     Bench(Box<BenchArgs>),
+    /// The comparison: every technique preset on a matrix of views, against
+    /// the reference and `none` (DIR/index.html, report.md, results.{csv,json});
+    /// resumable: cells already in DIR are reused.
+    Report(ReportArgs),
     /// Interactive viewer: switch and tune techniques, move camera and lights.
     View(Box<ViewCmdArgs>),
+}
+
+#[derive(Args)]
+pub struct ReportArgs {
+    /// Size of the matrix: quick (7 views, 640×360), standard (every
+    /// scene's default camera under each light preset, 1280×720), full
+    /// (every camera preset too).
+    #[arg(long, value_enum, default_value = "quick")]
+    pub preset: crate::report::matrix::ReportPreset,
+    /// Only these built-in scenes (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    pub scenes: Option<Vec<String>>,
+    /// Technique list (as `compare --techniques`); default every registered preset.
+    #[arg(long)]
+    pub techniques: Option<String>,
+    /// Output directory (its cells are reused by the next run).
+    #[arg(long, default_value = "out/report")]
+    pub out: PathBuf,
+    /// Graphics backend (vulkan, metal, dx12); default: WGPU_BACKEND or all.
+    #[arg(long)]
+    pub backend: Option<String>,
 }
 
 #[derive(Args)]
@@ -182,6 +207,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(a) => render(*a),
         Command::Compare(a) => compare(*a),
         Command::Bench(a) => bench(*a),
+        Command::Report(a) => report(a),
         Command::View(a) => {
             let a = *a;
             crate::viewer::run(crate::viewer::ViewerOptions {
@@ -352,8 +378,11 @@ fn bench(a: BenchArgs) -> Result<()> {
         a.view.size,
         &a.view.settings(),
         &techniques,
-        a.warmup,
-        a.frames,
+        measure::bench::BenchFrames {
+            warmup: a.warmup,
+            measured: a.frames,
+            progress: true,
+        },
         &a.out,
     )?;
     println!(
@@ -372,6 +401,25 @@ fn bench(a: BenchArgs) -> Result<()> {
         );
     }
     println!("wrote {}", a.out.join("bench.md").display());
+    Ok(())
+}
+
+fn report(a: ReportArgs) -> Result<()> {
+    let started = Instant::now();
+    let matrix = crate::report::matrix::Matrix::of(
+        a.preset,
+        a.scenes.as_deref(),
+        a.techniques.as_deref(),
+    )?;
+    let gpu = crate::gpu::GpuContext::new(a.backend.as_deref())?;
+    let stats = crate::report::run(&gpu, &matrix, &a.out, true)?;
+    println!(
+        "{} cells measured, {} reused, in {:.0} s; wrote {}",
+        stats.computed,
+        stats.reused,
+        started.elapsed().as_secs_f64(),
+        a.out.join("index.html").display()
+    );
     Ok(())
 }
 

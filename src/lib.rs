@@ -12,6 +12,7 @@ pub mod gpu;
 pub mod headless;
 pub mod measure;
 pub mod renderer;
+pub mod report;
 pub mod scene;
 pub mod technique;
 pub mod viewer;

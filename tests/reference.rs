@@ -268,8 +268,11 @@ fn bench_writes_ratios_to_none() {
         (96, 54),
         &Default::default(),
         &list,
-        1,
-        3,
+        measure::bench::BenchFrames {
+            warmup: 1,
+            measured: 3,
+            progress: false,
+        },
         &out,
     )
     .unwrap();

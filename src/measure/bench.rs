@@ -56,6 +56,16 @@ pub struct BenchRow {
     pub counters: Vec<(String, f64)>,
 }
 
+/// How many frames `bench` renders per technique, and whether it draws its
+/// own progress bar (a caller with its own bar turns it off).
+#[derive(Clone, Copy, Debug)]
+pub struct BenchFrames {
+    /// Frames rendered first and not measured.
+    pub warmup: u32,
+    pub measured: u32,
+    pub progress: bool,
+}
+
 /// Benchmarks `techniques` (with `none` added first when missing) with the
 /// render settings `base` (shading, specular model, culling), each stage
 /// waited for, GPU timestamps on and light icons off.
@@ -68,10 +78,14 @@ pub fn run(
     size: (u32, u32),
     base: &RenderSettings,
     techniques: &[TechniqueChoice],
-    warmup: u32,
-    frames: u32,
+    counts: BenchFrames,
     out: &Path,
 ) -> Result<Vec<BenchRow>> {
+    let BenchFrames {
+        warmup,
+        measured: frames,
+        ..
+    } = counts;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let mut list: Vec<TechniqueChoice> = techniques.to_vec();
     if !list.iter().any(|c| c.family.id == "none") {
@@ -83,7 +97,12 @@ pub fn run(
         stage_waits: true,
         ..*base
     };
-    let bar = indicatif::ProgressBar::new((list.len() as u32 * (warmup + frames)) as u64);
+    let total = (list.len() as u32 * (warmup + frames)) as u64;
+    let bar = if counts.progress {
+        indicatif::ProgressBar::new(total)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
     bar.set_style(
         indicatif::ProgressStyle::with_template(
             "{msg:>28} [{bar:30}] {pos}/{len} frames, {elapsed}",

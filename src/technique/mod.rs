@@ -209,10 +209,28 @@ pub struct Preset {
     pub values: &'static [(&'static str, &'static str)],
 }
 
+/// What a family declares it handles; `shadowlab report` checks each
+/// claim against the family's measurements.
+#[derive(Clone, Copy, Debug)]
+pub struct Capabilities {
+    pub point_lights: bool,
+    pub spot_lights: bool,
+    pub directional_lights: bool,
+    /// Penumbrae from lights with an area (some presets).
+    pub soft_shadows: bool,
+    /// Casters shadow themselves and other casters, not only receivers.
+    pub self_shadowing: bool,
+    /// Meshes that are not closed (the bunny, the teapot).
+    pub open_meshes: bool,
+    /// Receivers that are not planes.
+    pub curved_receivers: bool,
+}
+
 /// A technique family: its parameter table, presets and constructor.
 pub struct Family {
     pub id: &'static str,
     pub summary: &'static str,
+    pub capabilities: Capabilities,
     pub params: &'static [ParamSpec],
     /// The first preset is the family's default (`family` = `family:<first>`).
     pub presets: &'static [Preset],

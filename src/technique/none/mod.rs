@@ -8,6 +8,15 @@ use anyhow::Result;
 pub static FAMILY: Family = Family {
     id: "none",
     summary: "no shadows: the visibility mask is 1 everywhere",
+    capabilities: super::Capabilities {
+        point_lights: false,
+        spot_lights: false,
+        directional_lights: false,
+        soft_shadows: false,
+        self_shadowing: false,
+        open_meshes: false,
+        curved_receivers: false,
+    },
     params: &[],
     presets: &[Preset {
         name: "default",

@@ -35,6 +35,15 @@ const STENCIL: ParamSpec = ParamSpec::boolean(
 pub static FAMILY: Family = Family {
     id: "planar",
     summary: "projected planar shadows: casters flattened onto receiver planes by the shadow matrix",
+    capabilities: super::Capabilities {
+        point_lights: true,
+        spot_lights: true,
+        directional_lights: true,
+        soft_shadows: false,
+        self_shadowing: false,
+        open_meshes: true,
+        curved_receivers: false,
+    },
     params: &[
         ParamSpec::DARKENING,
         DEPTH_OFFSET,

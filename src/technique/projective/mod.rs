@@ -62,6 +62,15 @@ impl ProjectiveConfig {
 pub static FAMILY: Family = Family {
     id: "projective",
     summary: "projective shadow textures: one black-on-white texture per caster, projected onto receivers",
+    capabilities: super::Capabilities {
+        point_lights: true,
+        spot_lights: true,
+        directional_lights: true,
+        soft_shadows: false,
+        self_shadowing: false,
+        open_meshes: true,
+        curved_receivers: true,
+    },
     params: &[SIZE, MARGIN, DEPTH_IN_ALPHA, ALPHA_BIAS],
     presets: &[
         Preset {

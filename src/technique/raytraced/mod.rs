@@ -37,6 +37,15 @@ const OFFSET_ULPS: ParamSpec = ParamSpec::float(
 pub static FAMILY: Family = Family {
     id: "raytraced",
     summary: "ground truth: CPU shadow rays from the G-buffer against a BVH of the casters",
+    capabilities: super::Capabilities {
+        point_lights: true,
+        spot_lights: true,
+        directional_lights: true,
+        soft_shadows: true,
+        self_shadowing: true,
+        open_meshes: true,
+        curved_receivers: true,
+    },
     params: &[SAMPLES, OFFSET_ULPS],
     presets: &[
         Preset {

@@ -42,6 +42,15 @@ use std::sync::Arc;
 pub static FAMILY: Family = Family {
     id: "shadow-map",
     summary: "shadow maps: depth from the light, compared per pixel, with the PCF family of filters",
+    capabilities: super::Capabilities {
+        point_lights: true,
+        spot_lights: true,
+        directional_lights: true,
+        soft_shadows: true,
+        self_shadowing: true,
+        open_meshes: true,
+        curved_receivers: true,
+    },
     params: config::PARAMS,
     presets: config::PRESETS,
     create: |gpu, params| {

@@ -39,6 +39,15 @@ use std::sync::Arc;
 pub static FAMILY: Family = Family {
     id: "shadow-volume",
     summary: "stencil shadow volumes: silhouettes extruded away from the light, counted in the stencil buffer (exact hard shadows)",
+    capabilities: super::Capabilities {
+        point_lights: true,
+        spot_lights: true,
+        directional_lights: true,
+        soft_shadows: false,
+        self_shadowing: true,
+        open_meshes: true,
+        curved_receivers: true,
+    },
     params: config::PARAMS,
     presets: config::PRESETS,
     create: |gpu, params| {

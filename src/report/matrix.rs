@@ -1,0 +1,178 @@
+//! What a report measures: the views (scene, camera preset, light preset),
+//! the frame size, the benchmark's frame counts and the technique presets.
+
+use crate::measure;
+use crate::scene;
+use crate::technique::{self, FAMILIES, TechniqueChoice};
+use anyhow::{Result, bail};
+
+/// The size of the matrix.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ReportPreset {
+    /// Seven views chosen to show each family's strengths and failure cases, 640×360.
+    Quick,
+    /// Every built-in scene's default camera under each of its light presets, 1280×720.
+    Standard,
+    /// Every camera preset under every light preset, 1280×720.
+    Full,
+}
+
+/// One frame of the matrix.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct View {
+    pub scene: String,
+    pub camera: String,
+    pub light: String,
+}
+
+impl View {
+    pub fn new(scene: &str, camera: &str, light: &str) -> View {
+        View {
+            scene: scene.into(),
+            camera: camera.into(),
+            light: light.into(),
+        }
+    }
+
+    /// `scene/camera/light`.
+    pub fn label(&self) -> String {
+        format!("{}/{}/{}", self.scene, self.camera, self.light)
+    }
+}
+
+/// Everything a report measures.
+#[derive(Clone)]
+pub struct Matrix {
+    pub views: Vec<View>,
+    pub size: (u32, u32),
+    pub bench: measure::bench::BenchFrames,
+    pub techniques: Vec<TechniqueChoice>,
+    pub reference: TechniqueChoice,
+}
+
+/// The quick preset's views: a point light over a colonnade (z-fail's
+/// open-volume and far-plane failures), the camera inside the roof's shadow
+/// (z-pass's failure), a room, an open mesh under a spot, curved receivers,
+/// a street of a million-triangle city and 2 km of landscape seen from the
+/// ground (perspective aliasing: the warped and partitioned maps).
+const QUICK_VIEWS: [(&str, &str, &str); 7] = [
+    ("columns", "default", "point"),
+    ("columns", "in-shadow", "sun"),
+    ("room", "default", "point"),
+    ("bunny", "default", "spot"),
+    ("curved", "default", "sun"),
+    ("city", "street", "sun"),
+    ("landscape", "ground", "sun-side"),
+];
+
+/// Every registered preset of every family, the reference's too.
+pub fn every_preset() -> Result<Vec<TechniqueChoice>> {
+    FAMILIES
+        .iter()
+        .flat_map(|f| f.presets.iter().map(move |p| format!("{}:{}", f.id, p.name)))
+        .map(|id| technique::resolve(&id))
+        .collect()
+}
+
+impl Matrix {
+    /// The matrix of `preset`, restricted to `scenes` when given, over
+    /// `techniques` (a technique list, default every preset).
+    pub fn of(
+        preset: ReportPreset,
+        scenes: Option<&[String]>,
+        techniques: Option<&str>,
+    ) -> Result<Matrix> {
+        let mut views = vec![];
+        match preset {
+            ReportPreset::Quick => {
+                views.extend(QUICK_VIEWS.iter().map(|(s, c, l)| View::new(s, c, l)));
+            }
+            ReportPreset::Standard | ReportPreset::Full => {
+                for name in scene::builtin::NAMES {
+                    let s = scene::builtin::by_name(name)?.expect("a built-in scene");
+                    let cameras: Vec<&str> = match preset {
+                        ReportPreset::Full => {
+                            s.camera_presets.iter().map(|c| c.0.as_str()).collect()
+                        }
+                        _ => vec![s.camera_presets[0].0.as_str()],
+                    };
+                    for c in cameras {
+                        for (l, _) in &s.light_presets {
+                            views.push(View::new(name, c, l));
+                        }
+                    }
+                }
+            }
+        }
+        if let Some(names) = scenes {
+            for n in names {
+                if !views.iter().any(|v| &v.scene == n) {
+                    let known: Vec<&str> = scene::builtin::NAMES.to_vec();
+                    if !known.contains(&n.as_str()) {
+                        bail!("unknown scene '{n}' (built-in: {})", known.join(", "));
+                    }
+                    // A scene outside the preset's views: its default
+                    // camera under each of its lights.
+                    let s = scene::builtin::by_name(n)?.expect("a built-in scene");
+                    for (l, _) in &s.light_presets {
+                        views.push(View::new(n, &s.camera_presets[0].0, l));
+                    }
+                }
+            }
+            views.retain(|v| names.contains(&v.scene));
+        }
+        let (size, bench) = match preset {
+            ReportPreset::Quick => (
+                (640, 360),
+                measure::bench::BenchFrames {
+                    warmup: 2,
+                    measured: 5,
+                    progress: false,
+                },
+            ),
+            _ => (
+                (1280, 720),
+                measure::bench::BenchFrames {
+                    warmup: 3,
+                    measured: 10,
+                    progress: false,
+                },
+            ),
+        };
+        let techniques = match techniques {
+            Some(list) => measure::parse_technique_list(list)?,
+            None => every_preset()?,
+        };
+        Ok(Matrix {
+            views,
+            size,
+            bench,
+            techniques,
+            reference: technique::resolve("raytraced")?,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_grow_and_scenes_filter() {
+        let quick = Matrix::of(ReportPreset::Quick, None, None).unwrap();
+        let standard = Matrix::of(ReportPreset::Standard, None, None).unwrap();
+        let full = Matrix::of(ReportPreset::Full, None, None).unwrap();
+        assert_eq!(quick.views.len(), QUICK_VIEWS.len());
+        assert!(quick.views.len() < standard.views.len() && standard.views.len() < full.views.len());
+        // Every preset of every family, the reference's included.
+        let count: usize = FAMILIES.iter().map(|f| f.presets.len()).sum();
+        assert_eq!(quick.techniques.len(), count);
+        let only = Matrix::of(ReportPreset::Quick, Some(&["columns".into()]), Some("none")).unwrap();
+        assert!(only.views.iter().all(|v| v.scene == "columns") && only.views.len() == 2);
+        assert_eq!(only.techniques.len(), 1);
+        // A scene outside the quick views comes with its lights.
+        let floating = Matrix::of(ReportPreset::Quick, Some(&["floating".into()]), None).unwrap();
+        assert!(floating.views.iter().any(|v| v.light == "area"));
+        assert!(Matrix::of(ReportPreset::Quick, Some(&["nowhere".into()]), None).is_err());
+    }
+}

@@ -1,0 +1,162 @@
+//! `shadowlab report`: the comparison of SEEDS §7 measured — every
+//! technique preset on a matrix of views, against the ray-traced reference
+//! (`compare`) and against `none` (`bench`), written as one self-contained
+//! `index.html` (inline SVG charts by `plotters`, embedded images),
+//! `report.md`, `results.csv` and `results.json`. Cells are cached in the
+//! output folder (`cells`), so a run resumes where the last one stopped.
+
+pub mod cells;
+mod charts;
+mod html;
+mod markdown;
+pub mod matrix;
+pub mod summary;
+
+use crate::gpu::GpuContext;
+use crate::measure;
+use crate::renderer::RenderSettings;
+use crate::scene::{self, Scene};
+use anyhow::{Context, Result};
+use cells::Cell;
+use matrix::{Matrix, View};
+use std::path::Path;
+use std::time::Instant;
+
+/// What a run did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RunStats {
+    /// Cells measured by this run.
+    pub computed: usize,
+    /// Cells taken from the folder's cache.
+    pub reused: usize,
+}
+
+/// Measures what `matrix` asks that `out` does not hold yet, then writes
+/// the report from every cell.
+pub fn run(gpu: &GpuContext, matrix: &Matrix, out: &Path, progress: bool) -> Result<RunStats> {
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let total = matrix.views.len() * matrix.techniques.len();
+    let bar = if progress {
+        indicatif::ProgressBar::new(total as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{msg:>32} [{bar:30}] {pos}/{len} cells, {elapsed} elapsed, {eta} left",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    let started = Instant::now();
+    let mut stats = RunStats::default();
+    let mut all: Vec<Cell> = vec![];
+    let mut loaded: Option<Scene> = None;
+    for view in &matrix.views {
+        bar.set_message(view.label());
+        let mut cached = vec![];
+        let mut missing = vec![];
+        for t in &matrix.techniques {
+            match cells::load(out, &matrix.key(view, t)) {
+                Some(c) => cached.push(c),
+                None => missing.push(t.clone()),
+            }
+        }
+        stats.reused += cached.len();
+        bar.inc(cached.len() as u64);
+        if !missing.is_empty() {
+            if loaded.as_ref().is_none_or(|s| s.name != view.scene) {
+                loaded = Some(scene::load(&view.scene)?);
+            }
+            let scene = loaded.as_ref().expect("loaded above");
+            let fresh = measure_view(gpu, scene, matrix, view, &missing, out)?;
+            stats.computed += fresh.len();
+            bar.inc(fresh.len() as u64);
+            cached.extend(fresh);
+        }
+        // The matrix's order, whatever came from the cache.
+        for t in &matrix.techniques {
+            let key = matrix.key(view, t);
+            if let Some(i) = cached.iter().position(|c| c.key == key) {
+                all.push(cached.swap_remove(i));
+            }
+        }
+    }
+    bar.finish_and_clear();
+    cells::write_results(out, matrix, &all)?;
+    let report = summary::Report::new(matrix, &all);
+    std::fs::create_dir_all(out.join("charts"))?;
+    for i in 0..report.fronts.len() {
+        std::fs::write(
+            out.join(markdown::chart_name(i)),
+            charts::pareto_svg(&report, i)?,
+        )?;
+    }
+    std::fs::write(out.join("report.md"), markdown::write(&report))?;
+    std::fs::write(out.join("index.html"), html::write(&report, out)?)?;
+    log::info!(
+        "report: {} cells measured, {} reused, {:.0} s",
+        stats.computed,
+        stats.reused,
+        started.elapsed().as_secs_f64()
+    );
+    Ok(stats)
+}
+
+/// Measures `techniques` on `view`: `compare` against the reference, then
+/// `bench` with `none` in the same run; stores and returns their cells.
+fn measure_view(
+    gpu: &GpuContext,
+    scene: &Scene,
+    matrix: &Matrix,
+    view: &View,
+    techniques: &[crate::technique::TechniqueChoice],
+    out: &Path,
+) -> Result<Vec<Cell>> {
+    let camera = scene.camera_preset(&view.camera)?;
+    let lights = scene.light_preset(&view.light)?;
+    let rel = cells::view_dir(view);
+    let dir = out.join(&rel);
+    let quality = measure::compare::run(
+        gpu,
+        scene,
+        &camera,
+        &lights,
+        matrix.size,
+        techniques,
+        &matrix.reference,
+        &dir,
+    )?;
+    let bench = measure::bench::run(
+        gpu,
+        scene,
+        &camera,
+        &lights,
+        matrix.size,
+        &RenderSettings::default(),
+        techniques,
+        matrix.bench,
+        &dir.join("bench"),
+    )?;
+    let light_kinds: Vec<String> = lights
+        .iter()
+        .map(|l| format!("{:?}", l.kind).to_lowercase())
+        .collect();
+    let area = lights.iter().any(|l| l.area.is_some());
+    let mut fresh = vec![];
+    for t in techniques {
+        let label = measure::choice_label(t);
+        let rows: Vec<&measure::compare::QualityRow> =
+            quality.iter().filter(|r| r.technique == label).collect();
+        let b = bench
+            .iter()
+            .find(|r| r.technique == label)
+            .with_context(|| format!("bench has no row for {label}"))?;
+        let mut cell = cells::from_rows(matrix.key(view, t), t, &rows, b, &rel);
+        cell.light_kinds = light_kinds.clone();
+        cell.area_light = area;
+        cells::store(out, &cell)?;
+        fresh.push(cell);
+    }
+    Ok(fresh)
+}
