@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs the system packages shadowlab needs on Debian/Ubuntu: a Vulkan
 # driver (Mesa's lavapipe runs everywhere, GPU or not) and, for the tests,
-# Node.js (the Khronos glTF validator) and Xvfb (the viewer test).
+# Node.js (the Khronos glTF validator), Xvfb (the viewer test) and Chromium
+# (the report's HTML opened in a real browser).
 # Usage: scripts/setup.sh [--test]
 set -euo pipefail
 
@@ -14,6 +15,7 @@ if [[ "${1:-}" == "--test" ]]; then
   command -v npm >/dev/null || need+=(npm)
   have_pkg xvfb || need+=(xvfb)
   have_pkg xauth || need+=(xauth)
+  command -v chromium >/dev/null || need+=(chromium)
 fi
 
 if ((${#need[@]})); then

@@ -5,7 +5,7 @@
 
 use super::cells::{COLUMNS, Cell, SOURCE_VERSION, csv_row};
 use super::charts;
-use super::summary::{Claim, Report};
+use super::summary::{Claim, FAILED_PCT, Report, competes};
 use anyhow::Result;
 use base64::Engine;
 use std::fmt::Write as _;
@@ -77,6 +77,7 @@ h1{margin-top:0}table{border-collapse:collapse;margin:8px 0 24px}td,th{border:1p
 th{background:#eee;position:sticky;top:0}td.num{text-align:right;font-variant-numeric:tabular-nums}
 ul{margin:0;padding-left:16px}code{background:#f3f3f3;padding:0 2px}.ok{color:#080;font-weight:bold}.no{color:#c00;font-weight:bold}
 .thumb{width:200px;cursor:zoom-in;border:1px solid #aaa}.thumb.big{width:800px;cursor:zoom-out}
+.charts{display:flex;flex-wrap:wrap;gap:8px}.chart svg{width:540px;height:315px}
 .gallery{display:flex;flex-wrap:wrap;gap:10px}.gallery figure{margin:0}figcaption{font-size:12px;max-width:200px;overflow-wrap:anywhere}
 a.ev{font-size:11px}tr:target{background:#ffd}.summary td{min-width:90px}.answer{background:#eef6ff;padding:8px 16px;border-left:4px solid #36c}";
 
@@ -104,16 +105,16 @@ pub fn write(report: &Report, root: &Path) -> Result<String> {
         }
     }
     h += "</ul></div>";
+    best_per_view(&mut h, report);
+    h += "<h2 id=\"charts\">Error against cost (the Pareto front in red)</h2><div class=\"charts\">";
+    for i in 0..report.fronts.len() {
+        let _ = write!(h, "<div class=\"chart\">{}</div>", charts::pareto_svg(report, i)?);
+    }
+    h += "</div>";
     summary_table(&mut h, report);
-    h += "<h2 id=\"views\">Per view: error against cost, and the images</h2>";
-    for (i, (view, front)) in report.fronts.iter().enumerate() {
-        let _ = write!(h, "<h3 id=\"view-{i}\">{}</h3>", esc(&view.label()));
-        h += &charts::pareto_svg(report, i)?;
-        let names: Vec<String> = front
-            .iter()
-            .map(|&k| format!("<code>{}</code>", esc(report.cells[k].technique())))
-            .collect();
-        let _ = write!(h, "<p>Pareto front: {}</p><div class=\"gallery\">", names.join(" → "));
+    h += "<h2 id=\"views\">Per view: the images and error heatmaps</h2>";
+    for (i, (view, _)) in report.fronts.iter().enumerate() {
+        let _ = write!(h, "<h3 id=\"view-{i}\">{}</h3><div class=\"gallery\">", esc(&view.label()));
         let view_cells: Vec<&Cell> = report.cells.iter().filter(|c| c.view() == *view).collect();
         if let Some(c) = view_cells.first() {
             let reference = format!(
@@ -155,6 +156,50 @@ pub fn write(report: &Report, root: &Path) -> Result<String> {
     }
     h += "</tbody></table></body></html>\n";
     Ok(h)
+}
+
+/// Per view: the lowest mismatch, the cheapest preset under the failure
+/// threshold, and the Pareto front.
+fn best_per_view(h: &mut String, report: &Report) {
+    *h += "<h2 id=\"best\">Best per view</h2><table><thead><tr><th>view</th><th>lowest mismatch</th><th>cheapest under 1 % mismatch</th><th>Pareto front (cheap → exact)</th></tr></thead><tbody>";
+    for (view, front) in &report.fronts {
+        let competing: Vec<&Cell> = report
+            .cells
+            .iter()
+            .filter(|c| c.view() == *view && competes(c))
+            .collect();
+        let best = competing
+            .iter()
+            .min_by(|a, b| a.quality.total_pct.total_cmp(&b.quality.total_pct));
+        let cheapest = competing
+            .iter()
+            .filter(|c| c.quality.total_pct <= FAILED_PCT)
+            .min_by(|a, b| a.cost.ratio_to_none.total_cmp(&b.cost.ratio_to_none));
+        let show = |c: Option<&&Cell>| {
+            c.map_or("–".to_string(), |c| {
+                format!(
+                    "<a href=\"#{}\"><code>{}</code></a> {:.3} %, ×{:.2}",
+                    c.anchor(),
+                    esc(c.technique()),
+                    c.quality.total_pct,
+                    c.cost.ratio_to_none
+                )
+            })
+        };
+        let names: Vec<String> = front
+            .iter()
+            .map(|&k| format!("<code>{}</code>", esc(report.cells[k].technique())))
+            .collect();
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(&view.label()),
+            show(best),
+            show(cheapest),
+            names.join(" → ")
+        );
+    }
+    *h += "</tbody></table>";
 }
 
 fn summary_table(h: &mut String, report: &Report) {

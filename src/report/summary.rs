@@ -337,7 +337,7 @@ impl<'a> Report<'a> {
         failed.sort_by(|a, b| total(b).total_cmp(&total(a)));
         let mut disadvantages: Vec<Claim> = failed
             .iter()
-            .take(3)
+            .take(2)
             .map(|c| {
                 let q = &c.quality;
                 let kind = if q.false_lit_pct > 2.0 * q.false_shadow_pct {
@@ -518,28 +518,41 @@ fn mark(k: &Criterion, mine: &[&Cell]) -> Mark {
     }
 }
 
-/// The family's declared capabilities, each checked against its mark.
+/// The family's declared capabilities, and each one its measurements
+/// contradict (declared but failed, or not declared yet passed).
 fn extensibility(caps: &Capabilities, marks: &[Mark]) -> Vec<Claim> {
-    CRITERIA
+    let declared: Vec<(&Criterion, &Mark, bool)> = CRITERIA
         .iter()
         .zip(marks)
-        .filter_map(|(k, m)| {
-            let declared = (k.declared?)(caps);
-            let measured = match (m.ok, &m.claim) {
-                (Some(true), Some(c)) => format!("measured ✔ ({})", c.text),
-                (Some(false), Some(c)) => format!("measured ✗ ({})", c.text),
-                _ => "not measured here".into(),
-            };
-            Some(Claim {
+        .filter_map(|(k, m)| Some((k, m, (k.declared?)(caps))))
+        .collect();
+    let names: Vec<&str> = declared
+        .iter()
+        .filter(|(_, _, d)| *d)
+        .map(|(k, _, _)| k.name)
+        .collect();
+    let mut out = vec![Claim::plain(if names.is_empty() {
+        "declares nothing".into()
+    } else {
+        format!("declares {}", names.join(", "))
+    })];
+    for (k, m, d) in declared {
+        if let (Some(ok), Some(c)) = (m.ok, &m.claim)
+            && ok != d
+        {
+            out.push(Claim {
                 text: format!(
-                    "{}: declared {}, {measured}",
+                    "{} {}, yet measured {}: {}",
                     k.name,
-                    if declared { "✔" } else { "✗" }
+                    if d { "declared" } else { "not declared" },
+                    if ok { "✔" } else { "✗" },
+                    c.text
                 ),
-                evidence: m.claim.as_ref().and_then(|c| c.evidence.clone()),
-            })
-        })
-        .collect()
+                evidence: c.evidence.clone(),
+            });
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -1,0 +1,159 @@
+//! `shadowlab report` on a tiny matrix: every registered preset appears,
+//! the HTML shows the figures of `results.csv`, a second run reuses every
+//! cell, a changed parameter recomputes only its own cells, and the page
+//! opens in headless Chromium with its tables and charts drawn.
+
+mod common;
+
+use common::{gpu, tmpdir};
+use shadowlab::measure::{self, bench::BenchFrames};
+use shadowlab::report::{self, matrix::Matrix, matrix::View};
+use std::path::Path;
+
+fn tiny(techniques: &str) -> Matrix {
+    let mut m = Matrix::of(
+        report::matrix::ReportPreset::Quick,
+        Some(&["teapot".to_string()]),
+        Some(techniques),
+    )
+    .unwrap();
+    m.views = vec![View::new("teapot", "default", "point")];
+    m.size = (96, 54);
+    m.bench = BenchFrames {
+        warmup: 0,
+        measured: 1,
+        progress: false,
+    };
+    m
+}
+
+/// The text of each `<td>` of the HTML results table, row by row.
+fn html_results(html: &str) -> Vec<Vec<String>> {
+    let table = html
+        .split("<table id=\"results-table\">")
+        .nth(1)
+        .expect("a results table")
+        .split("</table>")
+        .next()
+        .unwrap();
+    let body = table.split("<tbody>").nth(1).unwrap();
+    body.split("<tr")
+        .skip(1)
+        .map(|row| {
+            row.split("<td")
+                .skip(1)
+                .map(|td| {
+                    let text = td.split_once('>').unwrap().1.split("</td>").next().unwrap();
+                    text.replace("&gt;", ">")
+                        .replace("&lt;", "<")
+                        .replace("&quot;", "\"")
+                        .replace("&amp;", "&")
+                })
+                .collect()
+        })
+        .collect()
+}
+
+fn csv_results(dir: &Path) -> Vec<Vec<String>> {
+    csv::Reader::from_path(dir.join("results.csv"))
+        .unwrap()
+        .records()
+        .map(|r| r.unwrap().iter().map(str::to_string).collect())
+        .collect()
+}
+
+#[test]
+fn the_report_covers_every_preset_shows_the_csv_and_resumes() {
+    let out = tmpdir("report-all");
+    let all = tiny("none");
+    let every = report::matrix::every_preset().unwrap();
+    let matrix = Matrix {
+        techniques: every.clone(),
+        ..all
+    };
+    let first = report::run(gpu(), &matrix, &out, false).unwrap();
+    assert_eq!(first.computed, every.len());
+    for f in ["index.html", "report.md", "results.csv", "results.json", "charts/view-0.svg"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    for t in &every {
+        let label = measure::choice_label(t);
+        assert!(html.contains(&format!("<code>{label}</code>")), "{label} not in the HTML");
+        assert!(md.contains(&format!("`{label}`")), "{label} not in report.md");
+    }
+    // Self-contained: images embedded, nothing fetched.
+    assert!(html.contains("src=\"data:image/jpeg;base64,") && !html.contains("src=\"http"));
+    assert!(html.contains("<svg"), "inline charts");
+    let csv = csv_results(&out);
+    assert_eq!(csv.len(), every.len());
+    assert_eq!(html_results(&html), csv, "the HTML table shows results.csv");
+    // The summary table's claims come from those rows: z-pass is exact
+    // here (the camera is not in a shadow), `none` misses every shadow.
+    let none = csv.iter().find(|r| r[3] == "none:default").unwrap();
+    let total: f64 = none[5].parse().unwrap();
+    assert!(total > 1.0, "none misses the teapot's shadow: {total}");
+    assert!(md.contains(&format!("{} % mismatch on `teapot/default/point`", fmt_pct(total))));
+
+    // A second run measures nothing.
+    let second = report::run(gpu(), &matrix, &out, false).unwrap();
+    assert_eq!((second.computed, second.reused), (0, every.len()));
+    // One changed parameter: only its cell is measured again.
+    let mut changed = matrix.clone();
+    let pcf = every.iter().position(|t| t.id() == "shadow-map:pcf").unwrap();
+    changed.techniques[pcf] = measure::parse_technique_list("shadow-map:pcf[depth_bias=7]")
+        .unwrap()
+        .remove(0);
+    let third = report::run(gpu(), &changed, &out, false).unwrap();
+    assert_eq!((third.computed, third.reused), (1, every.len() - 1));
+}
+
+/// The summary's percentages as `summary.rs` writes them.
+fn fmt_pct(v: f64) -> String {
+    if v >= 10.0 {
+        format!("{v:.1}")
+    } else if v >= 0.1 {
+        format!("{v:.2}")
+    } else {
+        format!("{v:.3}")
+    }
+}
+
+/// The page in a real browser: headless Chromium's screenshot of its top
+/// shows text, the tables' rules and the charts' red front, not a blank page.
+#[test]
+fn the_html_report_renders_in_chromium() {
+    let out = tmpdir("report-browser");
+    let matrix = tiny("none,planar,shadow-volume,shadow-map[size=256]");
+    report::run(gpu(), &matrix, &out, false).unwrap();
+    let shot = out.join("shot.png");
+    let page = format!("file://{}", out.join("index.html").canonicalize().unwrap().display());
+    let status = std::process::Command::new("chromium")
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--hide-scrollbars",
+            "--window-size=1200,1100",
+            &format!("--screenshot={}", shot.display()),
+            &page,
+        ])
+        .output()
+        .expect("chromium runs (scripts/setup.sh --test installs it)");
+    assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
+    let img = image::open(&shot).unwrap().to_rgb8();
+    let px = img.pixels().count() as f64;
+    let ink = img.pixels().filter(|p| p.0.iter().all(|&c| c < 128)).count() as f64;
+    let red = img
+        .pixels()
+        .filter(|p| p.0[0] > 200 && p.0[1] < 60 && p.0[2] < 60)
+        .count();
+    let grey_rules = img
+        .pixels()
+        .filter(|p| p.0.iter().all(|&c| (190..=215).contains(&c)))
+        .count() as f64;
+    assert!(ink / px > 0.01, "text: {:.4} of the pixels are dark", ink / px);
+    assert!(red > 200, "the Pareto front in red: {red} pixels");
+    assert!(grey_rules / px > 0.002, "table borders: {:.4}", grey_rules / px);
+}
