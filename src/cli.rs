@@ -53,7 +53,7 @@ pub enum Command {
 
 #[derive(Args)]
 pub struct ReportArgs {
-    /// Size of the matrix: quick (7 views, 640×360), standard (every
+    /// Size of the matrix: quick (6 views, 640×360), standard (every
     /// scene's default camera under each light preset, 1280×720), full
     /// (every camera preset too).
     #[arg(long, value_enum, default_value = "quick")]
@@ -406,11 +406,8 @@ fn bench(a: BenchArgs) -> Result<()> {
 
 fn report(a: ReportArgs) -> Result<()> {
     let started = Instant::now();
-    let matrix = crate::report::matrix::Matrix::of(
-        a.preset,
-        a.scenes.as_deref(),
-        a.techniques.as_deref(),
-    )?;
+    let matrix =
+        crate::report::matrix::Matrix::of(a.preset, a.scenes.as_deref(), a.techniques.as_deref())?;
     let gpu = crate::gpu::GpuContext::new(a.backend.as_deref())?;
     let stats = crate::report::run(&gpu, &matrix, &a.out, true)?;
     println!(

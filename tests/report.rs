@@ -73,15 +73,27 @@ fn the_report_covers_every_preset_shows_the_csv_and_resumes() {
     };
     let first = report::run(gpu(), &matrix, &out, false).unwrap();
     assert_eq!(first.computed, every.len());
-    for f in ["index.html", "report.md", "results.csv", "results.json", "charts/view-0.svg"] {
+    for f in [
+        "index.html",
+        "report.md",
+        "results.csv",
+        "results.json",
+        "charts/view-0.svg",
+    ] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     for t in &every {
         let label = measure::choice_label(t);
-        assert!(html.contains(&format!("<code>{label}</code>")), "{label} not in the HTML");
-        assert!(md.contains(&format!("`{label}`")), "{label} not in report.md");
+        assert!(
+            html.contains(&format!("<code>{label}</code>")),
+            "{label} not in the HTML"
+        );
+        assert!(
+            md.contains(&format!("`{label}`")),
+            "{label} not in report.md"
+        );
     }
     // Self-contained: images embedded, nothing fetched.
     assert!(html.contains("src=\"data:image/jpeg;base64,") && !html.contains("src=\"http"));
@@ -94,14 +106,20 @@ fn the_report_covers_every_preset_shows_the_csv_and_resumes() {
     let none = csv.iter().find(|r| r[3] == "none:default").unwrap();
     let total: f64 = none[5].parse().unwrap();
     assert!(total > 1.0, "none misses the teapot's shadow: {total}");
-    assert!(md.contains(&format!("{} % mismatch on `teapot/default/point`", fmt_pct(total))));
+    assert!(md.contains(&format!(
+        "{} % mismatch on `teapot/default/point`",
+        fmt_pct(total)
+    )));
 
     // A second run measures nothing.
     let second = report::run(gpu(), &matrix, &out, false).unwrap();
     assert_eq!((second.computed, second.reused), (0, every.len()));
     // One changed parameter: only its cell is measured again.
     let mut changed = matrix.clone();
-    let pcf = every.iter().position(|t| t.id() == "shadow-map:pcf").unwrap();
+    let pcf = every
+        .iter()
+        .position(|t| t.id() == "shadow-map:pcf")
+        .unwrap();
     changed.techniques[pcf] = measure::parse_technique_list("shadow-map:pcf[depth_bias=7]")
         .unwrap()
         .remove(0);
@@ -128,7 +146,10 @@ fn the_html_report_renders_in_chromium() {
     let matrix = tiny("none,planar,shadow-volume,shadow-map[size=256]");
     report::run(gpu(), &matrix, &out, false).unwrap();
     let shot = out.join("shot.png");
-    let page = format!("file://{}", out.join("index.html").canonicalize().unwrap().display());
+    let page = format!(
+        "file://{}",
+        out.join("index.html").canonicalize().unwrap().display()
+    );
     let status = std::process::Command::new("chromium")
         .args([
             "--headless",
@@ -141,10 +162,17 @@ fn the_html_report_renders_in_chromium() {
         ])
         .output()
         .expect("chromium runs (scripts/setup.sh --test installs it)");
-    assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
     let img = image::open(&shot).unwrap().to_rgb8();
     let px = img.pixels().count() as f64;
-    let ink = img.pixels().filter(|p| p.0.iter().all(|&c| c < 128)).count() as f64;
+    let ink = img
+        .pixels()
+        .filter(|p| p.0.iter().all(|&c| c < 128))
+        .count() as f64;
     let red = img
         .pixels()
         .filter(|p| p.0[0] > 200 && p.0[1] < 60 && p.0[2] < 60)
@@ -153,7 +181,15 @@ fn the_html_report_renders_in_chromium() {
         .pixels()
         .filter(|p| p.0.iter().all(|&c| (190..=215).contains(&c)))
         .count() as f64;
-    assert!(ink / px > 0.01, "text: {:.4} of the pixels are dark", ink / px);
+    assert!(
+        ink / px > 0.01,
+        "text: {:.4} of the pixels are dark",
+        ink / px
+    );
     assert!(red > 200, "the Pareto front in red: {red} pixels");
-    assert!(grey_rules / px > 0.002, "table borders: {:.4}", grey_rules / px);
+    assert!(
+        grey_rules / px > 0.002,
+        "table borders: {:.4}",
+        grey_rules / px
+    );
 }

@@ -277,6 +277,9 @@ pub fn write_results(root: &Path, matrix: &Matrix, cells: &[Cell]) -> Result<()>
         "views": matrix.views.iter().map(View::label).collect::<Vec<_>>(),
         "cells": cells,
     });
-    std::fs::write(root.join("results.json"), serde_json::to_string_pretty(&json)?)?;
+    std::fs::write(
+        root.join("results.json"),
+        serde_json::to_string_pretty(&json)?,
+    )?;
     Ok(())
 }

@@ -35,7 +35,8 @@ pub fn pareto_svg(report: &Report, index: usize) -> Result<String> {
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (720, 420)).into_drawing_area();
-        let err = |e: DrawingAreaErrorKind<_>| anyhow!("drawing the chart of {}: {e:?}", view.label());
+        let err =
+            |e: DrawingAreaErrorKind<_>| anyhow!("drawing the chart of {}: {e:?}", view.label());
         root.fill(&WHITE).map_err(err)?;
         let (mut x0, mut x1, mut y0, mut y1) = (1.0f64, 1.0f64, FLOOR_PCT, 1.0f64);
         for c in &cells {
@@ -57,14 +58,17 @@ pub fn pareto_svg(report: &Report, index: usize) -> Result<String> {
             .map_err(err)?;
         chart
             .configure_mesh()
+            .light_line_style(RGBColor(0xf4, 0xf4, 0xf4))
             .x_desc("frame time × none (log)")
             .y_desc("mismatch, % of considered pixels (log)")
             .draw()
             .map_err(err)?;
         chart
-            .draw_series(cells.iter().map(|c| {
-                Circle::new(point(c), 4, colour(&c.family).mix(0.6).filled())
-            }))
+            .draw_series(
+                cells
+                    .iter()
+                    .map(|c| Circle::new(point(c), 4, colour(&c.family).mix(0.6).filled())),
+            )
             .map_err(err)?;
         let front_points: Vec<(f64, f64)> =
             front.iter().map(|&i| point(&report.cells[i])).collect();

@@ -45,7 +45,10 @@ fn claims(cs: &[Claim]) -> String {
     if cs.is_empty() {
         return "–".into();
     }
-    let items: String = cs.iter().map(|c| format!("<li>{}</li>", claim(c))).collect();
+    let items: String = cs
+        .iter()
+        .map(|c| format!("<li>{}</li>", claim(c)))
+        .collect();
     format!("<ul>{items}</ul>")
 }
 
@@ -106,15 +109,24 @@ pub fn write(report: &Report, root: &Path) -> Result<String> {
     }
     h += "</ul></div>";
     best_per_view(&mut h, report);
-    h += "<h2 id=\"charts\">Error against cost (the Pareto front in red)</h2><div class=\"charts\">";
+    h +=
+        "<h2 id=\"charts\">Error against cost (the Pareto front in red)</h2><div class=\"charts\">";
     for i in 0..report.fronts.len() {
-        let _ = write!(h, "<div class=\"chart\">{}</div>", charts::pareto_svg(report, i)?);
+        let _ = write!(
+            h,
+            "<div class=\"chart\">{}</div>",
+            charts::pareto_svg(report, i)?
+        );
     }
     h += "</div>";
     summary_table(&mut h, report);
     h += "<h2 id=\"views\">Per view: the images and error heatmaps</h2>";
     for (i, (view, _)) in report.fronts.iter().enumerate() {
-        let _ = write!(h, "<h3 id=\"view-{i}\">{}</h3><div class=\"gallery\">", esc(&view.label()));
+        let _ = write!(
+            h,
+            "<h3 id=\"view-{i}\">{}</h3><div class=\"gallery\">",
+            esc(&view.label())
+        );
         let view_cells: Vec<&Cell> = report.cells.iter().filter(|c| c.view() == *view).collect();
         if let Some(c) = view_cells.first() {
             let reference = format!(
@@ -149,7 +161,11 @@ pub fn write(report: &Report, root: &Path) -> Result<String> {
     for c in report.cells {
         let _ = write!(h, "<tr id=\"{}\">", c.anchor());
         for (i, v) in csv_row(c).into_iter().enumerate() {
-            let class = if i >= 5 && i < COLUMNS.len() - 1 { " class=\"num\"" } else { "" };
+            let class = if i >= 5 && i < COLUMNS.len() - 1 {
+                " class=\"num\""
+            } else {
+                ""
+            };
             let _ = write!(h, "<td{class}>{}</td>", esc(&v));
         }
         h += "</tr>";
@@ -239,8 +255,13 @@ fn summary_table(h: &mut String, report: &Report) {
                 .claim
                 .as_ref()
                 .and_then(|c| c.evidence.as_ref())
-                .map_or(String::new(), |a| format!(" <a class=\"ev\" href=\"#{a}\">[row]</a>"));
-            let _ = write!(h, "<td class=\"{class}\" title=\"{title}\">{sym}{link}</td>");
+                .map_or(String::new(), |a| {
+                    format!(" <a class=\"ev\" href=\"#{a}\">[row]</a>")
+                });
+            let _ = write!(
+                h,
+                "<td class=\"{class}\" title=\"{title}\">{sym}{link}</td>"
+            );
         }
         *h += "</tr>";
     }

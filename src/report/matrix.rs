@@ -9,7 +9,7 @@ use anyhow::{Result, bail};
 /// The size of the matrix.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum ReportPreset {
-    /// Seven views chosen to show each family's strengths and failure cases, 640×360.
+    /// Six views chosen to show each family's strengths and failure cases, 640×360.
     Quick,
     /// Every built-in scene's default camera under each of its light presets, 1280×720.
     Standard,
@@ -52,16 +52,17 @@ pub struct Matrix {
 
 /// The quick preset's views: a point light over a colonnade (z-fail's
 /// open-volume and far-plane failures), the camera inside the roof's shadow
-/// (z-pass's failure), a room, an open mesh under a spot, curved receivers,
-/// a street of a million-triangle city and 2 km of landscape seen from the
-/// ground (perspective aliasing: the warped and partitioned maps).
-const QUICK_VIEWS: [(&str, &str, &str); 7] = [
+/// (z-pass's failure), a room, an open mesh under a spot, curved receivers
+/// and 2 km of landscape seen from the ground (perspective aliasing: the
+/// warped and partitioned maps). The million-triangle city (a second a
+/// frame on lavapipe for several families) is left to `standard`, so that
+/// `quick` stays within 5 minutes on a 2-core machine without a GPU.
+const QUICK_VIEWS: [(&str, &str, &str); 6] = [
     ("columns", "default", "point"),
     ("columns", "in-shadow", "sun"),
     ("room", "default", "point"),
     ("bunny", "default", "spot"),
     ("curved", "default", "sun"),
-    ("city", "street", "sun"),
     ("landscape", "ground", "sun-side"),
 ];
 
@@ -69,7 +70,11 @@ const QUICK_VIEWS: [(&str, &str, &str); 7] = [
 pub fn every_preset() -> Result<Vec<TechniqueChoice>> {
     FAMILIES
         .iter()
-        .flat_map(|f| f.presets.iter().map(move |p| format!("{}:{}", f.id, p.name)))
+        .flat_map(|f| {
+            f.presets
+                .iter()
+                .map(move |p| format!("{}:{}", f.id, p.name))
+        })
         .map(|id| technique::resolve(&id))
         .collect()
 }
@@ -163,11 +168,14 @@ mod tests {
         let standard = Matrix::of(ReportPreset::Standard, None, None).unwrap();
         let full = Matrix::of(ReportPreset::Full, None, None).unwrap();
         assert_eq!(quick.views.len(), QUICK_VIEWS.len());
-        assert!(quick.views.len() < standard.views.len() && standard.views.len() < full.views.len());
+        assert!(
+            quick.views.len() < standard.views.len() && standard.views.len() < full.views.len()
+        );
         // Every preset of every family, the reference's included.
         let count: usize = FAMILIES.iter().map(|f| f.presets.len()).sum();
         assert_eq!(quick.techniques.len(), count);
-        let only = Matrix::of(ReportPreset::Quick, Some(&["columns".into()]), Some("none")).unwrap();
+        let only =
+            Matrix::of(ReportPreset::Quick, Some(&["columns".into()]), Some("none")).unwrap();
         assert!(only.views.iter().all(|v| v.scene == "columns") && only.views.len() == 2);
         assert_eq!(only.techniques.len(), 1);
         // A scene outside the quick views comes with its lights.

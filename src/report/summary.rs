@@ -224,7 +224,10 @@ impl<'a> Report<'a> {
                     .filter(|&i| cells[i].view() == *v && competes(&cells[i]))
                     .collect();
                 let view_cells: Vec<&Cell> = idx.iter().map(|&i| &cells[i]).collect();
-                let front = pareto_front(&view_cells).into_iter().map(|k| idx[k]).collect();
+                let front = pareto_front(&view_cells)
+                    .into_iter()
+                    .map(|k| idx[k])
+                    .collect();
                 (v.clone(), front)
             })
             .collect();
@@ -274,7 +277,10 @@ impl<'a> Report<'a> {
             })
             .map_or(String::new(), |p| p.summary.to_string());
         let n = mine.len();
-        let worst = mine.iter().copied().max_by(|a, b| total(a).total_cmp(&total(b)));
+        let worst = mine
+            .iter()
+            .copied()
+            .max_by(|a, b| total(a).total_cmp(&total(b)));
         let quality = match worst {
             Some(w) => Claim::of(
                 format!(
@@ -325,7 +331,10 @@ impl<'a> Report<'a> {
                 exact[0],
             ));
         }
-        if let Some(best) = mine.iter().copied().min_by(|a, b| total(a).total_cmp(&total(b)))
+        if let Some(best) = mine
+            .iter()
+            .copied()
+            .min_by(|a, b| total(a).total_cmp(&total(b)))
             && exact.is_empty()
         {
             advantages.push(Claim::of(
@@ -411,7 +420,11 @@ impl<'a> Report<'a> {
             )];
         }
         // Dominated everywhere: name what dominates it where it does best.
-        let Some(best) = mine.iter().copied().min_by(|a, b| total(a).total_cmp(&total(b))) else {
+        let Some(best) = mine
+            .iter()
+            .copied()
+            .min_by(|a, b| total(a).total_cmp(&total(b)))
+        else {
             return vec![];
         };
         let view = best.view();

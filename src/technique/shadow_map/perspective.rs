@@ -79,7 +79,7 @@ pub fn caster_region(light_dir: Vec3, scene: &Aabb, body: &[Vec3]) -> Vec<Vec3> 
 /// The PSM matrix covering `body` (world points the map must cover, the
 /// view inside the scene, at view depths `z_near`..`z_far`) with every
 /// caster of `scene` towards the light: world → light clip, x/y the map,
-/// z/w = ½ (the map stores `depth_row`'s linear depth). `None` when the
+/// z/w in [0, 1] (the map stores `depth_row`'s linear depth). `None` when the
 /// body is empty or the map degenerates (use the uniform map).
 pub fn psm(
     camera: &Camera,
@@ -135,20 +135,31 @@ pub fn psm(
         DVec4::new(-(hi.x + lo.x) / size.x, -(hi.y + lo.y) / size.y, 0.0, 1.0),
     );
     let mut m = fit * image * pps;
-    // z = ½ w: inside the clip volume wherever the map is.
+    // z = c·depth with c the smallest w over the body: w is constant along
+    // each light ray (its zero plane holds the light), so z/w stays in
+    // [0, 1] on every ray through the body, and the matrix stays invertible
+    // (its frustum is drawn by the debug view).
+    let (light_view, scene_ls) = light_view_of_scene(light_dir, scene);
+    let depth_row = light_view.transpose() * linear_depth_row(&scene_ls);
     let w_row = m.row(3);
+    let c = body
+        .iter()
+        .map(|p| w_row.dot(p.as_dvec3().extend(1.0)))
+        .fold(f64::MAX, f64::min);
+    if !(c > 0.0) {
+        return None;
+    }
     m = m.transpose();
-    m.z_axis = w_row * 0.5;
+    m.z_axis = depth_row.as_dvec4() * c;
     let view_proj: Mat4 = m.transpose().as_mat4();
     if !view_proj.is_finite() {
         return None;
     }
-    let (light_view, scene_ls) = light_view_of_scene(light_dir, scene);
     Some((
         Warped {
             view_proj,
+            depth_row,
             n: virt.shift,
-            depth_row: light_view.transpose() * linear_depth_row(&scene_ls),
         },
         virt,
     ))
@@ -236,11 +247,15 @@ mod tests {
             for p in &body {
                 let q = ndc(w.view_proj, *p);
                 assert!(
-                    q.x.abs() <= 1.0 + 1e-3 && q.y.abs() <= 1.0 + 1e-3 && (q.z - 0.5).abs() < 1e-4,
+                    q.x.abs() <= 1.0 + 1e-3
+                        && q.y.abs() <= 1.0 + 1e-3
+                        && (-1e-4..=1.0 + 1e-4).contains(&q.z),
                     "{light}: {p} → {q}"
                 );
             }
             assert_magnifies_near_the_camera(w.view_proj);
+            // Invertible: the debug view draws its frustum.
+            assert!(w.view_proj.determinant().abs() > 0.0 && w.view_proj.inverse().is_finite());
             for ground in [Vec3::new(5.0, 0.0, 10.0), Vec3::new(-30.0, 0.0, -40.0)] {
                 let up = ground - light.normalize() * 3.0;
                 let (a, b) = (ndc(w.view_proj, up), ndc(w.view_proj, ground));
