@@ -382,6 +382,7 @@ fn bench(a: BenchArgs) -> Result<()> {
             warmup: a.warmup,
             measured: a.frames,
             progress: true,
+            max_seconds: None,
         },
         &a.out,
     )?;

@@ -272,6 +272,7 @@ fn bench_writes_ratios_to_none() {
             warmup: 1,
             measured: 3,
             progress: false,
+            max_seconds: None,
         },
         &out,
     )
@@ -291,7 +292,30 @@ fn bench_writes_ratios_to_none() {
             f.median
         );
         assert_eq!(r.triangles_drawn, scene.triangle_count());
+        assert_eq!(r.measured_frames, 3);
     }
+    // Out of time at once: the warm-up is skipped, one frame measured.
+    let hurried = measure::bench::run(
+        gpu(),
+        &scene,
+        &scene.camera,
+        &scene.lights,
+        (96, 54),
+        &Default::default(),
+        &list,
+        measure::bench::BenchFrames {
+            warmup: 2,
+            measured: 5,
+            progress: false,
+            max_seconds: Some(0.0),
+        },
+        &tmpdir("bench-hurried"),
+    )
+    .unwrap();
+    assert!(
+        hurried.iter().all(|r| r.measured_frames == 1),
+        "{hurried:?}"
+    );
     // One shadow ray per covered pixel for the hard light.
     let rays = rows[1]
         .counters

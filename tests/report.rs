@@ -23,6 +23,7 @@ fn tiny(techniques: &str) -> Matrix {
         warmup: 0,
         measured: 1,
         progress: false,
+        max_seconds: None,
     };
     m
 }
@@ -186,7 +187,8 @@ fn the_html_report_renders_in_chromium() {
         "text: {:.4} of the pixels are dark",
         ink / px
     );
-    assert!(red > 200, "the Pareto front in red: {red} pixels");
+    // At least one front point (a red disc of radius 5 drawn at ¾ scale).
+    assert!(red > 30, "the Pareto front in red: {red} pixels");
     assert!(
         grey_rules / px > 0.002,
         "table borders: {:.4}",

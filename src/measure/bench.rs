@@ -54,6 +54,8 @@ pub struct BenchRow {
     pub caster_triangles: usize,
     pub shadow_resource_bytes: u64,
     pub counters: Vec<(String, f64)>,
+    /// Frames measured (fewer than asked when `max_seconds` ran out).
+    pub measured_frames: usize,
 }
 
 /// How many frames `bench` renders per technique, and whether it draws its
@@ -64,6 +66,10 @@ pub struct BenchFrames {
     pub warmup: u32,
     pub measured: u32,
     pub progress: bool,
+    /// Stop a technique's frames once this many seconds have gone by,
+    /// after at least one measured frame (a 1024-sample reference takes
+    /// minutes a frame on a CPU); `None`: every frame.
+    pub max_seconds: Option<f64>,
 }
 
 /// Benchmarks `techniques` (with `none` added first when missing) with the
@@ -122,13 +128,28 @@ pub fn run(
             size.1,
         )?;
         let mut timings: Vec<FrameTimings> = vec![];
-        for i in 0..warmup + frames {
+        let started = std::time::Instant::now();
+        let mut i = 0;
+        while i < warmup + frames {
+            let out_of_time = counts
+                .max_seconds
+                .is_some_and(|s| started.elapsed().as_secs_f64() > s);
+            if out_of_time && !timings.is_empty() {
+                break;
+            }
+            if out_of_time && i < warmup {
+                // Skip the rest of the warm-up: measure one frame.
+                bar.inc((warmup - i) as u64);
+                i = warmup;
+            }
             let t = hf.render(gpu, scene, camera, lights, &settings)?;
             if i >= warmup {
                 timings.push(t);
             }
             bar.inc(1);
+            i += 1;
         }
+        bar.inc((warmup + frames - i) as u64);
         let gpu_stat = |f: fn(&crate::renderer::GpuPassTimes) -> f64| {
             let v: Option<Vec<f64>> = timings.iter().map(|t| t.gpu.as_ref().map(f)).collect();
             v.map(Stat::of)
@@ -156,6 +177,7 @@ pub fn run(
                 .map(|t| t.technique.resource_bytes())
                 .sum(),
             counters,
+            measured_frames: timings.len(),
         });
     }
     bar.finish_and_clear();

@@ -64,6 +64,8 @@ pub struct Cost {
     pub shadow_bytes: u64,
     /// The technique's own counters (volume fragments, rays, pages…).
     pub counters: Vec<(String, f64)>,
+    /// Frames the median is over (fewer for techniques past the time limit).
+    pub frames: usize,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -199,6 +201,7 @@ pub fn from_rows(
             mask_ms,
             shadow_bytes: bench.shadow_resource_bytes,
             counters: bench.counters.clone(),
+            frames: bench.measured_frames,
         },
         image: rel(first.map(|r| &r.image)),
         heatmap: rel(first.map(|r| &r.heatmap)),

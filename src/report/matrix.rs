@@ -66,6 +66,11 @@ const QUICK_VIEWS: [(&str, &str, &str); 6] = [
     ("landscape", "ground", "sun-side"),
 ];
 
+/// A technique's benchmark stops after this many seconds (at least one
+/// measured frame): the 1024-sample reference takes minutes a frame on a
+/// CPU.
+pub const MAX_BENCH_SECONDS: f64 = 5.0;
+
 /// Every registered preset of every family, the reference's too.
 pub fn every_preset() -> Result<Vec<TechniqueChoice>> {
     FAMILIES
@@ -133,6 +138,7 @@ impl Matrix {
                     warmup: 2,
                     measured: 5,
                     progress: false,
+                    max_seconds: Some(MAX_BENCH_SECONDS),
                 },
             ),
             _ => (
@@ -141,6 +147,7 @@ impl Matrix {
                     warmup: 3,
                     measured: 10,
                     progress: false,
+                    max_seconds: Some(MAX_BENCH_SECONDS),
                 },
             ),
         };
