@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs the system packages shadowlab needs on Debian/Ubuntu: a Vulkan
-# driver (Mesa's lavapipe runs everywhere, GPU or not) and, for the tests,
+# driver (Mesa's lavapipe runs everywhere, GPU or not), Embree 3 and, for the tests,
 # Node.js (the Khronos glTF validator), Xvfb (the viewer test) and Chromium
 # (the report's HTML opened in a real browser).
 # Usage: scripts/setup.sh [--test]
@@ -10,6 +10,9 @@ need=()
 have_pkg() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
 have_pkg mesa-vulkan-drivers || need+=(mesa-vulkan-drivers)
 have_pkg libvulkan1 || need+=(libvulkan1)
+# Embree 3: the reference's fast ray-tracing kernel (loaded at run time;
+# without it the reference falls back to its pure-Rust kernel).
+have_pkg libembree3-3 || need+=(libembree3-3)
 if [[ "${1:-}" == "--test" ]]; then
   command -v node >/dev/null || need+=(nodejs)
   command -v npm >/dev/null || need+=(npm)

@@ -462,7 +462,7 @@ impl<'a> Report<'a> {
             .map(|r| (r.technique.clone(), self.fronts_with(&r.technique).len()))
             .filter(|(_, k)| *k > 0)
             .collect();
-        counts.sort_by(|a, b| b.1.cmp(&a.1));
+        counts.sort_by_key(|c| std::cmp::Reverse(c.1));
         let universal: Vec<&(String, usize)> = counts.iter().filter(|(_, k)| *k == views).collect();
         let mut lines = vec![];
         if views == 0 {

@@ -5,6 +5,7 @@
 pub mod area;
 pub mod builtin;
 pub mod bvh;
+pub mod embree;
 pub mod gltf_io;
 pub mod landscape;
 pub mod obj;

@@ -914,7 +914,6 @@ fn heatmap_job(
 ) -> Result<(egui::ColorImage, String), String> {
     let (w, h) = (data.width, data.height);
     let (pos, nrm, mask, color) = (&data.positions, &data.normals, &data.mask, &data.color);
-    use crate::scene::bvh::CasterBvh;
     use crate::technique::raytraced::{ReferenceSettings, mask_from_gbuffer};
     let positions: &[[f32; 4]] = bytemuck::cast_slice(pos);
     let normals: Vec<glam::Vec3> = bytemuck::cast_slice::<u8, [half::f16; 4]>(nrm)
@@ -925,8 +924,10 @@ fn heatmap_job(
         .iter()
         .map(|v| v.to_f32())
         .collect();
-    let bvh = CasterBvh::for_scene(scene, None);
     let settings = ReferenceSettings::defaults();
+    let bvh = settings
+        .casters(scene, None)
+        .map_err(|e| format!("{e:#}"))?;
     let reference = mask_from_gbuffer(
         &bvh,
         light,
@@ -1123,7 +1124,6 @@ impl ApplicationHandler for App {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::bvh::CasterBvh;
     use crate::scene::{Material, shapes};
     use crate::technique::raytraced::{ReferenceSettings, mask_from_gbuffer};
     use glam::{Mat4, Vec3};
@@ -1169,8 +1169,8 @@ mod tests {
     #[test]
     fn the_heatmap_uses_the_reference_settings() {
         let (scene, light, positions, normals) = grazing_boundary();
-        let bvh = CasterBvh::for_scene(&scene, None);
         let settings = ReferenceSettings::defaults();
+        let bvh = settings.casters(&scene, None).unwrap();
         let mask = mask_from_gbuffer(&bvh, &light, &positions, &normals, 1, settings.offset_ulps);
         let other = mask_from_gbuffer(&bvh, &light, &positions, &normals, 1, 512.0);
         let moved = mask.iter().zip(&other).filter(|(a, b)| a != b).count();

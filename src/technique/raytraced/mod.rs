@@ -10,7 +10,7 @@
 
 use super::{Family, MaskContext, ParamSpec, ParamValues, Preset, ShadowTechnique};
 use crate::scene::area::{concentric_disk, stratified_square};
-use crate::scene::bvh::CasterBvh;
+use crate::scene::bvh::{CasterBvh, TraceKernel};
 use crate::scene::{Light, LightArea, LightType};
 use anyhow::Result;
 use glam::Vec3;
@@ -34,6 +34,17 @@ const OFFSET_ULPS: ParamSpec = ParamSpec::float(
     "ray-origin offset along the geometric normal, in float ULPs of the position (scales with its magnitude)",
 );
 
+crate::technique::params::choice_enum! {
+    /// Which kernel traces the shadow rays.
+    pub enum Kernel { Auto = "auto", Obvhs = "obvhs", Embree = "embree" }
+}
+
+const KERNEL: ParamSpec = ParamSpec::choice_of::<Kernel>(
+    "kernel",
+    Kernel::Auto as usize,
+    "ray-tracing kernel: embree (Embree 3, loaded at run time; Debian libembree3-3), obvhs (a pure-Rust CWBVH), auto: Embree when it loads, else obvhs; their masks differ only where a ray grazes a triangle's edge",
+);
+
 pub static FAMILY: Family = Family {
     id: "raytraced",
     summary: "ground truth: CPU shadow rays from the G-buffer against a BVH of the casters",
@@ -46,7 +57,7 @@ pub static FAMILY: Family = Family {
         open_meshes: true,
         curved_receivers: true,
     },
-    params: &[SAMPLES, OFFSET_ULPS],
+    params: &[SAMPLES, OFFSET_ULPS, KERNEL],
     presets: &[
         Preset {
             name: "default",
@@ -78,6 +89,7 @@ pub struct ReferenceSettings {
     pub samples: usize,
     /// Ray-origin offset in float ULPs of the position.
     pub offset_ulps: f32,
+    pub kernel: Kernel,
 }
 
 impl ReferenceSettings {
@@ -85,6 +97,7 @@ impl ReferenceSettings {
         Ok(ReferenceSettings {
             samples: p.int(&SAMPLES)? as usize,
             offset_ulps: p.float(&OFFSET_ULPS)?,
+            kernel: p.choice(&KERNEL)?,
         })
     }
     /// The defaults of the family's table (`raytraced:default`), which the
@@ -94,6 +107,30 @@ impl ReferenceSettings {
             .expect("the raytraced table has samples and offset_ulps")
     }
     /// Rays per pixel for `light`: one for a hard light.
+    /// The kernel to trace with: `auto` takes Embree when it loads.
+    pub fn trace_kernel(&self) -> TraceKernel {
+        match self.kernel {
+            Kernel::Obvhs => TraceKernel::Obvhs,
+            Kernel::Embree => TraceKernel::Embree,
+            Kernel::Auto => {
+                if crate::scene::embree::available().is_ok() {
+                    TraceKernel::Embree
+                } else {
+                    TraceKernel::Obvhs
+                }
+            }
+        }
+    }
+
+    /// The casters of `scene` for this kernel (`held` when it matches).
+    pub fn casters(
+        &self,
+        scene: &crate::scene::Scene,
+        held: Option<&Arc<CasterBvh>>,
+    ) -> Result<Arc<CasterBvh>> {
+        CasterBvh::for_scene(scene, held, self.trace_kernel()).map_err(|e| anyhow::anyhow!(e))
+    }
+
     pub fn samples_for(&self, light: &Light) -> usize {
         if light.area.is_some() {
             self.samples
@@ -249,7 +286,7 @@ impl ShadowTechnique for RayTraced {
     ) -> Result<()> {
         let gpu = ctx.gpu;
         let frame = ctx.frame;
-        let bvh = CasterBvh::for_scene(ctx.scene, self.bvh.as_ref());
+        let bvh = self.settings.casters(ctx.scene, self.bvh.as_ref())?;
         self.bvh = Some(bvh.clone());
         self.build_ms = bvh.build_ms;
         self.bvh_bytes = bvh.bytes();
@@ -290,6 +327,12 @@ impl ShadowTechnique for RayTraced {
                 },
             ),
             ("bvh_build_ms", self.build_ms),
+            (
+                "kernel_embree",
+                self.bvh
+                    .as_ref()
+                    .map_or(0.0, |b| (b.kernel() == TraceKernel::Embree) as u32 as f64),
+            ),
         ]
     }
 
@@ -323,7 +366,7 @@ mod tests {
         let cube = s.add_mesh(crate::scene::shapes::cuboid(Vec3::new(0.2, 0.1, 4.0)));
         s.add_object("Box", cube, m, glam::Mat4::IDENTITY);
         s.finalize().unwrap();
-        let bvh = CasterBvh::build(&s);
+        let bvh = CasterBvh::build(&s, TraceKernel::Obvhs).unwrap();
         let origin = Vec3::new(0.5, 0.0, 0.0);
         for z in [0.0f32, -0.0] {
             let dir = Vec3::new(-0.9986295, 0.05233596, z);

@@ -146,7 +146,7 @@ pub fn psm(
         .iter()
         .map(|p| w_row.dot(p.as_dvec3().extend(1.0)))
         .fold(f64::MAX, f64::min);
-    if !(c > 0.0) {
+    if c.is_nan() || c <= 0.0 {
         return None;
     }
     m = m.transpose();
