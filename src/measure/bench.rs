@@ -117,16 +117,15 @@ pub fn run(
         .progress_chars("=> "),
     );
     let mut rows = vec![];
+    // One frame (scene upload, targets) for every technique; each gets
+    // fresh instances.
+    let mut hf = HeadlessFrame::new(gpu, scene, &list[..1], size.0, size.1)?;
     for choice in &list {
         let label = choice_label(choice);
         bar.set_message(label.clone());
-        let mut hf = HeadlessFrame::new(
-            gpu,
-            scene,
-            &vec![choice.clone(); lights.len().max(1)],
-            size.0,
-            size.1,
-        )?;
+        hf.techniques = (0..lights.len().max(1))
+            .map(|_| crate::technique::TechniqueInstance::new(gpu, choice.clone()))
+            .collect::<Result<_>>()?;
         let mut timings: Vec<FrameTimings> = vec![];
         let started = std::time::Instant::now();
         let mut i = 0;

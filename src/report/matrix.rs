@@ -70,6 +70,8 @@ const QUICK_VIEWS: [(&str, &str, &str); 6] = [
 /// measured frame): the 1024-sample reference takes minutes a frame on a
 /// CPU.
 pub const MAX_BENCH_SECONDS: f64 = 5.0;
+/// The same for `quick`, which times 1 + 3 frames per technique.
+pub const QUICK_BENCH_SECONDS: f64 = 2.0;
 
 /// Every registered preset of every family, the reference's too.
 pub fn every_preset() -> Result<Vec<TechniqueChoice>> {
@@ -135,10 +137,10 @@ impl Matrix {
             ReportPreset::Quick => (
                 (640, 360),
                 measure::bench::BenchFrames {
-                    warmup: 2,
-                    measured: 5,
+                    warmup: 1,
+                    measured: 3,
                     progress: false,
-                    max_seconds: Some(MAX_BENCH_SECONDS),
+                    max_seconds: Some(QUICK_BENCH_SECONDS),
                 },
             ),
             _ => (
