@@ -144,8 +144,18 @@ fn fmt_pct(v: f64) -> String {
 #[test]
 fn the_html_report_renders_in_chromium() {
     let out = tmpdir("report-browser");
-    let matrix = tiny("none,planar,shadow-volume,shadow-map[size=256]");
+    let mut matrix = tiny("none,planar,shadow-volume,shadow-map[size=256]");
+    matrix.flicker = Some((measure::flicker::CameraPath::Strafe, 2));
     report::run(gpu(), &matrix, &out, false).unwrap();
+    // Flicker measured for every cell; exact shadow volumes do not flicker.
+    let csv = csv_results(&out);
+    let flicker = shadowlab::report::cells::COLUMNS
+        .iter()
+        .position(|c| *c == "flicker_pct")
+        .unwrap();
+    assert!(csv.iter().all(|r| !r[flicker].is_empty()), "{csv:?}");
+    let volumes = csv.iter().find(|r| r[3] == "shadow-volume:auto").unwrap();
+    assert_eq!(volumes[flicker].parse::<f64>().unwrap(), 0.0);
     let shot = out.join("shot.png");
     let page = format!(
         "file://{}",

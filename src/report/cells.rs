@@ -6,6 +6,7 @@
 use super::matrix::{Matrix, View};
 use crate::measure::bench::BenchRow;
 use crate::measure::compare::QualityRow;
+use crate::measure::flicker::FlickerRow;
 use crate::measure::{self, choice_label, file_stem};
 use crate::technique::TechniqueChoice;
 use anyhow::{Context, Result};
@@ -32,6 +33,8 @@ pub struct CellKey {
     pub technique: String,
     pub reference: String,
     pub bench_frames: (u32, u32),
+    /// The flicker path and its frames, when measured.
+    pub flicker: Option<(String, u32)>,
 }
 
 /// Quality against the reference, over the considered pixels (means over
@@ -51,6 +54,11 @@ pub struct Quality {
     pub flip_p99: f64,
     /// Screen pixels per map texel, 95th percentile (techniques with a map).
     pub footprint_p95: Option<f64>,
+    /// Pixels whose shadow state changes between steps of the camera
+    /// path, % of the considered pixels, and on shadow edges alone (when
+    /// the matrix measures flicker; mean over the lights).
+    pub flicker_pct: Option<f64>,
+    pub edge_flicker_pct: Option<f64>,
 }
 
 /// Cost, from `bench` in one run with `none`.
@@ -113,6 +121,9 @@ impl Matrix {
             technique: choice_label(technique),
             reference: choice_label(&self.reference),
             bench_frames: (self.bench.warmup, self.bench.measured),
+            flicker: self
+                .flicker
+                .map(|(p, n)| (format!("{p:?}").to_lowercase(), n)),
         }
     }
 }
@@ -140,13 +151,14 @@ pub fn store(root: &Path, cell: &Cell) -> Result<()> {
         .with_context(|| format!("writing {}", path.display()))
 }
 
-/// The cell of `technique` from its `compare` rows (one per light) and its
-/// `bench` row.
+/// The cell of `technique` from its `compare` rows (one per light), its
+/// `bench` row and its flicker rows (empty when not measured).
 pub fn from_rows(
     key: CellKey,
     technique: &TechniqueChoice,
     quality: &[&QualityRow],
     bench: &BenchRow,
+    flicker: &[&FlickerRow],
     view_dir: &Path,
 ) -> Cell {
     let pixels: usize = quality.iter().map(|r| r.mask.considered_pixels).sum();
@@ -178,6 +190,11 @@ pub fn from_rows(
         mean_abs_error: mean(&|r| r.mask.mean_abs_error),
         flip_p99: quality.first().map_or(0.0, |r| r.flip.p99),
         footprint_p95: footprints.into_iter().reduce(f64::max),
+        flicker_pct: (!flicker.is_empty())
+            .then(|| flicker.iter().map(|r| r.flicker_pct).sum::<f64>() / flicker.len() as f64),
+        edge_flicker_pct: (!flicker.is_empty()).then(|| {
+            flicker.iter().map(|r| r.edge_flicker_pct).sum::<f64>() / flicker.len() as f64
+        }),
     };
     let mask_ms = bench
         .gpu_masks_ms
@@ -210,7 +227,7 @@ pub fn from_rows(
 
 /// The columns of `results.csv` and of the HTML results table, formatted
 /// once so that both show the same figures.
-pub const COLUMNS: [&str; 20] = [
+pub const COLUMNS: [&str; 22] = [
     "scene",
     "camera",
     "light",
@@ -226,6 +243,8 @@ pub const COLUMNS: [&str; 20] = [
     "mean_abs_error",
     "flip_p99",
     "footprint_p95_px",
+    "flicker_pct",
+    "edge_flicker_pct",
     "frame_ms",
     "ratio_to_none",
     "mask_ms",
@@ -253,6 +272,9 @@ pub fn csv_row(c: &Cell) -> Vec<String> {
         format!("{:.4}", q.mean_abs_error),
         format!("{:.4}", q.flip_p99),
         q.footprint_p95.map_or(String::new(), |v| format!("{v:.2}")),
+        q.flicker_pct.map_or(String::new(), |v| format!("{v:.4}")),
+        q.edge_flicker_pct
+            .map_or(String::new(), |v| format!("{v:.4}")),
         format!("{:.2}", c.cost.frame_ms),
         format!("{:.2}", c.cost.ratio_to_none),
         format!("{:.2}", c.cost.mask_ms),

@@ -48,6 +48,9 @@ pub struct Matrix {
     pub bench: measure::bench::BenchFrames,
     pub techniques: Vec<TechniqueChoice>,
     pub reference: TechniqueChoice,
+    /// Flicker along this camera path over this many frames (`compare
+    /// --path`); `quick` leaves it out.
+    pub flicker: Option<(measure::flicker::CameraPath, u32)>,
 }
 
 /// The quick preset's views: a point light over a colonnade (z-fail's
@@ -70,6 +73,9 @@ const QUICK_VIEWS: [(&str, &str, &str); 6] = [
 /// measured frame): the 1024-sample reference takes minutes a frame on a
 /// CPU.
 pub const MAX_BENCH_SECONDS: f64 = 5.0;
+/// Frames along the strafe path for the flicker measure (`standard`, `full`).
+pub const FLICKER_FRAMES: u32 = 3;
+
 /// The same for `quick`, which times 1 + 3 frames per technique.
 pub const QUICK_BENCH_SECONDS: f64 = 2.0;
 
@@ -157,12 +163,15 @@ impl Matrix {
             Some(list) => measure::parse_technique_list(list)?,
             None => every_preset()?,
         };
+        let flicker = (preset != ReportPreset::Quick)
+            .then_some((measure::flicker::CameraPath::Strafe, FLICKER_FRAMES));
         Ok(Matrix {
             views,
             size,
             bench,
             techniques,
             reference: technique::resolve("raytraced")?,
+            flicker,
         })
     }
 }

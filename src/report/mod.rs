@@ -138,6 +138,21 @@ fn measure_view(
         matrix.bench,
         &dir.join("bench"),
     )?;
+    let flicker = match matrix.flicker {
+        Some((path, frames)) => measure::flicker::run(
+            gpu,
+            scene,
+            &camera,
+            &lights,
+            matrix.size,
+            techniques,
+            &matrix.reference,
+            path,
+            frames,
+            &dir.join("flicker"),
+        )?,
+        None => vec![],
+    };
     let light_kinds: Vec<String> = lights
         .iter()
         .map(|l| format!("{:?}", l.kind).to_lowercase())
@@ -152,7 +167,9 @@ fn measure_view(
             .iter()
             .find(|r| r.technique == label)
             .with_context(|| format!("bench has no row for {label}"))?;
-        let mut cell = cells::from_rows(matrix.key(view, t), t, &rows, b, &rel);
+        let shimmer: Vec<&measure::flicker::FlickerRow> =
+            flicker.iter().filter(|r| r.technique == label).collect();
+        let mut cell = cells::from_rows(matrix.key(view, t), t, &rows, b, &shimmer, &rel);
         cell.light_kinds = light_kinds.clone();
         cell.area_light = area;
         cells::store(out, &cell)?;

@@ -87,7 +87,11 @@ fn below_failure(c: &Cell) -> bool {
     total(c) <= FAILED_PCT
 }
 
-const CRITERIA: [Criterion; 9] = [
+/// Flicker (% of considered pixels per step) within which a technique
+/// counts as stable (issue 15's bar).
+pub const STABLE_FLICKER_PCT: f64 = 0.01;
+
+const CRITERIA: [Criterion; 10] = [
     Criterion {
         name: "hard shadows exact",
         declared: None,
@@ -151,6 +155,14 @@ const CRITERIA: [Criterion; 9] = [
         passes: below_failure,
         figure: total,
         unit: "% mismatch",
+    },
+    Criterion {
+        name: "stable under motion",
+        declared: None,
+        applies: |c| c.quality.flicker_pct.is_some(),
+        passes: |c| c.quality.flicker_pct.unwrap_or(0.0) <= STABLE_FLICKER_PCT,
+        figure: |c| c.quality.flicker_pct.unwrap_or(0.0),
+        unit: "% flicker per step",
     },
     Criterion {
         name: "cheap",
@@ -585,6 +597,7 @@ mod tests {
                 technique: technique.into(),
                 reference: String::new(),
                 bench_frames: (0, 0),
+                flicker: None,
             },
             family: "shadow-map".into(),
             preset: String::new(),
