@@ -436,12 +436,13 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "csm",
-        summary: "4 stabilised cascades of 1024² (the memory of one 2048² map), λ 0.95 (Sascha Willems' sample), 10 % blended",
+        summary: "4 stabilised cascades of 1024² (the memory of one 2048² map), λ 0.95 (Sascha Willems' sample), 10 % blended, normal offset ½ texel of each cascade (1 pushed lookups at building corners into the next wall's shadow: 0.12 % interior false shadow on city/street/sun at 640×360, ½: 0.004 %)",
         values: &[
             ("cascades", "4"),
             ("size", "1024"),
             ("split_lambda", "0.95"),
             ("blend", "0.1"),
+            ("normal_offset_directional", "0.5"),
         ],
     },
     Preset {
@@ -461,23 +462,25 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "pssm",
-        summary: "parallel-split maps: 4 cascades of 1024² fitted to their slices, λ 0.6 (bgfx)",
+        summary: "parallel-split maps: 4 cascades of 1024² fitted to their slices, λ 0.6 (bgfx), normal offset ½ texel",
         values: &[
             ("cascades", "4"),
             ("size", "1024"),
             ("split_lambda", "0.6"),
             ("stabilize", "false"),
+            ("normal_offset_directional", "0.5"),
         ],
     },
     Preset {
         name: "sdsm",
-        summary: "sample distribution shadow maps: 4 cascades of 1024² split over the depths the camera sees and fitted to the pixels each shades (GPU reduction of the prepass), λ 0.95, 10 % blended",
+        summary: "sample distribution shadow maps: 4 cascades of 1024² split over the depths the camera sees and fitted to the pixels each shades (GPU reduction of the prepass), λ 0.95, 10 % blended, normal offset ½ texel",
         values: &[
             ("cascades", "4"),
             ("size", "1024"),
             ("split_lambda", "0.95"),
             ("blend", "0.1"),
             ("fit", "samples"),
+            ("normal_offset_directional", "0.5"),
         ],
     },
     Preset {
