@@ -323,7 +323,7 @@ impl<'a> Report<'a> {
         let cost = match dearest {
             Some(d) => Claim::of(
                 format!(
-                    "median ×{ratio:.2} the frame of `none`, mask stage median {:.1} ms; at most ×{:.2} on `{}`; {} of shadow resources",
+                    "median ×{ratio:.2} the frame of `none`, mask stage median {:.1} ms (wall, CPU work included); at most ×{:.2} on `{}`; {} of shadow resources",
                     median(mine.iter().map(|c| c.cost.mask_ms).collect()),
                     d.cost.ratio_to_none,
                     d.view().label(),
