@@ -200,18 +200,35 @@ pub fn competes(c: &Cell) -> bool {
     c.family != "raytraced" && c.family != "none"
 }
 
+/// Frame times within this fraction of each other count as equal: the
+/// run-to-run spread of `bench` medians on lavapipe.
+pub const COST_NOISE: f64 = 0.10;
+/// Mismatches within this many percentage points count as equal (the
+/// precision of the tables).
+pub const ERROR_NOISE_PCT: f64 = 0.001;
+
+/// Whether `a` dominates `b` in (cost, error): not worse in either beyond
+/// the noise, better in one beyond it.
+fn dominates((ca, ea): (f64, f64), (cb, eb): (f64, f64)) -> bool {
+    let same_cost = (ca - cb).abs() <= COST_NOISE * ca.max(cb);
+    let same_error = (ea - eb).abs() <= ERROR_NOISE_PCT;
+    let cheaper = ca < cb && !same_cost;
+    let better = ea < eb && !same_error;
+    (ca <= cb || same_cost) && (ea <= eb || same_error) && (cheaper || better)
+}
+
 /// Indices of `cells` on the Pareto front of (frame × none, total
-/// mismatch): no other cell is at most as costly and at most as wrong, and
-/// strictly better in one of them. Sorted by cost.
+/// mismatch): no other cell dominates them beyond the timing and table
+/// noise, so presets with equal masks and times within 10 % share the
+/// front instead of noise picking one. Sorted by cost.
 pub fn pareto_front(cells: &[&Cell]) -> Vec<usize> {
     let point = |c: &Cell| (c.cost.ratio_to_none, total(c));
     let mut front: Vec<usize> = (0..cells.len())
         .filter(|&i| {
-            let (ci, ei) = point(cells[i]);
-            !cells.iter().enumerate().any(|(j, o)| {
-                let (cj, ej) = point(o);
-                j != i && cj <= ci && ej <= ei && (cj < ci || ej < ei)
-            })
+            !cells
+                .iter()
+                .enumerate()
+                .any(|(j, o)| j != i && dominates(point(o), point(cells[i])))
         })
         .collect();
     front.sort_by(|&a, &b| point(cells[a]).0.total_cmp(&point(cells[b]).0));
@@ -639,5 +656,13 @@ mod tests {
         ];
         let refs: Vec<&Cell> = cells.iter().collect();
         assert_eq!(pareto_front(&refs), vec![0, 2, 3]);
+        // Equal masks, times within the noise: both stay; 20 % slower goes.
+        let ties = [
+            cell("a", 2.0, 0.002),
+            cell("b", 2.1, 0.002),
+            cell("c", 2.4, 0.002),
+        ];
+        let refs: Vec<&Cell> = ties.iter().collect();
+        assert_eq!(pareto_front(&refs), vec![0, 1]);
     }
 }
