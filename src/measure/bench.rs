@@ -120,6 +120,12 @@ pub fn run(
     // One frame (scene upload, targets) for every technique; each gets
     // fresh instances.
     let mut hf = HeadlessFrame::new(gpu, scene, &list[..1], size.0, size.1)?;
+    // The shared frame's own first frames (its passes' pipelines, llvmpipe's
+    // shader compiles) are nobody's cost: run them before anything is timed,
+    // or the first technique — `none`, the baseline — pays for them.
+    for _ in 0..warmup.max(1) {
+        hf.render(gpu, scene, camera, lights, &settings)?;
+    }
     for choice in &list {
         let label = choice_label(choice);
         bar.set_message(label.clone());

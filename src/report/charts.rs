@@ -75,12 +75,26 @@ pub fn pareto_svg(report: &Report, index: usize) -> Result<String> {
         chart
             .draw_series(LineSeries::new(front_points, RED.stroke_width(2)))
             .map_err(err)?;
+        // Labels of front points that sit together are stacked upwards.
+        let mut placed: Vec<(i32, i32)> = vec![];
+        let labels: Vec<(usize, i32)> = front
+            .iter()
+            .map(|&i| {
+                let (px, py) = chart.backend_coord(&point(&report.cells[i]));
+                let crowd = placed
+                    .iter()
+                    .filter(|(x, y)| (x - px).abs() < 90 && (y - py).abs() < 14 * 4)
+                    .count() as i32;
+                placed.push((px, py));
+                (i, -14 - 13 * crowd)
+            })
+            .collect();
         chart
-            .draw_series(front.iter().map(|&i| {
+            .draw_series(labels.into_iter().map(|(i, dy)| {
                 let c = &report.cells[i];
                 EmptyElement::at(point(c))
                     + Circle::new((0, 0), 5, RED.filled())
-                    + Text::new(c.technique().to_string(), (7, -14), ("sans-serif", 12))
+                    + Text::new(c.technique().to_string(), (7, dy), ("sans-serif", 12))
             }))
             .map_err(err)?;
         root.present().map_err(err)?;
