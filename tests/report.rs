@@ -109,7 +109,7 @@ fn the_report_covers_every_preset_shows_the_csv_and_resumes() {
     assert!(total > 1.0, "none misses the teapot's shadow: {total}");
     assert!(md.contains(&format!(
         "{} % mismatch on `teapot/default/point`",
-        fmt_pct(total)
+        report::summary::pct(total)
     )));
 
     // A second run measures nothing.
@@ -126,17 +126,6 @@ fn the_report_covers_every_preset_shows_the_csv_and_resumes() {
         .remove(0);
     let third = report::run(gpu(), &changed, &out, false).unwrap();
     assert_eq!((third.computed, third.reused), (1, every.len() - 1));
-}
-
-/// The summary's percentages as `summary.rs` writes them.
-fn fmt_pct(v: f64) -> String {
-    if v >= 10.0 {
-        format!("{v:.1}")
-    } else if v >= 0.1 {
-        format!("{v:.2}")
-    } else {
-        format!("{v:.3}")
-    }
 }
 
 /// The page in a real browser: headless Chromium's screenshot of its top

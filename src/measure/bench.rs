@@ -104,17 +104,10 @@ pub fn run(
         ..*base
     };
     let total = (list.len() as u32 * (warmup + frames)) as u64;
-    let bar = if counts.progress {
-        indicatif::ProgressBar::new(total)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{msg:>28} [{bar:30}] {pos}/{len} frames, {elapsed}",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
+    let bar = super::progress_bar(
+        counts.progress,
+        total,
+        "{msg:>28} [{bar:30}] {pos}/{len} frames, {elapsed}",
     );
     let mut rows = vec![];
     // One frame (scene upload, targets) for every technique; each gets

@@ -6,7 +6,7 @@ pub mod compare;
 pub mod flicker;
 pub mod quality;
 
-use crate::technique::{self, FAMILIES, TechniqueChoice};
+use crate::technique::{self, TechniqueChoice};
 use anyhow::{Result, bail};
 
 /// `part` as a percentage of `whole` (0 when `whole` is 0).
@@ -24,20 +24,31 @@ pub fn percentile<T: Copy>(sorted: &[T], q: f64) -> T {
     sorted[((sorted.len() - 1) as f64 * q).round() as usize]
 }
 
+/// A progress bar of `len` steps drawn with `template` (indicatif's), or a
+/// hidden one when `show` is false (a caller that draws its own).
+pub fn progress_bar(show: bool, len: u64, template: &str) -> indicatif::ProgressBar {
+    let bar = if show {
+        indicatif::ProgressBar::new(len)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(template)
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar
+}
+
 /// Parses a technique list: `all`, or comma-separated ids, each optionally
 /// with parameter values in brackets: `none,raytraced:reference[samples=64]`.
 /// `all` is every preset of every family except the reference itself.
 pub fn parse_technique_list(spec: &str) -> Result<Vec<TechniqueChoice>> {
     if spec.trim() == "all" {
-        return FAMILIES
+        return technique::preset_ids()
             .iter()
-            .filter(|f| f.id != "raytraced")
-            .flat_map(|f| {
-                f.presets
-                    .iter()
-                    .map(move |p| format!("{}:{}", f.id, p.name))
-            })
-            .map(|id| technique::resolve(&id))
+            .map(|id| technique::resolve(id))
+            .filter(|c| c.as_ref().map_or(true, |c| c.family.id != "raytraced"))
             .collect();
     }
     let mut items = vec![];

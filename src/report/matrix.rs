@@ -3,7 +3,7 @@
 
 use crate::measure;
 use crate::scene;
-use crate::technique::{self, FAMILIES, TechniqueChoice};
+use crate::technique::{self, TechniqueChoice};
 use anyhow::{Result, bail};
 
 /// The size of the matrix.
@@ -81,14 +81,9 @@ pub const QUICK_BENCH_SECONDS: f64 = 2.0;
 
 /// Every registered preset of every family, the reference's too.
 pub fn every_preset() -> Result<Vec<TechniqueChoice>> {
-    FAMILIES
+    technique::preset_ids()
         .iter()
-        .flat_map(|f| {
-            f.presets
-                .iter()
-                .map(move |p| format!("{}:{}", f.id, p.name))
-        })
-        .map(|id| technique::resolve(&id))
+        .map(|id| technique::resolve(id))
         .collect()
 }
 
@@ -179,6 +174,7 @@ impl Matrix {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::technique::FAMILIES;
 
     #[test]
     fn presets_grow_and_scenes_filter() {

@@ -36,17 +36,10 @@ pub struct RunStats {
 pub fn run(gpu: &GpuContext, matrix: &Matrix, out: &Path, progress: bool) -> Result<RunStats> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let total = matrix.views.len() * matrix.techniques.len();
-    let bar = if progress {
-        indicatif::ProgressBar::new(total as u64)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{msg:>32} [{bar:30}] {pos}/{len} cells, {elapsed} elapsed, {eta} left",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
+    let bar = measure::progress_bar(
+        progress,
+        total as u64,
+        "{msg:>32} [{bar:30}] {pos}/{len} cells, {elapsed} elapsed, {eta} left",
     );
     let started = Instant::now();
     let mut stats = RunStats::default();

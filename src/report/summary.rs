@@ -67,7 +67,28 @@ struct Criterion {
     applies: fn(&Cell) -> bool,
     passes: fn(&Cell) -> bool,
     figure: fn(&Cell) -> f64,
-    unit: &'static str,
+    unit: Unit,
+}
+
+/// How a criterion's figure is written.
+#[derive(Clone, Copy)]
+enum Unit {
+    /// A percentage, followed by what it is a percentage of.
+    Percent(&'static str),
+    /// A multiple of `none`'s frame time.
+    TimesNone,
+    /// A plain value to 4 decimals, followed by its name.
+    Value(&'static str),
+}
+
+impl Unit {
+    fn format(self, v: f64) -> String {
+        match self {
+            Unit::Percent(of) => format!("{} % {of}", pct(v)),
+            Unit::TimesNone => format!("×{v:.2}"),
+            Unit::Value(name) => format!("{v:.4} {name}"),
+        }
+    }
 }
 
 /// Mismatch (% of considered pixels) above which a view counts as failed.
@@ -108,7 +129,7 @@ const CRITERIA: [Criterion; 10] = [
         applies: |c| !c.area_light,
         passes: |c| c.quality.interior_pct <= EXACT_INTERIOR_PCT,
         figure: |c| c.quality.interior_pct,
-        unit: "% interior mismatch",
+        unit: Unit::Percent("interior mismatch"),
     },
     Criterion {
         name: "point lights",
@@ -116,7 +137,7 @@ const CRITERIA: [Criterion; 10] = [
         applies: |c| plain_view(c, "point"),
         passes: below_failure,
         figure: total,
-        unit: "% mismatch",
+        unit: Unit::Percent("mismatch"),
     },
     Criterion {
         name: "spot lights",
@@ -124,7 +145,7 @@ const CRITERIA: [Criterion; 10] = [
         applies: |c| plain_view(c, "spot"),
         passes: below_failure,
         figure: total,
-        unit: "% mismatch",
+        unit: Unit::Percent("mismatch"),
     },
     Criterion {
         name: "directional lights",
@@ -132,7 +153,7 @@ const CRITERIA: [Criterion; 10] = [
         applies: |c| plain_view(c, "directional"),
         passes: below_failure,
         figure: total,
-        unit: "% mismatch",
+        unit: Unit::Percent("mismatch"),
     },
     Criterion {
         name: "soft shadows",
@@ -140,7 +161,7 @@ const CRITERIA: [Criterion; 10] = [
         applies: |c| c.area_light,
         passes: |c| c.quality.mean_abs_error <= SOFT_MAE,
         figure: |c| c.quality.mean_abs_error,
-        unit: " mean visibility error",
+        unit: Unit::Value("mean visibility error"),
     },
     Criterion {
         name: "open meshes",
@@ -148,7 +169,7 @@ const CRITERIA: [Criterion; 10] = [
         applies: |c| c.key.scene == "bunny" || c.key.scene == "teapot",
         passes: below_failure,
         figure: total,
-        unit: "% mismatch",
+        unit: Unit::Percent("mismatch"),
     },
     Criterion {
         name: "curved receivers",
@@ -156,7 +177,7 @@ const CRITERIA: [Criterion; 10] = [
         applies: |c| c.key.scene == "curved",
         passes: below_failure,
         figure: total,
-        unit: "% mismatch",
+        unit: Unit::Percent("mismatch"),
     },
     Criterion {
         name: "camera in a shadow",
@@ -164,7 +185,7 @@ const CRITERIA: [Criterion; 10] = [
         applies: |c| c.key.camera == "in-shadow",
         passes: below_failure,
         figure: total,
-        unit: "% mismatch",
+        unit: Unit::Percent("mismatch"),
     },
     Criterion {
         name: "stable under motion",
@@ -172,7 +193,7 @@ const CRITERIA: [Criterion; 10] = [
         applies: |c| c.quality.flicker_pct.is_some(),
         passes: |c| c.quality.flicker_pct.unwrap_or(0.0) <= STABLE_FLICKER_PCT,
         figure: |c| c.quality.flicker_pct.unwrap_or(0.0),
-        unit: "% flicker per step",
+        unit: Unit::Percent("flicker per step"),
     },
     Criterion {
         name: "cheap",
@@ -180,7 +201,7 @@ const CRITERIA: [Criterion; 10] = [
         applies: |_| true,
         passes: |c| c.cost.ratio_to_none <= CHEAP_RATIO,
         figure: |c| c.cost.ratio_to_none,
-        unit: "× none",
+        unit: Unit::TimesNone,
     },
 ];
 
@@ -235,7 +256,8 @@ pub fn pareto_front(cells: &[&Cell]) -> Vec<usize> {
     front
 }
 
-fn pct(v: f64) -> String {
+/// A percentage with the precision the report's prose uses.
+pub fn pct(v: f64) -> String {
     if v >= 10.0 {
         format!("{v:.1}")
     } else if v >= 0.1 {
@@ -558,14 +580,10 @@ fn mark(k: &Criterion, mine: &[&Cell]) -> Mark {
         ok: worst.map(|_| tested.iter().all(|c| (k.passes)(c))),
         claim: worst.map(|w| {
             let v = (k.figure)(w);
-            let figure = if k.unit.starts_with('%') {
-                format!("{} {}", pct(v), k.unit)
-            } else if k.unit.starts_with('×') {
-                format!("×{v:.2}")
-            } else {
-                format!("{v:.4}{}", k.unit)
-            };
-            Claim::of(format!("worst {figure} on `{}`", w.view().label()), w)
+            Claim::of(
+                format!("worst {} on `{}`", k.unit.format(v), w.view().label()),
+                w,
+            )
         }),
     }
 }

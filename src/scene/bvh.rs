@@ -33,7 +33,6 @@ enum Tracer {
 pub struct CasterBvh {
     key: (u64, TraceKernel),
     tracer: Tracer,
-    triangle_count: usize,
     pub build_ms: f64,
 }
 
@@ -44,7 +43,6 @@ impl CasterBvh {
         let t = Instant::now();
         let key = (scene_fingerprint(scene), kernel);
         let world = scene.world_triangles(|o| o.casts_shadow && !o.shadow_plane);
-        let triangle_count = world.len();
         let tracer = match kernel {
             TraceKernel::Embree => Tracer::Embree(super::embree::EmbreeScene::build(&world)?),
             TraceKernel::Obvhs => {
@@ -69,7 +67,6 @@ impl CasterBvh {
         Ok(CasterBvh {
             key,
             tracer,
-            triangle_count,
             build_ms: t.elapsed().as_secs_f64() * 1e3,
         })
     }
@@ -124,10 +121,6 @@ impl CasterBvh {
                 })
             }
         }
-    }
-
-    pub fn triangle_count(&self) -> usize {
-        self.triangle_count
     }
 
     /// Memory of the triangles, BVH nodes and index table (obvhs), or of

@@ -419,7 +419,8 @@ impl TechniqueChoice {
     }
 }
 
-fn all_ids() -> String {
+/// Every registered preset as `family:preset`, in registry order.
+pub fn preset_ids() -> Vec<String> {
     FAMILIES
         .iter()
         .flat_map(|f| {
@@ -427,17 +428,18 @@ fn all_ids() -> String {
                 .iter()
                 .map(move |p| format!("{}:{}", f.id, p.name))
         })
-        .collect::<Vec<_>>()
-        .join(", ")
+        .collect()
 }
 
 /// Resolves `family` or `family:preset` to a family and its preset values.
 pub fn resolve(id: &str) -> Result<TechniqueChoice> {
     let (fid, pid) = id.split_once(':').map_or((id, None), |(f, p)| (f, Some(p)));
-    let family = FAMILIES
-        .iter()
-        .find(|f| f.id == fid)
-        .ok_or_else(|| anyhow!("unknown technique '{id}' (valid: {})", all_ids()))?;
+    let family = FAMILIES.iter().find(|f| f.id == fid).ok_or_else(|| {
+        anyhow!(
+            "unknown technique '{id}' (valid: {})",
+            preset_ids().join(", ")
+        )
+    })?;
     let preset = match pid {
         None => &family.presets[0],
         Some(p) => family.presets.iter().find(|x| x.name == p).ok_or_else(|| {

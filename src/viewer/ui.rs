@@ -9,7 +9,7 @@ use crate::measure::flicker::CameraPath;
 use crate::renderer::{LightingModel, MipFilter, Shading};
 use crate::scene::{Light, LightArea, LightType, builtin};
 use crate::technique::TechniqueInstance;
-use crate::technique::{self, FAMILIES, ParamKind, ParamSpec, ParamValues};
+use crate::technique::{self, ParamKind, ParamSpec, ParamValues};
 use glam::Vec3;
 
 /// Requests from the panels that the app carries out after the frame.
@@ -82,17 +82,6 @@ pub fn param_panel(ui: &mut egui::Ui, params: &mut ParamValues) -> PanelResult {
         w.response.on_hover_text(spec.doc);
     }
     r
-}
-
-fn all_ids() -> Vec<String> {
-    FAMILIES
-        .iter()
-        .flat_map(|f| {
-            f.presets
-                .iter()
-                .map(move |p| format!("{}:{}", f.id, p.name))
-        })
-        .collect()
 }
 
 fn vec3_edit(ui: &mut egui::Ui, label: &str, v: &mut Vec3, speed: f32) {
@@ -190,7 +179,7 @@ fn technique_panel(
     egui::ComboBox::from_label("technique")
         .selected_text(&chosen)
         .show_ui(ui, |ui| {
-            for id in all_ids() {
+            for id in technique::preset_ids() {
                 let summary = technique::resolve(&id)
                     .map(|c| c.family.summary)
                     .unwrap_or("");
@@ -539,6 +528,7 @@ pub fn build(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::technique::FAMILIES;
 
     /// Every registered technique's parameter panel builds, with one widget
     /// per parameter, and leaves valid values.

@@ -159,7 +159,6 @@ pub fn psm(
         Warped {
             view_proj,
             depth_row,
-            n: virt.shift,
         },
         virt,
     ))

@@ -113,7 +113,6 @@ pub fn tsm(
     let trapezoid = Mat4::from_cols_array_2d(&rows.map(|r| r.to_array())).transpose();
     Some(Warped {
         view_proj: trapezoid * light_view,
-        n: eta,
         depth_row: light_view.transpose() * depth_row_ls,
     })
 }

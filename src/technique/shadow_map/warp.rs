@@ -18,14 +18,13 @@ use glam::{Mat4, Vec3, Vec4};
 /// Below this sin γ the light runs along the view: no warp (uniform map).
 pub const MIN_SIN_GAMMA: f32 = 1e-3;
 
-/// A warped map: its world → light-clip matrix (wgpu depth [0, 1]), the
-/// projection-centre distance n it used, and the row that gives a point's
-/// depth linear along the light (0 nearest it, 1 farthest, over the scene)
-/// — what the map stores instead of the perspective's z/w.
+/// A warped map: its world → light-clip matrix (wgpu depth [0, 1]) and the
+/// row that gives a point's depth linear along the light (0 nearest it, 1
+/// farthest, over the scene) — what the map stores instead of the
+/// perspective's z/w.
 #[derive(Clone, Copy, Debug)]
 pub struct Warped {
     pub view_proj: Mat4,
-    pub n: f32,
     pub depth_row: Vec4,
 }
 
@@ -119,7 +118,6 @@ pub fn lispsm(
     );
     Some(Warped {
         view_proj: to_clip * perspective * view,
-        n,
         depth_row: view.transpose() * linear_depth_row(&scene_ls),
     })
 }
