@@ -641,3 +641,38 @@ fn sdsm_cascades_cover_every_pixel_with_smaller_texels() {
         "{m:?}"
     );
 }
+
+#[test]
+fn edge_masked_filters_equal_the_full_kernel_on_the_builtin_scenes() {
+    for name in ["room", "columns", "city", "floating", "curved"] {
+        let scene = builtin::by_name(name).unwrap().unwrap();
+        for (filter, extra) in [
+            ("grid", "samples=5"),
+            ("disk", "radius=4"),
+            ("pcss", "samples=4"),
+            ("varwidth", "samples=3"),
+            ("grid", "format=r8"),
+            ("grid", "receiver_plane=true"),
+        ] {
+            let set = ["filter", filter].join("=");
+            let full = mask_of(&scene, "shadow-map", &[&set, extra], 240, 135);
+            let masked = mask_of(
+                &scene,
+                "shadow-map",
+                &[&set, extra, "edge_mask=true"],
+                240,
+                135,
+            );
+            let differ = full
+                .iter()
+                .zip(&masked)
+                .filter(|(a, b)| (*a - *b).abs() > 1e-3)
+                .count();
+            assert!(
+                differ as f64 <= 1e-4 * full.len() as f64,
+                "{name} {filter} {extra}: {differ} of {} pixels differ",
+                full.len()
+            );
+        }
+    }
+}

@@ -187,6 +187,12 @@ pub const NORMAL_OFFSET_LOCAL: ParamSpec = ParamSpec::float(
     "point and spot lights: lookup point moved along the geometric normal, in shadow-map texels at the point's distance",
 );
 
+pub const EDGE_MASK: ParamSpec = ParamSpec::boolean(
+    "edge_mask",
+    false,
+    "grid, disk, pcss, varwidth: a min/max chain of the map classifies each pixel as lit, shadowed or at a shadow edge from 4 texels covering its kernel, and only edge pixels run the kernel (PCF at shadow silhouettes, 000 §4.3); the mask is the full kernel's",
+);
+
 pub const RECEIVER_PLANE: ParamSpec = ParamSpec::boolean(
     "receiver_plane",
     false,
@@ -345,6 +351,7 @@ pub const PARAMS: &[ParamSpec] = &[
     NORMAL_OFFSET_LOCAL,
     NORMAL_OFFSET_SLOPE,
     RECEIVER_PLANE,
+    EDGE_MASK,
     CULL,
     OMNI,
     NEAR,
@@ -507,6 +514,8 @@ pub struct ShadowMapConfig {
     /// Normal offset × sin θ between normal and light.
     pub normal_offset_slope: bool,
     pub receiver_plane: bool,
+    /// The kernel only at shadow edges (min/max chain).
+    pub edge_mask: bool,
     pub cull: CullFace,
     pub omni: Omni,
     pub near: f32,
@@ -542,6 +551,7 @@ impl ShadowMapConfig {
             normal_offset_local: p.float(&NORMAL_OFFSET_LOCAL)?,
             normal_offset_slope: p.flag(&NORMAL_OFFSET_SLOPE)?,
             receiver_plane: p.flag(&RECEIVER_PLANE)?,
+            edge_mask: p.flag(&EDGE_MASK)?,
             cull: p.choice(&CULL)?,
             omni: p.choice(&OMNI)?,
             near: p.float(&NEAR)?,
@@ -570,6 +580,11 @@ impl ShadowMapConfig {
             LightType::Directional => self.normal_offset_directional,
             _ => self.normal_offset_local,
         }
+    }
+
+    /// Whether the lookup is edge-masked: asked for, with a filter of taps.
+    pub fn edge_masked(&self) -> bool {
+        self.edge_mask && self.filter.uses_taps()
     }
 
     /// The box-blur radius of moment maps (0 for depth maps).

@@ -198,3 +198,49 @@ fn blockers(uv: vec2f, face: u32, z: f32, radius_texels: f32, n: u32, phi: f32) 
     }
     return vec2f(sum / max(count, 1.0), count);
 }
+
+// Edge mask: the visibility every tap of a kernel reaching `reach` texels
+// from uv agrees on — 1 when the receiver depth range [z_lo, z_hi] is in
+// front of the least stored depth under the kernel, 0 when behind the
+// greatest — or −1 (a shadow edge: run the kernel). Reads 2×2 texels of
+// the chain level whose texels (2^(level+1) map texels each) cover the
+// kernel's texel span.
+fn edge_class(uv: vec2f, face: u32, z_lo: f32, z_hi: f32, reach: f32) -> f32 {
+    let top = vec2f(sm.map.x - 1.0);
+    let p = uv * sm.map.x;
+    let lo = clamp(floor(p - reach), vec2f(0.0), top);
+    let hi = clamp(floor(p + reach), vec2f(0.0), top);
+    let span = max(hi.x - lo.x, hi.y - lo.y) + 1.0;
+    let level = u32(max(ceil(log2(span)) - 1.0, 0.0));
+    if level >= textureNumLevels(minmax_map) {
+        return -1.0;
+    }
+    let cover = f32(1u << (level + 1u));
+    let a = vec2i(lo / cover);
+    let b = vec2i(hi / cover);
+    let l = i32(face);
+    let i = i32(level);
+    let r0 = textureLoad(minmax_map, a, l, i).xy;
+    let r1 = textureLoad(minmax_map, vec2i(b.x, a.y), l, i).xy;
+    let r2 = textureLoad(minmax_map, vec2i(a.x, b.y), l, i).xy;
+    let r3 = textureLoad(minmax_map, b, l, i).xy;
+    let least = min(min(r0.x, r1.x), min(r2.x, r3.x));
+    let greatest = max(max(r0.y, r1.y), max(r2.y, r3.y));
+    if z_hi <= least {
+        return 1.0;
+    }
+    if z_lo > greatest {
+        return 0.0;
+    }
+    return -1.0;
+}
+
+// How far in texels from its centre a pixel's kernel reads: the filter
+// radius (grid, disk) or the widest blocker search and penumbra (pcss,
+// varwidth, both capped at 64 texels), plus the half texel of a 2×2 tap.
+fn kernel_reach() -> f32 {
+    if FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK {
+        return sm.kernel.x + 0.5;
+    }
+    return max(64.0, sm.soft.w) + 0.5;
+}

@@ -178,6 +178,16 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
     if FILTER_KIND >= FILTER_VSM {
         return moment_visibility(moments_at(uv, face), select(linear01(c), pr.z, is_warped()));
     }
+    if EDGE_MASK && (FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK
+        || FILTER_KIND == FILTER_PCSS || FILTER_KIND == FILTER_VARWIDTH) {
+        // Taps compare against the receiver plane: its depth spread over the reach.
+        let reach = kernel_reach();
+        let spread = reach * sm.map.y * (abs(rp_gradient.x) + abs(rp_gradient.y));
+        let known = edge_class(uv, face, min(z, pr.z) - spread, max(z, pr.z) + spread, reach);
+        if known >= 0.0 {
+            return known;
+        }
+    }
     let count = max(TAPS, 1u);
     let radius = sm.kernel.x;
     let phi = ign(frag) * 6.2831853;

@@ -12,6 +12,7 @@ pub mod cascades;
 pub mod config;
 mod debug;
 mod depth_bounds;
+mod edge_mask;
 mod maps;
 pub mod partition_params;
 mod perspective;
@@ -34,6 +35,7 @@ use crate::scene::area::area_samples;
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use depth_bounds::{DepthReduction, SeenBounds};
+use edge_mask::{ChainSource, MinMaxChain};
 use glam::{Mat4, UVec4, Vec4};
 use maps::Maps;
 use pipelines::{DepthPassKey, LookupKey, ShadowMapShared};
@@ -111,6 +113,8 @@ pub struct ShadowMapTechnique {
     depth_reduction: Option<DepthReduction>,
     /// What the cascades were fitted to last frame with SDSM.
     last_seen: Option<SeenBounds>,
+    /// The edge mask's min/max chain of the maps (`edge_mask=true`).
+    chain: Option<MinMaxChain>,
 }
 
 /// Uniform slots: per face, the depth pass (and lookup), blur along x, blur along y.
@@ -137,6 +141,7 @@ impl ShadowMapTechnique {
             map_triangles: 0,
             depth_reduction: None,
             last_seen: None,
+            chain: None,
         }
     }
 
@@ -163,13 +168,15 @@ impl ShadowMapTechnique {
         Ok(())
     }
 
-    /// The technique's bind group with the given depth, 8-bit and moment arrays.
+    /// The technique's bind group with the given depth, 8-bit, moment and
+    /// min/max arrays.
     fn bind_group(
         &self,
         ctx: &MaskContext,
         depth: &wgpu::TextureView,
         bytes: &wgpu::TextureView,
         moments: &wgpu::TextureView,
+        minmax: &wgpu::TextureView,
     ) -> wgpu::BindGroup {
         let view = |binding, v| wgpu::BindGroupEntry {
             binding,
@@ -192,6 +199,7 @@ impl ShadowMapTechnique {
                     },
                     view(5, bytes),
                     view(6, moments),
+                    view(7, minmax),
                 ],
             })
     }
@@ -239,6 +247,12 @@ impl ShadowTechnique for ShadowMapTechnique {
         let paraboloid = c.omni == Omni::DualParaboloid;
         let layers = setups[0].faces.len() as u32;
         self.ensure_maps(ctx.gpu, size, layers, format, moments)?;
+        let edge_mask = c.edge_masked() && c.stage == Stage::Full;
+        if edge_mask {
+            MinMaxChain::ensure(&mut self.chain, ctx.gpu, size, layers)?;
+        } else {
+            self.chain = None;
+        }
         // Slot (s·MAX_FACES + f)·3 + k: sample s, face f; k = 0 depth pass
         // and lookup, 1 and 2 blur along x and y.
         let slots = lights.len() as u64 * SLOTS;
@@ -353,6 +367,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             byte_map: format == DepthFormat::R8,
             receiver_plane: c.receiver_plane,
             accumulate: false,
+            edge_mask,
         };
         let maps = self.maps.as_ref().expect("ensured above");
         let slot = |s: usize, f: u32, k: u32| {
@@ -366,6 +381,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             &shared.placeholder_depth,
             &shared.placeholder_bytes,
             &shared.placeholder_moments,
+            &shared.placeholder_minmax,
         );
         let blur_groups = maps.moment.as_ref().map(|m| {
             [0, 1].map(|src| {
@@ -374,6 +390,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     &shared.placeholder_depth,
                     &shared.placeholder_bytes,
                     &m[src].1,
+                    &shared.placeholder_minmax,
                 )
             })
         });
@@ -385,7 +402,17 @@ impl ShadowTechnique for ShadowMapTechnique {
             .moment
             .as_ref()
             .map_or(&shared.placeholder_moments, |m| &m[0].1);
-        let lookup_group = self.bind_group(ctx, &maps.depth_array, byte_array, moment_array);
+        let minmax_array = self
+            .chain
+            .as_ref()
+            .map_or(&shared.placeholder_minmax, |c| &c.view);
+        let lookup_group = self.bind_group(
+            ctx,
+            &maps.depth_array,
+            byte_array,
+            moment_array,
+            minmax_array,
+        );
         let mut map_triangles = 0;
         for (si, setup) in setups.iter().enumerate() {
             for face in 0..layers {
@@ -454,6 +481,16 @@ impl ShadowTechnique for ShadowMapTechnique {
             }
             if c.stage != Stage::Full {
                 continue;
+            }
+            if let Some(chain) = &self.chain {
+                chain.record(
+                    gpu,
+                    encoder,
+                    match &maps.byte {
+                        Some(b) => ChainSource::Bytes(&b.1),
+                        None => ChainSource::Depth(&maps.depth_array),
+                    },
+                );
             }
             // One sample writes the mask; several add 1/N each onto a cleared mask.
             let (load, accumulate) = match (lights.len(), si) {
@@ -548,6 +585,6 @@ impl ShadowTechnique for ShadowMapTechnique {
     }
 
     fn resource_bytes(&self) -> u64 {
-        self.maps.as_ref().map_or(0, |m| m.bytes)
+        self.maps.as_ref().map_or(0, |m| m.bytes) + self.chain.as_ref().map_or(0, |c| c.bytes)
     }
 }

@@ -41,16 +41,19 @@ pub struct LookupKey {
     pub receiver_plane: bool,
     /// Adds `constant × visibility` onto the mask (area-light maps).
     pub accumulate: bool,
+    /// The kernel only where the min/max chain finds a shadow edge.
+    pub edge_mask: bool,
 }
 
 impl LookupKey {
     /// The values of the lookup's pipeline-overridable constants.
-    fn constants(&self) -> [(&'static str, f64); 4] {
+    fn constants(&self) -> [(&'static str, f64); 5] {
         [
             ("FILTER_KIND", self.filter.index() as f64),
             ("TAPS", self.taps as f64),
             ("BYTE_MAP", self.byte_map as u32 as f64),
             ("RECEIVER_PLANE", self.receiver_plane as u32 as f64),
+            ("EDGE_MASK", self.edge_mask as u32 as f64),
         ]
     }
 }
@@ -81,6 +84,7 @@ pub struct ShadowMapShared {
     /// Bound in place of the maps while they are rendered.
     pub placeholder_depth: wgpu::TextureView,
     pub placeholder_moments: wgpu::TextureView,
+    pub placeholder_minmax: wgpu::TextureView,
 }
 
 impl ShadowMapShared {
@@ -109,6 +113,7 @@ impl ShadowMapShared {
                 },
                 tex(5, wgpu::TextureSampleType::Float { filterable: false }),
                 tex(6, wgpu::TextureSampleType::Float { filterable: false }),
+                tex(7, wgpu::TextureSampleType::Float { filterable: false }),
             ],
         });
         let filter_constants = Filter::wgsl_constants("FILTER");
@@ -138,6 +143,7 @@ impl ShadowMapShared {
             placeholder_bytes: placeholder(device, wgpu::TextureFormat::R8Unorm),
             placeholder_depth: placeholder(device, wgpu::TextureFormat::Depth32Float),
             placeholder_moments: placeholder(device, MOMENT_FORMAT),
+            placeholder_minmax: placeholder(device, wgpu::TextureFormat::Rg32Float),
         }
     }
 

@@ -12,6 +12,9 @@ override FILTER_KIND: u32 = FILTER_GRID;
 override TAPS: u32 = 3u;
 override BYTE_MAP: bool = false;
 override RECEIVER_PLANE: bool = false;
+// Edge-masked filtering: the kernel runs only where the min/max chain
+// (binding 7) cannot tell the answer.
+override EDGE_MASK: bool = false;
 
 struct ShadowMap {
     // world → light clip, one per face (1 for spot/directional, 6 for point,
@@ -63,6 +66,7 @@ struct ShadowMap {
 @group(2) @binding(4) var compare_sampler: sampler_comparison;
 @group(2) @binding(5) var byte_map: texture_2d_array<f32>;
 @group(2) @binding(6) var moment_map: texture_2d_array<f32>;
+@group(2) @binding(7) var minmax_map: texture_2d_array<f32>;
 
 
 struct DepthOut {

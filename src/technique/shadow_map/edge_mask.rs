@@ -1,0 +1,236 @@
+//! Edge-masked filtering (`edge_mask=true`; 000 §4.3: PCF only at shadow
+//! silhouettes): a min/max chain of the map (`edge_mask.wgsl`), after which
+//! the lookup reads 2×2 texels of the level that covers a pixel's whole
+//! kernel and runs the kernel only where the receiver depth lies between
+//! their least and greatest stored depth — elsewhere every tap would agree
+//! (all lit or all shadowed), so the answer is known without them.
+
+use crate::gpu::GpuContext;
+use anyhow::Result;
+use std::sync::Arc;
+
+const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+const WORKGROUP: u32 = 8;
+
+/// The reduction programs, shared per device.
+struct ChainShared {
+    layout: wgpu::BindGroupLayout,
+    from_depth: wgpu::ComputePipeline,
+    from_bytes: wgpu::ComputePipeline,
+    from_level: wgpu::ComputePipeline,
+    /// Bound in place of the source not read by a step.
+    placeholder_depth: wgpu::TextureView,
+    placeholder_values: wgpu::TextureView,
+}
+
+impl ChainShared {
+    fn new(gpu: &GpuContext) -> ChainShared {
+        let device = &gpu.device;
+        let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Texture {
+                sample_type,
+                view_dimension: wgpu::TextureViewDimension::D2Array,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("edge mask chain"),
+            entries: &[
+                texture(0, wgpu::TextureSampleType::Depth),
+                texture(1, wgpu::TextureSampleType::Float { filterable: false }),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        format: FORMAT,
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("edge mask chain"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = crate::gpu::compose_shader(
+            device,
+            "edge mask chain",
+            &[include_str!("edge_mask.wgsl")],
+        );
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let placeholder = |format| {
+            crate::gpu::texture_2d(
+                device,
+                "edge mask placeholder",
+                1,
+                1,
+                1,
+                format,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            )
+            .create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            })
+        };
+        ChainShared {
+            from_depth: pipeline("from_depth"),
+            from_bytes: pipeline("from_bytes"),
+            from_level: pipeline("from_level"),
+            placeholder_depth: placeholder(wgpu::TextureFormat::Depth32Float),
+            placeholder_values: placeholder(wgpu::TextureFormat::R8Unorm),
+            layout,
+        }
+    }
+}
+
+/// Where the chain's level 0 reads from.
+pub enum ChainSource<'a> {
+    Depth(&'a wgpu::TextureView),
+    Bytes(&'a wgpu::TextureView),
+}
+
+/// One light's min/max chain: levels from half the map's side down to 1×1.
+pub struct MinMaxChain {
+    shared: Arc<ChainShared>,
+    /// The map side and layers it was made for.
+    size: u32,
+    layers: u32,
+    /// Per level, its side and its view (written, then read by the next).
+    levels: Vec<(u32, wgpu::TextureView)>,
+    /// Every level, read by the lookup.
+    pub view: wgpu::TextureView,
+    pub bytes: u64,
+}
+
+impl MinMaxChain {
+    /// Keeps `chain` when it fits a map of `size`² × `layers`, else makes one.
+    pub fn ensure(
+        chain: &mut Option<MinMaxChain>,
+        gpu: &GpuContext,
+        size: u32,
+        layers: u32,
+    ) -> Result<()> {
+        if chain
+            .as_ref()
+            .is_some_and(|c| (c.size, c.layers) == (size, layers))
+        {
+            return Ok(());
+        }
+        *chain = None;
+        *chain = Some(MinMaxChain::new(gpu, size, layers)?);
+        Ok(())
+    }
+
+    fn new(gpu: &GpuContext, size: u32, layers: u32) -> Result<MinMaxChain> {
+        let sides: Vec<u32> = std::iter::successors(Some(size.div_ceil(2).max(1)), |&s| {
+            (s > 1).then(|| s.div_ceil(2))
+        })
+        .collect();
+        let bytes = sides.iter().map(|&s| s as u64 * s as u64 * 8).sum::<u64>() * layers as u64;
+        gpu.check_allocation(
+            &format!("shadow-map: the edge mask's min/max chain of a {size}² map"),
+            (sides[0], sides[0], layers),
+            bytes,
+        )?;
+        gpu.checked("allocating the edge mask's min/max chain", || {
+            let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("edge mask min/max chain"),
+                size: wgpu::Extent3d {
+                    width: sides[0],
+                    height: sides[0],
+                    depth_or_array_layers: layers,
+                },
+                mip_level_count: sides.len() as u32,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: FORMAT,
+                usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            });
+            let level_view = |level: u32| {
+                texture.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2Array),
+                    base_mip_level: level,
+                    mip_level_count: Some(1),
+                    ..Default::default()
+                })
+            };
+            let levels = (0..sides.len() as u32)
+                .map(|l| (sides[l as usize], level_view(l)))
+                .collect();
+            Ok(MinMaxChain {
+                shared: gpu.cache.shared(|| ChainShared::new(gpu)),
+                size,
+                layers,
+                levels,
+                view: texture.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2Array),
+                    ..Default::default()
+                }),
+                bytes,
+            })
+        })
+    }
+
+    /// Records the reduction of the map into every level.
+    pub fn record(&self, gpu: &GpuContext, encoder: &mut wgpu::CommandEncoder, source: ChainSource) {
+        let shared = &self.shared;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("edge mask min/max chain"),
+            timestamp_writes: None,
+        });
+        for (level, (side, storage)) in self.levels.iter().enumerate() {
+            let (pipeline, depth, values) = match (level, &source) {
+                (0, ChainSource::Depth(d)) => {
+                    (&shared.from_depth, *d, &shared.placeholder_values)
+                }
+                (0, ChainSource::Bytes(b)) => {
+                    (&shared.from_bytes, &shared.placeholder_depth, *b)
+                }
+                _ => (
+                    &shared.from_level,
+                    &shared.placeholder_depth,
+                    &self.levels[level - 1].1,
+                ),
+            };
+            let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("edge mask chain level"),
+                layout: &shared.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(depth),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(values),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::TextureView(storage),
+                    },
+                ],
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            let groups = side.div_ceil(WORKGROUP);
+            pass.dispatch_workgroups(groups, groups, self.layers);
+        }
+    }
+}
