@@ -32,6 +32,11 @@ impl AsyncReadback {
         }
     }
 
+    /// Bytes the buffer holds.
+    pub fn size(&self) -> u64 {
+        self.buffer.size()
+    }
+
     /// The buffer to copy into, when it is not waiting for an earlier read
     /// (then this frame's copy is skipped). Marks it as copied into.
     pub fn target(&self) -> Option<&wgpu::Buffer> {

@@ -11,6 +11,8 @@ use anyhow::Result;
 use super::partition_params::{
     BLEND, CASCADES, FIT, LISPSM_N, MAX_DISTANCE, SPLIT_LAMBDA, STABILIZE, TSM_FOCUS, WARP,
 };
+pub use super::paging_params::{Paging, PagingConfig};
+use super::paging_params::{CLIPMAP_LEVELS, PAGE_SIZE, PAGING, POOL, VIRTUAL_SIZE};
 pub use super::partition_params::{Cascades, Fit, Warp, WarpParams};
 
 choice_enum! {
@@ -378,6 +380,11 @@ pub const PARAMS: &[ParamSpec] = &[
     WARP,
     LISPSM_N,
     TSM_FOCUS,
+    PAGING,
+    VIRTUAL_SIZE,
+    PAGE_SIZE,
+    POOL,
+    CLIPMAP_LEVELS,
 ];
 
 pub const PRESETS: &[Preset] = &[
@@ -491,6 +498,11 @@ pub const PRESETS: &[Preset] = &[
         ],
     },
     Preset {
+        name: "virtual",
+        summary: "virtual shadow map: 16384² per clipmap level (directional) or view, 128² pages from a pool of 4096, cached across frames, 3×3 PCF grid",
+        values: &[("paging", "virtual")],
+    },
+    Preset {
         name: "8bit",
         summary: "depth stored in 8 bits: acne everywhere",
         values: &[("format", "r8"), ("filter", "hard")],
@@ -535,6 +547,7 @@ pub struct ShadowMapConfig {
     pub stage: Stage,
     pub cascades: Cascades,
     pub warp: WarpParams,
+    pub paging: PagingConfig,
 }
 
 impl ShadowMapConfig {
@@ -571,6 +584,17 @@ impl ShadowMapConfig {
             stage: p.choice(&STAGE)?,
             cascades: Cascades::parse(p)?,
             warp: WarpParams::parse(p)?,
+            paging: PagingConfig::parse(p)?,
+        })
+        .and_then(|c: ShadowMapConfig| {
+            if c.paging.is_virtual()
+                && (c.filter.is_moment() || c.area || c.format != DepthFormat::D32f)
+            {
+                anyhow::bail!(
+                    "shadow-map: paging=virtual stores d32f, filters with the PCF family (hard, pcf2x2, grid, disk, pcss, varwidth) and renders one map per light (area=false)"
+                );
+            }
+            Ok(c)
         })
     }
 

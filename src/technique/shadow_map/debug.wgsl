@@ -5,6 +5,11 @@
 @fragment
 fn fs_debug_map(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let uv = frag.xy / 256.0;
+    if VIRTUAL {
+        // The physical pool's first layer: every page, as rendered.
+        let side = f32(vsm.atlas_pages * vsm.page_texels);
+        return vec4f(vec3f(textureLoad(depth_map, vec2i(uv * side), 0, 0)), 1.0);
+    }
     let t = vec2i(uv * sm.map.x);
     var d: f32;
     if FILTER_KIND >= FILTER_VSM {
@@ -63,6 +68,9 @@ fn texel_footprint(dx: vec2f, dy: vec2f) -> f32 {
 
 @fragment
 fn fs_debug_frame(@builtin(position) frag: vec4f) -> DebugFrame {
+    if VIRTUAL {
+        return virtual_debug_frame(frag);
+    }
     let g = textureLoad(gbuffer_position, vec2i(frag.xy), 0);
     let face = face_of(g.xyz);
     var c = sm.faces[face] * vec4f(g.xyz, 1.0);

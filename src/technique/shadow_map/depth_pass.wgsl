@@ -10,6 +10,9 @@ fn vs_depth(v: VertexIn) -> DepthOut {
         o.clip = paraboloid(world, sm.face.x);
         let p = (sm.faces[sm.face.x] * world).xyz;
         o.hemisphere = -p.z / max(length(p), 1e-6);
+    } else if VIRTUAL {
+        // A page's matrix takes points relative to the camera (precision).
+        o.clip = sm.faces[sm.face.x] * vec4f(world.xyz - frame.camera_pos.xyz, 1.0);
     } else {
         o.clip = sm.faces[sm.face.x] * world;
     }
@@ -97,4 +100,11 @@ fn fs_depth_byte(i: DepthOut) -> @location(0) vec4f {
         discard;
     }
     return vec4f(select(i.clip.z, i.linear, is_warped()));
+}
+
+// Virtual maps: a page's depth cleared to the far plane before its casters
+// are drawn into it (the rest of the pool keeps its pages).
+@fragment
+fn fs_clear_page() -> @builtin(frag_depth) f32 {
+    return 1.0;
 }

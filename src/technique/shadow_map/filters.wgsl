@@ -4,6 +4,9 @@
 
 // Stored depth at a texel (nearest), from the depth map or the 8-bit map.
 fn stored(texel: vec2i, face: u32) -> f32 {
+    if VIRTUAL {
+        return virtual_stored(texel, face);
+    }
     let size = i32(sm.map.x);
     let t = clamp(texel, vec2i(0), vec2i(size - 1));
     if BYTE_MAP {
@@ -44,7 +47,7 @@ fn lit_at(texel: vec2i, face: u32, z: f32) -> f32 {
 
 // Bilinear (hardware-style 2×2) comparison at uv.
 fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
-    if !BYTE_MAP {
+    if !BYTE_MAP && !VIRTUAL {
         return textureSampleCompareLevel(depth_map, compare_sampler, uv, i32(face), z);
     }
     let p = uv * sm.map.x - 0.5;
@@ -178,10 +181,11 @@ fn pcf_grid(uv: vec2f, face: u32, z: f32, radius_texels: f32, k: u32) -> f32 {
 // units; for directional lights the tangent of the angular radius): the
 // segment from the receiver to the light's rim, seen from the light centre.
 fn penumbra_texels(dr: f32, db: f32) -> f32 {
+    let texel = select(sm.map.z, virtual_texel_world, VIRTUAL);
     if sm.map.w > 0.5 && !is_paraboloid() {
-        return sm.depth.z * (dr - db) * (sm.depth.y - sm.depth.x) / sm.map.z;
+        return sm.depth.z * (dr - db) * (sm.depth.y - sm.depth.x) / texel;
     }
-    return sm.depth.z * (dr - db) / (dr * max(db, 1e-4)) / sm.map.z;
+    return sm.depth.z * (dr - db) / (dr * max(db, 1e-4)) / texel;
 }
 
 // Mean linear depth of the blockers (stored < z) in a disk, and their count.

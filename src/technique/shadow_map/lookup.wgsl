@@ -68,6 +68,9 @@ fn linear_depth(z: f32) -> f32 {
 fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let g = textureLoad(gbuffer_position, vec2i(frag.xy), 0);
     let n = normalize(textureLoad(gbuffer_normal, vec2i(frag.xy), 0).xyz);
+    if VIRTUAL {
+        return vec4f(virtual_visibility(frag.xy, g, n));
+    }
     if sm.cascade.x < 0.5 {
         let face = face_of(g.xyz);
         return vec4f(filtered(face, projected(face, g, n), frag.xy));
@@ -116,6 +119,19 @@ fn warped_texel_world(face: u32, p: vec3f) -> f32 {
     return step / max(min(along_t, along_b) * sm.map.x, 1e-9);
 }
 
+// G-buffer point g with normal n moved along the normal by `sm.kernel.y`
+// texels of world size `texel_world` (× sin θ between normal and light
+// when `sm.kernel.w` is set: full at grazing light, none facing it).
+fn offset_point(g: vec3f, n: vec3f, texel_world: f32) -> vec3f {
+    var offset = sm.kernel.y * texel_world;
+    if sm.kernel.w > 0.5 {
+        let to_light = select(normalize(sm.light.xyz - g), -normalize(sm.warp.xyz), sm.map.w > 0.5 && !is_paraboloid());
+        let cos_theta = clamp(dot(n, to_light), 0.0, 1.0);
+        offset *= sqrt(1.0 - cos_theta * cos_theta);
+    }
+    return g + n * offset;
+}
+
 // A G-buffer point in one face of the map: its light-clip position, map uv
 // and depth, the receiver plane's depth gradient there, and whether it is
 // looked up at all (a receiver, in front of the light, inside the map).
@@ -141,13 +157,7 @@ fn projected(face: u32, g: vec4f, n: vec3f) -> Projected {
     } else if sm.map.w < 0.5 || is_paraboloid() {
         texel_world = sm.map.z * length(g.xyz - sm.light.xyz);
     }
-    var offset = sm.kernel.y * texel_world;
-    if sm.kernel.w > 0.5 {
-        let to_light = select(normalize(sm.light.xyz - g.xyz), -normalize(sm.warp.xyz), sm.map.w > 0.5 && !is_paraboloid());
-        let cos_theta = clamp(dot(n, to_light), 0.0, 1.0);
-        offset *= sqrt(1.0 - cos_theta * cos_theta);
-    }
-    let p = g.xyz + n * offset;
+    let p = offset_point(g.xyz, n, texel_world);
     var c = sm.faces[face] * vec4f(p, 1.0);
     if is_paraboloid() {
         c = paraboloid(vec4f(p, 1.0), face);

@@ -14,12 +14,15 @@ mod debug;
 mod depth_bounds;
 mod edge_mask;
 mod maps;
+pub mod paging_params;
 pub mod partition_params;
 mod perspective;
 mod pipelines;
 mod projection;
 mod setup;
 mod trapezoid;
+mod uniform;
+mod virtual_map;
 pub mod warp;
 
 pub use config::{
@@ -33,11 +36,11 @@ use crate::gpu::GpuContext;
 use crate::scene::LightType;
 use crate::scene::area::area_samples;
 use anyhow::Result;
-use bytemuck::{Pod, Zeroable};
 use depth_bounds::{DepthReduction, SeenBounds};
 use edge_mask::{ChainSource, MinMaxChain};
 use glam::{Mat4, UVec4, Vec4};
 use maps::Maps;
+use uniform::{MAX_FACES, SLOTS, STRIDE, ShadowMapUniform};
 use pipelines::{DepthPassKey, LookupKey, ShadowMapShared};
 use std::sync::Arc;
 
@@ -63,36 +66,6 @@ pub static FAMILY: Family = Family {
     },
 };
 
-/// The most faces (cube) or cascades one light's maps have.
-const MAX_FACES: usize = 8;
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct ShadowMapUniform {
-    faces: [Mat4; MAX_FACES],
-    light: Vec4,
-    kernel: Vec4,
-    map: Vec4,
-    soft: Vec4,
-    depth: Vec4,
-    face: UVec4,
-    moments: Vec4,
-    /// x cascades (0: not cascaded), y blend fraction, z view depth where
-    /// the first cascade starts.
-    cascade: Vec4,
-    /// View depth at which each cascade ends.
-    cascade_far: [Vec4; 2],
-    /// Each cascade's world texel size.
-    cascade_texel: [Vec4; 2],
-    /// Row z of the view matrix of the camera the cascades were fitted to:
-    /// a point's view depth is −dot(row, (p, 1)).
-    cascade_view_z: Vec4,
-    /// xyz the direction the light travels, w 1 when the faces are warped.
-    warp: Vec4,
-    /// Warped faces: the row giving a point's stored (linear) depth.
-    warp_depth: Vec4,
-}
-
 pub struct ShadowMapTechnique {
     shared: Arc<ShadowMapShared>,
     config: ShadowMapConfig,
@@ -115,11 +88,10 @@ pub struct ShadowMapTechnique {
     last_seen: Option<SeenBounds>,
     /// The edge mask's min/max chain of the maps (`edge_mask=true`).
     chain: Option<MinMaxChain>,
+    /// `paging=virtual`: the pool, page table and cache across frames.
+    virtual_state: Option<virtual_map::VirtualState>,
 }
 
-/// Uniform slots: per face, the depth pass (and lookup), blur along x, blur along y.
-const STRIDE: u64 = 768;
-const SLOTS: u64 = MAX_FACES as u64 * 3;
 impl ShadowMapTechnique {
     pub fn new(gpu: &GpuContext, config: ShadowMapConfig) -> ShadowMapTechnique {
         ShadowMapTechnique {
@@ -142,6 +114,7 @@ impl ShadowMapTechnique {
             depth_reduction: None,
             last_seen: None,
             chain: None,
+            virtual_state: None,
         }
     }
 
@@ -173,15 +146,23 @@ impl ShadowMapTechnique {
     fn bind_group(
         &self,
         ctx: &MaskContext,
+        uniforms: &wgpu::Buffer,
         depth: &wgpu::TextureView,
         bytes: &wgpu::TextureView,
         moments: &wgpu::TextureView,
         minmax: &wgpu::TextureView,
+        virtual_buffers: [&wgpu::Buffer; 4],
     ) -> wgpu::BindGroup {
         let view = |binding, v| wgpu::BindGroupEntry {
             binding,
             resource: wgpu::BindingResource::TextureView(v),
         };
+        fn buffer(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+            wgpu::BindGroupEntry {
+                binding,
+                resource: b.as_entire_binding(),
+            }
+        }
         ctx.gpu
             .device
             .create_bind_group(&wgpu::BindGroupDescriptor {
@@ -190,7 +171,7 @@ impl ShadowMapTechnique {
                 entries: &[
                     wgpu::BindGroupEntry {
                         binding: 0,
-                        resource: crate::gpu::dynamic_uniform::<ShadowMapUniform>(&self.uniforms),
+                        resource: crate::gpu::dynamic_uniform::<ShadowMapUniform>(uniforms),
                     },
                     view(3, depth),
                     wgpu::BindGroupEntry {
@@ -200,6 +181,10 @@ impl ShadowMapTechnique {
                     view(5, bytes),
                     view(6, moments),
                     view(7, minmax),
+                    buffer(8, virtual_buffers[0]),
+                    buffer(9, virtual_buffers[1]),
+                    buffer(10, virtual_buffers[2]),
+                    buffer(11, virtual_buffers[3]),
                 ],
             })
     }
@@ -219,6 +204,12 @@ impl ShadowTechnique for ShadowMapTechnique {
     }
 
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        if self.config.paging.is_virtual() {
+            self.maps = None;
+            self.chain = None;
+            return self.render_virtual(ctx, encoder);
+        }
+        self.virtual_state = None;
         let c = self.config;
         let gpu = ctx.gpu;
         let aspect = ctx.frame.width() as f32 / ctx.frame.height() as f32;
@@ -280,12 +271,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             let base = ShadowMapUniform {
                 faces,
                 light: light.position.extend(layers as f32),
-                kernel: Vec4::new(
-                    c.radius,
-                    normal_offset,
-                    c.slope_bias,
-                    c.normal_offset_slope as u32 as f32,
-                ),
+
                 map: Vec4::new(
                     size as f32,
                     1.0 / size as f32,
@@ -296,12 +282,6 @@ impl ShadowTechnique for ShadowMapTechnique {
                         setup.orthographic as u32 as f32
                     },
                 ),
-                soft: Vec4::new(
-                    c.light_size,
-                    c.varwidth_scale,
-                    c.varwidth_exponent,
-                    c.blocker_search,
-                ),
                 depth: Vec4::new(
                     setup.near,
                     setup.far,
@@ -309,12 +289,6 @@ impl ShadowTechnique for ShadowMapTechnique {
                     c.depth_bias as f32 * format.depth_step(),
                 ),
                 face: UVec4::ZERO,
-                moments: Vec4::new(
-                    c.bleeding_reduction,
-                    c.exponent,
-                    c.exponent_negative,
-                    c.moment_bias,
-                ),
                 cascade: Vec4::new(
                     setup.cascades.as_ref().map_or(0, |s| s.far.len()) as f32,
                     c.cascades.blend,
@@ -329,6 +303,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     .normalize_or_zero()
                     .extend(setup.warp_depth.is_some() as u32 as f32),
                 warp_depth: setup.warp_depth.unwrap_or(Vec4::ZERO),
+                ..ShadowMapUniform::with_filter(&c, normal_offset)
             };
             for f in 0..MAX_FACES as u32 {
                 for k in 0..3u32 {
@@ -358,6 +333,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     moments: moments.then_some(c.filter),
                     paraboloid,
                     linear_depth: setups.iter().any(|s| s.warp_depth.is_some()),
+                    virtual_map: false,
                 },
             )
         };
@@ -368,6 +344,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             receiver_plane: c.receiver_plane,
             accumulate: false,
             edge_mask,
+            virtual_map: false,
         };
         let maps = self.maps.as_ref().expect("ensured above");
         let slot = |s: usize, f: u32, k: u32| {
@@ -378,19 +355,23 @@ impl ShadowTechnique for ShadowMapTechnique {
         let shared = &self.shared;
         let render_group = self.bind_group(
             ctx,
+            &self.uniforms,
             &shared.placeholder_depth,
             &shared.placeholder_bytes,
             &shared.placeholder_moments,
             &shared.placeholder_minmax,
+            shared.placeholder_virtual.each_ref(),
         );
         let blur_groups = maps.moment.as_ref().map(|m| {
             [0, 1].map(|src| {
                 self.bind_group(
                     ctx,
+                    &self.uniforms,
                     &shared.placeholder_depth,
                     &shared.placeholder_bytes,
                     &m[src].1,
                     &shared.placeholder_minmax,
+                    shared.placeholder_virtual.each_ref(),
                 )
             })
         });
@@ -408,10 +389,12 @@ impl ShadowTechnique for ShadowMapTechnique {
             .map_or(&shared.placeholder_minmax, |c| &c.view);
         let lookup_group = self.bind_group(
             ctx,
+            &self.uniforms,
             &maps.depth_array,
             byte_array,
             moment_array,
             minmax_array,
+            shared.placeholder_virtual.each_ref(),
         );
         let mut map_triangles = 0;
         for (si, setup) in setups.iter().enumerate() {
@@ -541,6 +524,9 @@ impl ShadowTechnique for ShadowMapTechnique {
         if let Some(r) = &mut self.depth_reduction {
             r.after_frame();
         }
+        if let Some(v) = &mut self.virtual_state {
+            v.after_frame();
+        }
         Ok(())
     }
 
@@ -559,6 +545,22 @@ impl ShadowTechnique for ShadowMapTechnique {
     }
 
     fn counters(&self) -> Vec<(&'static str, f64)> {
+        if let Some(v) = &self.virtual_state {
+            let p = v.counters;
+            return vec![
+                ("pages_needed", p.needed as f64),
+                ("pages_rendered", p.rendered as f64),
+                ("pages_cached", p.cached as f64),
+                ("pages_degraded", p.degraded as f64),
+                ("pages_dropped", p.dropped as f64),
+                ("pages_resident", p.resident as f64),
+                ("pool_pages", p.capacity as f64),
+                ("pool_occupancy", p.resident as f64 / p.capacity.max(1) as f64),
+                ("virtual_levels", p.levels as f64),
+                ("page_feedback_ms", p.feedback_ms),
+                ("map_triangles", self.map_triangles as f64),
+            ];
+        }
         self.maps
             .as_ref()
             .map(|m| {
@@ -585,6 +587,11 @@ impl ShadowTechnique for ShadowMapTechnique {
     }
 
     fn resource_bytes(&self) -> u64 {
-        self.maps.as_ref().map_or(0, |m| m.bytes) + self.chain.as_ref().map_or(0, |c| c.bytes)
+        self.maps.as_ref().map_or(0, |m| m.bytes)
+            + self.chain.as_ref().map_or(0, |c| c.bytes)
+            + self
+                .virtual_state
+                .as_ref()
+                .map_or(0, |v| v.resource_bytes())
     }
 }

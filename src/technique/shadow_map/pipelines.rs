@@ -29,6 +29,8 @@ pub struct DepthPassKey {
     /// Warped faces: the fragment stage writes the linear depth and applies
     /// the bias itself (`fs_depth_linear`).
     pub linear_depth: bool,
+    /// Pages of a virtual map: positions relative to the camera.
+    pub virtual_map: bool,
 }
 
 /// What a lookup pipeline depends on.
@@ -43,17 +45,20 @@ pub struct LookupKey {
     pub accumulate: bool,
     /// The kernel only where the min/max chain finds a shadow edge.
     pub edge_mask: bool,
+    /// Texels read through a virtual map's page table.
+    pub virtual_map: bool,
 }
 
 impl LookupKey {
     /// The values of the lookup's pipeline-overridable constants.
-    fn constants(&self) -> [(&'static str, f64); 5] {
+    fn constants(&self) -> [(&'static str, f64); 6] {
         [
             ("FILTER_KIND", self.filter.index() as f64),
             ("TAPS", self.taps as f64),
             ("BYTE_MAP", self.byte_map as u32 as f64),
             ("RECEIVER_PLANE", self.receiver_plane as u32 as f64),
             ("EDGE_MASK", self.edge_mask as u32 as f64),
+            ("VIRTUAL", self.virtual_map as u32 as f64),
         ]
     }
 }
@@ -85,6 +90,8 @@ pub struct ShadowMapShared {
     pub placeholder_depth: wgpu::TextureView,
     pub placeholder_moments: wgpu::TextureView,
     pub placeholder_minmax: wgpu::TextureView,
+    /// Bound in place of a virtual map's buffers (bindings 8 to 11).
+    pub placeholder_virtual: [wgpu::Buffer; 4],
 }
 
 impl ShadowMapShared {
@@ -114,6 +121,10 @@ impl ShadowMapShared {
                 tex(5, wgpu::TextureSampleType::Float { filterable: false }),
                 tex(6, wgpu::TextureSampleType::Float { filterable: false }),
                 tex(7, wgpu::TextureSampleType::Float { filterable: false }),
+                crate::gpu::storage_entry(8, wgpu::ShaderStages::FRAGMENT, false),
+                crate::gpu::storage_entry(9, wgpu::ShaderStages::FRAGMENT, true),
+                crate::gpu::storage_entry(10, wgpu::ShaderStages::FRAGMENT, true),
+                crate::gpu::storage_entry(11, wgpu::ShaderStages::FRAGMENT, false),
             ],
         });
         let filter_constants = Filter::wgsl_constants("FILTER");
@@ -126,6 +137,7 @@ impl ShadowMapShared {
                 include_str!("depth_pass.wgsl"),
                 include_str!("filters.wgsl"),
                 include_str!("lookup.wgsl"),
+                include_str!("virtual_map.wgsl"),
                 include_str!("debug.wgsl"),
             ],
         );
@@ -144,6 +156,14 @@ impl ShadowMapShared {
             placeholder_depth: placeholder(device, wgpu::TextureFormat::Depth32Float),
             placeholder_moments: placeholder(device, MOMENT_FORMAT),
             placeholder_minmax: placeholder(device, wgpu::TextureFormat::Rg32Float),
+            placeholder_virtual: std::array::from_fn(|_| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("virtual map placeholder"),
+                    size: 256,
+                    usage: wgpu::BufferUsages::STORAGE,
+                    mapped_at_creation: false,
+                })
+            }),
         }
     }
 
@@ -217,6 +237,41 @@ impl ShadowMapShared {
         )
     }
 
+    /// A virtual map's marking pass: each pixel's level and the pages its
+    /// kernel needs (storage writes; the mask is not written).
+    pub fn virtual_mark(&self, gpu: &GpuContext, key: LookupKey) -> wgpu::RenderPipeline {
+        self.fullscreen(
+            gpu,
+            "virtual shadow map marking",
+            "fs_virtual_mark",
+            key,
+            &[Some(wgpu::ColorTargetState {
+                format: MASK_FORMAT,
+                blend: None,
+                write_mask: wgpu::ColorWrites::empty(),
+            })],
+            Some(crate::technique::frame_depth_read(Default::default())),
+        )
+    }
+
+    /// Clears one page of a virtual map's pool to the far plane.
+    pub fn clear_page(&self, gpu: &GpuContext, key: LookupKey) -> wgpu::RenderPipeline {
+        self.fullscreen(
+            gpu,
+            "virtual shadow map page clear",
+            "fs_clear_page",
+            key,
+            &[],
+            Some(wgpu::DepthStencilState {
+                format: wgpu::TextureFormat::Depth32Float,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+        )
+    }
+
     /// The separable box blur of moment maps.
     pub fn blur(&self, gpu: &GpuContext, key: LookupKey) -> wgpu::RenderPipeline {
         self.fullscreen(
@@ -271,10 +326,13 @@ impl ShadowMapShared {
             } else {
                 (None, None)
             };
-            let constants = [(
-                "FILTER_KIND",
-                key.moments.map_or(Filter::Grid, |f| f).index() as f64,
-            )];
+            let constants = [
+                (
+                    "FILTER_KIND",
+                    key.moments.map_or(Filter::Grid, |f| f).index() as f64,
+                ),
+                ("VIRTUAL", key.virtual_map as u32 as f64),
+            ];
             let options = wgpu::PipelineCompilationOptions {
                 constants: &constants,
                 ..Default::default()

@@ -15,6 +15,9 @@ override RECEIVER_PLANE: bool = false;
 // Edge-masked filtering: the kernel runs only where the min/max chain
 // (binding 7) cannot tell the answer.
 override EDGE_MASK: bool = false;
+// A virtual map (virtual_map.wgsl): texels are read through the page table
+// from the physical pool bound as `depth_map`.
+override VIRTUAL: bool = false;
 
 struct ShadowMap {
     // world → light clip, one per face (1 for spot/directional, 6 for point,
@@ -67,6 +70,54 @@ struct ShadowMap {
 @group(2) @binding(5) var byte_map: texture_2d_array<f32>;
 @group(2) @binding(6) var moment_map: texture_2d_array<f32>;
 @group(2) @binding(7) var minmax_map: texture_2d_array<f32>;
+
+// One level of a virtual map: a window of `pages`² pages over its view's
+// uv square (see virtual_map.wgsl).
+struct VirtualLevel {
+    // uv of the window's first texel corner in the view
+    origin: vec2f,
+    // clipmaps: the camera's texel coordinates in the window
+    eye_texel: vec2f,
+    // absolute index of the window's first page
+    origin_page: vec2i,
+    // uv per texel
+    texel: f32,
+    // the view (face) the level belongs to
+    view: u32,
+    // pages per side of the window
+    pages: u32,
+    // first page-table entry of the level
+    table: u32,
+    // world size of a texel (orthographic) or of a texel at unit distance
+    texel_world: f32,
+    // the next coarser level of the same view (itself when none)
+    parent: u32,
+};
+
+struct VirtualMap {
+    // clipmaps: the world directions of the view's u and v axes
+    axis_u: vec3f,
+    // pages per row of one atlas layer
+    atlas_pages: u32,
+    axis_v: vec3f,
+    // texels per page side
+    page_texels: u32,
+    // pages per atlas layer
+    layer_pages: u32,
+    // levels per view
+    view_levels: u32,
+    // texels a pixel's kernel reaches from its centre
+    reach: f32,
+    _pad: u32,
+    levels: array<VirtualLevel>,
+};
+
+// Virtual maps: the pages the visible pixels need (bits), the page table
+// (physical page + 1, 0 when none), the levels, each pixel's level.
+@group(2) @binding(8) var<storage, read_write> vsm_marks: array<atomic<u32>>;
+@group(2) @binding(9) var<storage, read> vsm_table: array<u32>;
+@group(2) @binding(10) var<storage, read> vsm: VirtualMap;
+@group(2) @binding(11) var<storage, read_write> vsm_pixel_level: array<u32>;
 
 
 struct DepthOut {

@@ -1,0 +1,89 @@
+//! The parameters of virtual (paged) shadow maps: whether a light's map is
+//! one texture per face or a huge virtual map in pages, and the sizes of
+//! the virtual map, its pages and the physical pool.
+
+use crate::technique::params::choice_enum;
+use crate::technique::{ParamSpec, ParamValues};
+use anyhow::{Result, bail};
+
+choice_enum! {
+    /// How a light's map is stored.
+    pub enum Paging { Off = "off", Virtual = "virtual" }
+}
+
+pub const PAGING: ParamSpec = ParamSpec::choice_of::<Paging>(
+    "paging",
+    Paging::Off as usize,
+    "off: one `size`² map per face; virtual: a `virtual_size`² virtual map per view in `page_size`² pages (directional lights: a clipmap of `clipmap_levels` windows whose side doubles per level, centred on the camera; spot: one view, point: six cube faces, each a mip chain) — the pages the visible pixels need at the level where a texel covers at most one pixel are marked on the GPU, allocated from a pool of `pool` pages (least recently used first), rendered when new and kept across frames until the light or a caster moves; depth is d32f and the filters are the PCF family",
+);
+
+pub const VIRTUAL_SIZE: ParamSpec = ParamSpec::int(
+    "virtual_size",
+    16384,
+    1024,
+    65536,
+    "paging=virtual: texels per side of each clipmap window, or of level 0 of a local light's view (a power of two)",
+);
+
+pub const PAGE_SIZE: ParamSpec = ParamSpec::int(
+    "page_size",
+    128,
+    32,
+    512,
+    "paging=virtual: texels per page side (a power of two)",
+);
+
+pub const POOL: ParamSpec = ParamSpec::int(
+    "pool",
+    4096,
+    16,
+    65536,
+    "paging=virtual: physical pages (each page_size² of d32f); when the view needs more, the finest levels give way to coarser ones (counter pages_degraded)",
+);
+
+pub const CLIPMAP_LEVELS: ParamSpec = ParamSpec::int(
+    "clipmap_levels",
+    10,
+    2,
+    14,
+    "paging=virtual, directional lights: clipmap levels; the coarsest window is twice the scene's width and each finer one half the last",
+);
+
+/// A light's paging and the virtual map's sizes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PagingConfig {
+    pub paging: Paging,
+    pub virtual_size: u32,
+    pub page_size: u32,
+    pub pool: u32,
+    pub clipmap_levels: u32,
+}
+
+impl PagingConfig {
+    pub fn parse(p: &ParamValues) -> Result<PagingConfig> {
+        let c = PagingConfig {
+            paging: p.choice(&PAGING)?,
+            virtual_size: p.int(&VIRTUAL_SIZE)?,
+            page_size: p.int(&PAGE_SIZE)?,
+            pool: p.int(&POOL)?,
+            clipmap_levels: p.int(&CLIPMAP_LEVELS)?,
+        };
+        for (name, v) in [("virtual_size", c.virtual_size), ("page_size", c.page_size)] {
+            if !v.is_power_of_two() {
+                bail!("shadow-map: {name}={v} is not a power of two");
+            }
+        }
+        if c.page_size > c.virtual_size {
+            bail!(
+                "shadow-map: page_size={} is larger than virtual_size={}",
+                c.page_size,
+                c.virtual_size
+            );
+        }
+        Ok(c)
+    }
+
+    pub fn is_virtual(&self) -> bool {
+        self.paging == Paging::Virtual
+    }
+}

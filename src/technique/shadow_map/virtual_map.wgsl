@@ -1,0 +1,223 @@
+// Virtual shadow maps: per pixel, the level whose texels cover at most one
+// pixel (from the texel footprint of the G-buffer's neighbours, as
+// `compare` measures it), the pages its kernel needs marked (fs_virtual_mark);
+// the lookup reads each texel through the page table and, where a page is
+// not resident (a pool too small), from the next coarser level that is.
+
+const NO_LEVEL: u32 = 0xffffffffu;
+
+// World size of the texels of the level being filtered (pcss's penumbra).
+var<private> virtual_texel_world: f32 = 1.0;
+
+// World size of one texel of `level` at world point p.
+fn level_texel_world(level: u32, p: vec3f) -> f32 {
+    let t = vsm.levels[level].texel_world;
+    if sm.map.w > 0.5 {
+        return t;
+    }
+    return t * length(p - sm.light.xyz);
+}
+
+// Texel coordinates of world point p in `level`'s window and its light
+// depth. A clipmap's are taken relative to the camera (a fine level's texel
+// is far below the float precision of uv over the whole square); the
+// views' matrices take points relative to the camera too.
+fn level_texel(level: u32, p: vec3f) -> vec4f {
+    let l = vsm.levels[level];
+    let d = p - frame.camera_pos.xyz;
+    let c = sm.faces[l.view] * vec4f(d, 1.0);
+    let ndc = c.xyz / select(c.w, 1e-6, abs(c.w) < 1e-6);
+    if sm.map.w > 0.5 {
+        let t = vec2f(dot(vsm.axis_u, d), dot(vsm.axis_v, d)) / l.texel_world + l.eye_texel;
+        return vec4f(t, ndc.z, 1.0);
+    }
+    return vec4f((vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) - l.origin) / l.texel, ndc.z, c.w);
+}
+
+// A lookup point in a level: uv = texel / map size (what the filters
+// take), its depth, whether it is inside the window and in front.
+struct VirtualPoint {
+    uv: vec2f,
+    z: f32,
+    inside: bool,
+};
+
+fn virtual_point(level: u32, g: vec3f, n: vec3f) -> VirtualPoint {
+    let l = vsm.levels[level];
+    let t = level_texel(level, offset_point(g, n, level_texel_world(level, g)));
+    let extent = f32(l.pages * vsm.page_texels);
+    let inside = t.w > 0.0 && all(t.xy >= vec2f(0.0)) && all(t.xy <= vec2f(extent))
+        && t.z >= 0.0 && t.z <= 1.0;
+    return VirtualPoint(t.xy * sm.map.y, t.z, inside);
+}
+
+// The page-table entry of window page `page` of `level` (absolute page
+// indices wrap around the window: a clipmap level that moves with the
+// camera keeps the entries of the pages it still covers).
+fn virtual_entry(level: u32, page: vec2i) -> u32 {
+    let l = vsm.levels[level];
+    let g = i32(l.pages);
+    let a = page + l.origin_page;
+    let w = ((a % g) + g) % g;
+    return l.table + u32(w.y * g + w.x);
+}
+
+// The window page holding texel t of `level` (clamped to the window).
+fn virtual_page_of(level: u32, t: vec2f) -> vec2i {
+    let size = f32(vsm.page_texels);
+    let extent = f32(vsm.levels[level].pages) * size;
+    return vec2i(floor(clamp(t, vec2f(0.0), vec2f(extent - 1.0)) / size));
+}
+
+// Stored depth at texel t of `level`'s window, through the page table;
+// 1 (lit) where no page is resident.
+fn virtual_stored(t: vec2i, level: u32) -> f32 {
+    let size = i32(vsm.page_texels);
+    let extent = i32(vsm.levels[level].pages) * size;
+    let c = clamp(t, vec2i(0), vec2i(extent - 1));
+    let page = c / size;
+    let entry = vsm_table[virtual_entry(level, page)];
+    if entry == 0u {
+        return 1.0;
+    }
+    let k = (entry - 1u) % vsm.layer_pages;
+    let layer = (entry - 1u) / vsm.layer_pages;
+    let at = vec2i(i32(k % vsm.atlas_pages), i32(k / vsm.atlas_pages)) * size + (c - page * size);
+    return textureLoad(depth_map, at, i32(layer), 0);
+}
+
+// Texel offset per pixel step `step` at `pixel`, toward the neighbour
+// nearer to p on a receiver (the other one may lie across an edge); 0
+// when neither is a receiver.
+fn neighbour_delta(level: u32, pixel: vec2i, p: vec3f, step: vec2i) -> vec2f {
+    let top = vec2i(frame.size.xy) - 1;
+    let a = textureLoad(gbuffer_position, clamp(pixel + step, vec2i(0), top), 0);
+    let b = textureLoad(gbuffer_position, clamp(pixel - step, vec2i(0), top), 0);
+    let use_b = a.w < 0.5 || (b.w >= 0.5 && distance(b.xyz, p) < distance(a.xyz, p));
+    let q = select(a, b, use_b);
+    if q.w < 0.5 {
+        return vec2f(0.0);
+    }
+    let d = level_texel(level, q.xyz).xy - level_texel(level, p).xy;
+    return select(d, -d, use_b);
+}
+
+// The level for G-buffer point p (normal n) at `pixel`: in its view, the
+// coarsest whose texels span at most one pixel (footprint × 2^level ≤ 1);
+// for a clipmap, moved up until the window holds the whole kernel.
+fn virtual_level_of(pixel: vec2i, p: vec3f, n: vec3f) -> u32 {
+    let base = face_of(p) * vsm.view_levels;
+    let dx = neighbour_delta(base, pixel, p, vec2i(1, 0));
+    let dy = neighbour_delta(base, pixel, p, vec2i(0, 1));
+    let footprint = texel_footprint(dx, dy);
+    let steps = clamp(floor(-log2(max(footprint, 1e-12))), 0.0, f32(vsm.view_levels - 1u));
+    var level = base + u32(steps);
+    let clipmap = sm.map.w > 0.5;
+    for (var i = 0u; i < vsm.view_levels; i++) {
+        let l = vsm.levels[level];
+        let vp = virtual_point(level, p, n);
+        let t = vp.uv * sm.map.x;
+        let extent = f32(l.pages * vsm.page_texels);
+        let holds = !clipmap || (all(t >= vec2f(vsm.reach)) && all(t <= vec2f(extent - vsm.reach)));
+        if (vp.inside && holds) || l.parent == level {
+            break;
+        }
+        level = l.parent;
+    }
+    if !virtual_point(level, p, n).inside {
+        return NO_LEVEL;
+    }
+    return level;
+}
+
+fn mark_page(level: u32, t: vec2f) {
+    let e = virtual_entry(level, virtual_page_of(level, t));
+    atomicOr(&vsm_marks[e / 32u], 1u << (e % 32u));
+}
+
+fn pixel_index(pixel: vec2i) -> u32 {
+    return u32(pixel.y) * u32(frame.size.x) + u32(pixel.x);
+}
+
+// The marking pass: each receiving pixel's level, and the pages its
+// kernel reads (the corners of its reach: at most 2×2 pages).
+@fragment
+fn fs_virtual_mark(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    let pixel = vec2i(frag.xy);
+    let g = textureLoad(gbuffer_position, pixel, 0);
+    let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
+    var level = NO_LEVEL;
+    if g.w >= 0.5 {
+        level = virtual_level_of(pixel, g.xyz, n);
+    }
+    vsm_pixel_level[pixel_index(pixel)] = level;
+    if level != NO_LEVEL {
+        let t = virtual_point(level, g.xyz, n).uv * sm.map.x;
+        let r = vsm.reach;
+        mark_page(level, t + vec2f(-r, -r));
+        mark_page(level, t + vec2f(r, -r));
+        mark_page(level, t + vec2f(-r, r));
+        mark_page(level, t + vec2f(r, r));
+    }
+    return vec4f(1.0);
+}
+
+// The lookup: the pixel's level or, where its page is not resident, the
+// first coarser level of the view whose page is; lit where none is.
+fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f) -> f32 {
+    let marked = vsm_pixel_level[pixel_index(vec2i(frag))];
+    let first = select(marked, 0u, marked == NO_LEVEL);
+    let vp = virtual_point(first, g.xyz, n);
+    // Derivatives first, in uniform control flow.
+    let gradient = receiver_plane(vec3f(vp.uv, vp.z));
+    if marked == NO_LEVEL || g.w < 0.5 {
+        return 1.0;
+    }
+    var level = first;
+    var q = vp;
+    var scale = 1.0;
+    for (var i = 0u; i < vsm.view_levels; i++) {
+        let page = virtual_page_of(level, q.uv * sm.map.x);
+        if q.inside && vsm_table[virtual_entry(level, page)] != 0u {
+            break;
+        }
+        let parent = vsm.levels[level].parent;
+        if parent == level {
+            return 1.0;
+        }
+        level = parent;
+        q = virtual_point(level, g.xyz, n);
+        scale *= 2.0;
+    }
+    virtual_texel_world = level_texel_world(level, g.xyz);
+    return filtered(level, Projected(vec4f(0.0, 0.0, q.z, 1.0), q.uv, q.z, gradient * scale, q.inside), frag);
+}
+
+// Debug views of a virtual map: pages tinted by level over the scene, and
+// the texel footprint `compare` reads (of the level looked up).
+fn virtual_debug_frame(frag: vec4f) -> DebugFrame {
+    let pixel = vec2i(frag.xy);
+    let g = textureLoad(gbuffer_position, pixel, 0);
+    let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
+    let marked = vsm_pixel_level[pixel_index(pixel)];
+    let level = select(marked, 0u, marked == NO_LEVEL);
+    let vp = virtual_point(level, g.xyz, n);
+    let texel = vp.uv * sm.map.x;
+    let pixels_per_texel = texel_footprint(dpdx(texel), dpdy(texel));
+    let texels_per_pixel = max(length(dpdx(texel)), length(dpdy(texel)));
+    var o: DebugFrame;
+    let inside = g.w > 0.5 && marked != NO_LEVEL && vp.inside;
+    let page = virtual_page_of(level, texel);
+    let resident = vsm_table[virtual_entry(level, page)] != 0u;
+    // Page borders darkened; a missing page dark red.
+    let in_page = fract(texel / f32(vsm.page_texels));
+    let border = any(in_page < vec2f(0.02)) || any(in_page > vec2f(0.98));
+    let tint = cascade_tint(level % vsm.view_levels) * select(1.0, 0.55, border);
+    let colour = select(vec3f(0.5, 0.0, 0.0), tint, resident);
+    o.projection = select(vec4f(0.0, 0.0, 0.0, 1.0), vec4f(colour, 1.0), inside);
+    let t = clamp(log2(max(texels_per_pixel, 1e-6)) / 2.0, -1.0, 1.0);
+    let heat = select(mix(vec3f(0.0, 1.0, 0.0), vec3f(1.0, 0.0, 0.0), t), mix(vec3f(0.0, 1.0, 0.0), vec3f(0.0, 0.2, 1.0), -t), t < 0.0);
+    o.texels = select(vec4f(0.0, 0.0, 0.0, 1.0), vec4f(heat, 1.0), inside);
+    o.lookup = select(vec2f(0.0), vec2f(pixels_per_texel, f32(level + 1u)), inside);
+    return o;
+}

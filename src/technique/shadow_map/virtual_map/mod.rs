@@ -1,0 +1,612 @@
+//! `paging=virtual`: virtual shadow maps (the descendant of Fernando et
+//! al.'s adaptive shadow maps that UE5 and EEVEE ship). Per frame: a
+//! full-screen pass marks, from the G-buffer, the pages the visible pixels
+//! need at the level where a texel covers at most one pixel
+//! (`virtual_map.wgsl`); the marks come back to the CPU (this frame's,
+//! waited for, in measurements; the latest arrived in the viewer, as SDSM's
+//! depth bounds), where the pool allocates them ([`pages`]) — on the CPU
+//! because wgpu has no portable indirect multi-draw to render a GPU-built
+//! page list with per-page culling; new pages are rendered into the pool
+//! (an atlas) with the casters that overlap them; cached pages stay until
+//! the light or a caster that overlaps them moves; the lookup reads through
+//! the page table.
+
+mod levels;
+mod pages;
+
+pub use levels::{PageKey, VirtualLayout, VirtualParams};
+pub use pages::PagePool;
+
+use super::pipelines::{DepthPassKey, LookupKey};
+use super::setup::FrustumParams;
+use super::uniform::{MAX_FACES, STRIDE, ShadowMapUniform};
+use super::{CullFace, ShadowMapConfig, ShadowMapTechnique};
+use crate::gpu::{AsyncReadback, GpuContext};
+use crate::scene::Aabb;
+use crate::technique::light_space::outside_clip_volume;
+use crate::technique::{Feedback, MaskContext};
+use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, UVec4, Vec4};
+use std::collections::BTreeSet;
+
+/// The header of the levels buffer (`VirtualMap` of shadow_map.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct MapHeader {
+    axis_u: [f32; 3],
+    atlas_pages: u32,
+    axis_v: [f32; 3],
+    page_texels: u32,
+    layer_pages: u32,
+    view_levels: u32,
+    reach: f32,
+    pad: u32,
+}
+
+/// One level (`VirtualLevel` of shadow_map.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct LevelGpu {
+    origin: [f32; 2],
+    eye_texel: [f32; 2],
+    origin_page: [i32; 2],
+    texel: f32,
+    view: u32,
+    pages: u32,
+    table: u32,
+    texel_world: f32,
+    parent: u32,
+}
+
+/// The physical pool: layers of `side`² pages of `page`² d32f texels.
+struct Atlas {
+    page: u32,
+    capacity: u32,
+    /// Pages per row of a layer, and per layer.
+    row_pages: u32,
+    layer_pages: u32,
+    layer_views: Vec<wgpu::TextureView>,
+    array: wgpu::TextureView,
+    bytes: u64,
+}
+
+impl Atlas {
+    fn new(gpu: &GpuContext, page: u32, capacity: u32) -> Result<Atlas> {
+        let max = gpu.max_texture_size();
+        let row_pages = (max / page).min((capacity as f64).sqrt().ceil() as u32).max(1);
+        let layer_pages = row_pages * row_pages;
+        let layers = capacity.div_ceil(layer_pages);
+        let side = row_pages * page;
+        let bytes = side as u64 * side as u64 * layers as u64 * 4;
+        gpu.check_allocation(
+            &format!(
+                "shadow-map: a pool of {capacity} pages of {page}² ({layers} layer(s) of {side}²; --set pool=N)"
+            ),
+            (side, side, layers),
+            bytes,
+        )?;
+        gpu.checked("allocating the virtual map's pool", || {
+            let t = crate::gpu::texture_2d(
+                &gpu.device,
+                "virtual shadow map pool",
+                side,
+                side,
+                layers,
+                wgpu::TextureFormat::Depth32Float,
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            );
+            let (layer_views, array) = crate::gpu::layer_views(&t, layers);
+            Ok(Atlas {
+                page,
+                capacity,
+                row_pages,
+                layer_pages,
+                layer_views,
+                array,
+                bytes,
+            })
+        })
+    }
+
+    /// Layer and texel origin of a slot.
+    fn place(&self, slot: u32) -> (usize, u32, u32) {
+        let k = slot % self.layer_pages;
+        (
+            (slot / self.layer_pages) as usize,
+            (k % self.row_pages) * self.page,
+            (k / self.row_pages) * self.page,
+        )
+    }
+}
+
+/// What the cached pages were rendered with: when any of it changes,
+/// every page is stale.
+#[derive(Clone, Debug, PartialEq)]
+struct CacheKey {
+    views: Vec<[f64; 16]>,
+    levels: Vec<(u32, f32, u32)>,
+    depth_bias: i32,
+    slope_bias: u32,
+    cull: CullFace,
+}
+
+/// The pages counted over the last frame.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PageCounters {
+    pub needed: usize,
+    pub rendered: usize,
+    pub cached: usize,
+    pub degraded: usize,
+    pub dropped: usize,
+    pub resident: usize,
+    pub capacity: u32,
+    pub levels: usize,
+    /// Wall time from the marking pass to its marks on the CPU.
+    pub feedback_ms: f64,
+}
+
+/// One light's virtual map across frames.
+pub struct VirtualState {
+    pool: PagePool,
+    atlas: Option<Atlas>,
+    marks: wgpu::Buffer,
+    marks_staging: wgpu::Buffer,
+    late: AsyncReadback,
+    late_pending: bool,
+    latest_marks: Option<Vec<u32>>,
+    table: wgpu::Buffer,
+    levels: wgpu::Buffer,
+    pixel_levels: wgpu::Buffer,
+    uniforms: wgpu::Buffer,
+    key: Option<CacheKey>,
+    /// Caster bounds the cached pages were rendered with.
+    casters: Vec<Aabb>,
+    pub counters: PageCounters,
+    /// The last frame's layout and marked entries (debug views).
+    pub last_layout: Option<VirtualLayout>,
+    pub last_marks: Vec<u32>,
+}
+
+fn buffer(gpu: &GpuContext, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16),
+        usage,
+        mapped_at_creation: false,
+    })
+}
+
+/// Grows `b` to at least `size` bytes (contents not kept).
+fn ensure_size(gpu: &GpuContext, b: &mut wgpu::Buffer, size: u64, label: &str) {
+    if b.size() < size {
+        *b = buffer(gpu, label, size.next_power_of_two(), b.usage());
+    }
+}
+
+impl VirtualState {
+    fn new(gpu: &GpuContext, capacity: u32) -> VirtualState {
+        use wgpu::BufferUsages as U;
+        VirtualState {
+            pool: PagePool::new(capacity),
+            atlas: None,
+            marks: buffer(gpu, "virtual map marks", 16, U::STORAGE | U::COPY_SRC | U::COPY_DST),
+            marks_staging: buffer(gpu, "virtual map marks read-back", 16, U::MAP_READ | U::COPY_DST),
+            late: AsyncReadback::new(&gpu.device, "virtual map marks, frame late", 16),
+            late_pending: false,
+            latest_marks: None,
+            table: buffer(gpu, "virtual map page table", 16, U::STORAGE | U::COPY_DST),
+            levels: buffer(gpu, "virtual map levels", 16, U::STORAGE | U::COPY_DST),
+            pixel_levels: buffer(gpu, "virtual map pixel levels", 16, U::STORAGE),
+            uniforms: buffer(gpu, "virtual map uniforms", STRIDE, U::UNIFORM | U::COPY_DST),
+            key: None,
+            casters: vec![],
+            counters: PageCounters::default(),
+            last_layout: None,
+            last_marks: vec![],
+        }
+    }
+
+    /// After the frame's submission: asks for the frame-late marks.
+    pub fn after_frame(&mut self) {
+        if std::mem::take(&mut self.late_pending) {
+            self.late.request();
+        }
+    }
+
+    pub fn resource_bytes(&self) -> u64 {
+        self.atlas.as_ref().map_or(0, |a| a.bytes)
+            + self.table.size()
+            + self.levels.size()
+            + self.marks.size()
+            + self.pixel_levels.size()
+    }
+
+    /// Drops the cached pages the changes since the last frame make stale:
+    /// all when the views or the depth pass changed, else those a moved,
+    /// added or removed caster overlaps (before or after).
+    fn invalidate(&mut self, layout: &VirtualLayout, key: CacheKey, casters: Vec<Aabb>) {
+        if self.key.as_ref() != Some(&key) {
+            self.pool.invalidate(|_| true);
+        } else if casters != self.casters {
+            let n = casters.len().max(self.casters.len());
+            let moved: Vec<Aabb> = (0..n)
+                .filter(|&i| casters.get(i) != self.casters.get(i))
+                .flat_map(|i| [casters.get(i), self.casters.get(i)])
+                .flatten()
+                .map(|b| Aabb {
+                    min: b.min - layout.eye,
+                    max: b.max - layout.eye,
+                })
+                .collect();
+            self.pool.invalidate(|k| {
+                let m = layout.page_view_proj(*k);
+                moved.iter().any(|b| !outside_clip_volume(b, m))
+            });
+        }
+        self.key = Some(key);
+        self.casters = casters;
+    }
+}
+
+impl ShadowMapTechnique {
+    /// The frame of a light with `paging=virtual`.
+    pub(super) fn render_virtual(
+        &mut self,
+        ctx: &MaskContext,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<()> {
+        let c = self.config;
+        let gpu = ctx.gpu;
+        let p = c.paging;
+        let layout = VirtualLayout::new(
+            ctx.light,
+            &ctx.scene_gpu.bounds,
+            ctx.fit_camera,
+            ctx.camera.eye,
+            &FrustumParams {
+                near: c.near,
+                far: c.far,
+                fov_deg: c.fov_deg,
+                paraboloid: false,
+                stabilize_size: None,
+            },
+            VirtualParams {
+                size: p.virtual_size,
+                page: p.page_size,
+                clipmap_levels: p.clipmap_levels,
+            },
+        );
+        let mut state = self
+            .virtual_state
+            .take()
+            .unwrap_or_else(|| VirtualState::new(gpu, p.pool));
+        let done = self.render_pages(ctx, encoder, &mut state, layout);
+        self.virtual_state = Some(state);
+        done
+    }
+
+    /// [`Self::render_virtual`] with the light's state and layout.
+    fn render_pages(
+        &mut self,
+        ctx: &MaskContext,
+        encoder: &mut wgpu::CommandEncoder,
+        state: &mut VirtualState,
+        layout: VirtualLayout,
+    ) -> Result<()> {
+        let c = self.config;
+        let gpu = ctx.gpu;
+        let shared = self.shared.clone();
+        let p = c.paging;
+        if state.atlas.as_ref().is_none_or(|a| (a.page, a.capacity) != (p.page_size, p.pool)) {
+            state.atlas = None;
+            state.atlas = Some(Atlas::new(gpu, p.page_size, p.pool)?);
+            state.pool = PagePool::new(p.pool);
+        }
+        // Stale pages.
+        let key = CacheKey {
+            views: layout.views.iter().map(|v| v.to_cols_array()).collect(),
+            levels: layout
+                .levels
+                .iter()
+                .map(|l| (l.view, l.texel, l.pages))
+                .collect(),
+            depth_bias: c.depth_bias,
+            slope_bias: c.slope_bias.to_bits(),
+            cull: c.cull,
+        };
+        let casters = ctx
+            .scene_gpu
+            .draws
+            .iter()
+            .filter(|d| d.casts_shadow && !d.shadow_plane)
+            .map(|d| d.bounds)
+            .collect();
+        state.invalidate(&layout, key, casters);
+        let atlas = state.atlas.as_ref().expect("made above");
+        // Buffers of this layout and frame size.
+        let words = layout.table_len.div_ceil(32) as u64;
+        ensure_size(gpu, &mut state.marks, words * 4, "virtual map marks");
+        ensure_size(gpu, &mut state.marks_staging, words * 4, "virtual map marks read-back");
+        if state.late.size() < words * 4 {
+            state.late = AsyncReadback::new(&gpu.device, "virtual map marks, frame late", words * 4);
+            state.late_pending = false;
+            state.latest_marks = None;
+        }
+        ensure_size(gpu, &mut state.table, layout.table_len as u64 * 4, "virtual map page table");
+        let pixels = ctx.frame.width() as u64 * ctx.frame.height() as u64;
+        ensure_size(gpu, &mut state.pixel_levels, pixels * 4, "virtual map pixel levels");
+        let mut level_bytes = bytemuck::bytes_of(&MapHeader {
+            axis_u: layout.axis_u.to_array(),
+            atlas_pages: atlas.row_pages,
+            axis_v: layout.axis_v.to_array(),
+            page_texels: layout.page,
+            layer_pages: atlas.layer_pages,
+            view_levels: layout.view_levels,
+            reach: kernel_reach(&c),
+            pad: 0,
+        })
+        .to_vec();
+        for l in &layout.levels {
+            level_bytes.extend_from_slice(bytemuck::bytes_of(&LevelGpu {
+                origin: l.origin.to_array(),
+                eye_texel: l.eye_texel.to_array(),
+                origin_page: l.origin_page.to_array(),
+                texel: l.texel,
+                view: l.view,
+                pages: l.pages,
+                table: l.table,
+                texel_world: l.texel_world,
+                parent: l.parent,
+            }));
+        }
+        ensure_size(gpu, &mut state.levels, level_bytes.len() as u64, "virtual map levels");
+        gpu.queue.write_buffer(&state.levels, 0, &level_bytes);
+        // Uniforms: slot 0 marking and lookup, then one per page rendered.
+        let mut faces = [Mat4::IDENTITY; MAX_FACES];
+        for (i, f) in faces.iter_mut().zip(0..layout.views.len()) {
+            *i = layout.view_relative(f);
+        }
+        let normal_offset = c.normal_offset(ctx.light.kind);
+        let base = ShadowMapUniform {
+            faces,
+            light: ctx.light.position.extend(layout.views.len() as f32),
+            map: Vec4::new(
+                p.virtual_size as f32,
+                1.0 / p.virtual_size as f32,
+                layout.levels[0].texel_world,
+                layout.orthographic as u32 as f32,
+            ),
+            depth: Vec4::new(layout.near, layout.far, 0.0, 0.0),
+            warp: ctx.light.direction.normalize_or_zero().extend(0.0),
+            cascade_view_z: ctx.fit_camera.view().row(2),
+            ..ShadowMapUniform::with_filter(&c, normal_offset)
+        };
+        let lookup_key = LookupKey {
+            filter: c.filter,
+            taps: if c.filter.uses_taps() { c.samples } else { 0 },
+            byte_map: false,
+            receiver_plane: c.receiver_plane,
+            accumulate: false,
+            edge_mask: false,
+            virtual_map: true,
+        };
+        let group = |state: &VirtualState, pool: &wgpu::TextureView| {
+            self.bind_group(
+                ctx,
+                &state.uniforms,
+                pool,
+                &shared.placeholder_bytes,
+                &shared.placeholder_moments,
+                &shared.placeholder_minmax,
+                [&state.marks, &state.table, &state.levels, &state.pixel_levels],
+            )
+        };
+        // Marking.
+        gpu.queue.write_buffer(&state.uniforms, 0, bytemuck::bytes_of(&base));
+        let mark_group = group(state, &shared.placeholder_depth);
+        let record_marks = |encoder: &mut wgpu::CommandEncoder| {
+            encoder.clear_buffer(&state.marks, 0, Some(words * 4));
+            let mut pass = crate::technique::mask_pass_with(
+                encoder,
+                ctx,
+                "virtual shadow map marking",
+                wgpu::LoadOp::Load,
+            );
+            pass.set_pipeline(&shared.virtual_mark(gpu, lookup_key));
+            ctx.bind_frame_groups(&mut pass);
+            pass.set_bind_group(crate::frame::OWN_GROUP, &mark_group, &[0]);
+            pass.draw(0..3, 0..1);
+        };
+        let start = std::time::Instant::now();
+        let marks: Option<Vec<u32>> = match ctx.feedback {
+            Feedback::ThisFrame => {
+                let mut own = gpu.device.create_command_encoder(&Default::default());
+                record_marks(&mut own);
+                own.copy_buffer_to_buffer(&state.marks, 0, &state.marks_staging, 0, words * 4);
+                gpu.queue.submit([own.finish()]);
+                let bytes = gpu.read_buffer(&state.marks_staging)?;
+                Some(bytemuck::cast_slice(&bytes[..(words * 4) as usize]).to_vec())
+            }
+            Feedback::PreviousFrame => {
+                if let Some(bytes) = state.late.try_read(gpu)? {
+                    state.latest_marks =
+                        Some(bytemuck::cast_slice(&bytes[..(words * 4) as usize]).to_vec());
+                }
+                record_marks(encoder);
+                if let Some(target) = state.late.target() {
+                    encoder.copy_buffer_to_buffer(&state.marks, 0, target, 0, words * 4);
+                    state.late_pending = true;
+                }
+                state.latest_marks.clone()
+            }
+        };
+        drop(mark_group);
+        let feedback_ms = start.elapsed().as_secs_f64() * 1e3;
+        let marks = marks.unwrap_or_default();
+        // Allocation.
+        let needed: BTreeSet<PageKey> = marked_entries(&marks, layout.table_len)
+            .map(|e| layout.key_of_entry(e))
+            .collect();
+        let allocation = state.pool.allocate(needed, |k| layout.parent(k));
+        let mut table = vec![0u32; layout.table_len as usize];
+        for (k, slot) in state.pool.resident() {
+            if let Some(e) = layout.entry(k) {
+                table[e as usize] = slot + 1;
+            }
+        }
+        gpu.queue.write_buffer(&state.table, 0, bytemuck::cast_slice(&table));
+        // New pages, rendered into their slots.
+        let slots = 1 + allocation.render.len() as u64;
+        ensure_size(gpu, &mut state.uniforms, slots * STRIDE, "virtual map uniforms");
+        let mut data = vec![0u8; (slots * STRIDE) as usize];
+        data[..std::mem::size_of::<ShadowMapUniform>()].copy_from_slice(bytemuck::bytes_of(&base));
+        for (i, (k, _)) in allocation.render.iter().enumerate() {
+            let mut faces = [Mat4::IDENTITY; MAX_FACES];
+            faces[0] = layout.page_view_proj(*k);
+            let u = ShadowMapUniform {
+                faces,
+                face: UVec4::ZERO,
+                ..base
+            };
+            let at = ((i as u64 + 1) * STRIDE) as usize;
+            data[at..at + std::mem::size_of::<ShadowMapUniform>()].copy_from_slice(bytemuck::bytes_of(&u));
+        }
+        gpu.queue.write_buffer(&state.uniforms, 0, &data);
+        let render_group = group(state, &shared.placeholder_depth);
+        let depth_pipeline = shared.depth_pass(
+            gpu,
+            DepthPassKey {
+                format: super::DepthFormat::D32f,
+                cull: c.cull,
+                bias: c.depth_bias,
+                slope_bits: c.slope_bias.to_bits(),
+                moments: None,
+                paraboloid: false,
+                linear_depth: false,
+                virtual_map: true,
+            },
+        );
+        let clear_pipeline = shared.clear_page(gpu, lookup_key);
+        let mut map_triangles = 0;
+        for (layer, view) in atlas.layer_views.iter().enumerate() {
+            let on_layer: Vec<(usize, &(PageKey, u32))> = allocation
+                .render
+                .iter()
+                .enumerate()
+                .filter(|(_, (_, slot))| atlas.place(*slot).0 == layer)
+                .collect();
+            if on_layer.is_empty() {
+                continue;
+            }
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("virtual shadow map pages"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            ctx.bind_frame_groups(&mut pass);
+            for (i, (k, slot)) in on_layer {
+                let (_, x, y) = atlas.place(*slot);
+                let page = atlas.page;
+                pass.set_viewport(x as f32, y as f32, page as f32, page as f32, 0.0, 1.0);
+                pass.set_scissor_rect(x, y, page, page);
+                let offset = ((i as u64 + 1) * STRIDE) as u32;
+                pass.set_bind_group(crate::frame::OWN_GROUP, &render_group, &[offset]);
+                pass.set_pipeline(&clear_pipeline);
+                pass.draw(0..3, 0..1);
+                pass.set_pipeline(&depth_pipeline);
+                let m = layout.page_view_proj(*k);
+                let eye = layout.eye;
+                map_triangles += ctx.scene_gpu.draw_objects(&mut pass, |d| {
+                    d.casts_shadow
+                        && !outside_clip_volume(
+                            &Aabb {
+                                min: d.bounds.min - eye,
+                                max: d.bounds.max - eye,
+                            },
+                            m,
+                        )
+                });
+            }
+        }
+        drop(render_group);
+        // The lookup through the page table.
+        let lookup_group = group(state, &atlas.array);
+        {
+            let mut pass = crate::technique::mask_pass(encoder, ctx, "virtual shadow map lookup");
+            pass.set_pipeline(&shared.lookup(gpu, lookup_key));
+            ctx.bind_frame_groups(&mut pass);
+            pass.set_bind_group(crate::frame::OWN_GROUP, &lookup_group, &[0]);
+            pass.draw(0..3, 0..1);
+        }
+        state.counters = PageCounters {
+            needed: allocation.needed,
+            rendered: allocation.render.len(),
+            cached: allocation.cached,
+            degraded: allocation.degraded,
+            dropped: allocation.dropped,
+            resident: state.pool.resident_count(),
+            capacity: state.pool.capacity(),
+            levels: layout.levels.len(),
+            feedback_ms,
+        };
+        state.last_marks = marked_entries(&marks, layout.table_len).collect();
+        self.render_debug(ctx, encoder, &lookup_group, lookup_key, 0);
+        self.map_triangles = map_triangles;
+        self.samples = 1;
+        self.last_faces = layout.views.iter().map(|v| v.as_mat4()).collect();
+        self.last_paraboloid = false;
+        state.last_layout = Some(layout);
+        Ok(())
+    }
+}
+
+/// The page-table entries whose bit is set in `marks`.
+fn marked_entries(marks: &[u32], len: u32) -> impl Iterator<Item = u32> + '_ {
+    marks.iter().enumerate().flat_map(move |(w, &bits)| {
+        (0..32)
+            .filter(move |b| bits & (1 << b) != 0)
+            .map(move |b| w as u32 * 32 + b)
+            .filter(move |&e| e < len)
+    })
+}
+
+/// Texels from a pixel's lookup point its filter reads (what `kernel_reach`
+/// and the 2×2 taps of filters.wgsl reach), rounded up.
+fn kernel_reach(c: &ShadowMapConfig) -> f32 {
+    use super::Filter;
+    match c.filter {
+        Filter::Hard => 0.5,
+        Filter::Pcf2x2 => 1.0,
+        Filter::Grid | Filter::Disk => c.radius + 1.0,
+        _ => c.blocker_search.max(64.0) + 1.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn marked_entries_are_the_set_bits() {
+        let marks = [0b1001u32, 0, 1 << 31];
+        let e: Vec<u32> = marked_entries(&marks, 96).collect();
+        assert_eq!(e, vec![0, 3, 95]);
+        assert_eq!(marked_entries(&marks, 90).count(), 2);
+    }
+
+    #[test]
+    fn reach_covers_the_kernel() {
+        let mut c = ShadowMapConfig::parse(&crate::technique::ParamValues::defaults(super::super::config::PARAMS)).unwrap();
+        c.radius = 2.5;
+        assert_eq!(kernel_reach(&c), 3.5);
+    }
+}
