@@ -676,3 +676,125 @@ fn edge_masked_filters_equal_the_full_kernel_on_the_builtin_scenes() {
         }
     }
 }
+
+/// A technique's counter after the frame `hf` rendered last.
+fn counter(hf: &shadowlab::headless::HeadlessFrame, name: &str) -> f64 {
+    hf.techniques[0]
+        .technique
+        .counters()
+        .into_iter()
+        .find(|(n, _)| *n == name)
+        .unwrap_or_else(|| panic!("no counter {name}"))
+        .1
+}
+
+/// One frame of `technique` (with settings) on `scene`, kept for more frames.
+fn virtual_frame(
+    scene: &Scene,
+    set: &[&str],
+    w: u32,
+    h: u32,
+) -> shadowlab::headless::HeadlessFrame {
+    let mut choice = shadowlab::technique::resolve("shadow-map:virtual").unwrap();
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    shadowlab::technique::apply_settings(&mut choice.params, &set).unwrap();
+    let mut hf = shadowlab::headless::HeadlessFrame::new(gpu(), scene, &[choice], w, h).unwrap();
+    render_again(&mut hf, scene);
+    hf
+}
+
+fn render_again(hf: &mut shadowlab::headless::HeadlessFrame, scene: &Scene) {
+    let settings = shadowlab::renderer::RenderSettings {
+        show_light_icons: false,
+        ..Default::default()
+    };
+    hf.render(gpu(), scene, &scene.camera, &scene.lights, &settings)
+        .unwrap();
+}
+
+/// A sun straight down on the 20×20 floor, the camera 8 above looking
+/// down (50° square view): every pixel sees 7.46/256 = 0.0291 of floor.
+/// With 1024² windows of 128² pages and 6 clipmap levels over the scene's
+/// 20.002-wide square, level 4's texel (0.0195) is the coarsest at most a
+/// pixel wide (level 5's is 0.039); its pages are 2.5005 wide from
+/// x = −10.001, so the seen ±3.73 (plus the 3×3 grid's 2.5 texels) crosses
+/// the page borders at −2.4985, 0.0020 and 2.5025: 4 × 4 = 16 pages.
+#[test]
+fn virtual_pages_marked_for_a_known_view_match_the_hand_count_and_stay_cached() {
+    let scene = squares_over_floor(
+        &[(Vec3::new(0.0, 1.0, 0.0), 0.7)],
+        Light::directional(Vec3::NEG_Y, 1.0),
+        false,
+    );
+    let set = ["virtual_size=1024", "page_size=128", "clipmap_levels=6"];
+    let mut hf = virtual_frame(&scene, &set, 256, 256);
+    assert_eq!(counter(&hf, "pages_needed"), 16.0);
+    assert_eq!(counter(&hf, "pages_rendered"), 16.0);
+    // A still camera and light: nothing to render, everything cached.
+    render_again(&mut hf, &scene);
+    assert_eq!(counter(&hf, "pages_rendered"), 0.0);
+    assert_eq!(counter(&hf, "pages_cached"), 16.0);
+    assert_eq!(counter(&hf, "pages_resident"), 16.0);
+}
+
+/// Texels read across page borders are the texels of one map: the same
+/// virtual map of a spot light (a mip chain over the whole view, the same
+/// levels whatever the pages) cut into 32² pages and into 512² pages (each
+/// the full-resolution map of a quarter of the view) gives the same mask,
+/// filtered over a wide kernel.
+#[test]
+fn virtual_lookups_across_page_borders_match_one_full_map() {
+    let scene = squares_over_floor(
+        &[
+            (Vec3::new(0.5, 1.0, 0.2), 0.7),
+            (Vec3::new(-1.5, 2.0, -1.0), 0.5),
+        ],
+        Light::spot(Vec3::new(1.0, 5.0, 1.0), Vec3::ZERO, 1.0, 30.0, 40.0),
+        false,
+    );
+    let mask = |page: &str, pool: &str| {
+        mask_of(
+            &scene,
+            "shadow-map:virtual",
+            &[
+                "virtual_size=1024",
+                page,
+                pool,
+                "clipmap_levels=6",
+                "filter=disk",
+                "radius=6",
+                "samples=5",
+            ],
+            256,
+            256,
+        )
+    };
+    let paged = mask("page_size=32", "pool=4096");
+    let whole = mask("page_size=512", "pool=64");
+    let shadowed = whole.iter().filter(|v| **v < 0.5).count();
+    assert!(shadowed > 1000, "{shadowed}");
+    let differ = paged
+        .iter()
+        .zip(&whole)
+        .filter(|(a, b)| (*a - *b).abs() > 1e-3)
+        .count();
+    assert!(differ <= 6, "{differ} of {} pixels differ", paged.len());
+}
+
+/// A pool far too small for the view: finer levels give way to coarser
+/// ones (counted), the mask stays a shadow of the right casters.
+#[test]
+fn a_virtual_pool_too_small_degrades_to_coarser_pages_without_garbage() {
+    let scene = builtin::by_name("columns").unwrap().unwrap();
+    let full = virtual_frame(&scene, &[], 320, 180);
+    let needed = counter(&full, "pages_needed");
+    let small = virtual_frame(&scene, &["pool=16"], 320, 180);
+    assert!(needed > 16.0, "{needed}");
+    assert!(counter(&small, "pages_degraded") > 0.0);
+    assert!(counter(&small, "pages_resident") <= 16.0);
+    let row = compare(&scene, "shadow-map:virtual[pool=16]", (320, 180));
+    let good = compare(&scene, "shadow-map:virtual", (320, 180));
+    assert!(row.mask.reference_shadowed_pct > 5.0);
+    assert!(row.mask.all.total_pct < 3.0, "{:?}", row.mask);
+    assert!(good.mask.all.total_pct <= row.mask.all.total_pct + 1e-9);
+}

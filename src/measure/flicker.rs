@@ -85,6 +85,9 @@ pub struct FlickerRow {
     pub edge_flicker_pct: f64,
     /// Per step, `flicker_pct`'s terms.
     pub per_step_pct: Vec<f64>,
+    /// Per step, the technique's counters after the frame of that step's
+    /// camera (a virtual map's pages rendered and cached, …).
+    pub per_step_counters: Vec<Vec<(&'static str, f64)>>,
 }
 
 /// Flicker of one step: of the `considered` pixels, the percentage whose
@@ -164,12 +167,18 @@ pub fn run(
     for choice in techniques {
         let mut hf = frame_of(choice)?;
         let mut per_light: Vec<(Vec<f64>, Vec<f64>)> = vec![(vec![], vec![]); lights.len()];
+        let mut counters: Vec<Vec<Vec<(&'static str, f64)>>> = vec![vec![]; lights.len()];
         for step in 0..cameras.len() - 1 {
             let view = &cameras[step];
             let mut masks = vec![];
             for fit in [view, &cameras[step + 1]] {
                 hf.render_fitted(gpu, scene, FrameCameras { view, fit }, lights, &settings)?;
                 masks.push(headless::read_back(gpu, &hf.frame, lights.len())?.masks);
+                if std::ptr::eq(fit, view) {
+                    for (li, c) in counters.iter_mut().enumerate() {
+                        c.push(hf.techniques[li].technique.counters());
+                    }
+                }
             }
             for (li, (all, edge)) in per_light.iter_mut().enumerate() {
                 let (a, e) = step_flicker(
@@ -183,13 +192,16 @@ pub fn run(
             }
         }
         let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
-        for (li, (all, edge)) in per_light.into_iter().enumerate() {
+        for ((li, (all, edge)), per_step_counters) in
+            per_light.into_iter().enumerate().zip(counters)
+        {
             rows.push(FlickerRow {
                 technique: choice_label(choice),
                 light: li,
                 flicker_pct: mean(&all),
                 edge_flicker_pct: mean(&edge),
                 per_step_pct: all,
+                per_step_counters,
             });
         }
     }
@@ -238,6 +250,29 @@ pub fn run(
             "| `{}` | {} | {:.4} | {:.4} |",
             r.technique, r.light, r.flicker_pct, r.edge_flicker_pct
         );
+    }
+    // Counters that change along the path, per step.
+    for r in &rows {
+        let Some(first) = r.per_step_counters.first() else {
+            continue;
+        };
+        for (i, (name, _)) in first.iter().enumerate() {
+            let values: Vec<f64> = r
+                .per_step_counters
+                .iter()
+                .filter_map(|c| c.get(i).map(|v| v.1))
+                .collect();
+            if values.iter().any(|v| *v != values[0]) {
+                let list: Vec<String> = values.iter().map(|v| format!("{v}")).collect();
+                let _ = writeln!(
+                    md,
+                    "\n`{}` light {}, `{name}` per step: {}",
+                    r.technique,
+                    r.light,
+                    list.join(", ")
+                );
+            }
+        }
     }
     std::fs::write(out.join("flicker.md"), md)?;
     Ok(rows)

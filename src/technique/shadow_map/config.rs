@@ -8,11 +8,11 @@ use crate::technique::params::choice_enum;
 use crate::technique::{ParamSpec, ParamValues, Preset};
 use anyhow::Result;
 
+use super::paging_params::{CLIPMAP_LEVELS, PAGE_SIZE, PAGING, POOL, VIRTUAL_SIZE};
+pub use super::paging_params::{Paging, PagingConfig};
 use super::partition_params::{
     BLEND, CASCADES, FIT, LISPSM_N, MAX_DISTANCE, SPLIT_LAMBDA, STABILIZE, TSM_FOCUS, WARP,
 };
-pub use super::paging_params::{Paging, PagingConfig};
-use super::paging_params::{CLIPMAP_LEVELS, PAGE_SIZE, PAGING, POOL, VIRTUAL_SIZE};
 pub use super::partition_params::{Cascades, Fit, Warp, WarpParams};
 
 choice_enum! {
@@ -499,8 +499,8 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "virtual",
-        summary: "virtual shadow map: 16384² per clipmap level (directional) or view, 128² pages from a pool of 4096, cached across frames, 3×3 PCF grid",
-        values: &[("paging", "virtual")],
+        summary: "virtual shadow map: 16384² per clipmap level (directional) or view, 128² pages from a pool of 4096, cached across frames, 3×3 PCF grid; slope bias 1 (its texels cover at most a pixel: 2 leaked light at grazing creases, 0.07–0.09 % interior false lit on curved/pipe, 1 at most 0.024 % on 23 views with no acne)",
+        values: &[("paging", "virtual"), ("slope_bias", "1")],
     },
     Preset {
         name: "8bit",

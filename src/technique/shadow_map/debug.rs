@@ -114,11 +114,18 @@ impl ShadowMapTechnique {
                 rgba: gpu.read_texture(t, 0, 4)?,
             });
         }
+        if let Some(v) = &self.virtual_state {
+            views.images.extend(v.page_table_images());
+        }
         if let Some([projection, texels, _]) = &self.debug_frame {
             for (t, label) in [
                 (
                     projection,
-                    "map projected onto the scene (depth, tinted per cascade; dark red: outside the map)",
+                    if self.virtual_state.is_some() {
+                        "virtual map pages over the scene, tinted by level (page borders darker; dark red: page not resident)"
+                    } else {
+                        "map projected onto the scene (depth, tinted per cascade; dark red: outside the map)"
+                    },
                 ),
                 (
                     texels,

@@ -189,7 +189,12 @@ impl MinMaxChain {
     }
 
     /// Records the reduction of the map into every level.
-    pub fn record(&self, gpu: &GpuContext, encoder: &mut wgpu::CommandEncoder, source: ChainSource) {
+    pub fn record(
+        &self,
+        gpu: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        source: ChainSource,
+    ) {
         let shared = &self.shared;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("edge mask min/max chain"),
@@ -197,12 +202,8 @@ impl MinMaxChain {
         });
         for (level, (side, storage)) in self.levels.iter().enumerate() {
             let (pipeline, depth, values) = match (level, &source) {
-                (0, ChainSource::Depth(d)) => {
-                    (&shared.from_depth, *d, &shared.placeholder_values)
-                }
-                (0, ChainSource::Bytes(b)) => {
-                    (&shared.from_bytes, &shared.placeholder_depth, *b)
-                }
+                (0, ChainSource::Depth(d)) => (&shared.from_depth, *d, &shared.placeholder_values),
+                (0, ChainSource::Bytes(b)) => (&shared.from_bytes, &shared.placeholder_depth, *b),
                 _ => (
                     &shared.from_level,
                     &shared.placeholder_depth,

@@ -50,6 +50,12 @@ fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
     if !BYTE_MAP && !VIRTUAL {
         return textureSampleCompareLevel(depth_map, compare_sampler, uv, i32(face), z);
     }
+    if VIRTUAL {
+        let v = virtual_pcf2x2(uv, face, z);
+        if v >= 0.0 {
+            return v;
+        }
+    }
     let p = uv * sm.map.x - 0.5;
     let b = vec2i(floor(p));
     let f = fract(p);

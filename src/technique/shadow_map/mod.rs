@@ -40,9 +40,9 @@ use depth_bounds::{DepthReduction, SeenBounds};
 use edge_mask::{ChainSource, MinMaxChain};
 use glam::{Mat4, UVec4, Vec4};
 use maps::Maps;
-use uniform::{MAX_FACES, SLOTS, STRIDE, ShadowMapUniform};
 use pipelines::{DepthPassKey, LookupKey, ShadowMapShared};
 use std::sync::Arc;
+use uniform::{MAX_FACES, SLOTS, STRIDE, ShadowMapUniform};
 
 pub static FAMILY: Family = Family {
     id: "shadow-map",
@@ -65,6 +65,31 @@ pub static FAMILY: Family = Family {
         )))
     },
 };
+
+/// What a shadow-map bind group binds: the uniforms, the depth, 8-bit,
+/// moment and min/max arrays and a virtual map's buffers;
+/// [`MapBindings::empty`] binds placeholders for all but the uniforms.
+struct MapBindings<'a> {
+    uniforms: &'a wgpu::Buffer,
+    depth: &'a wgpu::TextureView,
+    bytes: &'a wgpu::TextureView,
+    moments: &'a wgpu::TextureView,
+    minmax: &'a wgpu::TextureView,
+    virtual_buffers: [&'a wgpu::Buffer; 4],
+}
+
+impl<'a> MapBindings<'a> {
+    fn empty(shared: &'a ShadowMapShared, uniforms: &'a wgpu::Buffer) -> MapBindings<'a> {
+        MapBindings {
+            uniforms,
+            depth: &shared.placeholder_depth,
+            bytes: &shared.placeholder_bytes,
+            moments: &shared.placeholder_moments,
+            minmax: &shared.placeholder_minmax,
+            virtual_buffers: shared.placeholder_virtual.each_ref(),
+        }
+    }
+}
 
 pub struct ShadowMapTechnique {
     shared: Arc<ShadowMapShared>,
@@ -141,18 +166,8 @@ impl ShadowMapTechnique {
         Ok(())
     }
 
-    /// The technique's bind group with the given depth, 8-bit, moment and
-    /// min/max arrays.
-    fn bind_group(
-        &self,
-        ctx: &MaskContext,
-        uniforms: &wgpu::Buffer,
-        depth: &wgpu::TextureView,
-        bytes: &wgpu::TextureView,
-        moments: &wgpu::TextureView,
-        minmax: &wgpu::TextureView,
-        virtual_buffers: [&wgpu::Buffer; 4],
-    ) -> wgpu::BindGroup {
+    /// The technique's bind group of `b`.
+    fn bind_group(&self, ctx: &MaskContext, b: MapBindings) -> wgpu::BindGroup {
         let view = |binding, v| wgpu::BindGroupEntry {
             binding,
             resource: wgpu::BindingResource::TextureView(v),
@@ -171,20 +186,20 @@ impl ShadowMapTechnique {
                 entries: &[
                     wgpu::BindGroupEntry {
                         binding: 0,
-                        resource: crate::gpu::dynamic_uniform::<ShadowMapUniform>(uniforms),
+                        resource: crate::gpu::dynamic_uniform::<ShadowMapUniform>(b.uniforms),
                     },
-                    view(3, depth),
+                    view(3, b.depth),
                     wgpu::BindGroupEntry {
                         binding: 4,
                         resource: wgpu::BindingResource::Sampler(&self.shared.compare_sampler),
                     },
-                    view(5, bytes),
-                    view(6, moments),
-                    view(7, minmax),
-                    buffer(8, virtual_buffers[0]),
-                    buffer(9, virtual_buffers[1]),
-                    buffer(10, virtual_buffers[2]),
-                    buffer(11, virtual_buffers[3]),
+                    view(5, b.bytes),
+                    view(6, b.moments),
+                    view(7, b.minmax),
+                    buffer(8, b.virtual_buffers[0]),
+                    buffer(9, b.virtual_buffers[1]),
+                    buffer(10, b.virtual_buffers[2]),
+                    buffer(11, b.virtual_buffers[3]),
                 ],
             })
     }
@@ -353,48 +368,36 @@ impl ShadowTechnique for ShadowMapTechnique {
         // Bind groups: none of the maps while they are rendered; the moment
         // maps as blur sources; everything for the lookup.
         let shared = &self.shared;
-        let render_group = self.bind_group(
-            ctx,
-            &self.uniforms,
-            &shared.placeholder_depth,
-            &shared.placeholder_bytes,
-            &shared.placeholder_moments,
-            &shared.placeholder_minmax,
-            shared.placeholder_virtual.each_ref(),
-        );
+        let render_group = self.bind_group(ctx, MapBindings::empty(shared, &self.uniforms));
         let blur_groups = maps.moment.as_ref().map(|m| {
             [0, 1].map(|src| {
                 self.bind_group(
                     ctx,
-                    &self.uniforms,
-                    &shared.placeholder_depth,
-                    &shared.placeholder_bytes,
-                    &m[src].1,
-                    &shared.placeholder_minmax,
-                    shared.placeholder_virtual.each_ref(),
+                    MapBindings {
+                        moments: &m[src].1,
+                        ..MapBindings::empty(shared, &self.uniforms)
+                    },
                 )
             })
         });
-        let byte_array = maps
-            .byte
-            .as_ref()
-            .map_or(&shared.placeholder_bytes, |b| &b.1);
-        let moment_array = maps
-            .moment
-            .as_ref()
-            .map_or(&shared.placeholder_moments, |m| &m[0].1);
-        let minmax_array = self
-            .chain
-            .as_ref()
-            .map_or(&shared.placeholder_minmax, |c| &c.view);
         let lookup_group = self.bind_group(
             ctx,
-            &self.uniforms,
-            &maps.depth_array,
-            byte_array,
-            moment_array,
-            minmax_array,
-            shared.placeholder_virtual.each_ref(),
+            MapBindings {
+                depth: &maps.depth_array,
+                bytes: maps
+                    .byte
+                    .as_ref()
+                    .map_or(&shared.placeholder_bytes, |b| &b.1),
+                moments: maps
+                    .moment
+                    .as_ref()
+                    .map_or(&shared.placeholder_moments, |m| &m[0].1),
+                minmax: self
+                    .chain
+                    .as_ref()
+                    .map_or(&shared.placeholder_minmax, |c| &c.view),
+                ..MapBindings::empty(shared, &self.uniforms)
+            },
         );
         let mut map_triangles = 0;
         for (si, setup) in setups.iter().enumerate() {
@@ -555,7 +558,10 @@ impl ShadowTechnique for ShadowMapTechnique {
                 ("pages_dropped", p.dropped as f64),
                 ("pages_resident", p.resident as f64),
                 ("pool_pages", p.capacity as f64),
-                ("pool_occupancy", p.resident as f64 / p.capacity.max(1) as f64),
+                (
+                    "pool_occupancy",
+                    p.resident as f64 / p.capacity.max(1) as f64,
+                ),
                 ("virtual_levels", p.levels as f64),
                 ("page_feedback_ms", p.feedback_ms),
                 ("map_triangles", self.map_triangles as f64),

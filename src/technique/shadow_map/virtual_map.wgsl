@@ -9,9 +9,22 @@ const NO_LEVEL: u32 = 0xffffffffu;
 // World size of the texels of the level being filtered (pcss's penumbra).
 var<private> virtual_texel_world: f32 = 1.0;
 
+// The last level read from the levels buffer, kept in registers: a
+// filter's taps all read one level, and a storage read per tap is slow.
+var<private> cached_level_index: u32 = NO_LEVEL;
+var<private> cached_level: VirtualLevel;
+
+fn level_at(i: u32) -> VirtualLevel {
+    if i != cached_level_index {
+        cached_level = vsm.levels[i];
+        cached_level_index = i;
+    }
+    return cached_level;
+}
+
 // World size of one texel of `level` at world point p.
 fn level_texel_world(level: u32, p: vec3f) -> f32 {
-    let t = vsm.levels[level].texel_world;
+    let t = level_at(level).texel_world;
     if sm.map.w > 0.5 {
         return t;
     }
@@ -23,7 +36,7 @@ fn level_texel_world(level: u32, p: vec3f) -> f32 {
 // is far below the float precision of uv over the whole square); the
 // views' matrices take points relative to the camera too.
 fn level_texel(level: u32, p: vec3f) -> vec4f {
-    let l = vsm.levels[level];
+    let l = level_at(level);
     let d = p - frame.camera_pos.xyz;
     let c = sm.faces[l.view] * vec4f(d, 1.0);
     let ndc = c.xyz / select(c.w, 1e-6, abs(c.w) < 1e-6);
@@ -43,7 +56,7 @@ struct VirtualPoint {
 };
 
 fn virtual_point(level: u32, g: vec3f, n: vec3f) -> VirtualPoint {
-    let l = vsm.levels[level];
+    let l = level_at(level);
     let t = level_texel(level, offset_point(g, n, level_texel_world(level, g)));
     let extent = f32(l.pages * vsm.page_texels);
     let inside = t.w > 0.0 && all(t.xy >= vec2f(0.0)) && all(t.xy <= vec2f(extent))
@@ -55,44 +68,84 @@ fn virtual_point(level: u32, g: vec3f, n: vec3f) -> VirtualPoint {
 // indices wrap around the window: a clipmap level that moves with the
 // camera keeps the entries of the pages it still covers).
 fn virtual_entry(level: u32, page: vec2i) -> u32 {
-    let l = vsm.levels[level];
-    let g = i32(l.pages);
-    let a = page + l.origin_page;
-    let w = ((a % g) + g) % g;
-    return l.table + u32(w.y * g + w.x);
+    let l = level_at(level);
+    // Windows, pages and the pool's rows are powers of two: masks and
+    // shifts instead of integer division (scalar on SIMD CPUs).
+    let w = (page + l.origin_page) & vec2i(i32(l.pages) - 1);
+    return l.table + u32(w.y) * l.pages + u32(w.x);
 }
 
 // The window page holding texel t of `level` (clamped to the window).
 fn virtual_page_of(level: u32, t: vec2f) -> vec2i {
     let size = f32(vsm.page_texels);
-    let extent = f32(vsm.levels[level].pages) * size;
+    let extent = f32(level_at(level).pages) * size;
     return vec2i(floor(clamp(t, vec2f(0.0), vec2f(extent - 1.0)) / size));
+}
+
+// The atlas texel of window texel t of `level` (clamped to the window) and
+// its layer; layer −1 where no page is resident.
+fn virtual_atlas_texel(t: vec2i, level: u32) -> vec3i {
+    let size = i32(vsm.page_texels);
+    let extent = i32(level_at(level).pages) * size;
+    let c = clamp(t, vec2i(0), vec2i(extent - 1));
+    let page = c >> vec2u(countTrailingZeros(vsm.page_texels));
+    let entry = vsm_table[virtual_entry(level, page)];
+    if entry == 0u {
+        return vec3i(0, 0, -1);
+    }
+    let k = (entry - 1u) & (vsm.layer_pages - 1u);
+    let row = vec2u(k & (vsm.atlas_pages - 1u), k >> countTrailingZeros(vsm.atlas_pages));
+    let at = vec2i(row) * size + (c & vec2i(size - 1));
+    return vec3i(at, i32((entry - 1u) >> countTrailingZeros(vsm.layer_pages)));
+}
+
+// Hardware 2×2 comparison at level uv where its four texels lie in one
+// page (the atlas's own bilinear footprint is then the map's); −1 where
+// they straddle a page border or no page is resident.
+fn virtual_pcf2x2(uv: vec2f, level: u32, z: f32) -> f32 {
+    let p = uv * sm.map.x - 0.5;
+    let b = vec2i(floor(p));
+    let size = i32(vsm.page_texels);
+    let extent = i32(level_at(level).pages) * size;
+    let inner = b & vec2i(size - 1);
+    if any(b < vec2i(0)) || any(b + 1 >= vec2i(extent)) || any(inner == vec2i(size - 1)) {
+        return -1.0;
+    }
+    let a = virtual_atlas_texel(b, level);
+    if a.z < 0 {
+        return -1.0;
+    }
+    let side = f32(vsm.atlas_pages * vsm.page_texels);
+    let atlas_uv = (vec2f(a.xy) + 0.5 + fract(p)) / side;
+    return textureSampleCompareLevel(depth_map, compare_sampler, atlas_uv, a.z, z);
 }
 
 // Stored depth at texel t of `level`'s window, through the page table;
 // 1 (lit) where no page is resident.
 fn virtual_stored(t: vec2i, level: u32) -> f32 {
-    let size = i32(vsm.page_texels);
-    let extent = i32(vsm.levels[level].pages) * size;
-    let c = clamp(t, vec2i(0), vec2i(extent - 1));
-    let page = c / size;
-    let entry = vsm_table[virtual_entry(level, page)];
-    if entry == 0u {
+    let a = virtual_atlas_texel(t, level);
+    if a.z < 0 {
         return 1.0;
     }
-    let k = (entry - 1u) % vsm.layer_pages;
-    let layer = (entry - 1u) / vsm.layer_pages;
-    let at = vec2i(i32(k % vsm.atlas_pages), i32(k / vsm.atlas_pages)) * size + (c - page * size);
-    return textureLoad(depth_map, at, i32(layer), 0);
+    return textureLoad(depth_map, a.xy, a.z, 0);
 }
 
 // Texel offset per pixel step `step` at `pixel`, toward the neighbour
 // nearer to p on a receiver (the other one may lie across an edge); 0
 // when neither is a receiver.
 fn neighbour_delta(level: u32, pixel: vec2i, p: vec3f, step: vec2i) -> vec2f {
+    // A neighbour outside the frame counts as no receiver.
     let top = vec2i(frame.size.xy) - 1;
-    let a = textureLoad(gbuffer_position, clamp(pixel + step, vec2i(0), top), 0);
-    let b = textureLoad(gbuffer_position, clamp(pixel - step, vec2i(0), top), 0);
+    let pa = pixel + step;
+    let pb = pixel - step;
+    var a = textureLoad(gbuffer_position, clamp(pa, vec2i(0), top), 0);
+    var b = textureLoad(gbuffer_position, clamp(pb, vec2i(0), top), 0);
+    if any(pa > top) {
+        a.w = 0.0;
+    }
+    if any(pb < vec2i(0)) {
+        b.w = 0.0;
+    }
     let use_b = a.w < 0.5 || (b.w >= 0.5 && distance(b.xyz, p) < distance(a.xyz, p));
     let q = select(a, b, use_b);
     if q.w < 0.5 {
@@ -114,7 +167,7 @@ fn virtual_level_of(pixel: vec2i, p: vec3f, n: vec3f) -> u32 {
     var level = base + u32(steps);
     let clipmap = sm.map.w > 0.5;
     for (var i = 0u; i < vsm.view_levels; i++) {
-        let l = vsm.levels[level];
+        let l = level_at(level);
         let vp = virtual_point(level, p, n);
         let t = vp.uv * sm.map.x;
         let extent = f32(l.pages * vsm.page_texels);
@@ -130,9 +183,15 @@ fn virtual_level_of(pixel: vec2i, p: vec3f, n: vec3f) -> u32 {
     return level;
 }
 
+// Sets the bit of the page holding texel t of `level` (a plain read first:
+// most pixels find their pages already marked, and a read is cheaper than
+// an atomic write).
 fn mark_page(level: u32, t: vec2f) {
     let e = virtual_entry(level, virtual_page_of(level, t));
-    atomicOr(&vsm_marks[e / 32u], 1u << (e % 32u));
+    let bit = 1u << (e % 32u);
+    if (atomicLoad(&vsm_marks[e / 32u]) & bit) == 0u {
+        atomicOr(&vsm_marks[e / 32u], bit);
+    }
 }
 
 fn pixel_index(pixel: vec2i) -> u32 {
@@ -154,10 +213,19 @@ fn fs_virtual_mark(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     if level != NO_LEVEL {
         let t = virtual_point(level, g.xyz, n).uv * sm.map.x;
         let r = vsm.reach;
-        mark_page(level, t + vec2f(-r, -r));
-        mark_page(level, t + vec2f(r, -r));
-        mark_page(level, t + vec2f(-r, r));
-        mark_page(level, t + vec2f(r, r));
+        // The kernel's corners: one page, or two or four across borders.
+        let lo = virtual_page_of(level, t - vec2f(r));
+        let hi = virtual_page_of(level, t + vec2f(r));
+        mark_page(level, t - vec2f(r));
+        if hi.x != lo.x {
+            mark_page(level, t + vec2f(r, -r));
+        }
+        if hi.y != lo.y {
+            mark_page(level, t + vec2f(-r, r));
+        }
+        if any(hi != lo) {
+            mark_page(level, t + vec2f(r));
+        }
     }
     return vec4f(1.0);
 }
@@ -181,7 +249,7 @@ fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f) -> f32 {
         if q.inside && vsm_table[virtual_entry(level, page)] != 0u {
             break;
         }
-        let parent = vsm.levels[level].parent;
+        let parent = level_at(level).parent;
         if parent == level {
             return 1.0;
         }

@@ -108,7 +108,11 @@ impl VirtualLayout {
                     pages: side,
                     table,
                     texel_world: setup.texel_scale * texel,
-                    parent: if mip + 1 < view_levels { index + 1 } else { index },
+                    parent: if mip + 1 < view_levels {
+                        index + 1
+                    } else {
+                        index
+                    },
                 });
                 table += side * side;
             }
@@ -159,7 +163,8 @@ impl VirtualLayout {
         // The window centre in the view's uv, kept inside the square so
         // that the coarsest window (two squares wide) covers all of it.
         let margin = 1.0 / 32.0;
-        let centre_uv = uv_of(centre_eye).clamp(glam::DVec2::splat(margin), glam::DVec2::splat(1.0 - margin));
+        let centre_uv =
+            uv_of(centre_eye).clamp(glam::DVec2::splat(margin), glam::DVec2::splat(1.0 - margin));
         let eye_uv = uv_of(eye);
         let levels = (0..n)
             .map(|l| {
@@ -257,10 +262,22 @@ impl VirtualLayout {
         let cy = 1.0 - 2.0 * (v0 + 0.5 * page_uv);
         let s = 1.0 / page_uv;
         let stretch = DMat4::from_cols_array(&[
-            s, 0.0, 0.0, 0.0, //
-            0.0, s, 0.0, 0.0, //
-            0.0, 0.0, 1.0, 0.0, //
-            -s * cx, -s * cy, 0.0, 1.0,
+            s,
+            0.0,
+            0.0,
+            0.0, //
+            0.0,
+            s,
+            0.0,
+            0.0, //
+            0.0,
+            0.0,
+            1.0,
+            0.0, //
+            -s * cx,
+            -s * cy,
+            0.0,
+            1.0,
         ]);
         let relative = DMat4::from_translation(self.eye.as_dvec3());
         (stretch * self.views[l.view as usize] * relative).as_mat4()
@@ -293,7 +310,14 @@ mod tests {
     #[test]
     fn clipmap_windows_double_and_cover_the_scene_at_the_coarsest_level() {
         let (light, bounds, camera) = sun_over_box();
-        let l = VirtualLayout::new(&light, &bounds, &camera, camera.eye, &FrustumParams::default(), params());
+        let l = VirtualLayout::new(
+            &light,
+            &bounds,
+            &camera,
+            camera.eye,
+            &FrustumParams::default(),
+            params(),
+        );
         assert_eq!(l.levels.len(), 4);
         for w in l.levels.windows(2) {
             assert!((w[1].texel / w[0].texel - 2.0).abs() < 1e-6);
@@ -311,7 +335,10 @@ mod tests {
             let page_uv = lv.texel * 128.0;
             assert_eq!(lv.origin, lv.origin_page.as_vec2() * page_uv);
             let rel = (cam - lv.origin) / (lv.texel * 1024.0);
-            assert!(rel.cmpgt(Vec2::splat(0.4)).all() && rel.cmplt(Vec2::splat(0.6)).all(), "{rel}");
+            assert!(
+                rel.cmpgt(Vec2::splat(0.4)).all() && rel.cmplt(Vec2::splat(0.6)).all(),
+                "{rel}"
+            );
             assert!((lv.eye_texel / 1024.0 - rel).length() < 1e-4);
         }
     }
@@ -319,9 +346,20 @@ mod tests {
     #[test]
     fn a_page_matrix_maps_the_page_onto_the_clip_square() {
         let (light, bounds, camera) = sun_over_box();
-        let l = VirtualLayout::new(&light, &bounds, &camera, camera.eye, &FrustumParams::default(), params());
+        let l = VirtualLayout::new(
+            &light,
+            &bounds,
+            &camera,
+            camera.eye,
+            &FrustumParams::default(),
+            params(),
+        );
         let lv = l.levels[1];
-        let key = PageKey { level: 1, x: lv.origin_page.x + 3, y: lv.origin_page.y + 5 };
+        let key = PageKey {
+            level: 1,
+            x: lv.origin_page.x + 3,
+            y: lv.origin_page.y + 5,
+        };
         let page_uv = lv.texel as f64 * 128.0;
         let world_at = |u: f64, v: f64| {
             let ndc = DVec3::new(2.0 * u - 1.0, 1.0 - 2.0 * v, 0.5);
@@ -330,10 +368,16 @@ mod tests {
         let page = l.page_view_proj(key);
         let clip = |w: Vec3| page.project_point3(w - l.eye);
         // The page's centre goes to the clip centre, its first texel corner to (−1, 1).
-        let c = clip(world_at((key.x as f64 + 0.5) * page_uv, (key.y as f64 + 0.5) * page_uv));
+        let c = clip(world_at(
+            (key.x as f64 + 0.5) * page_uv,
+            (key.y as f64 + 0.5) * page_uv,
+        ));
         assert!(c.truncate().length() < 1e-3, "{c}");
         let c = clip(world_at(key.x as f64 * page_uv, key.y as f64 * page_uv));
-        assert!((c.truncate() - glam::Vec2::new(-1.0, 1.0)).length() < 1e-3, "{c}");
+        assert!(
+            (c.truncate() - glam::Vec2::new(-1.0, 1.0)).length() < 1e-3,
+            "{c}"
+        );
         // The clipmap's texel formula agrees: that corner is texel 128·(3, 5).
         let d = world_at(key.x as f64 * page_uv, key.y as f64 * page_uv) - l.eye;
         let t = Vec2::new(l.axis_u.dot(d), l.axis_v.dot(d)) / lv.texel_world + lv.eye_texel;
@@ -343,26 +387,78 @@ mod tests {
     #[test]
     fn entries_wrap_and_invert_and_parents_halve() {
         let (light, bounds, camera) = sun_over_box();
-        let l = VirtualLayout::new(&light, &bounds, &camera, camera.eye, &FrustumParams::default(), params());
+        let l = VirtualLayout::new(
+            &light,
+            &bounds,
+            &camera,
+            camera.eye,
+            &FrustumParams::default(),
+            params(),
+        );
         let o = l.levels[2].origin_page;
         for (dx, dy) in [(0, 0), (7, 0), (3, 6), (7, 7)] {
-            let key = PageKey { level: 2, x: o.x + dx, y: o.y + dy };
+            let key = PageKey {
+                level: 2,
+                x: o.x + dx,
+                y: o.y + dy,
+            };
             let e = l.entry(key).unwrap();
             assert!(e >= l.levels[2].table && e < l.levels[2].table + 64);
             assert_eq!(l.key_of_entry(e), key);
         }
-        assert_eq!(l.entry(PageKey { level: 2, x: o.x + 8, y: o.y }), None);
-        assert_eq!(l.entry(PageKey { level: 2, x: o.x - 1, y: o.y }), None);
-        let p = l.parent(PageKey { level: 0, x: -3, y: 5 }).unwrap();
-        assert_eq!(p, PageKey { level: 1, x: -2, y: 2 });
-        assert_eq!(l.parent(PageKey { level: 3, x: 0, y: 0 }), None);
+        assert_eq!(
+            l.entry(PageKey {
+                level: 2,
+                x: o.x + 8,
+                y: o.y
+            }),
+            None
+        );
+        assert_eq!(
+            l.entry(PageKey {
+                level: 2,
+                x: o.x - 1,
+                y: o.y
+            }),
+            None
+        );
+        let p = l
+            .parent(PageKey {
+                level: 0,
+                x: -3,
+                y: 5,
+            })
+            .unwrap();
+        assert_eq!(
+            p,
+            PageKey {
+                level: 1,
+                x: -2,
+                y: 2
+            }
+        );
+        assert_eq!(
+            l.parent(PageKey {
+                level: 3,
+                x: 0,
+                y: 0
+            }),
+            None
+        );
     }
 
     #[test]
     fn local_lights_get_mip_chains_per_view() {
         let (_, bounds, camera) = sun_over_box();
         let point = Light::point(Vec3::new(0.0, 4.0, 0.0), 1.0);
-        let l = VirtualLayout::new(&point, &bounds, &camera, camera.eye, &FrustumParams::default(), params());
+        let l = VirtualLayout::new(
+            &point,
+            &bounds,
+            &camera,
+            camera.eye,
+            &FrustumParams::default(),
+            params(),
+        );
         // 1024 / 128 = 8 pages: mips of 8, 4, 2, 1 pages per side, per cube face.
         assert_eq!(l.view_levels, 4);
         assert_eq!(l.levels.len(), 24);

@@ -20,11 +20,11 @@ pub use pages::PagePool;
 use super::pipelines::{DepthPassKey, LookupKey};
 use super::setup::FrustumParams;
 use super::uniform::{MAX_FACES, STRIDE, ShadowMapUniform};
-use super::{CullFace, ShadowMapConfig, ShadowMapTechnique};
+use super::{CullFace, MapBindings, ShadowMapConfig, ShadowMapTechnique};
 use crate::gpu::{AsyncReadback, GpuContext};
 use crate::scene::Aabb;
 use crate::technique::light_space::outside_clip_volume;
-use crate::technique::{Feedback, MaskContext};
+use crate::technique::{DebugImage, Feedback, MaskContext};
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec4};
@@ -74,7 +74,12 @@ struct Atlas {
 impl Atlas {
     fn new(gpu: &GpuContext, page: u32, capacity: u32) -> Result<Atlas> {
         let max = gpu.max_texture_size();
-        let row_pages = (max / page).min((capacity as f64).sqrt().ceil() as u32).max(1);
+        // Rows of a power of two pages (the shader masks and shifts).
+        let row_pages = (max / page)
+            .min((capacity as f64).sqrt().ceil() as u32)
+            .max(1)
+            .next_power_of_two()
+            .min(prev_power_of_two(max / page).max(1));
         let layer_pages = row_pages * row_pages;
         let layers = capacity.div_ceil(layer_pages);
         let side = row_pages * page;
@@ -190,15 +195,30 @@ impl VirtualState {
         VirtualState {
             pool: PagePool::new(capacity),
             atlas: None,
-            marks: buffer(gpu, "virtual map marks", 16, U::STORAGE | U::COPY_SRC | U::COPY_DST),
-            marks_staging: buffer(gpu, "virtual map marks read-back", 16, U::MAP_READ | U::COPY_DST),
+            marks: buffer(
+                gpu,
+                "virtual map marks",
+                16,
+                U::STORAGE | U::COPY_SRC | U::COPY_DST,
+            ),
+            marks_staging: buffer(
+                gpu,
+                "virtual map marks read-back",
+                16,
+                U::MAP_READ | U::COPY_DST,
+            ),
             late: AsyncReadback::new(&gpu.device, "virtual map marks, frame late", 16),
             late_pending: false,
             latest_marks: None,
             table: buffer(gpu, "virtual map page table", 16, U::STORAGE | U::COPY_DST),
             levels: buffer(gpu, "virtual map levels", 16, U::STORAGE | U::COPY_DST),
             pixel_levels: buffer(gpu, "virtual map pixel levels", 16, U::STORAGE),
-            uniforms: buffer(gpu, "virtual map uniforms", STRIDE, U::UNIFORM | U::COPY_DST),
+            uniforms: buffer(
+                gpu,
+                "virtual map uniforms",
+                STRIDE,
+                U::UNIFORM | U::COPY_DST,
+            ),
             key: None,
             casters: vec![],
             counters: PageCounters::default(),
@@ -212,6 +232,57 @@ impl VirtualState {
         if std::mem::take(&mut self.late_pending) {
             self.late.request();
         }
+    }
+
+    /// The page table of each view as an image: its levels side by side,
+    /// finest first, each scaled to `CELL`² — green: needed this frame and
+    /// resident, blue: resident from an earlier frame, red: needed but
+    /// served by a coarser level (pool too small), dark: not in the pool.
+    pub fn page_table_images(&self) -> Vec<DebugImage> {
+        const CELL: usize = 128;
+        let Some(layout) = &self.last_layout else {
+            return vec![];
+        };
+        let needed: std::collections::HashSet<u32> = self.last_marks.iter().copied().collect();
+        let mut resident = vec![false; layout.table_len as usize];
+        for (k, _) in self.pool.resident() {
+            if let Some(e) = layout.entry(k) {
+                resident[e as usize] = true;
+            }
+        }
+        let views = layout.levels.len() / layout.view_levels as usize;
+        (0..views)
+            .map(|v| {
+                let levels = &layout.levels[v * layout.view_levels as usize..][..layout.view_levels as usize];
+                let width = levels.len() * (CELL + 2);
+                let mut rgba = vec![0u8; width * CELL * 4];
+                for (i, l) in levels.iter().enumerate() {
+                    let g = l.pages as usize;
+                    for y in 0..CELL {
+                        for x in 0..CELL {
+                            let (px, py) = (x * g / CELL, y * g / CELL);
+                            let e = l.table + (py * g + px) as u32;
+                            let colour = match (needed.contains(&e), resident[e as usize]) {
+                                (true, true) => [60, 200, 80, 255],
+                                (false, true) => [60, 110, 230, 255],
+                                (true, false) => [230, 50, 40, 255],
+                                (false, false) => [25, 25, 25, 255],
+                            };
+                            let at = (y * width + i * (CELL + 2) + x) * 4;
+                            rgba[at..at + 4].copy_from_slice(&colour);
+                        }
+                    }
+                }
+                DebugImage {
+                    label: format!(
+                        "virtual map page table, view {v}: levels finest to coarsest (green needed and resident, blue cached, red needed but coarser, dark empty)"
+                    ),
+                    width: width as u32,
+                    height: CELL as u32,
+                    rgba,
+                }
+            })
+            .collect()
     }
 
     pub fn resource_bytes(&self) -> u64 {
@@ -298,7 +369,11 @@ impl ShadowMapTechnique {
         let gpu = ctx.gpu;
         let shared = self.shared.clone();
         let p = c.paging;
-        if state.atlas.as_ref().is_none_or(|a| (a.page, a.capacity) != (p.page_size, p.pool)) {
+        if state
+            .atlas
+            .as_ref()
+            .is_none_or(|a| (a.page, a.capacity) != (p.page_size, p.pool))
+        {
             state.atlas = None;
             state.atlas = Some(Atlas::new(gpu, p.page_size, p.pool)?);
             state.pool = PagePool::new(p.pool);
@@ -327,15 +402,31 @@ impl ShadowMapTechnique {
         // Buffers of this layout and frame size.
         let words = layout.table_len.div_ceil(32) as u64;
         ensure_size(gpu, &mut state.marks, words * 4, "virtual map marks");
-        ensure_size(gpu, &mut state.marks_staging, words * 4, "virtual map marks read-back");
+        ensure_size(
+            gpu,
+            &mut state.marks_staging,
+            words * 4,
+            "virtual map marks read-back",
+        );
         if state.late.size() < words * 4 {
-            state.late = AsyncReadback::new(&gpu.device, "virtual map marks, frame late", words * 4);
+            state.late =
+                AsyncReadback::new(&gpu.device, "virtual map marks, frame late", words * 4);
             state.late_pending = false;
             state.latest_marks = None;
         }
-        ensure_size(gpu, &mut state.table, layout.table_len as u64 * 4, "virtual map page table");
+        ensure_size(
+            gpu,
+            &mut state.table,
+            layout.table_len as u64 * 4,
+            "virtual map page table",
+        );
         let pixels = ctx.frame.width() as u64 * ctx.frame.height() as u64;
-        ensure_size(gpu, &mut state.pixel_levels, pixels * 4, "virtual map pixel levels");
+        ensure_size(
+            gpu,
+            &mut state.pixel_levels,
+            pixels * 4,
+            "virtual map pixel levels",
+        );
         let mut level_bytes = bytemuck::bytes_of(&MapHeader {
             axis_u: layout.axis_u.to_array(),
             atlas_pages: atlas.row_pages,
@@ -360,7 +451,12 @@ impl ShadowMapTechnique {
                 parent: l.parent,
             }));
         }
-        ensure_size(gpu, &mut state.levels, level_bytes.len() as u64, "virtual map levels");
+        ensure_size(
+            gpu,
+            &mut state.levels,
+            level_bytes.len() as u64,
+            "virtual map levels",
+        );
         gpu.queue.write_buffer(&state.levels, 0, &level_bytes);
         // Uniforms: slot 0 marking and lookup, then one per page rendered.
         let mut faces = [Mat4::IDENTITY; MAX_FACES];
@@ -394,16 +490,21 @@ impl ShadowMapTechnique {
         let group = |state: &VirtualState, pool: &wgpu::TextureView| {
             self.bind_group(
                 ctx,
-                &state.uniforms,
-                pool,
-                &shared.placeholder_bytes,
-                &shared.placeholder_moments,
-                &shared.placeholder_minmax,
-                [&state.marks, &state.table, &state.levels, &state.pixel_levels],
+                MapBindings {
+                    depth: pool,
+                    virtual_buffers: [
+                        &state.marks,
+                        &state.table,
+                        &state.levels,
+                        &state.pixel_levels,
+                    ],
+                    ..MapBindings::empty(&shared, &state.uniforms)
+                },
             )
         };
         // Marking.
-        gpu.queue.write_buffer(&state.uniforms, 0, bytemuck::bytes_of(&base));
+        gpu.queue
+            .write_buffer(&state.uniforms, 0, bytemuck::bytes_of(&base));
         let mark_group = group(state, &shared.placeholder_depth);
         let record_marks = |encoder: &mut wgpu::CommandEncoder| {
             encoder.clear_buffer(&state.marks, 0, Some(words * 4));
@@ -448,17 +549,27 @@ impl ShadowMapTechnique {
         let needed: BTreeSet<PageKey> = marked_entries(&marks, layout.table_len)
             .map(|e| layout.key_of_entry(e))
             .collect();
-        let allocation = state.pool.allocate(needed, |k| layout.parent(k));
+        let allocation = state.pool.allocate(
+            needed,
+            |k| layout.parent(k),
+            |level| level % layout.view_levels,
+        );
         let mut table = vec![0u32; layout.table_len as usize];
         for (k, slot) in state.pool.resident() {
             if let Some(e) = layout.entry(k) {
                 table[e as usize] = slot + 1;
             }
         }
-        gpu.queue.write_buffer(&state.table, 0, bytemuck::cast_slice(&table));
+        gpu.queue
+            .write_buffer(&state.table, 0, bytemuck::cast_slice(&table));
         // New pages, rendered into their slots.
         let slots = 1 + allocation.render.len() as u64;
-        ensure_size(gpu, &mut state.uniforms, slots * STRIDE, "virtual map uniforms");
+        ensure_size(
+            gpu,
+            &mut state.uniforms,
+            slots * STRIDE,
+            "virtual map uniforms",
+        );
         let mut data = vec![0u8; (slots * STRIDE) as usize];
         data[..std::mem::size_of::<ShadowMapUniform>()].copy_from_slice(bytemuck::bytes_of(&base));
         for (i, (k, _)) in allocation.render.iter().enumerate() {
@@ -470,7 +581,8 @@ impl ShadowMapTechnique {
                 ..base
             };
             let at = ((i as u64 + 1) * STRIDE) as usize;
-            data[at..at + std::mem::size_of::<ShadowMapUniform>()].copy_from_slice(bytemuck::bytes_of(&u));
+            data[at..at + std::mem::size_of::<ShadowMapUniform>()]
+                .copy_from_slice(bytemuck::bytes_of(&u));
         }
         gpu.queue.write_buffer(&state.uniforms, 0, &data);
         let render_group = group(state, &shared.placeholder_depth);
@@ -569,6 +681,14 @@ impl ShadowMapTechnique {
     }
 }
 
+fn prev_power_of_two(v: u32) -> u32 {
+    if v == 0 {
+        0
+    } else {
+        1 << (31 - v.leading_zeros())
+    }
+}
+
 /// The page-table entries whose bit is set in `marks`.
 fn marked_entries(marks: &[u32], len: u32) -> impl Iterator<Item = u32> + '_ {
     marks.iter().enumerate().flat_map(move |(w, &bits)| {
@@ -605,7 +725,10 @@ mod tests {
 
     #[test]
     fn reach_covers_the_kernel() {
-        let mut c = ShadowMapConfig::parse(&crate::technique::ParamValues::defaults(super::super::config::PARAMS)).unwrap();
+        let mut c = ShadowMapConfig::parse(&crate::technique::ParamValues::defaults(
+            super::super::config::PARAMS,
+        ))
+        .unwrap();
         c.radius = 2.5;
         assert_eq!(kernel_reach(&c), 3.5);
     }

@@ -71,11 +71,14 @@ impl PagePool {
     }
 
     /// Makes `needed` resident, coarsening through `parent` while it does
-    /// not fit; returns what to render and the counts.
+    /// not fit (the finest level first: the least `rank`, a level's
+    /// distance from the finest of its view); returns what to render and
+    /// the counts.
     pub fn allocate(
         &mut self,
         mut needed: BTreeSet<PageKey>,
         parent: impl Fn(PageKey) -> Option<PageKey>,
+        rank: impl Fn(u32) -> u32,
     ) -> Allocation {
         self.frame += 1;
         let mut a = Allocation {
@@ -83,17 +86,25 @@ impl PagePool {
             ..Default::default()
         };
         while needed.len() > self.capacity as usize {
-            // Replace the finest level present by its parents.
-            let finest = needed.first().expect("more than the capacity").level;
-            let fine: Vec<PageKey> = needed.iter().take_while(|k| k.level == finest).copied().collect();
-            let parents: Vec<PageKey> = fine.iter().filter_map(|k| parent(*k)).collect();
-            if parents.is_empty() {
+            // Replace the finest level present that has a coarser one by its parents.
+            let finest = needed
+                .iter()
+                .filter(|k| parent(**k).is_some())
+                .map(|k| (rank(k.level), k.level))
+                .min();
+            let Some((_, finest)) = finest else {
                 // The coarsest level alone is too many: keep what fits.
                 let keep = self.capacity as usize;
                 a.dropped += needed.len() - keep;
                 needed = needed.into_iter().rev().take(keep).collect();
                 break;
-            }
+            };
+            let fine: Vec<PageKey> = needed
+                .iter()
+                .filter(|k| k.level == finest)
+                .copied()
+                .collect();
+            let parents: Vec<PageKey> = fine.iter().filter_map(|k| parent(*k)).collect();
             a.degraded += fine.len();
             for k in &fine {
                 needed.remove(k);
@@ -142,6 +153,10 @@ mod tests {
         PageKey { level, x, y }
     }
 
+    fn rank(level: u32) -> u32 {
+        level
+    }
+
     fn parent(k: PageKey) -> Option<PageKey> {
         (k.level < 3).then(|| key(k.level + 1, k.x.div_euclid(2), k.y.div_euclid(2)))
     }
@@ -150,19 +165,19 @@ mod tests {
     fn cached_pages_are_not_rendered_again() {
         let mut pool = PagePool::new(16);
         let want: BTreeSet<_> = [key(0, 0, 0), key(0, 1, 0), key(1, 4, 4)].into();
-        let first = pool.allocate(want.clone(), parent);
+        let first = pool.allocate(want.clone(), parent, rank);
         assert_eq!(first.render.len(), 3);
-        let second = pool.allocate(want, parent);
+        let second = pool.allocate(want, parent, rank);
         assert_eq!((second.render.len(), second.cached), (0, 3));
     }
 
     #[test]
     fn the_least_recently_used_page_makes_room() {
         let mut pool = PagePool::new(2);
-        pool.allocate([key(0, 0, 0)].into(), parent);
-        pool.allocate([key(0, 1, 0)].into(), parent);
+        pool.allocate([key(0, 0, 0)].into(), parent, rank);
+        pool.allocate([key(0, 1, 0)].into(), parent, rank);
         // Both resident; a third evicts the older (0, 0, 0), not (0, 1, 0).
-        let a = pool.allocate([key(0, 1, 0), key(0, 2, 0)].into(), parent);
+        let a = pool.allocate([key(0, 1, 0), key(0, 2, 0)].into(), parent, rank);
         assert_eq!(a.render.len(), 1);
         assert_eq!(a.cached, 1);
         let keys: BTreeSet<_> = pool.resident().map(|(k, _)| k).collect();
@@ -179,17 +194,34 @@ mod tests {
             .flat_map(|x| [key(0, x, 0), key(0, x, 1)])
             .chain([key(2, 9, 9)])
             .collect();
-        let a = pool.allocate(want, parent);
+        let a = pool.allocate(want, parent, rank);
         assert_eq!((a.needed, a.degraded, a.dropped), (9, 8, 0));
         let keys: BTreeSet<_> = pool.resident().map(|(k, _)| k).collect();
         assert_eq!(keys, [key(1, 0, 0), key(1, 1, 0), key(2, 9, 9)].into());
     }
 
     #[test]
+    fn the_finest_level_of_any_view_gives_way_first() {
+        // Two views of two levels each: view 0 levels 0, 1; view 1 levels 2, 3.
+        let parent = |k: PageKey| {
+            k.level
+                .is_multiple_of(2)
+                .then(|| key(k.level + 1, k.x.div_euclid(2), k.y.div_euclid(2)))
+        };
+        let mut pool = PagePool::new(3);
+        let want: BTreeSet<_> = [key(1, 0, 0), key(2, 0, 0), key(2, 1, 0), key(2, 2, 0)].into();
+        let a = pool.allocate(want, parent, |l| l % 2);
+        // View 0 is at its coarsest; view 1's fine pages give way.
+        assert_eq!((a.degraded, a.dropped), (3, 0));
+        let keys: BTreeSet<_> = pool.resident().map(|(k, _)| k).collect();
+        assert_eq!(keys, [key(1, 0, 0), key(3, 0, 0), key(3, 1, 0)].into());
+    }
+
+    #[test]
     fn a_pool_smaller_than_the_coarsest_level_drops_and_says_so() {
         let mut pool = PagePool::new(2);
         let want: BTreeSet<_> = (0..5).map(|x| key(3, x, 0)).collect();
-        let a = pool.allocate(want, parent);
+        let a = pool.allocate(want, parent, rank);
         assert_eq!((a.render.len(), a.dropped), (2, 3));
     }
 
@@ -197,10 +229,10 @@ mod tests {
     fn invalidated_pages_free_their_slots_and_render_again() {
         let mut pool = PagePool::new(4);
         let want: BTreeSet<_> = [key(0, 0, 0), key(0, 1, 0)].into();
-        pool.allocate(want.clone(), parent);
+        pool.allocate(want.clone(), parent, rank);
         pool.invalidate(|k| k.x == 1);
         assert_eq!(pool.resident_count(), 1);
-        let a = pool.allocate(want, parent);
+        let a = pool.allocate(want, parent, rank);
         assert_eq!(a.render, vec![(key(0, 1, 0), a.render[0].1)]);
     }
 }
