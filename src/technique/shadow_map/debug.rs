@@ -108,7 +108,12 @@ impl ShadowMapTechnique {
         }
         if let Some(t) = &self.debug {
             views.images.push(DebugImage {
-                label: "shadow map (face 0, linear depth)".into(),
+                label: if self.virtual_state.is_some() {
+                    "virtual map pool, layer 0 (every resident page, depth)"
+                } else {
+                    "shadow map (face 0, linear depth)"
+                }
+                .into(),
                 width: t.width(),
                 height: t.height(),
                 rgba: gpu.read_texture(t, 0, 4)?,
