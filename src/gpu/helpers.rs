@@ -72,6 +72,47 @@ pub fn compose_shader(device: &wgpu::Device, label: &str, sources: &[&str]) -> w
     })
 }
 
+/// Compute pipelines for `entries` of the WGSL `source`, all with one bind
+/// group of `layout` (group 0), in the order given.
+pub fn compute_pipelines<const N: usize>(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    source: &str,
+    entries: [&str; N],
+) -> [wgpu::ComputePipeline; N] {
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &[Some(layout)],
+        immediate_size: 0,
+    });
+    let module = compose_shader(device, label, &[source]);
+    entries.map(|entry| {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+    })
+}
+
+/// Replaces `buffer` by an empty one of the same label and usage when it
+/// holds fewer than `size` bytes (the next power of two, so that a growing
+/// need reallocates rarely); contents are not kept.
+pub fn grow_buffer(device: &wgpu::Device, buffer: &mut wgpu::Buffer, size: u64, label: &str) {
+    if buffer.size() < size {
+        *buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size.next_power_of_two(),
+            usage: buffer.usage(),
+            mapped_at_creation: false,
+        });
+    }
+}
+
 /// A single-mip 2D texture (array when `layers` > 1).
 pub fn texture_2d(
     device: &wgpu::Device,

@@ -10,7 +10,7 @@ pub mod readback;
 
 pub use cache::{DeviceCache, PIPELINE_CACHE_BOUND};
 pub use helpers::*;
-pub use readback::AsyncReadback;
+pub use readback::{AsyncReadback, FrameFeedback};
 
 use anyhow::{Result, bail};
 

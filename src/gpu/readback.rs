@@ -32,11 +32,6 @@ impl AsyncReadback {
         }
     }
 
-    /// Bytes the buffer holds.
-    pub fn size(&self) -> u64 {
-        self.buffer.size()
-    }
-
     /// The buffer to copy into, when it is not waiting for an earlier read
     /// (then this frame's copy is skipped). Marks it as copied into.
     pub fn target(&self) -> Option<&wgpu::Buffer> {
@@ -81,6 +76,80 @@ impl AsyncReadback {
                 Ok(None)
             }
             _ => Ok(None),
+        }
+    }
+}
+
+/// A result the GPU computes for the CPU's set-up of the same frame (SDSM's
+/// depth bounds, a virtual map's page marks): this frame's, waited for (one
+/// stall; measurements), or the latest that has arrived, copied back a
+/// frame late without a stall (the viewer).
+pub struct FrameFeedback {
+    staging: wgpu::Buffer,
+    late: AsyncReadback,
+    pending: bool,
+    latest: Option<Vec<u8>>,
+}
+
+impl FrameFeedback {
+    pub fn new(device: &wgpu::Device, label: &str, size: u64) -> FrameFeedback {
+        FrameFeedback {
+            staging: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            late: AsyncReadback::new(device, label, size),
+            pending: false,
+            latest: None,
+        }
+    }
+
+    /// Bytes it can hold.
+    pub fn size(&self) -> u64 {
+        self.staging.size()
+    }
+
+    /// The encoder to record the GPU work into when waiting for it (`wait`:
+    /// its own, submitted by [`Self::collect`]); `None`: the frame's.
+    pub fn own_encoder(gpu: &GpuContext, wait: bool) -> Option<wgpu::CommandEncoder> {
+        wait.then(|| gpu.device.create_command_encoder(&Default::default()))
+    }
+
+    /// Copies the first `len` bytes of `source` back: with `own` (from
+    /// [`Self::own_encoder`]) submits it and waits, and returns these bytes;
+    /// else copies within the frame's `encoder` (read after
+    /// [`Self::after_frame`]) and returns the latest bytes that have arrived.
+    pub fn collect(
+        &mut self,
+        gpu: &GpuContext,
+        own: Option<wgpu::CommandEncoder>,
+        encoder: &mut wgpu::CommandEncoder,
+        source: &wgpu::Buffer,
+        len: u64,
+    ) -> Result<Option<Vec<u8>>> {
+        if let Some(mut own) = own {
+            own.copy_buffer_to_buffer(source, 0, &self.staging, 0, len);
+            gpu.queue.submit([own.finish()]);
+            let bytes = gpu.read_buffer(&self.staging)?;
+            self.latest = Some(bytes[..len as usize].to_vec());
+        } else {
+            if let Some(bytes) = self.late.try_read(gpu)? {
+                self.latest = Some(bytes[..len as usize].to_vec());
+            }
+            if let Some(target) = self.late.target() {
+                encoder.copy_buffer_to_buffer(source, 0, target, 0, len);
+                self.pending = true;
+            }
+        }
+        Ok(self.latest.clone())
+    }
+
+    /// After the frame's submission: asks for the frame-late copy.
+    pub fn after_frame(&mut self) {
+        if std::mem::take(&mut self.pending) {
+            self.late.request();
         }
     }
 }

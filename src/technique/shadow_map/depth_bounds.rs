@@ -6,7 +6,7 @@
 //! ([`Feedback`]), and widens it for the camera's motion in between.
 
 use super::partition_params::Fit;
-use crate::gpu::{AsyncReadback, GpuContext};
+use crate::gpu::{FrameFeedback, GpuContext};
 use crate::technique::{Feedback, MaskContext};
 use anyhow::Result;
 use glam::{Mat4, Vec4};
@@ -106,29 +106,16 @@ impl ReduceShared {
                 crate::gpu::storage_entry(3, wgpu::ShaderStages::COMPUTE, false),
             ],
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("sdsm reduction"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = crate::gpu::compose_shader(
+        let [depth_range, cascade_bounds] = crate::gpu::compute_pipelines(
             device,
             "sdsm reduction",
-            &[include_str!("depth_bounds.wgsl")],
+            &layout,
+            include_str!("depth_bounds.wgsl"),
+            ["depth_range", "cascade_bounds"],
         );
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
         ReduceShared {
-            depth_range: pipeline("depth_range"),
-            cascade_bounds: pipeline("cascade_bounds"),
+            depth_range,
+            cascade_bounds,
             layout,
         }
     }
@@ -139,11 +126,7 @@ pub struct DepthReduction {
     shared: Arc<ReduceShared>,
     params: wgpu::Buffer,
     result: wgpu::Buffer,
-    /// This frame's result, waited for (measurements).
-    staging: wgpu::Buffer,
-    /// The viewer's frame-late result.
-    late: AsyncReadback,
-    late_pending: bool,
+    feedback: FrameFeedback,
     latest: Option<SeenBounds>,
     /// Wall time of the last waited-for reduction (dispatch to result).
     pub last_ms: f64,
@@ -169,9 +152,7 @@ impl DepthReduction {
                 mapped_at_creation: false,
             }),
             result: buffer("sdsm bounds", U::STORAGE | U::COPY_SRC | U::COPY_DST),
-            staging: buffer("sdsm bounds read-back", U::MAP_READ | U::COPY_DST),
-            late: AsyncReadback::new(&gpu.device, "sdsm bounds, frame late", RESULT_BYTES),
-            late_pending: false,
+            feedback: FrameFeedback::new(&gpu.device, "sdsm bounds read-back", RESULT_BYTES),
             latest: None,
             last_ms: 0.0,
         }
@@ -189,37 +170,27 @@ impl DepthReduction {
         let gpu = ctx.gpu;
         let cascades = inputs.cascades.min(MAX_CASCADES as u32);
         let samples = inputs.fit == Fit::Samples;
-        match ctx.feedback {
-            Feedback::ThisFrame => {
-                let start = std::time::Instant::now();
-                let mut own = gpu.device.create_command_encoder(&Default::default());
-                self.record(ctx, &mut own, inputs);
-                own.copy_buffer_to_buffer(&self.result, 0, &self.staging, 0, RESULT_BYTES);
-                gpu.queue.submit([own.finish()]);
-                let bytes = gpu.read_buffer(&self.staging)?;
-                self.latest = decode(&bytes, cascades as usize, samples);
-                self.last_ms = start.elapsed().as_secs_f64() * 1e3;
-                Ok(self.latest.clone())
-            }
-            Feedback::PreviousFrame => {
-                if let Some(bytes) = self.late.try_read(gpu)? {
-                    self.latest = decode(&bytes, cascades as usize, samples);
-                }
-                self.record(ctx, encoder, inputs);
-                if let Some(target) = self.late.target() {
-                    encoder.copy_buffer_to_buffer(&self.result, 0, target, 0, RESULT_BYTES);
-                    self.late_pending = true;
-                }
-                Ok(self.latest.as_ref().map(SeenBounds::widened))
-            }
+        let wait = ctx.feedback == Feedback::ThisFrame;
+        let start = std::time::Instant::now();
+        let mut own = FrameFeedback::own_encoder(gpu, wait);
+        self.record(ctx, own.as_mut().unwrap_or(&mut *encoder), inputs);
+        let bytes = self
+            .feedback
+            .collect(gpu, own, encoder, &self.result, RESULT_BYTES)?;
+        if let Some(bytes) = bytes {
+            self.latest = decode(&bytes, cascades as usize, samples);
+        }
+        if wait {
+            self.last_ms = start.elapsed().as_secs_f64() * 1e3;
+            Ok(self.latest.clone())
+        } else {
+            Ok(self.latest.as_ref().map(SeenBounds::widened))
         }
     }
 
     /// After the frame's submission: asks for the frame-late result.
     pub fn after_frame(&mut self) {
-        if std::mem::take(&mut self.late_pending) {
-            self.late.request();
-        }
+        self.feedback.after_frame();
     }
 
     /// Records the reduction of the frame's G-buffer into `encoder`.

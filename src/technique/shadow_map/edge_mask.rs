@@ -5,6 +5,7 @@
 //! their least and greatest stored depth — elsewhere every tap would agree
 //! (all lit or all shadowed), so the answer is known without them.
 
+use super::pipelines::placeholder;
 use crate::gpu::GpuContext;
 use anyhow::Result;
 use std::sync::Arc;
@@ -53,47 +54,19 @@ impl ChainShared {
                 },
             ],
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("edge mask chain"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = crate::gpu::compose_shader(
+        let [from_depth, from_bytes, from_level] = crate::gpu::compute_pipelines(
             device,
             "edge mask chain",
-            &[include_str!("edge_mask.wgsl")],
+            &layout,
+            include_str!("edge_mask.wgsl"),
+            ["from_depth", "from_bytes", "from_level"],
         );
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let placeholder = |format| {
-            crate::gpu::texture_2d(
-                device,
-                "edge mask placeholder",
-                1,
-                1,
-                1,
-                format,
-                wgpu::TextureUsages::TEXTURE_BINDING,
-            )
-            .create_view(&wgpu::TextureViewDescriptor {
-                dimension: Some(wgpu::TextureViewDimension::D2Array),
-                ..Default::default()
-            })
-        };
         ChainShared {
-            from_depth: pipeline("from_depth"),
-            from_bytes: pipeline("from_bytes"),
-            from_level: pipeline("from_level"),
-            placeholder_depth: placeholder(wgpu::TextureFormat::Depth32Float),
-            placeholder_values: placeholder(wgpu::TextureFormat::R8Unorm),
+            from_depth,
+            from_bytes,
+            from_level,
+            placeholder_depth: placeholder(device, wgpu::TextureFormat::Depth32Float),
+            placeholder_values: placeholder(device, wgpu::TextureFormat::R8Unorm),
             layout,
         }
     }

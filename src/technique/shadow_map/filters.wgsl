@@ -245,10 +245,17 @@ fn edge_class(uv: vec2f, face: u32, z_lo: f32, z_hi: f32, reach: f32) -> f32 {
     return -1.0;
 }
 
-// How far in texels from its centre a pixel's kernel reads: the filter
-// radius (grid, disk) or the widest blocker search and penumbra (pcss,
-// varwidth, both capped at 64 texels), plus the half texel of a 2×2 tap.
+// How far in texels from its centre a pixel's kernel reads: none (hard),
+// the filter radius (grid, disk) or the widest blocker search and penumbra
+// (pcss, varwidth, both capped at 64 texels), plus the half texel of a 2×2
+// tap (pcf2x2 and the filters of taps).
 fn kernel_reach() -> f32 {
+    if FILTER_KIND == FILTER_HARD {
+        return 0.0;
+    }
+    if FILTER_KIND == FILTER_PCF2X2 {
+        return 0.5;
+    }
     if FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK {
         return sm.kernel.x + 0.5;
     }

@@ -262,14 +262,12 @@ impl ShadowTechnique for ShadowMapTechnique {
         // Slot (s·MAX_FACES + f)·3 + k: sample s, face f; k = 0 depth pass
         // and lookup, 1 and 2 blur along x and y.
         let slots = lights.len() as u64 * SLOTS;
-        if self.uniforms.size() < slots * STRIDE {
-            self.uniforms = ctx.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("shadow map uniforms"),
-                size: slots * STRIDE,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-        }
+        crate::gpu::grow_buffer(
+            &ctx.gpu.device,
+            &mut self.uniforms,
+            slots * STRIDE,
+            "shadow map uniforms",
+        );
         let mut data = vec![0u8; (slots * STRIDE) as usize];
         for (si, (light, setup)) in lights.iter().zip(&setups).enumerate() {
             let mut faces = [Mat4::IDENTITY; MAX_FACES];

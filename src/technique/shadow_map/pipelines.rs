@@ -64,7 +64,7 @@ impl LookupKey {
 }
 
 /// A 1×1 array texture bound in place of a map that is not in use.
-fn placeholder(device: &wgpu::Device, format: wgpu::TextureFormat) -> wgpu::TextureView {
+pub fn placeholder(device: &wgpu::Device, format: wgpu::TextureFormat) -> wgpu::TextureView {
     crate::gpu::texture_2d(
         device,
         "shadow map placeholder",

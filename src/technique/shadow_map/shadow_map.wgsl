@@ -106,9 +106,7 @@ struct VirtualMap {
     layer_pages: u32,
     // levels per view
     view_levels: u32,
-    // texels a pixel's kernel reaches from its centre
-    reach: f32,
-    _pad: u32,
+    _pad: vec2u,
     levels: array<VirtualLevel>,
 };
 

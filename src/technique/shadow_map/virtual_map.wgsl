@@ -166,12 +166,13 @@ fn virtual_level_of(pixel: vec2i, p: vec3f, n: vec3f) -> u32 {
     let steps = clamp(floor(-log2(max(footprint, 1e-12))), 0.0, f32(vsm.view_levels - 1u));
     var level = base + u32(steps);
     let clipmap = sm.map.w > 0.5;
+    let reach = marked_reach();
     for (var i = 0u; i < vsm.view_levels; i++) {
         let l = level_at(level);
         let vp = virtual_point(level, p, n);
         let t = vp.uv * sm.map.x;
         let extent = f32(l.pages * vsm.page_texels);
-        let holds = !clipmap || (all(t >= vec2f(vsm.reach)) && all(t <= vec2f(extent - vsm.reach)));
+        let holds = !clipmap || (all(t >= vec2f(reach)) && all(t <= vec2f(extent - reach)));
         if (vp.inside && holds) || l.parent == level {
             break;
         }
@@ -181,6 +182,12 @@ fn virtual_level_of(pixel: vec2i, p: vec3f, n: vec3f) -> u32 {
         return NO_LEVEL;
     }
     return level;
+}
+
+// Texels around a pixel's lookup point whose pages are marked: the
+// kernel's reach and half a texel more (the texel a tap's edge falls in).
+fn marked_reach() -> f32 {
+    return kernel_reach() + 0.5;
 }
 
 // Sets the bit of the page holding texel t of `level` (a plain read first:
@@ -212,7 +219,7 @@ fn fs_virtual_mark(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     vsm_pixel_level[pixel_index(pixel)] = level;
     if level != NO_LEVEL {
         let t = virtual_point(level, g.xyz, n).uv * sm.map.x;
-        let r = vsm.reach;
+        let r = marked_reach();
         // The kernel's corners: one page, or two or four across borders.
         let lo = virtual_page_of(level, t - vec2f(r));
         let hi = virtual_page_of(level, t + vec2f(r));

@@ -307,17 +307,21 @@ mod tests {
         (light, bounds, camera)
     }
 
-    #[test]
-    fn clipmap_windows_double_and_cover_the_scene_at_the_coarsest_level() {
-        let (light, bounds, camera) = sun_over_box();
-        let l = VirtualLayout::new(
-            &light,
-            &bounds,
-            &camera,
+    fn layout_of(light: &Light, bounds: &Aabb, camera: &Camera) -> VirtualLayout {
+        VirtualLayout::new(
+            light,
+            bounds,
+            camera,
             camera.eye,
             &FrustumParams::default(),
             params(),
-        );
+        )
+    }
+
+    #[test]
+    fn clipmap_windows_double_and_cover_the_scene_at_the_coarsest_level() {
+        let (light, bounds, camera) = sun_over_box();
+        let l = layout_of(&light, &bounds, &camera);
         assert_eq!(l.levels.len(), 4);
         for w in l.levels.windows(2) {
             assert!((w[1].texel / w[0].texel - 2.0).abs() < 1e-6);
@@ -346,14 +350,7 @@ mod tests {
     #[test]
     fn a_page_matrix_maps_the_page_onto_the_clip_square() {
         let (light, bounds, camera) = sun_over_box();
-        let l = VirtualLayout::new(
-            &light,
-            &bounds,
-            &camera,
-            camera.eye,
-            &FrustumParams::default(),
-            params(),
-        );
+        let l = layout_of(&light, &bounds, &camera);
         let lv = l.levels[1];
         let key = PageKey {
             level: 1,
@@ -387,14 +384,7 @@ mod tests {
     #[test]
     fn entries_wrap_and_invert_and_parents_halve() {
         let (light, bounds, camera) = sun_over_box();
-        let l = VirtualLayout::new(
-            &light,
-            &bounds,
-            &camera,
-            camera.eye,
-            &FrustumParams::default(),
-            params(),
-        );
+        let l = layout_of(&light, &bounds, &camera);
         let o = l.levels[2].origin_page;
         for (dx, dy) in [(0, 0), (7, 0), (3, 6), (7, 7)] {
             let key = PageKey {
@@ -451,14 +441,7 @@ mod tests {
     fn local_lights_get_mip_chains_per_view() {
         let (_, bounds, camera) = sun_over_box();
         let point = Light::point(Vec3::new(0.0, 4.0, 0.0), 1.0);
-        let l = VirtualLayout::new(
-            &point,
-            &bounds,
-            &camera,
-            camera.eye,
-            &FrustumParams::default(),
-            params(),
-        );
+        let l = layout_of(&point, &bounds, &camera);
         // 1024 / 128 = 8 pages: mips of 8, 4, 2, 1 pages per side, per cube face.
         assert_eq!(l.view_levels, 4);
         assert_eq!(l.levels.len(), 24);

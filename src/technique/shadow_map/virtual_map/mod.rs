@@ -20,8 +20,8 @@ pub use pages::PagePool;
 use super::pipelines::{DepthPassKey, LookupKey};
 use super::setup::FrustumParams;
 use super::uniform::{MAX_FACES, STRIDE, ShadowMapUniform};
-use super::{CullFace, MapBindings, ShadowMapConfig, ShadowMapTechnique};
-use crate::gpu::{AsyncReadback, GpuContext};
+use super::{CullFace, MapBindings, ShadowMapTechnique};
+use crate::gpu::{FrameFeedback, GpuContext};
 use crate::scene::Aabb;
 use crate::technique::light_space::outside_clip_volume;
 use crate::technique::{DebugImage, Feedback, MaskContext};
@@ -40,8 +40,7 @@ struct MapHeader {
     page_texels: u32,
     layer_pages: u32,
     view_levels: u32,
-    reach: f32,
-    pad: u32,
+    pad: [u32; 2],
 }
 
 /// One level (`VirtualLevel` of shadow_map.wgsl).
@@ -156,10 +155,8 @@ pub struct VirtualState {
     pool: PagePool,
     atlas: Option<Atlas>,
     marks: wgpu::Buffer,
-    marks_staging: wgpu::Buffer,
-    late: AsyncReadback,
-    late_pending: bool,
-    latest_marks: Option<Vec<u32>>,
+    /// The marks read back.
+    feedback: FrameFeedback,
     table: wgpu::Buffer,
     levels: wgpu::Buffer,
     pixel_levels: wgpu::Buffer,
@@ -182,13 +179,6 @@ fn buffer(gpu: &GpuContext, label: &str, size: u64, usage: wgpu::BufferUsages) -
     })
 }
 
-/// Grows `b` to at least `size` bytes (contents not kept).
-fn ensure_size(gpu: &GpuContext, b: &mut wgpu::Buffer, size: u64, label: &str) {
-    if b.size() < size {
-        *b = buffer(gpu, label, size.next_power_of_two(), b.usage());
-    }
-}
-
 impl VirtualState {
     fn new(gpu: &GpuContext, capacity: u32) -> VirtualState {
         use wgpu::BufferUsages as U;
@@ -201,15 +191,7 @@ impl VirtualState {
                 16,
                 U::STORAGE | U::COPY_SRC | U::COPY_DST,
             ),
-            marks_staging: buffer(
-                gpu,
-                "virtual map marks read-back",
-                16,
-                U::MAP_READ | U::COPY_DST,
-            ),
-            late: AsyncReadback::new(&gpu.device, "virtual map marks, frame late", 16),
-            late_pending: false,
-            latest_marks: None,
+            feedback: FrameFeedback::new(&gpu.device, "virtual map marks read-back", 16),
             table: buffer(gpu, "virtual map page table", 16, U::STORAGE | U::COPY_DST),
             levels: buffer(gpu, "virtual map levels", 16, U::STORAGE | U::COPY_DST),
             pixel_levels: buffer(gpu, "virtual map pixel levels", 16, U::STORAGE),
@@ -229,9 +211,7 @@ impl VirtualState {
 
     /// After the frame's submission: asks for the frame-late marks.
     pub fn after_frame(&mut self) {
-        if std::mem::take(&mut self.late_pending) {
-            self.late.request();
-        }
+        self.feedback.after_frame();
     }
 
     /// The page table of each view as an image: its levels side by side,
@@ -401,28 +381,25 @@ impl ShadowMapTechnique {
         let atlas = state.atlas.as_ref().expect("made above");
         // Buffers of this layout and frame size.
         let words = layout.table_len.div_ceil(32) as u64;
-        ensure_size(gpu, &mut state.marks, words * 4, "virtual map marks");
-        ensure_size(
-            gpu,
-            &mut state.marks_staging,
+        crate::gpu::grow_buffer(
+            &gpu.device,
+            &mut state.marks,
             words * 4,
-            "virtual map marks read-back",
+            "virtual map marks",
         );
-        if state.late.size() < words * 4 {
-            state.late =
-                AsyncReadback::new(&gpu.device, "virtual map marks, frame late", words * 4);
-            state.late_pending = false;
-            state.latest_marks = None;
+        if state.feedback.size() < words * 4 {
+            state.feedback =
+                FrameFeedback::new(&gpu.device, "virtual map marks read-back", words * 4);
         }
-        ensure_size(
-            gpu,
+        crate::gpu::grow_buffer(
+            &gpu.device,
             &mut state.table,
             layout.table_len as u64 * 4,
             "virtual map page table",
         );
         let pixels = ctx.frame.width() as u64 * ctx.frame.height() as u64;
-        ensure_size(
-            gpu,
+        crate::gpu::grow_buffer(
+            &gpu.device,
             &mut state.pixel_levels,
             pixels * 4,
             "virtual map pixel levels",
@@ -434,8 +411,7 @@ impl ShadowMapTechnique {
             page_texels: layout.page,
             layer_pages: atlas.layer_pages,
             view_levels: layout.view_levels,
-            reach: kernel_reach(&c),
-            pad: 0,
+            pad: [0; 2],
         })
         .to_vec();
         for l in &layout.levels {
@@ -451,8 +427,8 @@ impl ShadowMapTechnique {
                 parent: l.parent,
             }));
         }
-        ensure_size(
-            gpu,
+        crate::gpu::grow_buffer(
+            &gpu.device,
             &mut state.levels,
             level_bytes.len() as u64,
             "virtual map levels",
@@ -520,35 +496,18 @@ impl ShadowMapTechnique {
             pass.draw(0..3, 0..1);
         };
         let start = std::time::Instant::now();
-        let marks: Option<Vec<u32>> = match ctx.feedback {
-            Feedback::ThisFrame => {
-                let mut own = gpu.device.create_command_encoder(&Default::default());
-                record_marks(&mut own);
-                own.copy_buffer_to_buffer(&state.marks, 0, &state.marks_staging, 0, words * 4);
-                gpu.queue.submit([own.finish()]);
-                let bytes = gpu.read_buffer(&state.marks_staging)?;
-                Some(bytemuck::cast_slice(&bytes[..(words * 4) as usize]).to_vec())
-            }
-            Feedback::PreviousFrame => {
-                if let Some(bytes) = state.late.try_read(gpu)? {
-                    state.latest_marks =
-                        Some(bytemuck::cast_slice(&bytes[..(words * 4) as usize]).to_vec());
-                }
-                record_marks(encoder);
-                if let Some(target) = state.late.target() {
-                    encoder.copy_buffer_to_buffer(&state.marks, 0, target, 0, words * 4);
-                    state.late_pending = true;
-                }
-                state.latest_marks.clone()
-            }
-        };
+        let mut own = FrameFeedback::own_encoder(gpu, ctx.feedback == Feedback::ThisFrame);
+        record_marks(own.as_mut().unwrap_or(&mut *encoder));
+        let marks: Option<Vec<u32>> = state
+            .feedback
+            .collect(gpu, own, encoder, &state.marks, words * 4)?
+            .map(|bytes| bytemuck::cast_slice(&bytes).to_vec());
         drop(mark_group);
         let feedback_ms = start.elapsed().as_secs_f64() * 1e3;
         let marks = marks.unwrap_or_default();
         // Allocation.
-        let needed: BTreeSet<PageKey> = marked_entries(&marks, layout.table_len)
-            .map(|e| layout.key_of_entry(e))
-            .collect();
+        let marked: Vec<u32> = marked_entries(&marks, layout.table_len).collect();
+        let needed: BTreeSet<PageKey> = marked.iter().map(|&e| layout.key_of_entry(e)).collect();
         let allocation = state.pool.allocate(
             needed,
             |k| layout.parent(k),
@@ -564,17 +523,22 @@ impl ShadowMapTechnique {
             .write_buffer(&state.table, 0, bytemuck::cast_slice(&table));
         // New pages, rendered into their slots.
         let slots = 1 + allocation.render.len() as u64;
-        ensure_size(
-            gpu,
+        crate::gpu::grow_buffer(
+            &gpu.device,
             &mut state.uniforms,
             slots * STRIDE,
             "virtual map uniforms",
         );
+        let page_matrices: Vec<Mat4> = allocation
+            .render
+            .iter()
+            .map(|(k, _)| layout.page_view_proj(*k))
+            .collect();
         let mut data = vec![0u8; (slots * STRIDE) as usize];
         data[..std::mem::size_of::<ShadowMapUniform>()].copy_from_slice(bytemuck::bytes_of(&base));
-        for (i, (k, _)) in allocation.render.iter().enumerate() {
+        for (i, m) in page_matrices.iter().enumerate() {
             let mut faces = [Mat4::IDENTITY; MAX_FACES];
-            faces[0] = layout.page_view_proj(*k);
+            faces[0] = *m;
             let u = ShadowMapUniform {
                 faces,
                 face: UVec4::ZERO,
@@ -625,7 +589,7 @@ impl ShadowMapTechnique {
                 ..Default::default()
             });
             ctx.bind_frame_groups(&mut pass);
-            for (i, (k, slot)) in on_layer {
+            for (i, (_, slot)) in on_layer {
                 let (_, x, y) = atlas.place(*slot);
                 let page = atlas.page;
                 pass.set_viewport(x as f32, y as f32, page as f32, page as f32, 0.0, 1.0);
@@ -635,7 +599,7 @@ impl ShadowMapTechnique {
                 pass.set_pipeline(&clear_pipeline);
                 pass.draw(0..3, 0..1);
                 pass.set_pipeline(&depth_pipeline);
-                let m = layout.page_view_proj(*k);
+                let m = page_matrices[i];
                 let eye = layout.eye;
                 map_triangles += ctx.scene_gpu.draw_objects(&mut pass, |d| {
                     d.casts_shadow
@@ -670,7 +634,7 @@ impl ShadowMapTechnique {
             levels: layout.levels.len(),
             feedback_ms,
         };
-        state.last_marks = marked_entries(&marks, layout.table_len).collect();
+        state.last_marks = marked;
         self.render_debug(ctx, encoder, &lookup_group, lookup_key, 0);
         self.map_triangles = map_triangles;
         self.samples = 1;
@@ -699,18 +663,6 @@ fn marked_entries(marks: &[u32], len: u32) -> impl Iterator<Item = u32> + '_ {
     })
 }
 
-/// Texels from a pixel's lookup point its filter reads (what `kernel_reach`
-/// and the 2×2 taps of filters.wgsl reach), rounded up.
-fn kernel_reach(c: &ShadowMapConfig) -> f32 {
-    use super::Filter;
-    match c.filter {
-        Filter::Hard => 0.5,
-        Filter::Pcf2x2 => 1.0,
-        Filter::Grid | Filter::Disk => c.radius + 1.0,
-        _ => c.blocker_search.max(64.0) + 1.0,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -721,15 +673,5 @@ mod tests {
         let e: Vec<u32> = marked_entries(&marks, 96).collect();
         assert_eq!(e, vec![0, 3, 95]);
         assert_eq!(marked_entries(&marks, 90).count(), 2);
-    }
-
-    #[test]
-    fn reach_covers_the_kernel() {
-        let mut c = ShadowMapConfig::parse(&crate::technique::ParamValues::defaults(
-            super::super::config::PARAMS,
-        ))
-        .unwrap();
-        c.radius = 2.5;
-        assert_eq!(kernel_reach(&c), 3.5);
     }
 }
