@@ -22,6 +22,7 @@ struct ChainShared {
     /// Bound in place of the source not read by a step.
     placeholder_depth: wgpu::TextureView,
     placeholder_values: wgpu::TextureView,
+    nearest: wgpu::Sampler,
 }
 
 impl ChainShared {
@@ -37,19 +38,26 @@ impl ChainShared {
             },
             count: None,
         };
+        let storage = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format: FORMAT,
+                view_dimension: wgpu::TextureViewDimension::D2Array,
+            },
+            count: None,
+        };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("edge mask chain"),
             entries: &[
                 texture(0, wgpu::TextureSampleType::Depth),
                 texture(1, wgpu::TextureSampleType::Float { filterable: false }),
+                storage(2),
                 wgpu::BindGroupLayoutEntry {
-                    binding: 2,
+                    binding: 3,
                     visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::WriteOnly,
-                        format: FORMAT,
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                    },
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
                     count: None,
                 },
             ],
@@ -67,6 +75,10 @@ impl ChainShared {
             from_level,
             placeholder_depth: placeholder(device, wgpu::TextureFormat::Depth32Float),
             placeholder_values: placeholder(device, wgpu::TextureFormat::R8Unorm),
+            nearest: device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("edge mask chain gather"),
+                ..Default::default()
+            }),
             layout,
         }
     }
@@ -173,7 +185,7 @@ impl MinMaxChain {
             label: Some("edge mask min/max chain"),
             timestamp_writes: None,
         });
-        for (level, (side, storage)) in self.levels.iter().enumerate() {
+        for (level, (side, destination)) in self.levels.iter().enumerate() {
             let (pipeline, depth, values) = match (level, &source) {
                 (0, ChainSource::Depth(d)) => (&shared.from_depth, *d, &shared.placeholder_values),
                 (0, ChainSource::Bytes(b)) => (&shared.from_bytes, &shared.placeholder_depth, *b),
@@ -183,21 +195,20 @@ impl MinMaxChain {
                     &self.levels[level - 1].1,
                 ),
             };
+            let view = |binding, view| wgpu::BindGroupEntry {
+                binding,
+                resource: wgpu::BindingResource::TextureView(view),
+            };
             let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("edge mask chain level"),
                 layout: &shared.layout,
                 entries: &[
+                    view(0, depth),
+                    view(1, values),
+                    view(2, destination),
                     wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(depth),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(values),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: wgpu::BindingResource::TextureView(storage),
+                        binding: 3,
+                        resource: wgpu::BindingResource::Sampler(&shared.nearest),
                     },
                 ],
             });

@@ -7,21 +7,25 @@
 @group(0) @binding(0) var source_depth: texture_depth_2d_array;
 @group(0) @binding(1) var source_values: texture_2d_array<f32>;
 @group(0) @binding(2) var destination: texture_storage_2d_array<rg32float, write>;
+// Nearest, clamped to the edge (as the lookup's taps are): a gather at the
+// corner shared by four source texels returns those four.
+@group(0) @binding(3) var nearest: sampler;
 
-// The source texel at t of `layer`, clamped to the source (as the lookup's
-// taps are): from the depth map, the 8-bit map, or the level below.
-fn source_range(t: vec2i, layer: i32, kind: u32) -> vec2f {
+// The least and greatest of the 2×2 source texels under destination texel
+// `t` of `layer`: from the depth map, the 8-bit map, or the level below.
+fn source_range(t: vec2u, layer: u32, kind: u32) -> vec2f {
     if kind == 0u {
-        let size = vec2i(textureDimensions(source_depth));
-        let d = textureLoad(source_depth, clamp(t, vec2i(0), size - 1), layer, 0);
-        return vec2f(d, d);
+        let uv = (vec2f(t) * 2.0 + 1.0) / vec2f(textureDimensions(source_depth));
+        let d = textureGather(source_depth, nearest, uv, layer);
+        return vec2f(min(min(d.x, d.y), min(d.z, d.w)), max(max(d.x, d.y), max(d.z, d.w)));
     }
-    let size = vec2i(textureDimensions(source_values));
-    let v = textureLoad(source_values, clamp(t, vec2i(0), size - 1), layer, 0);
-    if kind == 1u {
-        return vec2f(v.r, v.r);
+    let uv = (vec2f(t) * 2.0 + 1.0) / vec2f(textureDimensions(source_values));
+    let lo = textureGather(0, source_values, nearest, uv, layer);
+    var hi = lo;
+    if kind == 2u {
+        hi = textureGather(1, source_values, nearest, uv, layer);
     }
-    return v.xy;
+    return vec2f(min(min(lo.x, lo.y), min(lo.z, lo.w)), max(max(hi.x, hi.y), max(hi.z, hi.w)));
 }
 
 fn reduce(id: vec3u, kind: u32) {
@@ -29,14 +33,7 @@ fn reduce(id: vec3u, kind: u32) {
     if id.x >= size.x || id.y >= size.y {
         return;
     }
-    let base = vec2i(id.xy) * 2;
-    let layer = i32(id.z);
-    let a = source_range(base, layer, kind);
-    let b = source_range(base + vec2i(1, 0), layer, kind);
-    let c = source_range(base + vec2i(0, 1), layer, kind);
-    let d = source_range(base + vec2i(1, 1), layer, kind);
-    let range = vec2f(min(min(a.x, b.x), min(c.x, d.x)), max(max(a.y, b.y), max(c.y, d.y)));
-    textureStore(destination, vec2i(id.xy), layer, vec4f(range, 0.0, 0.0));
+    textureStore(destination, id.xy, id.z, vec4f(source_range(id.xy, id.z, kind), 0.0, 0.0));
 }
 
 @compute @workgroup_size(8, 8, 1)

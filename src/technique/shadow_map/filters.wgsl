@@ -167,7 +167,7 @@ fn pcf_disk(uv: vec2f, face: u32, z: f32, radius_texels: f32, n: u32, phi: f32) 
         let t = uv + vogel(i, n, phi) * radius_texels * sm.map.y;
         sum += pcf2x2(t, face, tap_z(z, t));
     }
-    return sum / f32(n);
+    return sum / f32(max(n, 1u));
 }
 
 fn pcf_grid(uv: vec2f, face: u32, z: f32, radius_texels: f32, k: u32) -> f32 {
@@ -179,7 +179,7 @@ fn pcf_grid(uv: vec2f, face: u32, z: f32, radius_texels: f32, k: u32) -> f32 {
             sum += pcf2x2(t, face, tap_z(z, t));
         }
     }
-    return sum / f32(k * k);
+    return sum / f32(max(k * k, 1u));
 }
 
 // Half-width in texels of the penumbra that a blocker at linear depth db
@@ -214,20 +214,19 @@ fn blockers(uv: vec2f, face: u32, z: f32, radius_texels: f32, n: u32, phi: f32) 
 // front of the least stored depth under the kernel, 0 when behind the
 // greatest — or −1 (a shadow edge: run the kernel). Reads 2×2 texels of
 // the chain level whose texels (2^(level+1) map texels each) cover the
-// kernel's texel span.
+// kernel's texel span, at most floor(2·reach) + 2 texels wherever uv lies;
+// so the level is the same for every pixel (a uniform mip level keeps the
+// four loads cheap).
 fn edge_class(uv: vec2f, face: u32, z_lo: f32, z_hi: f32, reach: f32) -> f32 {
-    let top = vec2f(sm.map.x - 1.0);
-    let p = uv * sm.map.x;
-    let lo = clamp(floor(p - reach), vec2f(0.0), top);
-    let hi = clamp(floor(p + reach), vec2f(0.0), top);
-    let span = max(hi.x - lo.x, hi.y - lo.y) + 1.0;
-    let level = u32(max(ceil(log2(span)) - 1.0, 0.0));
+    let level = u32(max(ceil(log2(floor(2.0 * reach) + 2.0)) - 1.0, 0.0));
     if level >= textureNumLevels(minmax_map) {
         return -1.0;
     }
+    let top = vec2f(sm.map.x - 1.0);
+    let p = uv * sm.map.x;
     let cover = f32(1u << (level + 1u));
-    let a = vec2i(lo / cover);
-    let b = vec2i(hi / cover);
+    let a = vec2i(clamp(floor(p - reach), vec2f(0.0), top) / cover);
+    let b = vec2i(clamp(floor(p + reach), vec2f(0.0), top) / cover);
     let l = i32(face);
     let i = i32(level);
     let r0 = textureLoad(minmax_map, a, l, i).xy;

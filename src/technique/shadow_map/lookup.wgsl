@@ -188,17 +188,21 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
     if FILTER_KIND >= FILTER_VSM {
         return moment_visibility(moments_at(uv, face), select(linear01(c), pr.z, is_warped()));
     }
+    // Edge mask: where every tap agrees, the kernel's loops run zero times.
+    // A trip count, not an early return: SIMD rasterisers (llvmpipe among
+    // them) run both sides of a branch under a lane mask but leave a loop
+    // as soon as no lane is still in it.
+    var count = max(TAPS, 1u);
+    var known = -1.0;
     if EDGE_MASK && (FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK
         || FILTER_KIND == FILTER_PCSS || FILTER_KIND == FILTER_VARWIDTH) {
         // Taps compare against the receiver plane: its depth spread over the reach.
         let reach = kernel_reach();
         let spread = reach * sm.map.y * (abs(rp_gradient.x) + abs(rp_gradient.y));
-        let known = edge_class(uv, face, min(z, pr.z) - spread, max(z, pr.z) + spread, reach);
-        if known >= 0.0 {
-            return known;
-        }
+        known = edge_class(uv, face, min(z, pr.z) - spread, max(z, pr.z) + spread, reach);
+        count = select(count, 0u, known >= 0.0);
     }
-    let count = max(TAPS, 1u);
+    let searches = select(16u, 0u, known >= 0.0);
     let radius = sm.kernel.x;
     let phi = ign(frag) * 6.2831853;
     var v = 1.0;
@@ -226,7 +230,7 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
             if physical {
                 search = clamp(penumbra_texels(dr, select(sm.depth.x, 0.0, sm.map.w > 0.5 && !is_paraboloid())), 1.0, 64.0);
             }
-            let b = blockers(uv, face, z, search, 16u, phi);
+            let b = blockers(uv, face, z, search, searches, phi);
             if b.y > 0.0 {
                 var w = (dr - b.x) / max(b.x, 1e-4) * sm.soft.x;
                 if physical {
@@ -237,12 +241,12 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
         }
         default: {
             // Variable-width PCF (002): radius ∝ |d_blocker − d_receiver|^exponent.
-            let b = blockers(uv, face, z, sm.soft.w, 16u, phi);
+            let b = blockers(uv, face, z, sm.soft.w, searches, phi);
             if b.y > 0.0 {
                 let w = sm.soft.y * pow(abs(linear_depth(z) - b.x), sm.soft.z);
                 v = pcf_disk(uv, face, z, clamp(w, 0.5, 64.0), count * count, phi);
             }
         }
     }
-    return v;
+    return select(v, known, known >= 0.0);
 }
