@@ -7,6 +7,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-cargo build --release --locked
+# The report needs no window: the viewer (egui, winit) is left out of this
+# build; `cargo build --release` adds it.
+cargo build --release --locked --no-default-features
 ./target/release/shadowlab report --preset quick --out out/report "$@"
 echo "open out/report/index.html (or read out/report/report.md)"

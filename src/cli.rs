@@ -208,22 +208,32 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Compare(a) => compare(*a),
         Command::Bench(a) => bench(*a),
         Command::Report(a) => report(a),
-        Command::View(a) => {
-            let a = *a;
-            crate::viewer::run(crate::viewer::ViewerOptions {
-                view: a.view,
-                technique: a.technique,
-                set: a.set,
-                screenshot: a.screenshot,
-                frames: a.frames,
-                vsync: !a.no_vsync,
-                heatmap: a.heatmap,
-                debug_views: a.debug_views,
-                mask: a.mask,
-                camera_path: a.camera_path,
-            })
-        }
+        Command::View(a) => view(*a),
     }
+}
+
+#[cfg(feature = "viewer")]
+fn view(a: ViewCmdArgs) -> Result<()> {
+    crate::viewer::run(crate::viewer::ViewerOptions {
+        view: a.view,
+        technique: a.technique,
+        set: a.set,
+        screenshot: a.screenshot,
+        frames: a.frames,
+        vsync: !a.no_vsync,
+        heatmap: a.heatmap,
+        debug_views: a.debug_views,
+        mask: a.mask,
+        camera_path: a.camera_path,
+    })
+}
+
+#[cfg(not(feature = "viewer"))]
+fn view(_: ViewCmdArgs) -> Result<()> {
+    anyhow::bail!(
+        "this build has no viewer (built with --no-default-features, as scripts/demo.sh does); \
+         build it with `cargo build --release`"
+    )
 }
 
 fn scenes() -> Result<()> {

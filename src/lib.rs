@@ -15,4 +15,5 @@ pub mod renderer;
 pub mod report;
 pub mod scene;
 pub mod technique;
+#[cfg(feature = "viewer")]
 pub mod viewer;

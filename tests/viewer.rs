@@ -1,6 +1,8 @@
 //! The interactive viewer, started under Xvfb on the CPU Vulkan driver:
 //! its screenshot must show the scene and the egui panel.
 
+#![cfg(feature = "viewer")]
+
 mod common;
 use common::*;
 use std::process::Command;
