@@ -103,6 +103,9 @@ pub struct ShadowMapTechnique {
     /// Frame-sized debug views: the map projected onto the scene, texels per pixel.
     debug_frame: Option<[wgpu::Texture; 3]>,
     last_faces: Vec<Mat4>,
+    /// Per light sample: the half-extent of last frame's stabilised
+    /// directional square (kept while it fits; `setup::KEPT_FIT_RATIO`).
+    stable_halves: Vec<f32>,
     last_paraboloid: bool,
     want_debug: bool,
     /// Triangles drawn into the maps last frame (after culling per face).
@@ -133,6 +136,7 @@ impl ShadowMapTechnique {
             debug: None,
             debug_frame: None,
             last_faces: vec![],
+            stable_halves: vec![],
             last_paraboloid: false,
             want_debug: false,
             map_triangles: 0,

@@ -45,7 +45,7 @@ pub const MAX_DISTANCE: ParamSpec = ParamSpec::float(
 pub const STABILIZE: ParamSpec = ParamSpec::boolean(
     "stabilize",
     true,
-    "directional lights: texel edges stay in place when the camera moves or turns — cascades are bounding spheres snapped to whole texels; one map keeps its fitted square, its size rounded up to eighths of an octave and its centre snapped",
+    "directional lights: texel edges stay in place when the camera moves or turns — cascades are bounding spheres snapped to whole texels; one map's fitted square has its size rounded up to eighths of an octave and its centre snapped, and last frame's square is kept while it holds the view and is at most a quarter octave larger",
 );
 
 pub const BLEND: ParamSpec = ParamSpec::float(

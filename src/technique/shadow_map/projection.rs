@@ -33,6 +33,7 @@ impl ShadowMapTechnique {
             fov_deg: c.fov_deg,
             paraboloid: c.omni == Omni::DualParaboloid,
             stabilize_size: stabilize.then_some(size),
+            previous_half: None,
         };
         let cascaded = ctx.light.kind == LightType::Directional && c.cascades.count > 1;
         self.last_seen = if cascaded && c.cascades.fit != Fit::Frustum {
@@ -53,7 +54,8 @@ impl ShadowMapTechnique {
         };
         let setups = lights
             .iter()
-            .map(|l| {
+            .enumerate()
+            .map(|(i, l)| {
                 let mut setup = if cascaded {
                     cascades::cascade_setup(
                         l.direction,
@@ -73,7 +75,10 @@ impl ShadowMapTechnique {
                         &ctx.scene_gpu.bounds,
                         ctx.fit_camera,
                         aspect,
-                        &frustum_params,
+                        &FrustumParams {
+                            previous_half: self.stable_halves.get(i).copied(),
+                            ..frustum_params
+                        },
                     )
                 };
                 if l.kind == LightType::Directional && c.warp.kind != Warp::None {
@@ -88,7 +93,15 @@ impl ShadowMapTechnique {
                 }
                 setup
             })
-            .collect();
+            .collect::<Vec<LightSetup>>();
+        // A stabilised single directional map's square, kept next frame
+        // while it fits (`FrustumParams::previous_half`).
+        self.stable_halves = match ctx.light.kind {
+            LightType::Directional if stabilize && !cascaded => {
+                setups.iter().map(|s| s.texel_scale * 0.5).collect()
+            }
+            _ => vec![],
+        };
         Ok(setups)
     }
 }

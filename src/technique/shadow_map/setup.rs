@@ -99,7 +99,17 @@ pub struct FrustumParams {
     /// of an octave and its centre snapped to whole texels of a map of
     /// `size`², so that small camera moves leave the texel grid in place.
     pub stabilize_size: Option<u32>,
+    /// Directional, stabilised: the previous frame's half-extent, kept
+    /// while it still holds the view's square and exceeds it by at most
+    /// [`KEPT_FIT_RATIO`] (hysteresis: a size at a rounding step does not
+    /// flip from frame to frame, moving every texel edge).
+    pub previous_half: Option<f32>,
 }
+
+/// How much larger than the fitted square a stabilised map's previous
+/// square may be and still be kept: a quarter octave (a fresh fit is at
+/// most an eighth larger).
+pub const KEPT_FIT_RATIO: f32 = 1.189_207_1;
 
 /// The eight world-space corners of the camera's view between view depths
 /// `z0` and `z1`.
@@ -244,6 +254,7 @@ pub fn light_setup(
         fov_deg,
         paraboloid,
         stabilize_size,
+        previous_half,
     } = *fp;
     use glam::camera::rh::proj::directx::{orthographic, perspective};
     match light.kind {
@@ -338,7 +349,12 @@ pub fn light_setup(
             let half = ((max_x - min_x).max(max_y - min_y) * 0.5).max(1e-3);
             let (cx, cy) = ((min_x + max_x) * 0.5, (min_y + max_y) * 0.5);
             let (half, cx, cy) = match stabilize_size {
-                Some(size) => stable_fit(half, cx, cy, size),
+                Some(size) => match previous_half {
+                    Some(p) if p >= half && p <= half * KEPT_FIT_RATIO => {
+                        snap_to_texels(p, cx, cy, size)
+                    }
+                    _ => stable_fit(half, cx, cy, size),
+                },
                 None => (half, cx, cy),
             };
             // View space looks down −z: depth range from the scene's z extent.
@@ -402,5 +418,69 @@ mod tests {
             max: Vec3::new(1.0, 1.0, 4.0),
         };
         assert!(clip_to_bounds(&slice(), &behind).is_empty());
+    }
+}
+
+#[cfg(test)]
+mod stable_fit_tests {
+    use super::*;
+
+    /// A sun straight down over a 200 × 200 floor, a camera 10 m above it
+    /// looking across: the one map's square and its half-extent.
+    fn fit(eye_z: f32, previous_half: Option<f32>) -> f32 {
+        let light = Light::directional(Vec3::new(0.0, -1.0, 0.0), 1.0);
+        let bounds = Aabb {
+            min: Vec3::new(-100.0, 0.0, -100.0),
+            max: Vec3::new(100.0, 1.0, 100.0),
+        };
+        let mut camera = Camera::new(
+            Vec3::new(0.0, 10.0, eye_z),
+            Vec3::new(0.0, 0.0, eye_z - 30.0),
+        );
+        camera.far = 60.0;
+        let fp = FrustumParams {
+            stabilize_size: Some(2048),
+            previous_half,
+            ..Default::default()
+        };
+        light_setup(&light, &bounds, &camera, 16.0 / 9.0, &fp).texel_scale * 0.5
+    }
+
+    #[test]
+    fn a_stabilised_map_keeps_its_square_while_it_fits_and_is_not_too_large() {
+        let first = fit(0.0, None);
+        let needed = fit(0.0, Some(f32::MAX)); // a previous square too large: a fresh fit
+        assert_eq!(first, needed);
+        // A fresh fit is the needed square rounded up to an eighth octave.
+        let exact = {
+            let light = Light::directional(Vec3::new(0.0, -1.0, 0.0), 1.0);
+            let bounds = Aabb {
+                min: Vec3::new(-100.0, 0.0, -100.0),
+                max: Vec3::new(100.0, 1.0, 100.0),
+            };
+            let mut camera = Camera::new(Vec3::new(0.0, 10.0, 0.0), Vec3::new(0.0, 0.0, -30.0));
+            camera.far = 60.0;
+            light_setup(
+                &light,
+                &bounds,
+                &camera,
+                16.0 / 9.0,
+                &FrustumParams::default(),
+            )
+            .texel_scale
+                * 0.5
+        };
+        assert!(
+            first >= exact && first < exact * 1.0906,
+            "{first} vs {exact}"
+        );
+        // Kept: up to a quarter octave above what the view needs.
+        let kept = exact * 1.15;
+        assert_eq!(fit(0.0, Some(kept)), kept);
+        // Not kept: too small to hold the view, or more than a quarter octave larger.
+        assert_eq!(fit(0.0, Some(exact * 0.99)), first);
+        assert_eq!(fit(0.0, Some(exact * 1.25)), first);
+        // A dolly step of 0.5 m keeps the square (and so every texel edge).
+        assert_eq!(fit(-0.5, Some(first)), first);
     }
 }

@@ -321,6 +321,7 @@ impl ShadowMapTechnique {
                 fov_deg: c.fov_deg,
                 paraboloid: false,
                 stabilize_size: None,
+                previous_half: None,
             },
             VirtualParams {
                 size: p.virtual_size,
