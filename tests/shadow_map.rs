@@ -25,6 +25,7 @@ fn texture_matrix_maps_a_known_point_to_its_texel_and_depth() {
         fov_deg: 90.0,
         paraboloid: false,
         stabilize_size: None,
+        previous_half: None,
     };
     let s = light_setup(&light, &bounds, &cam, 1.0, &fp);
     let t = bias_matrix() * s.faces[0] * Vec4::new(0.0, 0.0, 0.0, 1.0);
