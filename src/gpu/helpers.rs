@@ -51,11 +51,26 @@ pub fn texture_entry(
     dim: wgpu::TextureViewDimension,
     filterable: bool,
 ) -> wgpu::BindGroupLayoutEntry {
+    sampled_texture_entry(
+        binding,
+        wgpu::ShaderStages::FRAGMENT,
+        wgpu::TextureSampleType::Float { filterable },
+        dim,
+    )
+}
+
+/// Layout entry of a single-sampled texture of any sample type.
+pub fn sampled_texture_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    sample_type: wgpu::TextureSampleType,
+    dim: wgpu::TextureViewDimension,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
+        visibility,
         ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable },
+            sample_type,
             view_dimension: dim,
             multisampled: false,
         },

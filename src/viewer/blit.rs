@@ -40,18 +40,7 @@ pub struct Blit {
 
 impl Blit {
     pub fn new(device: &wgpu::Device) -> Blit {
-        let tex = |binding, dim| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float {
-                    filterable: binding == 1,
-                },
-                view_dimension: dim,
-                multisampled: false,
-            },
-            count: None,
-        };
+        let tex = |binding, dim| crate::gpu::texture_entry(binding, dim, binding == 1);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("blit"),
             entries: &[

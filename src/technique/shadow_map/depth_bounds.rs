@@ -87,15 +87,13 @@ struct ReduceShared {
 impl ReduceShared {
     fn new(gpu: &GpuContext) -> ReduceShared {
         let device = &gpu.device;
-        let texture = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
+        let texture = |binding| {
+            crate::gpu::sampled_texture_entry(
+                binding,
+                wgpu::ShaderStages::COMPUTE,
+                wgpu::TextureSampleType::Float { filterable: false },
+                wgpu::TextureViewDimension::D2,
+            )
         };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("sdsm reduction"),

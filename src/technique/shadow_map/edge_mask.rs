@@ -28,15 +28,13 @@ struct ChainShared {
 impl ChainShared {
     fn new(gpu: &GpuContext) -> ChainShared {
         let device = &gpu.device;
-        let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Texture {
+        let texture = |binding, sample_type| {
+            crate::gpu::sampled_texture_entry(
+                binding,
+                wgpu::ShaderStages::COMPUTE,
                 sample_type,
-                view_dimension: wgpu::TextureViewDimension::D2Array,
-                multisampled: false,
-            },
-            count: None,
+                wgpu::TextureViewDimension::D2Array,
+            )
         };
         let storage = |binding| wgpu::BindGroupLayoutEntry {
             binding,

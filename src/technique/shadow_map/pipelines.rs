@@ -97,15 +97,13 @@ pub struct ShadowMapShared {
 impl ShadowMapShared {
     pub fn new(gpu: &GpuContext) -> ShadowMapShared {
         let device = &gpu.device;
-        let tex = |binding, sample_type| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
+        let tex = |binding, sample_type| {
+            crate::gpu::sampled_texture_entry(
+                binding,
+                wgpu::ShaderStages::FRAGMENT,
                 sample_type,
-                view_dimension: wgpu::TextureViewDimension::D2Array,
-                multisampled: false,
-            },
-            count: None,
+                wgpu::TextureViewDimension::D2Array,
+            )
         };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadow map"),

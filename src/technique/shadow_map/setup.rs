@@ -425,9 +425,10 @@ mod tests {
 mod stable_fit_tests {
     use super::*;
 
-    /// A sun straight down over a 200 × 200 floor, a camera 10 m above it
-    /// looking across: the one map's square and its half-extent.
-    fn fit(eye_z: f32, previous_half: Option<f32>) -> f32 {
+    /// A sun straight down over a 200 × 200 floor and a narrow camera 10 m
+    /// above it at z = `eye_z`, looking down −z and seeing 60 m: the one
+    /// map's half-extent, stabilised for 2048² or not.
+    fn fit(eye_z: f32, stabilize_size: Option<u32>, previous_half: Option<f32>) -> f32 {
         let light = Light::directional(Vec3::new(0.0, -1.0, 0.0), 1.0);
         let bounds = Aabb {
             min: Vec3::new(-100.0, 0.0, -100.0),
@@ -438,49 +439,41 @@ mod stable_fit_tests {
             Vec3::new(0.0, 0.0, eye_z - 30.0),
         );
         camera.far = 60.0;
+        camera.fov_y_deg = 30.0;
         let fp = FrustumParams {
-            stabilize_size: Some(2048),
+            stabilize_size,
             previous_half,
             ..Default::default()
         };
-        light_setup(&light, &bounds, &camera, 16.0 / 9.0, &fp).texel_scale * 0.5
+        light_setup(&light, &bounds, &camera, 1.0, &fp).texel_scale * 0.5
     }
 
     #[test]
     fn a_stabilised_map_keeps_its_square_while_it_fits_and_is_not_too_large() {
-        let first = fit(0.0, None);
-        let needed = fit(0.0, Some(f32::MAX)); // a previous square too large: a fresh fit
-        assert_eq!(first, needed);
+        let stable = Some(2048);
+        let first = fit(0.0, stable, None);
+        // A previous square too large: a fresh fit.
+        assert_eq!(fit(0.0, stable, Some(f32::MAX)), first);
         // A fresh fit is the needed square rounded up to an eighth octave.
-        let exact = {
-            let light = Light::directional(Vec3::new(0.0, -1.0, 0.0), 1.0);
-            let bounds = Aabb {
-                min: Vec3::new(-100.0, 0.0, -100.0),
-                max: Vec3::new(100.0, 1.0, 100.0),
-            };
-            let mut camera = Camera::new(Vec3::new(0.0, 10.0, 0.0), Vec3::new(0.0, 0.0, -30.0));
-            camera.far = 60.0;
-            light_setup(
-                &light,
-                &bounds,
-                &camera,
-                16.0 / 9.0,
-                &FrustumParams::default(),
-            )
-            .texel_scale
-                * 0.5
-        };
+        let needed = fit(0.0, None, None);
         assert!(
-            first >= exact && first < exact * 1.0906,
-            "{first} vs {exact}"
+            first >= needed && first < needed * 1.0906,
+            "{first} vs {needed}"
         );
         // Kept: up to a quarter octave above what the view needs.
-        let kept = exact * 1.15;
-        assert_eq!(fit(0.0, Some(kept)), kept);
+        let kept = needed * 1.15;
+        assert_eq!(fit(0.0, stable, Some(kept)), kept);
         // Not kept: too small to hold the view, or more than a quarter octave larger.
-        assert_eq!(fit(0.0, Some(exact * 0.99)), first);
-        assert_eq!(fit(0.0, Some(exact * 1.25)), first);
-        // A dolly step of 0.5 m keeps the square (and so every texel edge).
-        assert_eq!(fit(-0.5, Some(first)), first);
+        assert_eq!(fit(0.0, stable, Some(needed * 0.99)), first);
+        assert_eq!(fit(0.0, stable, Some(needed * 1.25)), first);
+        // A dolly towards the floor's far edge shrinks the needed square: at
+        // the first step where a fresh fit rounds to another size, the
+        // previous square still holds the view and is kept.
+        let z = (1..400)
+            .map(|k| -0.25 * k as f32)
+            .find(|&z| fit(z, stable, None) != first)
+            .expect("the dolly crosses a rounding step");
+        assert!(fit(z, None, None) <= first);
+        assert_eq!(fit(z, stable, Some(first)), first);
     }
 }
