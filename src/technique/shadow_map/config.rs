@@ -8,7 +8,7 @@ use crate::technique::params::choice_enum;
 use crate::technique::{ParamSpec, ParamValues, Preset};
 use anyhow::Result;
 
-use super::paging_params::{CLIPMAP_LEVELS, PAGE_SIZE, PAGING, POOL, VIRTUAL_SIZE};
+use super::paging_params::{CLIPMAP_LEVELS, PAGE_SIZE, PAGING, POOL, REFINE_STEPS, VIRTUAL_SIZE};
 pub use super::paging_params::{Paging, PagingConfig};
 use super::partition_params::{
     BLEND, CASCADES, FIT, LISPSM_N, MAX_DISTANCE, SPLIT_LAMBDA, STABILIZE, TSM_FOCUS, WARP,
@@ -385,6 +385,7 @@ pub const PARAMS: &[ParamSpec] = &[
     PAGE_SIZE,
     POOL,
     CLIPMAP_LEVELS,
+    REFINE_STEPS,
 ];
 
 pub const PRESETS: &[Preset] = &[
@@ -503,6 +504,11 @@ pub const PRESETS: &[Preset] = &[
         values: &[("paging", "virtual"), ("slope_bias", "1")],
     },
     Preset {
+        name: "adaptive",
+        summary: "adaptive shadow map (Fernando et al. 2001) on the virtual map's pages: each pixel starts at its view's coarsest level and is refined a level at a time, up to the level where a texel covers at most a pixel, only where its kernel sees a shadow edge; 3×3 PCF grid, slope bias 1",
+        values: &[("paging", "adaptive"), ("slope_bias", "1")],
+    },
+    Preset {
         name: "8bit",
         summary: "depth stored in 8 bits: acne everywhere",
         values: &[("format", "r8"), ("filter", "hard")],
@@ -587,11 +593,11 @@ impl ShadowMapConfig {
             paging: PagingConfig::parse(p)?,
         })
         .and_then(|c: ShadowMapConfig| {
-            if c.paging.is_virtual()
+            if c.paging.is_paged()
                 && (c.filter.is_moment() || c.area || c.format != DepthFormat::D32f)
             {
                 anyhow::bail!(
-                    "shadow-map: paging=virtual stores d32f, filters with the PCF family (hard, pcf2x2, grid, disk, pcss, varwidth) and renders one map per light (area=false)"
+                    "shadow-map: paging=virtual and adaptive store d32f, filters with the PCF family (hard, pcf2x2, grid, disk, pcss, varwidth) and renders one map per light (area=false)"
                 );
             }
             Ok(c)

@@ -223,7 +223,7 @@ impl ShadowTechnique for ShadowMapTechnique {
     }
 
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        if self.config.paging.is_virtual() {
+        if self.config.paging.is_paged() {
             self.maps = None;
             self.chain = None;
             return self.render_virtual(ctx, encoder);
@@ -565,6 +565,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     p.resident as f64 / p.capacity.max(1) as f64,
                 ),
                 ("virtual_levels", p.levels as f64),
+                ("refine_passes", p.refine_passes as f64),
                 ("page_feedback_ms", p.feedback_ms),
                 ("map_triangles", self.map_triangles as f64),
             ];

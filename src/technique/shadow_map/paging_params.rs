@@ -1,5 +1,6 @@
 //! The parameters of virtual (paged) shadow maps: whether a light's map is
-//! one texture per face or a huge virtual map in pages, and the sizes of
+//! one texture per face or a huge virtual map in pages (all of them that
+//! the view needs, or only those at shadow edges), and the sizes of
 //! the virtual map, its pages and the physical pool.
 
 use crate::technique::params::choice_enum;
@@ -8,13 +9,13 @@ use anyhow::{Result, bail};
 
 choice_enum! {
     /// How a light's map is stored.
-    pub enum Paging { Off = "off", Virtual = "virtual" }
+    pub enum Paging { Off = "off", Virtual = "virtual", Adaptive = "adaptive" }
 }
 
 pub const PAGING: ParamSpec = ParamSpec::choice_of::<Paging>(
     "paging",
     Paging::Off as usize,
-    "off: one `size`² map per face; virtual: a `virtual_size`² virtual map per view in `page_size`² pages (directional lights: a clipmap of `clipmap_levels` windows whose side doubles per level, centred on the camera; spot: one view, point: six cube faces, each a mip chain) — the pages the visible pixels need at the level where a texel covers at most one pixel are marked on the GPU, allocated from a pool of `pool` pages (least recently used first), rendered when new and kept across frames until the light or a caster moves; depth is d32f and the filters are the PCF family",
+    "off: one `size`² map per face; virtual: a `virtual_size`² virtual map per view in `page_size`² pages (directional lights: a clipmap of `clipmap_levels` windows whose side doubles per level, centred on the camera; spot: one view, point: six cube faces, each a mip chain) — the pages the visible pixels need at the level where a texel covers at most one pixel are marked on the GPU, allocated from a pool of `pool` pages (least recently used first), rendered when new and kept across frames until the light or a caster moves; depth is d32f and the filters are the PCF family; adaptive: the same pages, levels and pool, refined as Fernando et al. 2001 (adaptive shadow maps) refine their hierarchy — a pixel starts at its view's coarsest level and asks for the next finer page only where the level it has shows a shadow edge under its kernel (the stored depths it reads do not all lie on one side of the receiver) and is coarser than the pixel needs; up to `refine_steps` refinements a frame, each marked on the GPU and read back",
 );
 
 pub const VIRTUAL_SIZE: ParamSpec = ParamSpec::int(
@@ -22,7 +23,7 @@ pub const VIRTUAL_SIZE: ParamSpec = ParamSpec::int(
     16384,
     1024,
     65536,
-    "paging=virtual: texels per side of each clipmap window, or of level 0 of a local light's view (a power of two)",
+    "paging=virtual or adaptive: texels per side of each clipmap window, or of level 0 of a local light's view (a power of two)",
 );
 
 pub const PAGE_SIZE: ParamSpec = ParamSpec::int(
@@ -30,7 +31,7 @@ pub const PAGE_SIZE: ParamSpec = ParamSpec::int(
     128,
     32,
     512,
-    "paging=virtual: texels per page side (a power of two)",
+    "paging=virtual or adaptive: texels per page side (a power of two)",
 );
 
 pub const POOL: ParamSpec = ParamSpec::int(
@@ -38,7 +39,7 @@ pub const POOL: ParamSpec = ParamSpec::int(
     4096,
     16,
     65536,
-    "paging=virtual: physical pages (each page_size² of d32f); when the view needs more, the finest levels give way to coarser ones (counter pages_degraded)",
+    "paging=virtual or adaptive: physical pages (each page_size² of d32f); when the view needs more, the finest levels give way to coarser ones (counter pages_degraded)",
 );
 
 pub const CLIPMAP_LEVELS: ParamSpec = ParamSpec::int(
@@ -46,7 +47,15 @@ pub const CLIPMAP_LEVELS: ParamSpec = ParamSpec::int(
     10,
     2,
     14,
-    "paging=virtual, directional lights: clipmap levels; the coarsest window is twice the scene's width and each finer one half the last",
+    "paging=virtual or adaptive, directional lights: clipmap levels; the coarsest window is twice the scene's width and each finer one half the last",
+);
+
+pub const REFINE_STEPS: ParamSpec = ParamSpec::int(
+    "refine_steps",
+    16,
+    1,
+    32,
+    "paging=adaptive: the most refinements per frame (each a marking pass and its read-back, one level finer at shadow edges); it stops earlier when no pixel asks for a new page; the viewer refines once a frame (the marks arrive a frame late)",
 );
 
 /// A light's paging and the virtual map's sizes.
@@ -57,6 +66,7 @@ pub struct PagingConfig {
     pub page_size: u32,
     pub pool: u32,
     pub clipmap_levels: u32,
+    pub refine_steps: u32,
 }
 
 impl PagingConfig {
@@ -67,6 +77,7 @@ impl PagingConfig {
             page_size: p.int(&PAGE_SIZE)?,
             pool: p.int(&POOL)?,
             clipmap_levels: p.int(&CLIPMAP_LEVELS)?,
+            refine_steps: p.int(&REFINE_STEPS)?,
         };
         for (name, v) in [("virtual_size", c.virtual_size), ("page_size", c.page_size)] {
             if !v.is_power_of_two() {
@@ -83,7 +94,13 @@ impl PagingConfig {
         Ok(c)
     }
 
-    pub fn is_virtual(&self) -> bool {
-        self.paging == Paging::Virtual
+    /// Whether the map is stored in pages (virtual or adaptive).
+    pub fn is_paged(&self) -> bool {
+        self.paging != Paging::Off
+    }
+
+    /// Whether pages are refined only at shadow edges.
+    pub fn is_adaptive(&self) -> bool {
+        self.paging == Paging::Adaptive
     }
 }

@@ -106,7 +106,9 @@ struct VirtualMap {
     layer_pages: u32,
     // levels per view
     view_levels: u32,
-    _pad: vec2u,
+    // 1: adaptive (pages refined only at shadow edges), 0: virtual
+    refine: u32,
+    _pad: u32,
     levels: array<VirtualLevel>,
 };
 

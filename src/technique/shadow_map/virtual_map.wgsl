@@ -3,8 +3,14 @@
 // `compare` measures it), the pages its kernel needs marked (fs_virtual_mark);
 // the lookup reads each texel through the page table and, where a page is
 // not resident (a pool too small), from the next coarser level that is.
+// Adaptive maps (vsm.refine = 1) mark fewer: a pixel keeps the finest level
+// it has and asks for the next finer one only at a shadow edge.
 
 const NO_LEVEL: u32 = 0xffffffffu;
+
+// Adaptive maps: the least depth step (of [0, 1] light depth) between a
+// receiver and a stored texel that counts as a shadow edge, 2^-16.
+const EDGE_STEP: f32 = 1.52587890625e-5;
 
 // World size of the texels of the level being filtered (pcss's penumbra).
 var<private> virtual_texel_world: f32 = 1.0;
@@ -55,11 +61,16 @@ struct VirtualPoint {
     inside: bool,
 };
 
+// A point light's lookup point may lie up to its normal offset
+// (`sm.kernel.y` texels of the level) outside the cube face whose
+// direction holds the G-buffer point — at a coarse level a visible band
+// along the seams — and reads the face's border texels there.
 fn virtual_point(level: u32, g: vec3f, n: vec3f) -> VirtualPoint {
     let l = level_at(level);
     let t = level_texel(level, offset_point(g, n, level_texel_world(level, g)));
     let extent = f32(l.pages * vsm.page_texels);
-    let inside = t.w > 0.0 && all(t.xy >= vec2f(0.0)) && all(t.xy <= vec2f(extent))
+    let margin = select(0.0, sm.kernel.y + 1.0, sm.light.w > 1.5);
+    let inside = t.w > 0.0 && all(t.xy >= vec2f(-margin)) && all(t.xy <= vec2f(extent + margin))
         && t.z >= 0.0 && t.z <= 1.0;
     return VirtualPoint(t.xy * sm.map.y, t.z, inside);
 }
@@ -190,14 +201,151 @@ fn marked_reach() -> f32 {
     return kernel_reach() + 0.5;
 }
 
-// Sets the bit of the page holding texel t of `level` (a plain read first:
-// most pixels find their pages already marked, and a read is cheaper than
-// an atomic write).
-fn mark_page(level: u32, t: vec2f) {
-    let e = virtual_entry(level, virtual_page_of(level, t));
+// Sets the bit of window page `page` of `level` (a plain read first: most
+// pixels find their pages already marked, and a read is cheaper than an
+// atomic write).
+fn mark_page(level: u32, page: vec2i) {
+    let e = virtual_entry(level, page);
     let bit = 1u << (e % 32u);
     if (atomicLoad(&vsm_marks[e / 32u]) & bit) == 0u {
         atomicOr(&vsm_marks[e / 32u], bit);
+    }
+}
+
+// Marks the pages a kernel around texel t of `level` reads: the corners of
+// its reach, one page or two or four across borders.
+fn mark_kernel(level: u32, t: vec2f) {
+    let r = marked_reach();
+    let lo = virtual_page_of(level, t - vec2f(r));
+    let hi = virtual_page_of(level, t + vec2f(r));
+    mark_page(level, lo);
+    if hi.x != lo.x {
+        mark_page(level, vec2i(hi.x, lo.y));
+    }
+    if hi.y != lo.y {
+        mark_page(level, vec2i(lo.x, hi.y));
+    }
+    if any(hi != lo) {
+        mark_page(level, hi);
+    }
+}
+
+// Whether every page a kernel around texel t of `level` reads is resident.
+fn kernel_resident(level: u32, t: vec2f) -> bool {
+    let r = marked_reach();
+    let lo = virtual_page_of(level, t - vec2f(r));
+    let hi = virtual_page_of(level, t + vec2f(r));
+    return vsm_table[virtual_entry(level, lo)] != 0u
+        && vsm_table[virtual_entry(level, vec2i(hi.x, lo.y))] != 0u
+        && vsm_table[virtual_entry(level, vec2i(lo.x, hi.y))] != 0u
+        && vsm_table[virtual_entry(level, hi)] != 0u;
+}
+
+// The finest level from `level` up (toward its view's coarsest) where the
+// point of G-buffer point g (normal n) is inside the window and every page
+// its kernel reads is resident; NO_LEVEL where none is (lit).
+fn resident_level(level: u32, g: vec3f, n: vec3f) -> u32 {
+    var l = level;
+    for (var i = 0u; i < vsm.view_levels; i++) {
+        let q = virtual_point(l, g, n);
+        if q.inside && kernel_resident(l, q.uv * sm.map.x) {
+            return l;
+        }
+        let parent = level_at(l).parent;
+        if parent == l {
+            break;
+        }
+        l = parent;
+    }
+    return NO_LEVEL;
+}
+
+// The coarsest level of the view that `level` belongs to.
+fn root_level(level: u32) -> u32 {
+    return level - level % vsm.view_levels + vsm.view_levels - 1u;
+}
+
+// d(uv, depth) in `level` of a world step `dg` at G-buffer point g: the
+// view's linear part applied to the step (not the difference of two
+// projected points, which loses the step to rounding of the light depth).
+fn level_step(level: u32, g: vec3f, dg: vec3f) -> vec3f {
+    let l = level_at(level);
+    let m = sm.faces[l.view];
+    let dc = m * vec4f(dg, 0.0);
+    if sm.map.w > 0.5 {
+        let t = vec2f(dot(vsm.axis_u, dg), dot(vsm.axis_v, dg)) / l.texel_world;
+        return vec3f(t * sm.map.y, dc.z);
+    }
+    let c = m * vec4f(g - frame.camera_pos.xyz, 1.0);
+    let d = (dc.xyz - c.xyz / c.w * dc.w) / c.w;
+    return vec3f(vec2f(0.5 * d.x, -0.5 * d.y) / l.texel * sm.map.y, d.z);
+}
+
+// The receiver plane's d(depth)/d(uv) in `level` from the screen
+// derivatives gx, gy of the G-buffer position (as `receiver_plane`, which
+// takes them of projected values), clamped as the lookup clamps its own,
+// scaled to the level.
+fn level_gradient(level: u32, g: vec3f, gx: vec3f, gy: vec3f) -> vec2f {
+    let dx = level_step(level, g, gx);
+    let dy = level_step(level, g, gy);
+    let det = dx.x * dy.y - dx.y * dy.x;
+    let r = vec2f(dy.y * dx.z - dx.y * dy.z, dx.x * dy.z - dy.x * dx.z) / det;
+    if abs(det) < 1e-20 || any(r != r) {
+        return vec2f(0.0);
+    }
+    let limit = 4.0 * exp2(f32(level % vsm.view_levels));
+    return clamp(r, vec2f(-limit), vec2f(limit));
+}
+
+// Adaptive maps: whether `level` shows a shadow edge under the kernel
+// around point (g, n) — the stored depths of the texels it reads and one
+// more each side (at most 9 × 9 of them, strided beyond) do not all lie on
+// one side of the receiver, compared along the receiver's plane
+// (`gradient`, d(depth)/d(uv) in this level) as the filters' taps are.
+fn adaptive_edge(level: u32, g: vec3f, n: vec3f, gradient: vec2f) -> bool {
+    let q = virtual_point(level, g, n);
+    let t = q.uv * sm.map.x;
+    let r = marked_reach() + 1.0;
+    let lo = floor(t - vec2f(r));
+    let span = floor(t.x + r) - lo.x + 1.0;
+    let stride = max(ceil(span / 9.0), 1.0);
+    let count = u32(ceil(span / stride));
+    // The 2×2 comparison's slack (as `filtered` takes it), and a depth
+    // discontinuity's least step: a receiver that faces the light stores
+    // its own depth within rounding of what the lookup computes.
+    let z = q.z - min(2.0 * dot(vec2f(sm.map.y), abs(gradient)), 0.01) - EDGE_STEP;
+    var lit = 0u;
+    var shadowed = 0u;
+    for (var y = 0u; y < count; y++) {
+        for (var x = 0u; x < count; x++) {
+            let texel = lo + vec2f(f32(x), f32(y)) * stride;
+            let receiver = z + dot((texel + 0.5 - t) * sm.map.y, gradient);
+            if receiver <= virtual_stored(vec2i(texel), level) {
+                lit += 1u;
+            } else {
+                shadowed += 1u;
+            }
+        }
+    }
+    return lit > 0u && shadowed > 0u;
+}
+
+// Adaptive marking (Fernando et al. 2001, refined on the GPU's marks): the
+// pixel keeps the finest level it has (`need` its finest useful one) and
+// asks for the next finer one where that level shows a shadow edge; with
+// nothing resident yet, its view's coarsest level (the hierarchy's root).
+// gx, gy: the screen derivatives of the G-buffer position.
+fn adaptive_mark(need: u32, g: vec3f, n: vec3f, gx: vec3f, gy: vec3f) {
+    let have = resident_level(need, g, n);
+    if have == NO_LEVEL {
+        let root = root_level(need);
+        mark_kernel(root, virtual_point(root, g, n).uv * sm.map.x);
+        return;
+    }
+    mark_kernel(have, virtual_point(have, g, n).uv * sm.map.x);
+    if have != need && adaptive_edge(have, g, n, level_gradient(have, g, gx, gy)) {
+        let finer = have - 1u;
+        mark_kernel(finer, virtual_point(finer, g, n).uv * sm.map.x);
     }
 }
 
@@ -217,28 +365,22 @@ fn fs_virtual_mark(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         level = virtual_level_of(pixel, g.xyz, n);
     }
     vsm_pixel_level[pixel_index(pixel)] = level;
+    // The receiver's screen derivatives (uniform control flow).
+    let gx = dpdx(g.xyz);
+    let gy = dpdy(g.xyz);
     if level != NO_LEVEL {
-        let t = virtual_point(level, g.xyz, n).uv * sm.map.x;
-        let r = marked_reach();
-        // The kernel's corners: one page, or two or four across borders.
-        let lo = virtual_page_of(level, t - vec2f(r));
-        let hi = virtual_page_of(level, t + vec2f(r));
-        mark_page(level, t - vec2f(r));
-        if hi.x != lo.x {
-            mark_page(level, t + vec2f(r, -r));
-        }
-        if hi.y != lo.y {
-            mark_page(level, t + vec2f(-r, r));
-        }
-        if any(hi != lo) {
-            mark_page(level, t + vec2f(r));
+        if vsm.refine == 1u {
+            adaptive_mark(level, g.xyz, n, gx, gy);
+        } else {
+            mark_kernel(level, virtual_point(level, g.xyz, n).uv * sm.map.x);
         }
     }
     return vec4f(1.0);
 }
 
-// The lookup: the pixel's level or, where its page is not resident, the
-// first coarser level of the view whose page is; lit where none is.
+// The lookup: the pixel's level or, where its kernel's pages are not all
+// resident, the first coarser level of the view where they are; lit where
+// none is.
 fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f) -> f32 {
     let marked = vsm_pixel_level[pixel_index(vec2i(frag))];
     let first = select(marked, 0u, marked == NO_LEVEL);
@@ -248,22 +390,12 @@ fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f) -> f32 {
     if marked == NO_LEVEL || g.w < 0.5 {
         return 1.0;
     }
-    var level = first;
-    var q = vp;
-    var scale = 1.0;
-    for (var i = 0u; i < vsm.view_levels; i++) {
-        let page = virtual_page_of(level, q.uv * sm.map.x);
-        if q.inside && vsm_table[virtual_entry(level, page)] != 0u {
-            break;
-        }
-        let parent = level_at(level).parent;
-        if parent == level {
-            return 1.0;
-        }
-        level = parent;
-        q = virtual_point(level, g.xyz, n);
-        scale *= 2.0;
+    let level = resident_level(first, g.xyz, n);
+    if level == NO_LEVEL {
+        return 1.0;
     }
+    let q = virtual_point(level, g.xyz, n);
+    let scale = exp2(f32(level - first));
     virtual_texel_world = level_texel_world(level, g.xyz);
     return filtered(level, Projected(vec4f(0.0, 0.0, q.z, 1.0), q.uv, q.z, gradient * scale, q.inside), frag);
 }
@@ -275,15 +407,16 @@ fn virtual_debug_frame(frag: vec4f) -> DebugFrame {
     let g = textureLoad(gbuffer_position, pixel, 0);
     let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
     let marked = vsm_pixel_level[pixel_index(pixel)];
-    let level = select(marked, 0u, marked == NO_LEVEL);
+    let first = select(marked, 0u, marked == NO_LEVEL);
+    let found = resident_level(first, g.xyz, n);
+    let level = select(found, first, found == NO_LEVEL);
     let vp = virtual_point(level, g.xyz, n);
     let texel = vp.uv * sm.map.x;
     let pixels_per_texel = texel_footprint(dpdx(texel), dpdy(texel));
     let texels_per_pixel = max(length(dpdx(texel)), length(dpdy(texel)));
     var o: DebugFrame;
     let inside = g.w > 0.5 && marked != NO_LEVEL && vp.inside;
-    let page = virtual_page_of(level, texel);
-    let resident = vsm_table[virtual_entry(level, page)] != 0u;
+    let resident = found != NO_LEVEL;
     // Page borders darkened; a missing page dark red.
     let in_page = fract(texel / f32(vsm.page_texels));
     let border = any(in_page < vec2f(0.02)) || any(in_page > vec2f(0.98));

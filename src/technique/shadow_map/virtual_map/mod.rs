@@ -11,11 +11,16 @@
 //! the light or a caster that overlaps them moves; the lookup reads through
 //! the page table.
 
+mod atlas;
 mod levels;
 mod pages;
 
 pub use levels::{PageKey, VirtualLayout, VirtualParams};
 pub use pages::PagePool;
+
+use pages::Allocation;
+
+use atlas::Atlas;
 
 use super::pipelines::{DepthPassKey, LookupKey};
 use super::setup::FrustumParams;
@@ -28,7 +33,7 @@ use crate::technique::{DebugImage, Feedback, MaskContext};
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec4};
-use std::collections::BTreeSet;
+use std::collections::{BTreeSet, HashSet};
 
 /// The header of the levels buffer (`VirtualMap` of shadow_map.wgsl).
 #[repr(C)]
@@ -40,7 +45,9 @@ struct MapHeader {
     page_texels: u32,
     layer_pages: u32,
     view_levels: u32,
-    pad: [u32; 2],
+    /// 1: adaptive (refined at shadow edges).
+    refine: u32,
+    pad: u32,
 }
 
 /// One level (`VirtualLevel` of shadow_map.wgsl).
@@ -56,72 +63,6 @@ struct LevelGpu {
     table: u32,
     texel_world: f32,
     parent: u32,
-}
-
-/// The physical pool: layers of `side`² pages of `page`² d32f texels.
-struct Atlas {
-    page: u32,
-    capacity: u32,
-    /// Pages per row of a layer, and per layer.
-    row_pages: u32,
-    layer_pages: u32,
-    layer_views: Vec<wgpu::TextureView>,
-    array: wgpu::TextureView,
-    bytes: u64,
-}
-
-impl Atlas {
-    fn new(gpu: &GpuContext, page: u32, capacity: u32) -> Result<Atlas> {
-        let max = gpu.max_texture_size();
-        // Rows of a power of two pages (the shader masks and shifts).
-        let row_pages = (max / page)
-            .min((capacity as f64).sqrt().ceil() as u32)
-            .max(1)
-            .next_power_of_two()
-            .min(prev_power_of_two(max / page).max(1));
-        let layer_pages = row_pages * row_pages;
-        let layers = capacity.div_ceil(layer_pages);
-        let side = row_pages * page;
-        let bytes = side as u64 * side as u64 * layers as u64 * 4;
-        gpu.check_allocation(
-            &format!(
-                "shadow-map: a pool of {capacity} pages of {page}² ({layers} layer(s) of {side}²; --set pool=N)"
-            ),
-            (side, side, layers),
-            bytes,
-        )?;
-        gpu.checked("allocating the virtual map's pool", || {
-            let t = crate::gpu::texture_2d(
-                &gpu.device,
-                "virtual shadow map pool",
-                side,
-                side,
-                layers,
-                wgpu::TextureFormat::Depth32Float,
-                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            );
-            let (layer_views, array) = crate::gpu::layer_views(&t, layers);
-            Ok(Atlas {
-                page,
-                capacity,
-                row_pages,
-                layer_pages,
-                layer_views,
-                array,
-                bytes,
-            })
-        })
-    }
-
-    /// Layer and texel origin of a slot.
-    fn place(&self, slot: u32) -> (usize, u32, u32) {
-        let k = slot % self.layer_pages;
-        (
-            (slot / self.layer_pages) as usize,
-            (k % self.row_pages) * self.page,
-            (k / self.row_pages) * self.page,
-        )
-    }
 }
 
 /// What the cached pages were rendered with: when any of it changes,
@@ -146,6 +87,8 @@ pub struct PageCounters {
     pub resident: usize,
     pub capacity: u32,
     pub levels: usize,
+    /// Marking passes this frame (adaptive maps: refinements).
+    pub refine_passes: usize,
     /// Wall time from the marking pass to its marks on the CPU.
     pub feedback_ms: f64,
 }
@@ -157,6 +100,9 @@ pub struct VirtualState {
     marks: wgpu::Buffer,
     /// The marks read back.
     feedback: FrameFeedback,
+    /// Adaptive maps without waiting: the marks of an earlier frame, for
+    /// the next frame's allocation.
+    carried_marks: Option<Vec<u32>>,
     table: wgpu::Buffer,
     levels: wgpu::Buffer,
     pixel_levels: wgpu::Buffer,
@@ -192,6 +138,7 @@ impl VirtualState {
                 U::STORAGE | U::COPY_SRC | U::COPY_DST,
             ),
             feedback: FrameFeedback::new(&gpu.device, "virtual map marks read-back", 16),
+            carried_marks: None,
             table: buffer(gpu, "virtual map page table", 16, U::STORAGE | U::COPY_DST),
             levels: buffer(gpu, "virtual map levels", 16, U::STORAGE | U::COPY_DST),
             pixel_levels: buffer(gpu, "virtual map pixel levels", 16, U::STORAGE),
@@ -412,7 +359,8 @@ impl ShadowMapTechnique {
             page_texels: layout.page,
             layer_pages: atlas.layer_pages,
             view_levels: layout.view_levels,
-            pad: [0; 2],
+            refine: p.is_adaptive() as u32,
+            pad: 0,
         })
         .to_vec();
         for l in &layout.levels {
@@ -464,26 +412,136 @@ impl ShadowMapTechnique {
             edge_mask: false,
             virtual_map: true,
         };
-        let group = |state: &VirtualState, pool: &wgpu::TextureView| {
-            self.bind_group(
-                ctx,
-                MapBindings {
-                    depth: pool,
-                    virtual_buffers: [
-                        &state.marks,
-                        &state.table,
-                        &state.levels,
-                        &state.pixel_levels,
-                    ],
-                    ..MapBindings::empty(&shared, &state.uniforms)
-                },
-            )
+        // Adaptive maps refine a level per pass; a pass's pages are rendered
+        // and submitted before the next pass marks (its edge test reads
+        // them). Without waiting (the viewer) one pass a frame, marked
+        // after the frame's pages and allocated from in the next frame.
+        let refine = p.is_adaptive();
+        let wait = ctx.feedback == Feedback::ThisFrame;
+        let mut passes = 0;
+        let mut feedback_ms = 0.0;
+        let mut map_triangles = 0;
+        let mut rendered: HashSet<PageKey> = HashSet::new();
+        let allocation = loop {
+            passes += 1;
+            let marks = if refine && !wait {
+                state.carried_marks.take().unwrap_or_default()
+            } else {
+                let start = std::time::Instant::now();
+                let marks = self.mark_pages(ctx, encoder, state, &base, lookup_key, words, wait)?;
+                feedback_ms += start.elapsed().as_secs_f64() * 1e3;
+                marks.unwrap_or_default()
+            };
+            let marked: Vec<u32> = marked_entries(&marks, layout.table_len).collect();
+            let needed: BTreeSet<PageKey> =
+                marked.iter().map(|&e| layout.key_of_entry(e)).collect();
+            let allocation = state.pool.allocate(
+                needed,
+                |k| layout.parent(k),
+                |level| level % layout.view_levels,
+            );
+            let mut table = vec![0u32; layout.table_len as usize];
+            for (k, slot) in state.pool.resident() {
+                if let Some(e) = layout.entry(k) {
+                    table[e as usize] = slot + 1;
+                }
+            }
+            gpu.queue
+                .write_buffer(&state.table, 0, bytemuck::cast_slice(&table));
+            if refine && wait {
+                let mut own = gpu.device.create_command_encoder(&Default::default());
+                map_triangles +=
+                    self.render_new_pages(ctx, &mut own, state, &layout, &allocation, &base, lookup_key);
+                gpu.queue.submit([own.finish()]);
+            } else {
+                map_triangles +=
+                    self.render_new_pages(ctx, encoder, state, &layout, &allocation, &base, lookup_key);
+            }
+            rendered.extend(allocation.render.iter().map(|(k, _)| *k));
+            state.last_marks = marked;
+            if !(refine && wait) || allocation.render.is_empty() || passes >= p.refine_steps {
+                break allocation;
+            }
         };
-        // Marking.
+        if refine && !wait {
+            let start = std::time::Instant::now();
+            state.carried_marks = self.mark_pages(ctx, encoder, state, &base, lookup_key, words, false)?;
+            feedback_ms += start.elapsed().as_secs_f64() * 1e3;
+        }
+        // The lookup through the page table.
+        let atlas = state.atlas.as_ref().expect("made above");
+        let lookup_group = self.page_group(ctx, state, &atlas.array);
+        {
+            let mut pass = crate::technique::mask_pass(encoder, ctx, "virtual shadow map lookup");
+            pass.set_pipeline(&shared.lookup(gpu, lookup_key));
+            ctx.bind_frame_groups(&mut pass);
+            pass.set_bind_group(crate::frame::OWN_GROUP, &lookup_group, &[0]);
+            pass.draw(0..3, 0..1);
+        }
+        state.counters = PageCounters {
+            needed: allocation.needed,
+            rendered: rendered.len(),
+            cached: allocation.kept.iter().filter(|k| !rendered.contains(k)).count(),
+            degraded: allocation.degraded,
+            dropped: allocation.dropped,
+            resident: state.pool.resident_count(),
+            capacity: state.pool.capacity(),
+            levels: layout.levels.len(),
+            refine_passes: passes as usize,
+            feedback_ms,
+        };
+        self.render_debug(ctx, encoder, &lookup_group, lookup_key, 0);
+        self.map_triangles = map_triangles;
+        self.samples = 1;
+        self.last_faces = layout.views.iter().map(|v| v.as_mat4()).collect();
+        self.last_paraboloid = false;
+        state.last_layout = Some(layout);
+        Ok(())
+    }
+
+    /// The bind group of a virtual map's passes, its pool as `pool`.
+    fn page_group(
+        &self,
+        ctx: &MaskContext,
+        state: &VirtualState,
+        pool: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
+        self.bind_group(
+            ctx,
+            MapBindings {
+                depth: pool,
+                virtual_buffers: [
+                    &state.marks,
+                    &state.table,
+                    &state.levels,
+                    &state.pixel_levels,
+                ],
+                ..MapBindings::empty(&self.shared, &state.uniforms)
+            },
+        )
+    }
+
+    /// Records the marking pass (`words` words of page bits) and its read
+    /// back: this pass's marks when `wait`, else the latest that arrived.
+    #[allow(clippy::too_many_arguments)]
+    fn mark_pages(
+        &self,
+        ctx: &MaskContext,
+        encoder: &mut wgpu::CommandEncoder,
+        state: &mut VirtualState,
+        base: &ShadowMapUniform,
+        lookup_key: LookupKey,
+        words: u64,
+        wait: bool,
+    ) -> Result<Option<Vec<u32>>> {
+        let gpu = ctx.gpu;
         gpu.queue
-            .write_buffer(&state.uniforms, 0, bytemuck::bytes_of(&base));
-        let mark_group = group(state, &shared.placeholder_depth);
-        let record_marks = |encoder: &mut wgpu::CommandEncoder| {
+            .write_buffer(&state.uniforms, 0, bytemuck::bytes_of(base));
+        let atlas = state.atlas.as_ref().expect("made before marking");
+        let mark_group = self.page_group(ctx, state, &atlas.array);
+        let mut own = FrameFeedback::own_encoder(gpu, wait);
+        {
+            let encoder = own.as_mut().unwrap_or(&mut *encoder);
             encoder.clear_buffer(&state.marks, 0, Some(words * 4));
             let mut pass = crate::technique::mask_pass_with(
                 encoder,
@@ -491,38 +549,33 @@ impl ShadowMapTechnique {
                 "virtual shadow map marking",
                 wgpu::LoadOp::Load,
             );
-            pass.set_pipeline(&shared.virtual_mark(gpu, lookup_key));
+            pass.set_pipeline(&self.shared.virtual_mark(gpu, lookup_key));
             ctx.bind_frame_groups(&mut pass);
             pass.set_bind_group(crate::frame::OWN_GROUP, &mark_group, &[0]);
             pass.draw(0..3, 0..1);
-        };
-        let start = std::time::Instant::now();
-        let mut own = FrameFeedback::own_encoder(gpu, ctx.feedback == Feedback::ThisFrame);
-        record_marks(own.as_mut().unwrap_or(&mut *encoder));
-        let marks: Option<Vec<u32>> = state
+        }
+        Ok(state
             .feedback
             .collect(gpu, own, encoder, &state.marks, words * 4)?
-            .map(|bytes| bytemuck::cast_slice(&bytes).to_vec());
-        drop(mark_group);
-        let feedback_ms = start.elapsed().as_secs_f64() * 1e3;
-        let marks = marks.unwrap_or_default();
-        // Allocation.
-        let marked: Vec<u32> = marked_entries(&marks, layout.table_len).collect();
-        let needed: BTreeSet<PageKey> = marked.iter().map(|&e| layout.key_of_entry(e)).collect();
-        let allocation = state.pool.allocate(
-            needed,
-            |k| layout.parent(k),
-            |level| level % layout.view_levels,
-        );
-        let mut table = vec![0u32; layout.table_len as usize];
-        for (k, slot) in state.pool.resident() {
-            if let Some(e) = layout.entry(k) {
-                table[e as usize] = slot + 1;
-            }
-        }
-        gpu.queue
-            .write_buffer(&state.table, 0, bytemuck::cast_slice(&table));
-        // New pages, rendered into their slots.
+            .map(|bytes| bytemuck::cast_slice(&bytes).to_vec()))
+    }
+
+    /// Renders the pages `allocation` made new into their pool slots (each
+    /// with the casters that overlap it); returns the triangles drawn.
+    #[allow(clippy::too_many_arguments)]
+    fn render_new_pages(
+        &self,
+        ctx: &MaskContext,
+        encoder: &mut wgpu::CommandEncoder,
+        state: &mut VirtualState,
+        layout: &VirtualLayout,
+        allocation: &Allocation,
+        base: &ShadowMapUniform,
+        lookup_key: LookupKey,
+    ) -> u64 {
+        let c = self.config;
+        let gpu = ctx.gpu;
+        // Uniforms: slot 0 marking and lookup, then one per page rendered.
         let slots = 1 + allocation.render.len() as u64;
         crate::gpu::grow_buffer(
             &gpu.device,
@@ -536,22 +589,25 @@ impl ShadowMapTechnique {
             .map(|(k, _)| layout.page_view_proj(*k))
             .collect();
         let mut data = vec![0u8; (slots * STRIDE) as usize];
-        data[..std::mem::size_of::<ShadowMapUniform>()].copy_from_slice(bytemuck::bytes_of(&base));
+        data[..std::mem::size_of::<ShadowMapUniform>()].copy_from_slice(bytemuck::bytes_of(base));
         for (i, m) in page_matrices.iter().enumerate() {
             let mut faces = [Mat4::IDENTITY; MAX_FACES];
             faces[0] = *m;
             let u = ShadowMapUniform {
                 faces,
                 face: UVec4::ZERO,
-                ..base
+                ..*base
             };
             let at = ((i as u64 + 1) * STRIDE) as usize;
             data[at..at + std::mem::size_of::<ShadowMapUniform>()]
                 .copy_from_slice(bytemuck::bytes_of(&u));
         }
         gpu.queue.write_buffer(&state.uniforms, 0, &data);
-        let render_group = group(state, &shared.placeholder_depth);
-        let depth_pipeline = shared.depth_pass(
+        if allocation.render.is_empty() {
+            return 0;
+        }
+        let render_group = self.page_group(ctx, state, &self.shared.placeholder_depth);
+        let depth_pipeline = self.shared.depth_pass(
             gpu,
             DepthPassKey {
                 format: super::DepthFormat::D32f,
@@ -564,7 +620,8 @@ impl ShadowMapTechnique {
                 virtual_map: true,
             },
         );
-        let clear_pipeline = shared.clear_page(gpu, lookup_key);
+        let clear_pipeline = self.shared.clear_page(gpu, lookup_key);
+        let atlas = state.atlas.as_ref().expect("made before rendering");
         let mut map_triangles = 0;
         for (layer, view) in atlas.layer_views.iter().enumerate() {
             let on_layer: Vec<(usize, &(PageKey, u32))> = allocation
@@ -614,43 +671,7 @@ impl ShadowMapTechnique {
                 });
             }
         }
-        drop(render_group);
-        // The lookup through the page table.
-        let lookup_group = group(state, &atlas.array);
-        {
-            let mut pass = crate::technique::mask_pass(encoder, ctx, "virtual shadow map lookup");
-            pass.set_pipeline(&shared.lookup(gpu, lookup_key));
-            ctx.bind_frame_groups(&mut pass);
-            pass.set_bind_group(crate::frame::OWN_GROUP, &lookup_group, &[0]);
-            pass.draw(0..3, 0..1);
-        }
-        state.counters = PageCounters {
-            needed: allocation.needed,
-            rendered: allocation.render.len(),
-            cached: allocation.cached,
-            degraded: allocation.degraded,
-            dropped: allocation.dropped,
-            resident: state.pool.resident_count(),
-            capacity: state.pool.capacity(),
-            levels: layout.levels.len(),
-            feedback_ms,
-        };
-        state.last_marks = marked;
-        self.render_debug(ctx, encoder, &lookup_group, lookup_key, 0);
-        self.map_triangles = map_triangles;
-        self.samples = 1;
-        self.last_faces = layout.views.iter().map(|v| v.as_mat4()).collect();
-        self.last_paraboloid = false;
-        state.last_layout = Some(layout);
-        Ok(())
-    }
-}
-
-fn prev_power_of_two(v: u32) -> u32 {
-    if v == 0 {
-        0
-    } else {
-        1 << (31 - v.leading_zeros())
+        map_triangles
     }
 }
 

@@ -31,6 +31,8 @@ pub struct Allocation {
     pub needed: usize,
     /// Needed pages already resident (not rendered again).
     pub cached: usize,
+    /// Those pages.
+    pub kept: Vec<PageKey>,
     /// Needed pages replaced by a coarser one for want of slots.
     pub degraded: usize,
     /// Needed pages of the coarsest levels left out (the pool holds fewer
@@ -123,6 +125,7 @@ impl PagePool {
             if let Some(r) = self.resident.get_mut(&key) {
                 r.last_used = self.frame;
                 a.cached += 1;
+                a.kept.push(key);
                 continue;
             }
             let slot = match self.free.pop() {

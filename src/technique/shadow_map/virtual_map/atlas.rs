@@ -1,0 +1,79 @@
+//! The physical pool of a virtual map as a texture: layers of square
+//! rows of pages of d32f texels, and where each slot lies in it.
+
+use crate::gpu::GpuContext;
+use anyhow::Result;
+
+/// The physical pool: layers of `side`² pages of `page`² d32f texels.
+pub struct Atlas {
+    pub page: u32,
+    pub capacity: u32,
+    /// Pages per row of a layer, and per layer.
+    pub row_pages: u32,
+    pub layer_pages: u32,
+    pub layer_views: Vec<wgpu::TextureView>,
+    pub array: wgpu::TextureView,
+    pub bytes: u64,
+}
+
+impl Atlas {
+    pub fn new(gpu: &GpuContext, page: u32, capacity: u32) -> Result<Atlas> {
+        let max = gpu.max_texture_size();
+        // Rows of a power of two pages (the shader masks and shifts).
+        let row_pages = (max / page)
+            .min((capacity as f64).sqrt().ceil() as u32)
+            .max(1)
+            .next_power_of_two()
+            .min(prev_power_of_two(max / page).max(1));
+        let layer_pages = row_pages * row_pages;
+        let layers = capacity.div_ceil(layer_pages);
+        let side = row_pages * page;
+        let bytes = side as u64 * side as u64 * layers as u64 * 4;
+        gpu.check_allocation(
+            &format!(
+                "shadow-map: a pool of {capacity} pages of {page}² ({layers} layer(s) of {side}²; --set pool=N)"
+            ),
+            (side, side, layers),
+            bytes,
+        )?;
+        gpu.checked("allocating the virtual map's pool", || {
+            let t = crate::gpu::texture_2d(
+                &gpu.device,
+                "virtual shadow map pool",
+                side,
+                side,
+                layers,
+                wgpu::TextureFormat::Depth32Float,
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            );
+            let (layer_views, array) = crate::gpu::layer_views(&t, layers);
+            Ok(Atlas {
+                page,
+                capacity,
+                row_pages,
+                layer_pages,
+                layer_views,
+                array,
+                bytes,
+            })
+        })
+    }
+
+    /// Layer and texel origin of a slot.
+    pub fn place(&self, slot: u32) -> (usize, u32, u32) {
+        let k = slot % self.layer_pages;
+        (
+            (slot / self.layer_pages) as usize,
+            (k % self.row_pages) * self.page,
+            (k / self.row_pages) * self.page,
+        )
+    }
+}
+
+fn prev_power_of_two(v: u32) -> u32 {
+    if v == 0 {
+        0
+    } else {
+        1 << (31 - v.leading_zeros())
+    }
+}

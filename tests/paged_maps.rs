@@ -1,0 +1,201 @@
+//! Paged shadow maps: the virtual map's page marking, cache, lookups
+//! across page borders and degradation, and the adaptive map's refinement
+//! at shadow edges.
+
+mod common;
+use common::*;
+use glam::Vec3;
+use shadowlab::scene::{Light, Scene, builtin};
+
+/// A technique's counter after the frame `hf` rendered last.
+fn counter(hf: &shadowlab::headless::HeadlessFrame, name: &str) -> f64 {
+    hf.techniques[0]
+        .technique
+        .counters()
+        .into_iter()
+        .find(|(n, _)| *n == name)
+        .unwrap_or_else(|| panic!("no counter {name}"))
+        .1
+}
+
+/// One frame of `technique_id` (with settings) on `scene`, kept for more frames.
+fn paged_frame(
+    technique_id: &str,
+    scene: &Scene,
+    set: &[&str],
+    w: u32,
+    h: u32,
+) -> shadowlab::headless::HeadlessFrame {
+    let mut choice = shadowlab::technique::resolve(technique_id).unwrap();
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    shadowlab::technique::apply_settings(&mut choice.params, &set).unwrap();
+    let mut hf = shadowlab::headless::HeadlessFrame::new(gpu(), scene, &[choice], w, h).unwrap();
+    render_again(&mut hf, scene);
+    hf
+}
+
+fn render_again(hf: &mut shadowlab::headless::HeadlessFrame, scene: &Scene) {
+    let settings = shadowlab::renderer::RenderSettings {
+        show_light_icons: false,
+        ..Default::default()
+    };
+    hf.render(gpu(), scene, &scene.camera, &scene.lights, &settings)
+        .unwrap();
+}
+
+/// A sun straight down on the 20×20 floor, the camera 8 above looking
+/// down (50° square view): every pixel sees 7.46/256 = 0.0291 of floor.
+/// With 1024² windows of 128² pages and 6 clipmap levels over the scene's
+/// 20.002-wide square, level 4's texel (0.0195) is the coarsest at most a
+/// pixel wide (level 5's is 0.039); its pages are 2.5005 wide from
+/// x = −10.001, so the seen ±3.73 (plus the 3×3 grid's 2.5 texels) crosses
+/// the page borders at −2.4985, 0.0020 and 2.5025: 4 × 4 = 16 pages.
+#[test]
+fn virtual_pages_marked_for_a_known_view_match_the_hand_count_and_stay_cached() {
+    let scene = squares_over_floor(
+        &[(Vec3::new(0.0, 1.0, 0.0), 0.7)],
+        Light::directional(Vec3::NEG_Y, 1.0),
+        false,
+    );
+    let set = ["virtual_size=1024", "page_size=128", "clipmap_levels=6"];
+    let mut hf = paged_frame("shadow-map:virtual", &scene, &set, 256, 256);
+    assert_eq!(counter(&hf, "pages_needed"), 16.0);
+    assert_eq!(counter(&hf, "pages_rendered"), 16.0);
+    // A still camera and light: nothing to render, everything cached.
+    render_again(&mut hf, &scene);
+    assert_eq!(counter(&hf, "pages_rendered"), 0.0);
+    assert_eq!(counter(&hf, "pages_cached"), 16.0);
+    assert_eq!(counter(&hf, "pages_resident"), 16.0);
+}
+
+/// Texels read across page borders are the texels of one map: the same
+/// virtual map of a spot light (a mip chain over the whole view, the same
+/// levels whatever the pages) cut into 32² pages and into 512² pages (each
+/// the full-resolution map of a quarter of the view) gives the same mask,
+/// filtered over a wide kernel.
+#[test]
+fn virtual_lookups_across_page_borders_match_one_full_map() {
+    let scene = squares_over_floor(
+        &[
+            (Vec3::new(0.5, 1.0, 0.2), 0.7),
+            (Vec3::new(-1.5, 2.0, -1.0), 0.5),
+        ],
+        Light::spot(Vec3::new(1.0, 5.0, 1.0), Vec3::ZERO, 1.0, 30.0, 40.0),
+        false,
+    );
+    let mask = |page: &str, pool: &str| {
+        mask_of(
+            &scene,
+            "shadow-map:virtual",
+            &[
+                "virtual_size=1024",
+                page,
+                pool,
+                "clipmap_levels=6",
+                "filter=disk",
+                "radius=6",
+                "samples=5",
+            ],
+            256,
+            256,
+        )
+    };
+    let paged = mask("page_size=32", "pool=4096");
+    let whole = mask("page_size=512", "pool=64");
+    let shadowed = whole.iter().filter(|v| **v < 0.5).count();
+    assert!(shadowed > 1000, "{shadowed}");
+    let differ = paged
+        .iter()
+        .zip(&whole)
+        .filter(|(a, b)| (*a - *b).abs() > 1e-3)
+        .count();
+    assert!(differ <= 6, "{differ} of {} pixels differ", paged.len());
+}
+
+/// A pool far too small for the view: finer levels give way to coarser
+/// ones (counted), the mask stays a shadow of the right casters.
+#[test]
+fn a_virtual_pool_too_small_degrades_to_coarser_pages_without_garbage() {
+    let scene = builtin::by_name("columns").unwrap().unwrap();
+    let full = paged_frame("shadow-map:virtual", &scene, &[], 320, 180);
+    let needed = counter(&full, "pages_needed");
+    let small = paged_frame("shadow-map:virtual", &scene, &["pool=16"], 320, 180);
+    assert!(needed > 16.0, "{needed}");
+    assert!(counter(&small, "pages_degraded") > 0.0);
+    assert!(counter(&small, "pages_resident") <= 16.0);
+    let row = compare(&scene, "shadow-map:virtual[pool=16]", (320, 180));
+    let good = compare(&scene, "shadow-map:virtual", (320, 180));
+    assert!(row.mask.reference_shadowed_pct > 5.0);
+    assert!(row.mask.all.total_pct < 3.0, "{:?}", row.mask);
+    assert!(good.mask.all.total_pct <= row.mask.all.total_pct + 1e-9);
+}
+
+/// The sun straight down on the floor of the hand count above, its one
+/// square far outside the view (its shadow at x, z = 7.3 … 8.7): no shadow
+/// edge in view, so an adaptive map stays at its root, the coarsest
+/// clipmap level (1024 texels over 20.002 × 2, pages 5.0005 wide from
+/// x = −10.001, a border at 0.000 on each axis): 2 × 2 pages, rendered by
+/// the first pass; the second finds nothing to refine.
+#[test]
+fn an_adaptive_map_without_shadow_edges_stays_at_its_root() {
+    let scene = squares_over_floor(
+        &[(Vec3::new(8.0, 1.0, 8.0), 0.7)],
+        Light::directional(Vec3::NEG_Y, 1.0),
+        false,
+    );
+    let set = ["virtual_size=1024", "page_size=128", "clipmap_levels=6"];
+    let mut hf = paged_frame("shadow-map:adaptive", &scene, &set, 256, 256);
+    assert_eq!(counter(&hf, "pages_needed"), 4.0);
+    assert_eq!(counter(&hf, "pages_rendered"), 4.0);
+    assert_eq!(counter(&hf, "refine_passes"), 2.0);
+    render_again(&mut hf, &scene);
+    assert_eq!(counter(&hf, "pages_rendered"), 0.0);
+    assert_eq!(counter(&hf, "pages_cached"), 4.0);
+    assert_eq!(counter(&hf, "refine_passes"), 1.0);
+}
+
+/// One square over that floor: its shadow's edges (x, z = ±0.7) lie in
+/// the 2 × 2 pages of level 4 (the finest the pixels need, pages 2.5005
+/// wide with borders at 0.002) around the centre, so the adaptive map
+/// refines those 4 pages and keeps the 4 root pages for the rest — 8, where
+/// the virtual map needs level 4's 16 — and its mask is the virtual map's.
+#[test]
+fn an_adaptive_map_refines_only_at_shadow_edges_and_matches_the_virtual_map() {
+    let scene = squares_over_floor(
+        &[(Vec3::new(0.0, 1.0, 0.0), 0.7)],
+        Light::directional(Vec3::NEG_Y, 1.0),
+        false,
+    );
+    let set = ["virtual_size=1024", "page_size=128", "clipmap_levels=6"];
+    let hf = paged_frame("shadow-map:adaptive", &scene, &set, 256, 256);
+    assert_eq!(counter(&hf, "pages_needed"), 8.0);
+    assert_eq!(counter(&hf, "refine_passes"), 3.0);
+    let adaptive = mask_of(&scene, "shadow-map:adaptive", &set, 256, 256);
+    let virtual_map = mask_of(&scene, "shadow-map:virtual", &set, 256, 256);
+    let shadowed = virtual_map.iter().filter(|v| **v < 0.5).count();
+    assert!(shadowed > 2000, "{shadowed}");
+    let differ = adaptive
+        .iter()
+        .zip(&virtual_map)
+        .filter(|(a, b)| (*a - *b).abs() > 1e-3)
+        .count();
+    assert_eq!(differ, 0);
+}
+
+/// On the built-in scenes' default views (point, spot and sun lights, cube
+/// seams included) the adaptive map shades like the virtual map: it
+/// refines wherever the virtual map's finer pages would change a pixel.
+#[test]
+fn adaptive_maps_agree_with_virtual_maps_on_the_builtin_scenes() {
+    for name in ["room", "columns", "floating", "curved"] {
+        let scene = builtin::by_name(name).unwrap().unwrap();
+        let adaptive = compare(&scene, "shadow-map:adaptive", (320, 180));
+        let virtual_map = compare(&scene, "shadow-map:virtual", (320, 180));
+        assert!(
+            adaptive.mask.all.total_pct <= virtual_map.mask.all.total_pct + 0.05,
+            "{name}: adaptive {:?} virtual {:?}",
+            adaptive.mask,
+            virtual_map.mask
+        );
+    }
+}
