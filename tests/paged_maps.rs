@@ -199,3 +199,44 @@ fn adaptive_maps_agree_with_virtual_maps_on_the_builtin_scenes() {
         );
     }
 }
+
+/// In the viewer the marks arrive a frame late, so an adaptive map refines
+/// a pass per frame: it starts coarser, and a few frames later it has the
+/// pages and the mask that waiting for every pass gives in one frame.
+#[test]
+fn an_adaptive_map_refined_a_frame_late_converges_to_the_waited_one() {
+    let scene = squares_over_floor(
+        &[(Vec3::new(0.0, 1.0, 0.0), 0.7)],
+        Light::directional(Vec3::NEG_Y, 1.0),
+        false,
+    );
+    let set = ["virtual_size=1024", "page_size=128", "clipmap_levels=6"];
+    let waited = mask_of(&scene, "shadow-map:adaptive", &set, 256, 256);
+    let mut choice = shadowlab::technique::resolve("shadow-map:adaptive").unwrap();
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    shadowlab::technique::apply_settings(&mut choice.params, &set).unwrap();
+    let mut hf = shadowlab::headless::HeadlessFrame::new(gpu(), &scene, &[choice], 256, 256).unwrap();
+    let settings = shadowlab::renderer::RenderSettings {
+        show_light_icons: false,
+        feedback: shadowlab::technique::Feedback::PreviousFrame,
+        ..Default::default()
+    };
+    let mut needed = vec![];
+    for _ in 0..12 {
+        hf.render(gpu(), &scene, &scene.camera, &scene.lights, &settings)
+            .unwrap();
+        needed.push(counter(&hf, "pages_needed"));
+    }
+    assert_eq!(needed[0], 0.0, "nothing to allocate before marks arrive");
+    assert_eq!(*needed.last().unwrap(), 8.0, "{needed:?}");
+    let late = shadowlab::headless::read_back(gpu(), &hf.frame, 1)
+        .unwrap()
+        .masks
+        .remove(0);
+    let differ = late
+        .iter()
+        .zip(&waited)
+        .filter(|(a, b)| (*a - *b).abs() > 1e-3)
+        .count();
+    assert_eq!(differ, 0);
+}

@@ -314,13 +314,30 @@ fn adaptive_edge(level: u32, g: vec3f, n: vec3f, gradient: vec2f) -> bool {
     // discontinuity's least step: a receiver that faces the light stores
     // its own depth within rounding of what the lookup computes.
     let z = q.z - min(2.0 * dot(vec2f(sm.map.y), abs(gradient)), 0.01) - EDGE_STEP;
+    // Mostly the window lies in one resident page: its atlas texels are
+    // then read directly, without a page-table read per texel.
+    let first = vec2i(lo);
+    let last = first + vec2i(i32(f32(count - 1u) * stride));
+    let size = i32(vsm.page_texels);
+    let extent = i32(level_at(level).pages) * size;
+    let one_page = all(first >= vec2i(0)) && all(last < vec2i(extent))
+        && all((first >> vec2u(countTrailingZeros(vsm.page_texels))) == (last >> vec2u(countTrailingZeros(vsm.page_texels))));
+    let origin = virtual_atlas_texel(first, level);
+    let direct = one_page && origin.z >= 0;
     var lit = 0u;
     var shadowed = 0u;
     for (var y = 0u; y < count; y++) {
         for (var x = 0u; x < count; x++) {
-            let texel = lo + vec2f(f32(x), f32(y)) * stride;
+            let step = vec2f(f32(x), f32(y)) * stride;
+            let texel = lo + step;
             let receiver = z + dot((texel + 0.5 - t) * sm.map.y, gradient);
-            if receiver <= virtual_stored(vec2i(texel), level) {
+            var stored = 1.0;
+            if direct {
+                stored = textureLoad(depth_map, origin.xy + vec2i(step), origin.z, 0);
+            } else {
+                stored = virtual_stored(vec2i(texel), level);
+            }
+            if receiver <= stored {
                 lit += 1u;
             } else {
                 shadowed += 1u;
