@@ -235,13 +235,24 @@ impl ShadowMapShared {
         )
     }
 
-    /// A virtual map's marking pass: each pixel's level and the pages its
-    /// kernel needs (storage writes; the mask is not written).
-    pub fn virtual_mark(&self, gpu: &GpuContext, key: LookupKey) -> wgpu::RenderPipeline {
+    /// A paged map's marking pass: each pixel's level and the pages its
+    /// kernel needs — all of them (virtual) or a refinement at shadow edges
+    /// (adaptive); storage writes, the mask is not written.
+    pub fn virtual_mark(
+        &self,
+        gpu: &GpuContext,
+        key: LookupKey,
+        adaptive: bool,
+    ) -> wgpu::RenderPipeline {
+        let (label, entry) = if adaptive {
+            ("adaptive shadow map marking", "fs_adaptive_mark")
+        } else {
+            ("virtual shadow map marking", "fs_virtual_mark")
+        };
         self.fullscreen(
             gpu,
-            "virtual shadow map marking",
-            "fs_virtual_mark",
+            label,
+            entry,
             key,
             &[Some(wgpu::ColorTargetState {
                 format: MASK_FORMAT,

@@ -106,9 +106,7 @@ struct VirtualMap {
     layer_pages: u32,
     // levels per view
     view_levels: u32,
-    // 1: adaptive (pages refined only at shadow edges), 0: virtual
-    refine: u32,
-    _pad: u32,
+    _pad: vec2u,
     levels: array<VirtualLevel>,
 };
 

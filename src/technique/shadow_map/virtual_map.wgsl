@@ -3,7 +3,7 @@
 // `compare` measures it), the pages its kernel needs marked (fs_virtual_mark);
 // the lookup reads each texel through the page table and, where a page is
 // not resident (a pool too small), from the next coarser level that is.
-// Adaptive maps (vsm.refine = 1) mark fewer: a pixel keeps the finest level
+// Adaptive maps (fs_adaptive_mark) mark fewer: a pixel keeps the finest level
 // it has and asks for the next finer one only at a shadow edge.
 
 const NO_LEVEL: u32 = 0xffffffffu;
@@ -230,13 +230,17 @@ fn mark_kernel(level: u32, t: vec2f) {
     }
 }
 
-// Whether every page a kernel around texel t of `level` reads is resident.
+// Whether every page a kernel around texel t of `level` reads is resident
+// (one table read where the kernel lies in one page, as it mostly does).
 fn kernel_resident(level: u32, t: vec2f) -> bool {
     let r = marked_reach();
     let lo = virtual_page_of(level, t - vec2f(r));
     let hi = virtual_page_of(level, t + vec2f(r));
-    return vsm_table[virtual_entry(level, lo)] != 0u
-        && vsm_table[virtual_entry(level, vec2i(hi.x, lo.y))] != 0u
+    let resident = vsm_table[virtual_entry(level, lo)] != 0u;
+    if all(lo == hi) || !resident {
+        return resident;
+    }
+    return vsm_table[virtual_entry(level, vec2i(hi.x, lo.y))] != 0u
         && vsm_table[virtual_entry(level, vec2i(lo.x, hi.y))] != 0u
         && vsm_table[virtual_entry(level, hi)] != 0u;
 }
@@ -370,27 +374,42 @@ fn pixel_index(pixel: vec2i) -> u32 {
     return u32(pixel.y) * u32(frame.size.x) + u32(pixel.x);
 }
 
-// The marking pass: each receiving pixel's level, and the pages its
-// kernel reads (the corners of its reach: at most 2×2 pages).
-@fragment
-fn fs_virtual_mark(@builtin(position) frag: vec4f) -> @location(0) vec4f {
-    let pixel = vec2i(frag.xy);
-    let g = textureLoad(gbuffer_position, pixel, 0);
-    let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
+// Each receiving pixel's level (NO_LEVEL for none), stored for the lookup.
+fn pixel_level(pixel: vec2i, g: vec4f, n: vec3f) -> u32 {
     var level = NO_LEVEL;
     if g.w >= 0.5 {
         level = virtual_level_of(pixel, g.xyz, n);
     }
     vsm_pixel_level[pixel_index(pixel)] = level;
+    return level;
+}
+
+// The virtual map's marking pass: each receiving pixel's level, and the
+// pages its kernel reads (the corners of its reach: at most 2×2 pages).
+@fragment
+fn fs_virtual_mark(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    let pixel = vec2i(frag.xy);
+    let g = textureLoad(gbuffer_position, pixel, 0);
+    let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
+    let level = pixel_level(pixel, g, n);
+    if level != NO_LEVEL {
+        mark_kernel(level, virtual_point(level, g.xyz, n).uv * sm.map.x);
+    }
+    return vec4f(1.0);
+}
+
+// The adaptive map's marking pass (one refinement).
+@fragment
+fn fs_adaptive_mark(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    let pixel = vec2i(frag.xy);
+    let g = textureLoad(gbuffer_position, pixel, 0);
+    let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
+    let level = pixel_level(pixel, g, n);
     // The receiver's screen derivatives (uniform control flow).
     let gx = dpdx(g.xyz);
     let gy = dpdy(g.xyz);
     if level != NO_LEVEL {
-        if vsm.refine == 1u {
-            adaptive_mark(level, g.xyz, n, gx, gy);
-        } else {
-            mark_kernel(level, virtual_point(level, g.xyz, n).uv * sm.map.x);
-        }
+        adaptive_mark(level, g.xyz, n, gx, gy);
     }
     return vec4f(1.0);
 }

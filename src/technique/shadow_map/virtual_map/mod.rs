@@ -45,9 +45,7 @@ struct MapHeader {
     page_texels: u32,
     layer_pages: u32,
     view_levels: u32,
-    /// 1: adaptive (refined at shadow edges).
-    refine: u32,
-    pad: u32,
+    pad: [u32; 2],
 }
 
 /// One level (`VirtualLevel` of shadow_map.wgsl).
@@ -359,8 +357,7 @@ impl ShadowMapTechnique {
             page_texels: layout.page,
             layer_pages: atlas.layer_pages,
             view_levels: layout.view_levels,
-            refine: p.is_adaptive() as u32,
-            pad: 0,
+            pad: [0; 2],
         })
         .to_vec();
         for l in &layout.levels {
@@ -549,7 +546,11 @@ impl ShadowMapTechnique {
                 "virtual shadow map marking",
                 wgpu::LoadOp::Load,
             );
-            pass.set_pipeline(&self.shared.virtual_mark(gpu, lookup_key));
+            pass.set_pipeline(&self.shared.virtual_mark(
+                gpu,
+                lookup_key,
+                self.config.paging.is_adaptive(),
+            ));
             ctx.bind_frame_groups(&mut pass);
             pass.set_bind_group(crate::frame::OWN_GROUP, &mark_group, &[0]);
             pass.draw(0..3, 0..1);
