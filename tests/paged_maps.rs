@@ -215,7 +215,8 @@ fn an_adaptive_map_refined_a_frame_late_converges_to_the_waited_one() {
     let mut choice = shadowlab::technique::resolve("shadow-map:adaptive").unwrap();
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
     shadowlab::technique::apply_settings(&mut choice.params, &set).unwrap();
-    let mut hf = shadowlab::headless::HeadlessFrame::new(gpu(), &scene, &[choice], 256, 256).unwrap();
+    let mut hf =
+        shadowlab::headless::HeadlessFrame::new(gpu(), &scene, &[choice], 256, 256).unwrap();
     let settings = shadowlab::renderer::RenderSettings {
         show_light_icons: false,
         feedback: shadowlab::technique::Feedback::PreviousFrame,

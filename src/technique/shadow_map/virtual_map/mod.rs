@@ -447,12 +447,26 @@ impl ShadowMapTechnique {
                 .write_buffer(&state.table, 0, bytemuck::cast_slice(&table));
             if refine && wait {
                 let mut own = gpu.device.create_command_encoder(&Default::default());
-                map_triangles +=
-                    self.render_new_pages(ctx, &mut own, state, &layout, &allocation, &base, lookup_key);
+                map_triangles += self.render_new_pages(
+                    ctx,
+                    &mut own,
+                    state,
+                    &layout,
+                    &allocation,
+                    &base,
+                    lookup_key,
+                );
                 gpu.queue.submit([own.finish()]);
             } else {
-                map_triangles +=
-                    self.render_new_pages(ctx, encoder, state, &layout, &allocation, &base, lookup_key);
+                map_triangles += self.render_new_pages(
+                    ctx,
+                    encoder,
+                    state,
+                    &layout,
+                    &allocation,
+                    &base,
+                    lookup_key,
+                );
             }
             rendered.extend(allocation.render.iter().map(|(k, _)| *k));
             state.last_marks = marked;
@@ -462,7 +476,8 @@ impl ShadowMapTechnique {
         };
         if refine && !wait {
             let start = std::time::Instant::now();
-            state.carried_marks = self.mark_pages(ctx, encoder, state, &base, lookup_key, words, false)?;
+            state.carried_marks =
+                self.mark_pages(ctx, encoder, state, &base, lookup_key, words, false)?;
             feedback_ms += start.elapsed().as_secs_f64() * 1e3;
         }
         // The lookup through the page table.
@@ -478,7 +493,11 @@ impl ShadowMapTechnique {
         state.counters = PageCounters {
             needed: allocation.needed,
             rendered: rendered.len(),
-            cached: allocation.kept.iter().filter(|k| !rendered.contains(k)).count(),
+            cached: allocation
+                .kept
+                .iter()
+                .filter(|k| !rendered.contains(k))
+                .count(),
             degraded: allocation.degraded,
             dropped: allocation.dropped,
             resident: state.pool.resident_count(),
