@@ -197,9 +197,21 @@ mod tests {
         assert!(
             quick.views.len() < standard.views.len() && standard.views.len() < full.views.len()
         );
-        // Every preset of every family, the reference's included.
+        // Every preset of every family, the reference's included; quick
+        // without those it leaves to standard.
         let count: usize = FAMILIES.iter().map(|f| f.presets.len()).sum();
-        assert_eq!(quick.techniques.len(), count);
+        assert_eq!(standard.techniques.len(), count);
+        assert_eq!(quick.techniques.len(), count - LEFT_TO_STANDARD.len());
+        assert!(
+            standard
+                .techniques
+                .iter()
+                .any(|t| t.id() == "shadow-map:adaptive")
+                && !quick
+                    .techniques
+                    .iter()
+                    .any(|t| t.id() == "shadow-map:adaptive")
+        );
         let only =
             Matrix::of(ReportPreset::Quick, Some(&["columns".into()]), Some("none")).unwrap();
         assert!(only.views.iter().all(|v| v.scene == "columns") && only.views.len() == 2);
