@@ -7,17 +7,6 @@ use common::*;
 use glam::Vec3;
 use shadowlab::scene::{Light, Scene, builtin};
 
-/// A technique's counter after the frame `hf` rendered last.
-fn counter(hf: &shadowlab::headless::HeadlessFrame, name: &str) -> f64 {
-    hf.techniques[0]
-        .technique
-        .counters()
-        .into_iter()
-        .find(|(n, _)| *n == name)
-        .unwrap_or_else(|| panic!("no counter {name}"))
-        .1
-}
-
 /// One frame of `technique_id` (with settings) on `scene`, kept for more frames.
 fn paged_frame(
     technique_id: &str,
@@ -26,10 +15,7 @@ fn paged_frame(
     w: u32,
     h: u32,
 ) -> shadowlab::headless::HeadlessFrame {
-    let mut choice = shadowlab::technique::resolve(technique_id).unwrap();
-    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    shadowlab::technique::apply_settings(&mut choice.params, &set).unwrap();
-    let mut hf = shadowlab::headless::HeadlessFrame::new(gpu(), scene, &[choice], w, h).unwrap();
+    let mut hf = frame_of(scene, technique_id, set, w, h);
     render_again(&mut hf, scene);
     hf
 }
@@ -52,12 +38,8 @@ fn render_again(hf: &mut shadowlab::headless::HeadlessFrame, scene: &Scene) {
 /// the page borders at −2.4985, 0.0020 and 2.5025: 4 × 4 = 16 pages.
 #[test]
 fn virtual_pages_marked_for_a_known_view_match_the_hand_count_and_stay_cached() {
-    let scene = squares_over_floor(
-        &[(Vec3::new(0.0, 1.0, 0.0), 0.7)],
-        Light::directional(Vec3::NEG_Y, 1.0),
-        false,
-    );
-    let set = ["virtual_size=1024", "page_size=128", "clipmap_levels=6"];
+    let scene = square_under_the_sun(Vec3::new(0.0, 1.0, 0.0));
+    let set = SMALL_CLIPMAP;
     let mut hf = paged_frame("shadow-map:virtual", &scene, &set, 256, 256);
     assert_eq!(counter(&hf, "pages_needed"), 16.0);
     assert_eq!(counter(&hf, "pages_rendered"), 16.0);
@@ -104,11 +86,7 @@ fn virtual_lookups_across_page_borders_match_one_full_map() {
     let whole = mask("page_size=512", "pool=64");
     let shadowed = whole.iter().filter(|v| **v < 0.5).count();
     assert!(shadowed > 1000, "{shadowed}");
-    let differ = paged
-        .iter()
-        .zip(&whole)
-        .filter(|(a, b)| (*a - *b).abs() > 1e-3)
-        .count();
+    let differ = pixels_differing(&paged, &whole);
     assert!(differ <= 6, "{differ} of {} pixels differ", paged.len());
 }
 
@@ -130,6 +108,19 @@ fn a_virtual_pool_too_small_degrades_to_coarser_pages_without_garbage() {
     assert!(good.mask.all.total_pct <= row.mask.all.total_pct + 1e-9);
 }
 
+/// The clipmap of the hand counts: 1024² windows of 128² pages, 6 levels.
+const SMALL_CLIPMAP: [&str; 3] = ["virtual_size=1024", "page_size=128", "clipmap_levels=6"];
+
+/// The floor of the hand counts under a sun straight down, with one square
+/// of half size 0.7 centred at `centre`.
+fn square_under_the_sun(centre: Vec3) -> Scene {
+    squares_over_floor(
+        &[(centre, 0.7)],
+        Light::directional(Vec3::NEG_Y, 1.0),
+        false,
+    )
+}
+
 /// The sun straight down on the floor of the hand count above, its one
 /// square far outside the view (its shadow at x, z = 7.3 … 8.7): no shadow
 /// edge in view, so an adaptive map stays at its root, the coarsest
@@ -138,12 +129,8 @@ fn a_virtual_pool_too_small_degrades_to_coarser_pages_without_garbage() {
 /// the first pass; the second finds nothing to refine.
 #[test]
 fn an_adaptive_map_without_shadow_edges_stays_at_its_root() {
-    let scene = squares_over_floor(
-        &[(Vec3::new(8.0, 1.0, 8.0), 0.7)],
-        Light::directional(Vec3::NEG_Y, 1.0),
-        false,
-    );
-    let set = ["virtual_size=1024", "page_size=128", "clipmap_levels=6"];
+    let scene = square_under_the_sun(Vec3::new(8.0, 1.0, 8.0));
+    let set = SMALL_CLIPMAP;
     let mut hf = paged_frame("shadow-map:adaptive", &scene, &set, 256, 256);
     assert_eq!(counter(&hf, "pages_needed"), 4.0);
     assert_eq!(counter(&hf, "pages_rendered"), 4.0);
@@ -161,12 +148,8 @@ fn an_adaptive_map_without_shadow_edges_stays_at_its_root() {
 /// the virtual map needs level 4's 16 — and its mask is the virtual map's.
 #[test]
 fn an_adaptive_map_refines_only_at_shadow_edges_and_matches_the_virtual_map() {
-    let scene = squares_over_floor(
-        &[(Vec3::new(0.0, 1.0, 0.0), 0.7)],
-        Light::directional(Vec3::NEG_Y, 1.0),
-        false,
-    );
-    let set = ["virtual_size=1024", "page_size=128", "clipmap_levels=6"];
+    let scene = square_under_the_sun(Vec3::new(0.0, 1.0, 0.0));
+    let set = SMALL_CLIPMAP;
     let hf = paged_frame("shadow-map:adaptive", &scene, &set, 256, 256);
     assert_eq!(counter(&hf, "pages_needed"), 8.0);
     assert_eq!(counter(&hf, "refine_passes"), 3.0);
@@ -174,12 +157,7 @@ fn an_adaptive_map_refines_only_at_shadow_edges_and_matches_the_virtual_map() {
     let virtual_map = mask_of(&scene, "shadow-map:virtual", &set, 256, 256);
     let shadowed = virtual_map.iter().filter(|v| **v < 0.5).count();
     assert!(shadowed > 2000, "{shadowed}");
-    let differ = adaptive
-        .iter()
-        .zip(&virtual_map)
-        .filter(|(a, b)| (*a - *b).abs() > 1e-3)
-        .count();
-    assert_eq!(differ, 0);
+    assert_eq!(pixels_differing(&adaptive, &virtual_map), 0);
 }
 
 /// On the built-in scenes' default views (point, spot and sun lights, cube
@@ -205,18 +183,10 @@ fn adaptive_maps_agree_with_virtual_maps_on_the_builtin_scenes() {
 /// pages and the mask that waiting for every pass gives in one frame.
 #[test]
 fn an_adaptive_map_refined_a_frame_late_converges_to_the_waited_one() {
-    let scene = squares_over_floor(
-        &[(Vec3::new(0.0, 1.0, 0.0), 0.7)],
-        Light::directional(Vec3::NEG_Y, 1.0),
-        false,
-    );
-    let set = ["virtual_size=1024", "page_size=128", "clipmap_levels=6"];
+    let scene = square_under_the_sun(Vec3::new(0.0, 1.0, 0.0));
+    let set = SMALL_CLIPMAP;
     let waited = mask_of(&scene, "shadow-map:adaptive", &set, 256, 256);
-    let mut choice = shadowlab::technique::resolve("shadow-map:adaptive").unwrap();
-    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    shadowlab::technique::apply_settings(&mut choice.params, &set).unwrap();
-    let mut hf =
-        shadowlab::headless::HeadlessFrame::new(gpu(), &scene, &[choice], 256, 256).unwrap();
+    let mut hf = frame_of(&scene, "shadow-map:adaptive", &set, 256, 256);
     let settings = shadowlab::renderer::RenderSettings {
         show_light_icons: false,
         feedback: shadowlab::technique::Feedback::PreviousFrame,
@@ -234,10 +204,5 @@ fn an_adaptive_map_refined_a_frame_late_converges_to_the_waited_one() {
         .unwrap()
         .masks
         .remove(0);
-    let differ = late
-        .iter()
-        .zip(&waited)
-        .filter(|(a, b)| (*a - *b).abs() > 1e-3)
-        .count();
-    assert_eq!(differ, 0);
+    assert_eq!(pixels_differing(&late, &waited), 0);
 }

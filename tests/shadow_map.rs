@@ -531,15 +531,7 @@ fn sdsm_depth_bounds_are_the_seen_view_depths() {
     let gpu = gpu();
     let scene = squares_along_the_view(0.0, 2.0);
     let hf = frame_with_debug_views(&scene, "shadow-map:sdsm", 256, 192);
-    let counter = |name: &str| {
-        hf.techniques[0]
-            .technique
-            .counters()
-            .into_iter()
-            .find(|(n, _)| *n == name)
-            .unwrap_or_else(|| panic!("no counter {name}"))
-            .1
-    };
+    let counter = |name: &str| counter(&hf, name);
     let position = gpu
         .read_texture(hf.frame.gbuffer_position(), 0, 16)
         .unwrap();
@@ -664,11 +656,7 @@ fn edge_masked_filters_equal_the_full_kernel_on_the_builtin_scenes() {
                 240,
                 135,
             );
-            let differ = full
-                .iter()
-                .zip(&masked)
-                .filter(|(a, b)| (*a - *b).abs() > 1e-3)
-                .count();
+            let differ = pixels_differing(&full, &masked);
             assert!(
                 differ as f64 <= 1e-4 * full.len() as f64,
                 "{name} {filter} {extra}: {differ} of {} pixels differ",

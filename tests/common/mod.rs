@@ -131,14 +131,39 @@ pub fn squares_over_floor(squares: &[(Vec3, f32)], light: Light, plane_object: b
     s
 }
 
+/// A headless frame of `technique_id` (with `--set`-style settings) on
+/// `scene`, not yet rendered.
+pub fn frame_of(scene: &Scene, technique_id: &str, set: &[&str], w: u32, h: u32) -> HeadlessFrame {
+    let mut choice = technique::resolve(technique_id).unwrap();
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    technique::apply_settings(&mut choice.params, &set).unwrap();
+    HeadlessFrame::new(gpu(), scene, &[choice], w, h).unwrap()
+}
+
+/// A technique's counter after the frame `hf` rendered last.
+pub fn counter(hf: &HeadlessFrame, name: &str) -> f64 {
+    hf.techniques[0]
+        .technique
+        .counters()
+        .into_iter()
+        .find(|(n, _)| *n == name)
+        .unwrap_or_else(|| panic!("no counter {name}"))
+        .1
+}
+
+/// Pixels whose visibility differs by more than 1e-3 between two masks.
+pub fn pixels_differing(a: &[f32], b: &[f32]) -> usize {
+    a.iter()
+        .zip(b)
+        .filter(|(a, b)| (*a - *b).abs() > 1e-3)
+        .count()
+}
+
 /// Renders one frame with `technique_id` (with `--set`-style settings) and
 /// returns light 0's mask.
 pub fn mask_of(scene: &Scene, technique_id: &str, set: &[&str], w: u32, h: u32) -> Vec<f32> {
     let gpu = gpu();
-    let mut choice = technique::resolve(technique_id).unwrap();
-    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    technique::apply_settings(&mut choice.params, &set).unwrap();
-    let mut hf = HeadlessFrame::new(gpu, scene, &[choice], w, h).unwrap();
+    let mut hf = frame_of(scene, technique_id, set, w, h);
     let settings = RenderSettings {
         show_light_icons: false,
         ..Default::default()

@@ -20,19 +20,24 @@ fn stored(texel: vec2i, face: u32) -> f32 {
 var<private> rp_gradient: vec2f;
 var<private> rp_origin: vec2f;
 
-// d(depth)/d(uv) from the screen derivatives of (u, v, depth): solve
-// [du/dx dv/dx; du/dy dv/dy] · g = [dz/dx; dz/dy]. Must run in uniform
-// control flow; 0 when off or degenerate (silhouettes, face seams), and
-// clamped so that a derivative across an edge cannot swing a tap far.
-fn receiver_plane(t: vec3f) -> vec2f {
-    let dx = dpdx(t);
-    let dy = dpdy(t);
+// d(depth)/d(uv) of a plane from its steps dx, dy of (u, v, depth) per
+// screen pixel: solve [du/dx dv/dx; du/dy dv/dy] · g = [dz/dx; dz/dy];
+// 0 when degenerate (silhouettes, face seams), clamped to ±limit so that a
+// step across an edge cannot swing a tap far.
+fn solve_plane(dx: vec3f, dy: vec3f, limit: f32) -> vec2f {
     let det = dx.x * dy.y - dx.y * dy.x;
     let g = vec2f(dy.y * dx.z - dx.y * dy.z, dx.x * dy.z - dy.x * dx.z) / det;
-    if !RECEIVER_PLANE || abs(det) < 1e-20 || any(g != g) {
+    if abs(det) < 1e-20 || any(g != g) {
         return vec2f(0.0);
     }
-    return clamp(g, vec2f(-4.0), vec2f(4.0));
+    return clamp(g, vec2f(-limit), vec2f(limit));
+}
+
+// The receiver plane from the screen derivatives of (u, v, depth); 0 when
+// off. Must run in uniform control flow.
+fn receiver_plane(t: vec3f) -> vec2f {
+    let g = solve_plane(dpdx(t), dpdy(t), 4.0);
+    return select(vec2f(0.0), g, RECEIVER_PLANE);
 }
 
 // The receiver depth to compare at a tap's uv.

@@ -286,19 +286,11 @@ fn level_step(level: u32, g: vec3f, dg: vec3f) -> vec3f {
 }
 
 // The receiver plane's d(depth)/d(uv) in `level` from the screen
-// derivatives gx, gy of the G-buffer position (as `receiver_plane`, which
-// takes them of projected values), clamped as the lookup clamps its own,
-// scaled to the level.
+// derivatives gx, gy of the G-buffer position, clamped as the lookup
+// clamps its own, scaled to the level.
 fn level_gradient(level: u32, g: vec3f, gx: vec3f, gy: vec3f) -> vec2f {
-    let dx = level_step(level, g, gx);
-    let dy = level_step(level, g, gy);
-    let det = dx.x * dy.y - dx.y * dy.x;
-    let r = vec2f(dy.y * dx.z - dx.y * dy.z, dx.x * dy.z - dy.x * dx.z) / det;
-    if abs(det) < 1e-20 || any(r != r) {
-        return vec2f(0.0);
-    }
     let limit = 4.0 * exp2(f32(level % vsm.view_levels));
-    return clamp(r, vec2f(-limit), vec2f(limit));
+    return solve_plane(level_step(level, g, gx), level_step(level, g, gy), limit);
 }
 
 // Adaptive maps: whether `level` shows a shadow edge under the kernel

@@ -30,8 +30,6 @@ pub struct Allocation {
     /// Pages the view asked for.
     pub needed: usize,
     /// Needed pages already resident (not rendered again).
-    pub cached: usize,
-    /// Those pages.
     pub kept: Vec<PageKey>,
     /// Needed pages replaced by a coarser one for want of slots.
     pub degraded: usize,
@@ -124,7 +122,6 @@ impl PagePool {
         for key in needed {
             if let Some(r) = self.resident.get_mut(&key) {
                 r.last_used = self.frame;
-                a.cached += 1;
                 a.kept.push(key);
                 continue;
             }
@@ -171,7 +168,7 @@ mod tests {
         let first = pool.allocate(want.clone(), parent, rank);
         assert_eq!(first.render.len(), 3);
         let second = pool.allocate(want, parent, rank);
-        assert_eq!((second.render.len(), second.cached), (0, 3));
+        assert_eq!((second.render.len(), second.kept.len()), (0, 3));
     }
 
     #[test]
@@ -182,7 +179,7 @@ mod tests {
         // Both resident; a third evicts the older (0, 0, 0), not (0, 1, 0).
         let a = pool.allocate([key(0, 1, 0), key(0, 2, 0)].into(), parent, rank);
         assert_eq!(a.render.len(), 1);
-        assert_eq!(a.cached, 1);
+        assert_eq!(a.kept.len(), 1);
         let keys: BTreeSet<_> = pool.resident().map(|(k, _)| k).collect();
         assert_eq!(keys, [key(0, 1, 0), key(0, 2, 0)].into());
         let slots: BTreeSet<_> = pool.resident().map(|(_, s)| s).collect();
