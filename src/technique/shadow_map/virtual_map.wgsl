@@ -376,16 +376,28 @@ fn pixel_level(pixel: vec2i, g: vec4f, n: vec3f) -> u32 {
     return level;
 }
 
+// A marking pass's pixel: its G-buffer point and normal, and its level
+// (stored for the lookup).
+struct MarkingPixel {
+    g: vec4f,
+    n: vec3f,
+    level: u32,
+};
+
+fn marking_pixel(frag: vec4f) -> MarkingPixel {
+    let pixel = vec2i(frag.xy);
+    let g = textureLoad(gbuffer_position, pixel, 0);
+    let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
+    return MarkingPixel(g, n, pixel_level(pixel, g, n));
+}
+
 // The virtual map's marking pass: each receiving pixel's level, and the
 // pages its kernel reads (the corners of its reach: at most 2×2 pages).
 @fragment
 fn fs_virtual_mark(@builtin(position) frag: vec4f) -> @location(0) vec4f {
-    let pixel = vec2i(frag.xy);
-    let g = textureLoad(gbuffer_position, pixel, 0);
-    let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
-    let level = pixel_level(pixel, g, n);
-    if level != NO_LEVEL {
-        mark_kernel(level, virtual_point(level, g.xyz, n).uv * sm.map.x);
+    let p = marking_pixel(frag);
+    if p.level != NO_LEVEL {
+        mark_kernel(p.level, virtual_point(p.level, p.g.xyz, p.n).uv * sm.map.x);
     }
     return vec4f(1.0);
 }
@@ -393,15 +405,12 @@ fn fs_virtual_mark(@builtin(position) frag: vec4f) -> @location(0) vec4f {
 // The adaptive map's marking pass (one refinement).
 @fragment
 fn fs_adaptive_mark(@builtin(position) frag: vec4f) -> @location(0) vec4f {
-    let pixel = vec2i(frag.xy);
-    let g = textureLoad(gbuffer_position, pixel, 0);
-    let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
-    let level = pixel_level(pixel, g, n);
+    let p = marking_pixel(frag);
     // The receiver's screen derivatives (uniform control flow).
-    let gx = dpdx(g.xyz);
-    let gy = dpdy(g.xyz);
-    if level != NO_LEVEL {
-        adaptive_mark(level, g.xyz, n, gx, gy);
+    let gx = dpdx(p.g.xyz);
+    let gy = dpdy(p.g.xyz);
+    if p.level != NO_LEVEL {
+        adaptive_mark(p.level, p.g.xyz, p.n, gx, gy);
     }
     return vec4f(1.0);
 }
