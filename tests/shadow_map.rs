@@ -26,6 +26,7 @@ fn texture_matrix_maps_a_known_point_to_its_texel_and_depth() {
         paraboloid: false,
         stabilize_size: None,
         previous_half: None,
+        view_fit: Default::default(),
     };
     let s = light_setup(&light, &bounds, &cam, 1.0, &fp);
     let t = bias_matrix() * s.faces[0] * Vec4::new(0.0, 0.0, 0.0, 1.0);
@@ -438,13 +439,15 @@ fn cascade_selection_and_blending_on_a_plane_match_the_reference() {
 }
 
 /// Stabilised maps keep their texel grid while the camera strafes and
-/// turns: no surface point changes its shadow state; refitted maps slide.
+/// turns: no surface point changes its shadow state; maps refitted to the
+/// frustum slide. (The default one map, fitted to the pixels seen, is
+/// stabilised too.)
 #[test]
 fn stabilised_maps_do_not_flicker_along_a_camera_path() {
     use shadowlab::measure::flicker::{self, CameraPath};
     let scene = squares_along_the_view(0.5, 2.0);
     let list = shadowlab::measure::parse_technique_list(
-        "shadow-map:pcf[size=256],shadow-map:pcf[size=256,stabilize=false],shadow-map:csm[size=256],shadow-map:csm[size=256,stabilize=false]",
+        "shadow-map:pcf[size=256,fit=frustum],shadow-map:pcf[size=256,fit=frustum,stabilize=false],shadow-map:csm[size=256],shadow-map:csm[size=256,stabilize=false],shadow-map:pcf[size=256]",
     )
     .unwrap();
     let reference = shadowlab::technique::resolve("raytraced").unwrap();
@@ -463,7 +466,10 @@ fn stabilised_maps_do_not_flicker_along_a_camera_path() {
         )
         .unwrap();
         let pct: Vec<f64> = rows.iter().map(|r| r.flicker_pct).collect();
-        assert!(pct[0] <= 0.01 && pct[2] <= 0.01, "{path:?}: {pct:?}");
+        assert!(
+            pct[0] <= 0.01 && pct[2] <= 0.01 && pct[4] <= 0.01,
+            "{path:?}: {pct:?}"
+        );
         assert!(pct[1] > pct[0] && pct[3] > pct[2], "{path:?}: {pct:?}");
     }
 }
@@ -493,7 +499,8 @@ fn texel_footprint_halves_with_twice_the_map_and_shrinks_with_cascades() {
 }
 
 /// The warps (PSM, LiSPSM, TSM) on the landscape from the ground, one
-/// 2048² map each: against the unwarped map they replace, several times
+/// 2048² map each: against the unwarped map they replace (fitted to the
+/// view frustum, as their warps are; not to the pixels seen), several times
 /// fewer mismatched pixels and a clean interior with the sun from the side,
 /// and still under half of its mismatch with the sun low in front of the
 /// camera (the duelling frusta, where LiSPSM and TSM relax towards it).
@@ -503,7 +510,7 @@ fn warped_maps_beat_the_one_map_on_the_landscape() {
     land.camera = land.camera_preset("ground").unwrap();
     for (light, interior, ratio) in [("sun-side", 0.1, 3.0), ("sun-low-front", 0.5, 2.0)] {
         land.lights = land.light_preset(light).unwrap();
-        let one = compare(&land, "shadow-map:pcf", (320, 180));
+        let one = compare(&land, "shadow-map:pcf[fit=frustum]", (320, 180));
         for warp in ["shadow-map:psm", "shadow-map:lispsm", "shadow-map:tsm"] {
             let r = compare(&land, warp, (320, 180));
             let m = &r.mask;
@@ -632,6 +639,56 @@ fn sdsm_cascades_cover_every_pixel_with_smaller_texels() {
     assert!(
         m.interior.total_pct <= 0.2 && m.all.total_pct <= 2.0,
         "{m:?}"
+    );
+}
+
+/// One directional map fitted to the pixels the camera saw (the default
+/// `fit=samples`) on the landscape from the ground, where the view frustum
+/// reaches 2 km: every receiving pixel inside the map, texels well under
+/// the frustum-fitted map's and less than half of its mismatch.
+#[test]
+fn one_map_fitted_to_the_seen_pixels_covers_them_with_smaller_texels() {
+    let gpu = gpu();
+    let mut land = shadowlab::scene::load("landscape").unwrap();
+    land.camera = land.camera_preset("ground").unwrap();
+    land.lights = land.light_preset("sun-low-front").unwrap();
+    let (w, h) = (256, 144);
+    let lookup = |id: &str| {
+        frame_with_debug_views(&land, id, w, h).techniques[0]
+            .technique
+            .map_lookup(gpu)
+            .unwrap()
+            .unwrap()
+    };
+    let hf = frame_with_debug_views(&land, "shadow-map:pcf", w, h);
+    let normal = gpu.read_texture(hf.frame.gbuffer_normal(), 0, 8).unwrap();
+    let receives: Vec<bool> = bytemuck::cast_slice::<u8, [half::f16; 4]>(&normal)
+        .iter()
+        .map(|n| n[3].to_f32() > 0.5)
+        .collect();
+    let seen = lookup("shadow-map:pcf");
+    let outside = receives
+        .iter()
+        .zip(&seen.partition)
+        .filter(|(r, p)| **r && **p == 0)
+        .count();
+    assert_eq!(outside, 0, "receiving pixels outside the map");
+    let mean = |l: &shadowlab::technique::MapLookup| {
+        let v: Vec<f32> = l.footprint.iter().copied().filter(|f| *f > 0.0).collect();
+        v.iter().sum::<f32>() / v.len() as f32
+    };
+    let frustum = lookup("shadow-map:pcf[fit=frustum]");
+    assert!(
+        mean(&seen) < 0.8 * mean(&frustum),
+        "fitted to the pixels {} px/texel, to the frustum {}",
+        mean(&seen),
+        mean(&frustum)
+    );
+    let fitted = compare(&land, "shadow-map:pcf", (w, h)).mask;
+    let wide = compare(&land, "shadow-map:pcf[fit=frustum]", (w, h)).mask;
+    assert!(
+        fitted.all.total_pct * 2.0 <= wide.all.total_pct,
+        "fitted {fitted:?}\nfrustum {wide:?}"
     );
 }
 

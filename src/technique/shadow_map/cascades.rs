@@ -9,7 +9,7 @@ use super::depth_bounds::SeenBounds;
 use super::partition_params::{Cascades, Fit};
 use super::setup::{
     CascadeSplit, LightSetup, light_view_of_scene, quantize_down, quantize_up, slice_corners,
-    snap_to_texels, view_reach,
+    snap_to_texels, view_reach, widen_for_kernels,
 };
 use crate::scene::{Aabb, Camera};
 use glam::Vec3;
@@ -41,15 +41,11 @@ pub fn stable_square(corners_ls: &[Vec3; 8], size: u32) -> (f32, f32, f32) {
     snap_to_texels(half, centre.x, centre.y, size)
 }
 
-/// SDSM's fitted cascades reach this many texels past their samples' box
-/// on each side (filter kernels, normal offset and blending look there).
-const SAMPLE_FIT_MARGIN_TEXELS: f32 = 16.0;
-
 /// The view depths the cascades partition: the camera's near plane to the
 /// last split of `cascades` (its `max_distance`, else the camera's view of
 /// the scene), or with SDSM what the camera saw within the same limit
 /// (stabilised: rounded outwards to eighths of an octave).
-fn partitioned_depths(
+pub fn partitioned_depths(
     camera: &Camera,
     scene_bounds: &Aabb,
     cascades: &Cascades,
@@ -117,12 +113,14 @@ pub fn cascade_setup(
     let mut texel_scales = vec![];
     for (i, w) in splits.windows(2).enumerate() {
         let corners = slice_corners(camera, aspect, w[0], w[1]).map(|p| view.transform_point3(p));
-        let (half, cx, cy) = if let Some(Some([x0, y0, x1, y1])) = samples.get(i) {
-            // The box of the pixels this cascade shades, widened by the
-            // margin in its own texels: half · (1 − 2m/size) = box half.
-            let half = ((x1 - x0).max(y1 - y0) * 0.5).max(1e-3)
-                / (1.0 - 2.0 * SAMPLE_FIT_MARGIN_TEXELS / size as f32).max(0.5);
-            (half, (x0 + x1) * 0.5, (y0 + y1) * 0.5)
+        let (half, cx, cy) = if let Some(Some(seen_box)) = samples.get(i) {
+            // The box of the pixels this cascade shades, widened for kernels.
+            let [x0, y0, x1, y1] = widen_for_kernels(*seen_box, size);
+            (
+                ((x1 - x0).max(y1 - y0) * 0.5).max(1e-3),
+                (x0 + x1) * 0.5,
+                (y0 + y1) * 0.5,
+            )
         } else if cascades.stabilize && cascades.fit != Fit::Samples {
             stable_square(&corners, size)
         } else {

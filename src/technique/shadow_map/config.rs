@@ -451,12 +451,13 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "csm",
-        summary: "4 stabilised cascades of 1024² (the memory of one 2048² map), λ 0.95 (Sascha Willems' sample), 10 % blended, normal offset ½ texel of each cascade (1 pushed lookups at building corners into the next wall's shadow: 0.12 % interior false shadow on city/street/sun at 640×360, ½: 0.004 %)",
+        summary: "4 stabilised cascades of 1024² fitted to the view frustum (the memory of one 2048² map), λ 0.95 (Sascha Willems' sample), 10 % blended, normal offset ½ texel of each cascade (1 pushed lookups at building corners into the next wall's shadow: 0.12 % interior false shadow on city/street/sun at 640×360, ½: 0.004 %)",
         values: &[
             ("cascades", "4"),
             ("size", "1024"),
             ("split_lambda", "0.95"),
             ("blend", "0.1"),
+            ("fit", "frustum"),
             ("normal_offset_directional", "0.5"),
         ],
     },
@@ -483,6 +484,7 @@ pub const PRESETS: &[Preset] = &[
             ("size", "1024"),
             ("split_lambda", "0.6"),
             ("stabilize", "false"),
+            ("fit", "frustum"),
             ("normal_offset_directional", "0.5"),
         ],
     },

@@ -59,8 +59,8 @@ pub const BLEND: ParamSpec = ParamSpec::float(
 
 pub const FIT: ParamSpec = ParamSpec::choice_of::<Fit>(
     "fit",
-    Fit::Frustum as usize,
-    "cascades: what they are fitted to — frustum: the view frustum up to max_distance; depth: the view depths the camera sees (SDSM, Lauritzen, Salvi & Lefohn 2011: min/max of a GPU reduction of the prepass depth); samples: those depths and, per cascade, the light-view x/y bounds of the pixels it shades (not stabilised)",
+    Fit::Samples as usize,
+    "directional lights: what the map, or each cascade, is fitted to — frustum: the view frustum up to max_distance (one map: up to where the view of the scene ends), clipped to the scene; depth: the view depths the camera sees (SDSM, Lauritzen, Salvi & Lefohn 2011: min/max of a GPU reduction of the prepass depth); samples: those depths and the light-view x/y box of the pixels the map (each cascade) shades — one map's box is stabilised as a frustum fit is, cascades fitted so are not; a single warped map is fitted by its warp. Measurements wait for the reduction; the viewer uses the previous frame's, widened",
 );
 
 pub const WARP: ParamSpec = ParamSpec::choice_of::<Warp>(

@@ -5,6 +5,7 @@
 //! `depth_bounds`), and the warps (`warp`, `trapezoid`).
 
 use super::depth_bounds::{DepthReduction, ReduceInputs};
+use super::setup::ViewFit;
 use super::{
     Cascades, Fit, FrustumParams, LightSetup, Omni, ShadowMapTechnique, Warp, cascades,
     light_setup, setup, warp,
@@ -34,9 +35,15 @@ impl ShadowMapTechnique {
             paraboloid: c.omni == Omni::DualParaboloid,
             stabilize_size: stabilize.then_some(size),
             previous_half: None,
+            view_fit: ViewFit::Frustum,
         };
-        let cascaded = ctx.light.kind == LightType::Directional && c.cascades.count > 1;
-        self.last_seen = if cascaded && c.cascades.fit != Fit::Frustum {
+        let directional = ctx.light.kind == LightType::Directional;
+        let cascaded = directional && c.cascades.count > 1;
+        // A single warped map is fitted by its warp, not to what was seen.
+        let fits_seen = directional
+            && c.cascades.fit != Fit::Frustum
+            && (cascaded || c.warp.kind == Warp::None);
+        self.last_seen = if fits_seen {
             let reduction = self
                 .depth_reduction
                 .get_or_insert_with(|| DepthReduction::new(ctx.gpu));
@@ -77,6 +84,7 @@ impl ShadowMapTechnique {
                         aspect,
                         &FrustumParams {
                             previous_half: self.stable_halves.get(i).copied(),
+                            view_fit: self.single_map_fit(ctx),
                             ..frustum_params
                         },
                     )
@@ -103,5 +111,28 @@ impl ShadowMapTechnique {
             _ => vec![],
         };
         Ok(setups)
+    }
+
+    /// What a directional light's single map is fitted to this frame: the
+    /// view frustum, or (SDSM with one map) the depths or the light-view
+    /// box of the pixels the camera saw, when the reduction has them.
+    fn single_map_fit(&self, ctx: &MaskContext) -> ViewFit {
+        let c = &self.config.cascades;
+        match (c.fit, self.last_seen.as_ref()) {
+            (Fit::Samples, Some(seen)) => match seen.cascades_xy.first() {
+                Some(Some(b)) => ViewFit::Box(setup::widen_for_kernels(*b, self.config.size)),
+                _ => ViewFit::Frustum,
+            },
+            (Fit::Depth, Some(seen)) => {
+                let (near, far) = cascades::partitioned_depths(
+                    ctx.fit_camera,
+                    &ctx.scene_gpu.bounds,
+                    c,
+                    Some(seen),
+                );
+                ViewFit::Depths { near, far }
+            }
+            _ => ViewFit::Frustum,
+        }
     }
 }

@@ -104,6 +104,38 @@ pub struct FrustumParams {
     /// [`KEPT_FIT_RATIO`] (hysteresis: a size at a rounding step does not
     /// flip from frame to frame, moving every texel edge).
     pub previous_half: Option<f32>,
+    /// Directional, one map: what its square is fitted to.
+    pub view_fit: ViewFit,
+}
+
+/// What a directional light's single map is fitted to, within the scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum ViewFit {
+    /// The camera's view of the scene: its frustum, up to where that view
+    /// ends, clipped to the scene's bounds.
+    #[default]
+    Frustum,
+    /// The camera's frustum between these view depths (SDSM's seen
+    /// depths), clipped to the scene's bounds.
+    Depths { near: f32, far: f32 },
+    /// This light-view box `[min x, min y, max x, max y]`: the pixels the
+    /// camera saw (SDSM's samples), widened by [`widen_for_kernels`].
+    Box([f32; 4]),
+}
+
+/// Maps fitted to the pixels the camera saw reach this many texels past
+/// their box on each side (filter kernels, normal offset and blending
+/// look there).
+const SAMPLE_FIT_MARGIN_TEXELS: f32 = 16.0;
+
+/// A light-view box `[min x, min y, max x, max y]` grown on each side by
+/// [`SAMPLE_FIT_MARGIN_TEXELS`] texels of the square `size`² map that will
+/// hold it: the square's half-extent h satisfies h·(1 − 2m/size) = the
+/// box's larger half-extent.
+pub fn widen_for_kernels([x0, y0, x1, y1]: [f32; 4], size: u32) -> [f32; 4] {
+    let half = ((x1 - x0).max(y1 - y0) * 0.5).max(1e-3);
+    let margin = half / (1.0 - 2.0 * SAMPLE_FIT_MARGIN_TEXELS / size as f32).max(0.5) - half;
+    [x0 - margin, y0 - margin, x1 + margin, y1 + margin]
 }
 
 /// How much larger than the fitted square a stabilised map's previous
@@ -255,6 +287,7 @@ pub fn light_setup(
         paraboloid,
         stabilize_size,
         previous_half,
+        view_fit,
     } = *fp;
     use glam::camera::rh::proj::directx::{orthographic, perspective};
     match light.kind {
@@ -316,35 +349,25 @@ pub fn light_setup(
         }
         LightType::Directional => {
             let (view, scene_ls) = light_view_of_scene(light.direction, scene_bounds);
-            // The camera frustum, its far plane pulled in to the scene, in light space.
-            let vp = camera.projection(aspect) * camera.view();
-            let inv = vp.inverse();
-            let reach = view_reach(camera, scene_bounds);
-            let far_z = {
-                let p = camera.projection(aspect) * Vec4::new(0.0, 0.0, -reach, 1.0);
-                (p.z / p.w).clamp(0.0, 1.0)
-            };
-            let corners = [0.0f32, far_z].into_iter().flat_map(|z| {
-                [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)].map(|(x, y)| {
-                    let w = inv * Vec4::new(x, y, z, 1.0);
-                    view.transform_point3(w.truncate() / w.w)
+            let clipped_view = |z0: f32, z1: f32| {
+                let corners = slice_corners(camera, aspect, z0, z1.max(z0 * 1.001));
+                let inside = clip_to_bounds(&corners, scene_bounds);
+                (!inside.is_empty()).then(|| {
+                    let b = Aabb::from_points(inside.iter().map(|p| view.transform_point3(*p)));
+                    [b.min.x, b.min.y, b.max.x, b.max.y]
                 })
-            });
-            let cam_ls = Aabb::from_points(corners);
-            let min_x = scene_ls.min.x.max(cam_ls.min.x);
-            let max_x = scene_ls.max.x.min(cam_ls.max.x);
-            let min_y = scene_ls.min.y.max(cam_ls.min.y);
-            let max_y = scene_ls.max.y.min(cam_ls.max.y);
-            let (min_x, max_x, min_y, max_y) = if min_x < max_x && min_y < max_y {
-                (min_x, max_x, min_y, max_y)
-            } else {
-                (
-                    scene_ls.min.x,
-                    scene_ls.max.x,
-                    scene_ls.min.y,
-                    scene_ls.max.y,
-                )
             };
+            let fitted = match view_fit {
+                ViewFit::Box(b) => Some(b),
+                ViewFit::Frustum => clipped_view(camera.near, view_reach(camera, scene_bounds)),
+                ViewFit::Depths { near, far } => clipped_view(near, far),
+            };
+            let [min_x, min_y, max_x, max_y] = fitted.unwrap_or([
+                scene_ls.min.x,
+                scene_ls.min.y,
+                scene_ls.max.x,
+                scene_ls.max.y,
+            ]);
             // Square texels: the larger extent on both axes.
             let half = ((max_x - min_x).max(max_y - min_y) * 0.5).max(1e-3);
             let (cx, cy) = ((min_x + max_x) * 0.5, (min_y + max_y) * 0.5);

@@ -268,6 +268,7 @@ impl ShadowMapTechnique {
                 paraboloid: false,
                 stabilize_size: None,
                 previous_half: None,
+                view_fit: Default::default(),
             },
             VirtualParams {
                 size: p.virtual_size,
