@@ -120,14 +120,14 @@ fn warped_texel_world(face: u32, p: vec3f) -> f32 {
 }
 
 // G-buffer point g with normal n moved along the normal by `sm.kernel.y`
-// texels of world size `texel_world` (× sin θ between normal and light
+// texels of world size `texel_world` (× sin²θ between normal and light
 // when `sm.kernel.w` is set: full at grazing light, none facing it).
 fn offset_point(g: vec3f, n: vec3f, texel_world: f32) -> vec3f {
     var offset = sm.kernel.y * texel_world;
     if sm.kernel.w > 0.5 {
         let to_light = select(normalize(sm.light.xyz - g), -normalize(sm.warp.xyz), sm.map.w > 0.5 && !is_paraboloid());
         let cos_theta = clamp(dot(n, to_light), 0.0, 1.0);
-        offset *= sqrt(1.0 - cos_theta * cos_theta);
+        offset *= (1.0 - cos_theta * cos_theta);
     }
     return g + n * offset;
 }

@@ -337,9 +337,12 @@ impl ShadowTechnique for ShadowMapTechnique {
         }
         ctx.gpu.queue.write_buffer(&self.uniforms, 0, &data);
         let floor = c.stage == Stage::Floor;
-        let pipeline = if floor {
-            self.shared.floor(gpu, format.depth_texture())
-        } else {
+        let linear_depth = setups.iter().any(|s| s.warp_depth.is_some());
+        let pipeline_for = |setup: &LightSetup, face: usize| {
+            if floor {
+                return self.shared.floor(gpu, format.depth_texture());
+            }
+            let clamp = bias_clamp(setup, face, size, c.slope_bias_clamp);
             self.shared.depth_pass(
                 gpu,
                 DepthPassKey {
@@ -347,9 +350,10 @@ impl ShadowTechnique for ShadowMapTechnique {
                     cull: c.cull,
                     bias: c.depth_bias,
                     slope_bits: c.slope_bias.to_bits(),
+                    clamp_bits: clamp.to_bits(),
                     moments: moments.then_some(c.filter),
                     paraboloid,
-                    linear_depth: setups.iter().any(|s| s.warp_depth.is_some()),
+                    linear_depth,
                     virtual_map: false,
                 },
             )
@@ -430,7 +434,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     }),
                     ..Default::default()
                 });
-                pass.set_pipeline(&pipeline);
+                pass.set_pipeline(&pipeline_for(setup, f));
                 ctx.bind_frame_groups(&mut pass);
                 pass.set_bind_group(crate::frame::OWN_GROUP, &render_group, &[slot(si, face, 0)]);
                 // Casters outside this face's (or cascade's) view are not
@@ -602,5 +606,73 @@ impl ShadowTechnique for ShadowMapTechnique {
                 .virtual_state
                 .as_ref()
                 .map_or(0, |v| v.resource_bytes())
+    }
+}
+
+/// The depth bias's cap for `face` of `setup` in the map's depth units:
+/// `texels` texel widths of depth — the texel's world size over the
+/// orthographic depth range — rounded to a quarter octave (few pipelines);
+/// 0 (no cap) for perspective and warped maps or `texels` = 0.
+fn bias_clamp(setup: &LightSetup, face: usize, size: u32, texels: f32) -> f32 {
+    if !setup.orthographic || setup.warp_depth.is_some() || texels <= 0.0 {
+        return 0.0;
+    }
+    let scale = setup
+        .cascades
+        .as_ref()
+        .and_then(|s| s.texel_scales.get(face).copied())
+        .unwrap_or(setup.texel_scale);
+    let clamp = texels * scale / size as f32 / (setup.far - setup.near).max(1e-6);
+    2f32.powf((clamp.log2() * 4.0).round() / 4.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ortho(texel_scale: f32, cascades: Option<Vec<f32>>) -> LightSetup {
+        LightSetup {
+            faces: vec![Mat4::IDENTITY; cascades.as_ref().map_or(1, |c| c.len())],
+            near: 0.0,
+            far: 1024.0,
+            orthographic: true,
+            paraboloid: false,
+            texel_scale,
+            cascades: cascades.map(|texel_scales| CascadeSplit {
+                near: 0.1,
+                far: vec![1.0; texel_scales.len()],
+                texel_scales,
+            }),
+            warp_depth: None,
+        }
+    }
+
+    #[test]
+    fn the_bias_cap_is_texel_widths_of_the_depth_range() {
+        // 2048 world units over 2048 texels: 1 per texel; 4 texels of a
+        // 1024-unit depth range = 2^-8.
+        assert_eq!(
+            bias_clamp(&ortho(2048.0, None), 0, 2048, 4.0),
+            2f32.powi(-8)
+        );
+        // 4.5 texels rounds to the nearest quarter octave, 2^(-8 + 1/4)·…
+        let c = bias_clamp(&ortho(2048.0, None), 0, 2048, 4.5);
+        assert!((c.log2() + 7.75).abs() < 1e-5, "{}", c.log2());
+        // Each cascade its own texel.
+        let cascaded = ortho(1024.0, Some(vec![1024.0, 4096.0]));
+        assert_eq!(bias_clamp(&cascaded, 1, 2048, 4.0), 2f32.powi(-7));
+        assert_eq!(bias_clamp(&cascaded, 0, 2048, 4.0), 2f32.powi(-9));
+        // None for perspective or warped maps, or a cap of 0.
+        let spot = LightSetup {
+            orthographic: false,
+            ..ortho(2048.0, None)
+        };
+        assert_eq!(bias_clamp(&spot, 0, 2048, 4.0), 0.0);
+        let warped = LightSetup {
+            warp_depth: Some(Vec4::Z),
+            ..ortho(2048.0, None)
+        };
+        assert_eq!(bias_clamp(&warped, 0, 2048, 4.0), 0.0);
+        assert_eq!(bias_clamp(&ortho(2048.0, None), 0, 2048, 0.0), 0.0);
     }
 }

@@ -23,6 +23,8 @@ pub struct DepthPassKey {
     pub cull: CullFace,
     pub bias: i32,
     pub slope_bits: u32,
+    /// The bias's cap in the map's depth units (`f32` bits; 0: none).
+    pub clamp_bits: u32,
     /// The moment filter whose moments the pass stores, if any.
     pub moments: Option<Filter>,
     pub paraboloid: bool,
@@ -374,7 +376,7 @@ impl ShadowMapShared {
                             wgpu::DepthBiasState {
                                 constant: key.bias,
                                 slope_scale: f32::from_bits(key.slope_bits),
-                                clamp: 0.0,
+                                clamp: f32::from_bits(key.clamp_bits),
                             }
                         },
                     }),

@@ -134,6 +134,7 @@ impl ShadowMapTechnique {
                 cull: c.cull,
                 bias: c.depth_bias,
                 slope_bits: c.slope_bias.to_bits(),
+                clamp_bits: 0,
                 moments: None,
                 paraboloid: false,
                 linear_depth: false,
