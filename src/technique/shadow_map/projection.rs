@@ -1,8 +1,9 @@
 //! The light-projection step: a light (or an area light's samples), the
 //! camera and the scene's bounds become this frame's shadow views — the
-//! spot, point or directional frusta of `setup`, cascades fitted to the
-//! view frustum or, with SDSM, to what the camera saw (`cascades`,
-//! `depth_bounds`), and the warps (`warp`, `trapezoid`).
+//! spot, point or directional frusta of `setup`, a directional map or its
+//! cascades fitted to the view frustum or, with SDSM (the single map's
+//! default), to what the camera saw (`cascades`, `depth_bounds`), and the
+//! warps (`warp`, `trapezoid`).
 
 use super::depth_bounds::{DepthReduction, ReduceInputs};
 use super::setup::ViewFit;
