@@ -608,43 +608,43 @@ fn sdsm_depth_bounds_are_the_seen_view_depths() {
     );
 }
 
+/// `id` rendered on `scene` with its debug views: how many receiving pixels
+/// look up no map (partition 0), and the mean texel footprint (screen
+/// pixels per texel) where a map is looked up.
+fn map_coverage(scene: &shadowlab::scene::Scene, id: &str, (w, h): (u32, u32)) -> (usize, f32) {
+    let gpu = gpu();
+    let hf = frame_with_debug_views(scene, id, w, h);
+    let normal = gpu.read_texture(hf.frame.gbuffer_normal(), 0, 8).unwrap();
+    let lookup = hf.techniques[0].technique.map_lookup(gpu).unwrap().unwrap();
+    let outside = bytemuck::cast_slice::<u8, [half::f16; 4]>(&normal)
+        .iter()
+        .zip(&lookup.partition)
+        .filter(|(n, p)| n[3].to_f32() > 0.5 && **p == 0)
+        .count();
+    let looked_up: Vec<f32> = lookup
+        .footprint
+        .iter()
+        .copied()
+        .filter(|f| *f > 0.0)
+        .collect();
+    (
+        outside,
+        looked_up.iter().sum::<f32>() / looked_up.len() as f32,
+    )
+}
+
 /// SDSM's cascades fitted to the pixels they shade: every receiving pixel
 /// finds its surface inside the map it looks up, the texels are smaller
 /// than the frustum-fitted cascades', and the mask matches the reference.
 #[test]
 fn sdsm_cascades_cover_every_pixel_with_smaller_texels() {
-    let gpu = gpu();
     let scene = squares_along_the_view(0.0, 2.0);
-    let lookup = |id: &str| {
-        frame_with_debug_views(&scene, id, 256, 192).techniques[0]
-            .technique
-            .map_lookup(gpu)
-            .unwrap()
-            .unwrap()
-    };
-    let hf = frame_with_debug_views(&scene, "shadow-map:sdsm", 256, 192);
-    let normal = gpu.read_texture(hf.frame.gbuffer_normal(), 0, 8).unwrap();
-    let receives: Vec<bool> = bytemuck::cast_slice::<u8, [half::f16; 4]>(&normal)
-        .iter()
-        .map(|n| n[3].to_f32() > 0.5)
-        .collect();
-    let sdsm = lookup("shadow-map:sdsm");
-    let outside = receives
-        .iter()
-        .zip(&sdsm.partition)
-        .filter(|(r, p)| **r && **p == 0)
-        .count();
+    let (outside, sdsm) = map_coverage(&scene, "shadow-map:sdsm", (256, 192));
     assert_eq!(outside, 0, "receiving pixels outside their cascade's map");
-    let mean = |l: &shadowlab::technique::MapLookup| {
-        let v: Vec<f32> = l.footprint.iter().copied().filter(|f| *f > 0.0).collect();
-        v.iter().sum::<f32>() / v.len() as f32
-    };
-    let frustum = lookup("shadow-map:sdsm[fit=frustum]");
+    let (_, frustum) = map_coverage(&scene, "shadow-map:sdsm[fit=frustum]", (256, 192));
     assert!(
-        mean(&sdsm) < 0.8 * mean(&frustum),
-        "sdsm {} px/texel, frustum-fitted {}",
-        mean(&sdsm),
-        mean(&frustum)
+        sdsm < 0.8 * frustum,
+        "sdsm {sdsm} px/texel, frustum-fitted {frustum}"
     );
     let m = compare(&scene, "shadow-map:sdsm", (256, 256)).mask;
     assert!(m.reference_shadowed_pct > 5.0, "{m:?}");
@@ -660,41 +660,16 @@ fn sdsm_cascades_cover_every_pixel_with_smaller_texels() {
 /// the frustum-fitted map's and less than half of its mismatch.
 #[test]
 fn one_map_fitted_to_the_seen_pixels_covers_them_with_smaller_texels() {
-    let gpu = gpu();
     let mut land = shadowlab::scene::load("landscape").unwrap();
     land.camera = land.camera_preset("ground").unwrap();
     land.lights = land.light_preset("sun-low-front").unwrap();
     let (w, h) = (256, 144);
-    let lookup = |id: &str| {
-        frame_with_debug_views(&land, id, w, h).techniques[0]
-            .technique
-            .map_lookup(gpu)
-            .unwrap()
-            .unwrap()
-    };
-    let hf = frame_with_debug_views(&land, "shadow-map:pcf", w, h);
-    let normal = gpu.read_texture(hf.frame.gbuffer_normal(), 0, 8).unwrap();
-    let receives: Vec<bool> = bytemuck::cast_slice::<u8, [half::f16; 4]>(&normal)
-        .iter()
-        .map(|n| n[3].to_f32() > 0.5)
-        .collect();
-    let seen = lookup("shadow-map:pcf");
-    let outside = receives
-        .iter()
-        .zip(&seen.partition)
-        .filter(|(r, p)| **r && **p == 0)
-        .count();
+    let (outside, seen) = map_coverage(&land, "shadow-map:pcf", (w, h));
     assert_eq!(outside, 0, "receiving pixels outside the map");
-    let mean = |l: &shadowlab::technique::MapLookup| {
-        let v: Vec<f32> = l.footprint.iter().copied().filter(|f| *f > 0.0).collect();
-        v.iter().sum::<f32>() / v.len() as f32
-    };
-    let frustum = lookup("shadow-map:pcf[fit=frustum]");
+    let (_, frustum) = map_coverage(&land, "shadow-map:pcf[fit=frustum]", (w, h));
     assert!(
-        mean(&seen) < 0.8 * mean(&frustum),
-        "fitted to the pixels {} px/texel, to the frustum {}",
-        mean(&seen),
-        mean(&frustum)
+        seen < 0.8 * frustum,
+        "fitted to the pixels {seen} px/texel, to the frustum {frustum}"
     );
     let fitted = compare(&land, "shadow-map:pcf", (w, h)).mask;
     let wide = compare(&land, "shadow-map:pcf[fit=frustum]", (w, h)).mask;

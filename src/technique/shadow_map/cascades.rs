@@ -9,7 +9,7 @@ use super::depth_bounds::SeenBounds;
 use super::partition_params::{Cascades, Fit};
 use super::setup::{
     CascadeSplit, LightSetup, light_view_of_scene, quantize_down, quantize_up, slice_corners,
-    snap_to_texels, view_reach, widen_for_kernels,
+    snap_to_texels, square_around, view_reach, widen_for_kernels,
 };
 use crate::scene::{Aabb, Camera};
 use glam::Vec3;
@@ -115,28 +115,18 @@ pub fn cascade_setup(
         let corners = slice_corners(camera, aspect, w[0], w[1]).map(|p| view.transform_point3(p));
         let (half, cx, cy) = if let Some(Some(seen_box)) = samples.get(i) {
             // The box of the pixels this cascade shades, widened for kernels.
-            let [x0, y0, x1, y1] = widen_for_kernels(*seen_box, size);
-            (
-                ((x1 - x0).max(y1 - y0) * 0.5).max(1e-3),
-                (x0 + x1) * 0.5,
-                (y0 + y1) * 0.5,
-            )
+            square_around(widen_for_kernels(*seen_box, size))
         } else if cascades.stabilize && cascades.fit != Fit::Samples {
             stable_square(&corners, size)
         } else {
             let b = Aabb::from_points(corners);
             let (min_x, max_x) = (b.min.x.max(scene_ls.min.x), b.max.x.min(scene_ls.max.x));
             let (min_y, max_y) = (b.min.y.max(scene_ls.min.y), b.max.y.min(scene_ls.max.y));
-            let (min_x, max_x, min_y, max_y) = if min_x < max_x && min_y < max_y {
-                (min_x, max_x, min_y, max_y)
+            square_around(if min_x < max_x && min_y < max_y {
+                [min_x, min_y, max_x, max_y]
             } else {
-                (b.min.x, b.max.x, b.min.y, b.max.y)
-            };
-            (
-                ((max_x - min_x).max(max_y - min_y) * 0.5).max(1e-3),
-                (min_x + max_x) * 0.5,
-                (min_y + max_y) * 0.5,
-            )
+                [b.min.x, b.min.y, b.max.x, b.max.y]
+            })
         };
         faces.push(orthographic(cx - half, cx + half, cy - half, cy + half, n, f) * view);
         texel_scales.push(2.0 * half);

@@ -132,10 +132,22 @@ const SAMPLE_FIT_MARGIN_TEXELS: f32 = 16.0;
 /// [`SAMPLE_FIT_MARGIN_TEXELS`] texels of the square `size`² map that will
 /// hold it: the square's half-extent h satisfies h·(1 − 2m/size) = the
 /// box's larger half-extent.
-pub fn widen_for_kernels([x0, y0, x1, y1]: [f32; 4], size: u32) -> [f32; 4] {
-    let half = ((x1 - x0).max(y1 - y0) * 0.5).max(1e-3);
+pub fn widen_for_kernels(b: [f32; 4], size: u32) -> [f32; 4] {
+    let [x0, y0, x1, y1] = b;
+    let (half, _, _) = square_around(b);
     let margin = half / (1.0 - 2.0 * SAMPLE_FIT_MARGIN_TEXELS / size as f32).max(0.5) - half;
     [x0 - margin, y0 - margin, x1 + margin, y1 + margin]
+}
+
+/// The square (half-extent, at least 1 mm, and centre) around a light-view
+/// box `[min x, min y, max x, max y]`: square texels, the larger extent on
+/// both axes.
+pub fn square_around([x0, y0, x1, y1]: [f32; 4]) -> (f32, f32, f32) {
+    (
+        ((x1 - x0).max(y1 - y0) * 0.5).max(1e-3),
+        (x0 + x1) * 0.5,
+        (y0 + y1) * 0.5,
+    )
 }
 
 /// How much larger than the fitted square a stabilised map's previous
@@ -362,15 +374,12 @@ pub fn light_setup(
                 ViewFit::Frustum => clipped_view(camera.near, view_reach(camera, scene_bounds)),
                 ViewFit::Depths { near, far } => clipped_view(near, far),
             };
-            let [min_x, min_y, max_x, max_y] = fitted.unwrap_or([
+            let (half, cx, cy) = square_around(fitted.unwrap_or([
                 scene_ls.min.x,
                 scene_ls.min.y,
                 scene_ls.max.x,
                 scene_ls.max.y,
-            ]);
-            // Square texels: the larger extent on both axes.
-            let half = ((max_x - min_x).max(max_y - min_y) * 0.5).max(1e-3);
-            let (cx, cy) = ((min_x + max_x) * 0.5, (min_y + max_y) * 0.5);
+            ]));
             let (half, cx, cy) = match stabilize_size {
                 Some(size) => match previous_half {
                     Some(p) if p >= half && p <= half * KEPT_FIT_RATIO => {
