@@ -20,10 +20,7 @@ fn fs_debug_map(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     } else {
         let z = stored(t, 0u);
         d = (linear_depth(z) - sm.depth.x) / (sm.depth.y - sm.depth.x);
-        if sm.map.w > 0.5 && !is_paraboloid() {
-            d = z;
-        }
-        if is_paraboloid() {
+        if is_orthographic() || is_paraboloid() {
             d = z;
         }
     }
@@ -87,11 +84,11 @@ fn fs_debug_frame(@builtin(position) frag: vec4f) -> DebugFrame {
     var o: DebugFrame;
     let inside = g.w > 0.5 && c.w > 0.0 && all(uv >= vec2f(0.0)) && all(uv <= vec2f(1.0));
     var d = stored(vec2i(floor(texel)), face);
-    if sm.map.w < 0.5 {
+    if !is_orthographic() && !is_paraboloid() {
         d = (linear_depth(d) - sm.depth.x) / (sm.depth.y - sm.depth.x);
     }
     var tint = vec3f(1.0);
-    if sm.cascade.x > 0.5 {
+    if CASCADED {
         tint = cascade_tint(face);
     }
     o.projection = select(vec4f(0.5, 0.0, 0.0, 1.0), vec4f(tint * (0.35 + 0.65 * d), 1.0), inside);

@@ -193,11 +193,14 @@ fn pcf_grid(uv: vec2f, face: u32, z: f32, radius_texels: f32, k: u32) -> f32 {
 // segment from the receiver to the light's rim, seen from the light centre.
 fn penumbra_texels(dr: f32, db: f32) -> f32 {
     let texel = select(sm.map.z, virtual_texel_world, VIRTUAL);
-    if sm.map.w > 0.5 && !is_paraboloid() {
+    if is_orthographic() {
         return sm.depth.z * (dr - db) * (sm.depth.y - sm.depth.x) / texel;
     }
     return sm.depth.z * (dr - db) / (dr * max(db, 1e-4)) / texel;
 }
+
+// Taps of the blocker search (PCSS, variable-width PCF).
+const BLOCKER_SEARCHES: u32 = 16u;
 
 // Mean linear depth of the blockers (stored < z) in a disk, and their count.
 fn blockers(uv: vec2f, face: u32, z: f32, radius_texels: f32, n: u32, phi: f32) -> vec2f {

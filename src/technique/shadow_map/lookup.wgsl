@@ -32,14 +32,14 @@ fn cascade_of(p: vec3f) -> CascadePick {
 
 // Face of a point light's six 90° frusta: the major axis of p − light.
 fn face_of(p: vec3f) -> u32 {
-    if sm.cascade.x > 0.5 {
+    if CASCADED {
         return min(cascade_of(p).index, u32(sm.cascade.x) - 1u);
     }
-    if sm.light.w < 1.5 {
-        return 0u;
-    }
-    if sm.light.w < 2.5 {
+    if is_paraboloid() {
         return select(1u, 0u, (sm.faces[0] * vec4f(p, 1.0)).z <= 0.0);
+    }
+    if PROJECTION != PROJECTION_CUBE {
+        return 0u;
     }
     let d = p - sm.light.xyz;
     let a = abs(d);
@@ -56,7 +56,7 @@ fn linear_depth(z: f32) -> f32 {
     if is_paraboloid() {
         return sm.depth.x + z * (sm.depth.y - sm.depth.x);
     }
-    if sm.map.w > 0.5 {
+    if is_orthographic() {
         return z;
     }
     let n = sm.depth.x;
@@ -71,7 +71,7 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     if VIRTUAL {
         return vec4f(virtual_visibility(frag.xy, g, n));
     }
-    if sm.cascade.x < 0.5 {
+    if !CASCADED {
         let face = face_of(g.xyz);
         return vec4f(filtered(face, projected(face, g, n), frag.xy));
     }
@@ -88,7 +88,9 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         return vec4f(1.0); // beyond the last cascade
     }
     var v = filtered(face, here, frag.xy);
-    if pick.next_weight > 0.0 {
+    // A loop, not a branch: llvmpipe runs both sides of a branch under a
+    // lane mask but leaves a loop as soon as no lane is still in it.
+    for (var in_band = pick.next_weight > 0.0; in_band; in_band = false) {
         v = mix(v, filtered(next_face, next, frag.xy), pick.next_weight);
     }
     return vec4f(v);
@@ -125,7 +127,7 @@ fn warped_texel_world(face: u32, p: vec3f) -> f32 {
 fn offset_point(g: vec3f, n: vec3f, texel_world: f32) -> vec3f {
     var offset = sm.kernel.y * texel_world;
     if sm.kernel.w > 0.5 {
-        let to_light = select(normalize(sm.light.xyz - g), -normalize(sm.warp.xyz), sm.map.w > 0.5 && !is_paraboloid());
+        let to_light = select(normalize(sm.light.xyz - g), -normalize(sm.warp.xyz), is_orthographic());
         let cos_theta = clamp(dot(n, to_light), 0.0, 1.0);
         offset *= (1.0 - cos_theta * cos_theta);
     }
@@ -152,9 +154,9 @@ fn projected(face: u32, g: vec4f, n: vec3f) -> Projected {
     var texel_world = sm.map.z;
     if is_warped() {
         texel_world = warped_texel_world(face, g.xyz);
-    } else if sm.cascade.x > 0.5 {
+    } else if CASCADED {
         texel_world = sm.cascade_texel[face / 4u][face % 4u];
-    } else if sm.map.w < 0.5 || is_paraboloid() {
+    } else if !is_orthographic() {
         texel_world = sm.map.z * length(g.xyz - sm.light.xyz);
     }
     let p = offset_point(g.xyz, n, texel_world);
@@ -179,19 +181,18 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
     }
     rp_gradient = pr.gradient;
     rp_origin = pr.uv;
-    let uv = pr.uv;
-    let c = pr.clip;
     // With the receiver plane, a 2×2 comparison still sees texels up to one
     // texel away at a single depth: take off that slope (Isidoro's
     // fractional sampling error), capped.
     let z = pr.z - min(2.0 * dot(vec2f(sm.map.y), abs(rp_gradient)), 0.01);
     if FILTER_KIND >= FILTER_VSM {
-        return moment_visibility(moments_at(uv, face), select(linear01(c), pr.z, is_warped()));
+        return moment_visibility(moments_at(pr.uv, face), select(linear01(pr.clip), pr.z, is_warped()));
     }
     // Edge mask: where every tap agrees, the kernel's loops run zero times.
     // A trip count, not an early return: SIMD rasterisers (llvmpipe among
     // them) run both sides of a branch under a lane mask but leave a loop
-    // as soon as no lane is still in it.
+    // as soon as no lane is still in it. (A constant count inside a
+    // one-trip loop, unrolled, measured slower on llvmpipe.)
     var count = max(TAPS, 1u);
     var known = -1.0;
     if EDGE_MASK && (FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK
@@ -199,10 +200,16 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
         // Taps compare against the receiver plane: its depth spread over the reach.
         let reach = kernel_reach();
         let spread = reach * sm.map.y * (abs(rp_gradient.x) + abs(rp_gradient.y));
-        known = edge_class(uv, face, min(z, pr.z) - spread, max(z, pr.z) + spread, reach);
+        known = edge_class(pr.uv, face, min(z, pr.z) - spread, max(z, pr.z) + spread, reach);
         count = select(count, 0u, known >= 0.0);
     }
-    let searches = select(16u, 0u, known >= 0.0);
+    return select(kernel(face, pr, z, frag, count), known, known >= 0.0);
+}
+
+// The filter's kernel at a projected point whose compared depth is z, with
+// `count` taps per side (0: none, and no blocker search).
+fn kernel(face: u32, pr: Projected, z: f32, frag: vec2f, count: u32) -> f32 {
+    let uv = pr.uv;
     let radius = sm.kernel.x;
     let phi = ign(frag) * 6.2831853;
     var v = 1.0;
@@ -228,10 +235,11 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
             let physical = sm.depth.z > 0.0;
             var search = sm.soft.w;
             if physical {
-                search = clamp(penumbra_texels(dr, select(sm.depth.x, 0.0, sm.map.w > 0.5 && !is_paraboloid())), 1.0, 64.0);
+                search = clamp(penumbra_texels(dr, select(sm.depth.x, 0.0, is_orthographic())), 1.0, 64.0);
             }
-            let b = blockers(uv, face, z, search, searches, phi);
-            if b.y > 0.0 {
+            let b = blockers(uv, face, z, search, select(BLOCKER_SEARCHES, 0u, count == 0u), phi);
+            // Loops, not branches (see `filtered`): no disk where no blocker.
+            for (var blocked = b.y > 0.0; blocked; blocked = false) {
                 var w = (dr - b.x) / max(b.x, 1e-4) * sm.soft.x;
                 if physical {
                     w = penumbra_texels(dr, b.x);
@@ -241,12 +249,12 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
         }
         default: {
             // Variable-width PCF (002): radius ∝ |d_blocker − d_receiver|^exponent.
-            let b = blockers(uv, face, z, sm.soft.w, searches, phi);
-            if b.y > 0.0 {
+            let b = blockers(uv, face, z, sm.soft.w, select(BLOCKER_SEARCHES, 0u, count == 0u), phi);
+            for (var blocked = b.y > 0.0; blocked; blocked = false) {
                 let w = sm.soft.y * pow(abs(linear_depth(z) - b.x), sm.soft.z);
                 v = pcf_disk(uv, face, z, clamp(w, 0.5, 64.0), count * count, phi);
             }
         }
     }
-    return select(v, known, known >= 0.0);
+    return v;
 }

@@ -40,7 +40,7 @@ use depth_bounds::{DepthReduction, SeenBounds};
 use edge_mask::{ChainSource, MinMaxChain};
 use glam::{Mat4, UVec4, Vec4};
 use maps::Maps;
-use pipelines::{DepthPassKey, LookupKey, ShadowMapShared};
+use pipelines::{DepthPassKey, LookupKey, MapShape, ShadowMapShared};
 use std::sync::Arc;
 use uniform::{MAX_FACES, SLOTS, STRIDE, ShadowMapUniform};
 
@@ -293,11 +293,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     size as f32,
                     1.0 / size as f32,
                     setup.texel_scale / size as f32,
-                    if setup.paraboloid {
-                        2.0
-                    } else {
-                        setup.orthographic as u32 as f32
-                    },
+                    0.0,
                 ),
                 depth: Vec4::new(
                     setup.near,
@@ -315,10 +311,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 cascade_far: pack(cascade_far),
                 cascade_texel: pack(cascade_texel),
                 cascade_view_z: ctx.fit_camera.view().row(2),
-                warp: light
-                    .direction
-                    .normalize_or_zero()
-                    .extend(setup.warp_depth.is_some() as u32 as f32),
+                warp: light.direction.normalize_or_zero().extend(0.0),
                 warp_depth: setup.warp_depth.unwrap_or(Vec4::ZERO),
                 ..ShadowMapUniform::with_filter(&c, normal_offset)
             };
@@ -337,10 +330,11 @@ impl ShadowTechnique for ShadowMapTechnique {
         }
         ctx.gpu.queue.write_buffer(&self.uniforms, 0, &data);
         let floor = c.stage == Stage::Floor;
-        let linear_depth = setups.iter().any(|s| s.warp_depth.is_some());
+        // Every sample of an area light has the first one's shape.
+        let shape = MapShape::of(&setups[0]);
         let pipeline_for = |setup: &LightSetup, face: usize| {
             if floor {
-                return self.shared.floor(gpu, format.depth_texture());
+                return self.shared.floor(gpu, format.depth_texture(), shape);
             }
             let clamp = bias_clamp(setup, face, size, c.slope_bias_clamp);
             self.shared.depth_pass(
@@ -352,8 +346,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     slope_bits: c.slope_bias.to_bits(),
                     clamp_bits: clamp.to_bits(),
                     moments: moments.then_some(c.filter),
-                    paraboloid,
-                    linear_depth,
+                    shape,
                     virtual_map: false,
                 },
             )
@@ -366,6 +359,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             accumulate: false,
             edge_mask,
             virtual_map: false,
+            shape,
         };
         let maps = self.maps.as_ref().expect("ensured above");
         let slot = |s: usize, f: u32, k: u32| {

@@ -1,14 +1,76 @@
 //! The shadow-map family's GPU programs, shared by every light's instance
 //! on a device: one shader module, its layouts, samplers and placeholders
 //! ([`ShadowMapShared`]), and pipelines specialised by what they depend on
-//! — the depth pass by format, culling, bias and moment kind, the lookup by
-//! filter, taps, depth format and receiver-plane bias — taken from the
-//! device's bounded cache.
+//! — the depth pass by format, culling, bias, moment kind and map shape,
+//! the lookup by filter, taps, depth format, receiver-plane bias and map
+//! shape — taken from the device's bounded cache.
 
 use super::config::{CullFace, DepthFormat, Filter};
+use super::setup::LightSetup;
 use crate::frame::{MASK_FORMAT, VERTEX_LAYOUT};
 use crate::gpu::GpuContext;
-use crate::technique::params::Choice;
+use crate::technique::params::{Choice, choice_enum};
+
+choice_enum! {
+    /// How a light's map faces project (`PROJECTION_*` in the shaders):
+    /// one perspective face (spot), six (point, cube), two dual-paraboloid
+    /// hemispheres, or orthographic (directional: one map or cascades).
+    pub enum MapProjection {
+        Perspective = "perspective",
+        Cube = "cube",
+        Paraboloid = "paraboloid",
+        Orthographic = "orthographic",
+    }
+}
+
+impl MapProjection {
+    /// The projection of `faces` map faces, orthographic or a dual paraboloid or neither.
+    pub fn of(faces: usize, orthographic: bool, paraboloid: bool) -> MapProjection {
+        if paraboloid {
+            MapProjection::Paraboloid
+        } else if orthographic {
+            MapProjection::Orthographic
+        } else if faces == 6 {
+            MapProjection::Cube
+        } else {
+            MapProjection::Perspective
+        }
+    }
+}
+
+/// The shape of a light's maps, a constant of every pipeline that reads
+/// them: SIMD rasterisers such as llvmpipe run both sides of a branch on a
+/// uniform value under a lane mask, so a lookup that branched on the shape
+/// paid for the cascade path, the cube-face choice and the warp on every
+/// one-map pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct MapShape {
+    pub projection: MapProjection,
+    /// Faces are cascades, chosen per pixel by view depth.
+    pub cascaded: bool,
+    /// Faces are warped (PSM, LiSPSM, TSM): depth stored linear along the light.
+    pub warped: bool,
+}
+
+impl MapShape {
+    /// The shape of the maps `setup` describes.
+    pub fn of(setup: &LightSetup) -> MapShape {
+        MapShape {
+            projection: MapProjection::of(setup.faces.len(), setup.orthographic, setup.paraboloid),
+            cascaded: setup.cascades.is_some(),
+            warped: setup.warp_depth.is_some(),
+        }
+    }
+
+    /// The values of the shape's pipeline-overridable constants.
+    fn constants(self) -> [(&'static str, f64); 3] {
+        [
+            ("PROJECTION", self.projection.index() as f64),
+            ("CASCADED", self.cascaded as u32 as f64),
+            ("WARPED", self.warped as u32 as f64),
+        ]
+    }
+}
 
 /// The debug frame's numbers per pixel: texel footprint (pixels per texel)
 /// and the partition looked up (see [`crate::technique::MapLookup`]).
@@ -27,10 +89,10 @@ pub struct DepthPassKey {
     pub clamp_bits: u32,
     /// The moment filter whose moments the pass stores, if any.
     pub moments: Option<Filter>,
-    pub paraboloid: bool,
-    /// Warped faces: the fragment stage writes the linear depth and applies
-    /// the bias itself (`fs_depth_linear`).
-    pub linear_depth: bool,
+    /// The maps' shape: a paraboloid's pass drops what lies behind the
+    /// hemisphere; a warped face's writes the linear depth and applies the
+    /// bias itself (`fs_depth_linear`).
+    pub shape: MapShape,
     /// Pages of a virtual map: positions relative to the camera.
     pub virtual_map: bool,
 }
@@ -49,19 +111,22 @@ pub struct LookupKey {
     pub edge_mask: bool,
     /// Texels read through a virtual map's page table.
     pub virtual_map: bool,
+    pub shape: MapShape,
 }
 
 impl LookupKey {
     /// The values of the lookup's pipeline-overridable constants.
-    fn constants(&self) -> [(&'static str, f64); 6] {
-        [
+    fn constants(&self) -> Vec<(&'static str, f64)> {
+        let mut constants = vec![
             ("FILTER_KIND", self.filter.index() as f64),
             ("TAPS", self.taps as f64),
             ("BYTE_MAP", self.byte_map as u32 as f64),
             ("RECEIVER_PLANE", self.receiver_plane as u32 as f64),
             ("EDGE_MASK", self.edge_mask as u32 as f64),
             ("VIRTUAL", self.virtual_map as u32 as f64),
-        ]
+        ];
+        constants.extend(self.shape.constants());
+        constants
     }
 }
 
@@ -127,12 +192,13 @@ impl ShadowMapShared {
                 crate::gpu::storage_entry(11, wgpu::ShaderStages::FRAGMENT, false),
             ],
         });
-        let filter_constants = Filter::wgsl_constants("FILTER");
+        let constants =
+            Filter::wgsl_constants("FILTER") + &MapProjection::wgsl_constants("PROJECTION");
         let module = crate::frame::technique_shader(
             device,
             "shadow map",
             &[
-                &filter_constants,
+                &constants,
                 include_str!("shadow_map.wgsl"),
                 include_str!("depth_pass.wgsl"),
                 include_str!("filters.wgsl"),
@@ -330,20 +396,21 @@ impl ShadowMapShared {
                 (Some("fs_depth_moments"), Some(MOMENT_FORMAT))
             } else if key.format == DepthFormat::R8 {
                 (Some("fs_depth_byte"), Some(wgpu::TextureFormat::R8Unorm))
-            } else if key.paraboloid {
+            } else if key.shape.projection == MapProjection::Paraboloid {
                 (Some("fs_depth_paraboloid"), None)
-            } else if key.linear_depth {
+            } else if key.shape.warped {
                 (Some("fs_depth_linear"), None)
             } else {
                 (None, None)
             };
-            let constants = [
+            let mut constants = vec![
                 (
                     "FILTER_KIND",
                     key.moments.map_or(Filter::Grid, |f| f).index() as f64,
                 ),
                 ("VIRTUAL", key.virtual_map as u32 as f64),
             ];
+            constants.extend(key.shape.constants());
             let options = wgpu::PipelineCompilationOptions {
                 constants: &constants,
                 ..Default::default()
@@ -370,7 +437,7 @@ impl ShadowMapShared {
                         stencil: Default::default(),
                         // Written depth takes no polygon offset: the
                         // linear pass biases in its fragment stage.
-                        bias: if key.linear_depth && key.moments.is_none() {
+                        bias: if key.shape.warped && key.moments.is_none() {
                             wgpu::DepthBiasState::default()
                         } else {
                             wgpu::DepthBiasState {
@@ -395,31 +462,41 @@ impl ShadowMapShared {
 
     /// The floor of `stage=floor`: positions transformed by the face matrix,
     /// depth test and write, nothing else.
-    pub fn floor(&self, gpu: &GpuContext, format: wgpu::TextureFormat) -> wgpu::RenderPipeline {
-        gpu.cache.render_pipeline("shadow map floor", &format, || {
-            gpu.device
-                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("shadow map floor"),
-                    layout: Some(&self.pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module: &self.module,
-                        entry_point: Some("vs_floor"),
-                        compilation_options: Default::default(),
-                        buffers: &[Some(VERTEX_LAYOUT)],
-                    },
-                    primitive: Default::default(),
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format,
-                        depth_write_enabled: Some(true),
-                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    fragment: None,
-                    multiview_mask: None,
-                    cache: None,
-                })
-        })
+    pub fn floor(
+        &self,
+        gpu: &GpuContext,
+        format: wgpu::TextureFormat,
+        shape: MapShape,
+    ) -> wgpu::RenderPipeline {
+        gpu.cache
+            .render_pipeline("shadow map floor", &(format, shape), || {
+                let constants = shape.constants();
+                gpu.device
+                    .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                        label: Some("shadow map floor"),
+                        layout: Some(&self.pipeline_layout),
+                        vertex: wgpu::VertexState {
+                            module: &self.module,
+                            entry_point: Some("vs_floor"),
+                            compilation_options: wgpu::PipelineCompilationOptions {
+                                constants: &constants,
+                                ..Default::default()
+                            },
+                            buffers: &[Some(VERTEX_LAYOUT)],
+                        },
+                        primitive: Default::default(),
+                        depth_stencil: Some(wgpu::DepthStencilState {
+                            format,
+                            depth_write_enabled: Some(true),
+                            depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                            stencil: Default::default(),
+                            bias: Default::default(),
+                        }),
+                        multisample: Default::default(),
+                        fragment: None,
+                        multiview_mask: None,
+                        cache: None,
+                    })
+            })
     }
 }

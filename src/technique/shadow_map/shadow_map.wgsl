@@ -6,8 +6,8 @@
 // enum.
 
 // Specialisation (pipeline-overridable constants, set per pipeline by
-// pipelines.rs): the filter, taps per side, the 8-bit map and the
-// receiver-plane bias are constants of each pipeline.
+// pipelines.rs): the filter, taps per side, the 8-bit map, the
+// receiver-plane bias and the maps' shape are constants of each pipeline.
 override FILTER_KIND: u32 = FILTER_GRID;
 override TAPS: u32 = 3u;
 override BYTE_MAP: bool = false;
@@ -18,13 +18,21 @@ override EDGE_MASK: bool = false;
 // A virtual map (virtual_map.wgsl): texels are read through the page table
 // from the physical pool bound as `depth_map`.
 override VIRTUAL: bool = false;
+// The maps' shape (`MapShape`): how the faces project (`PROJECTION_*`),
+// whether they are cascades, whether they are warped. llvmpipe runs both
+// sides of a branch on a uniform under a lane mask: as constants, a
+// pipeline holds only its own shape's code.
+override PROJECTION: u32 = PROJECTION_PERSPECTIVE;
+override CASCADED: bool = false;
+override WARPED: bool = false;
 
 struct ShadowMap {
     // world → light clip, one per face (1 for spot/directional, 6 for point,
     // one per cascade)
     faces: array<mat4x4f, 8>,
     // xyz light position, w faces: 1, 6 (cube) or 2 (dual paraboloid, whose
-    // `faces` are the two hemispheres' view matrices)
+    // `faces` are the two hemispheres' view matrices); the shaders take the
+    // shape from `PROJECTION`
     light: vec4f,
     // x filter radius (texels), y normal offset (texels), z slope-scaled
     // bias of warped depth passes (per depth slope per pixel), w 1 when the
@@ -32,7 +40,7 @@ struct ShadowMap {
     kernel: vec4f,
     // x map size, y 1/size, z world size of a texel at unit distance
     // (perspective, paraboloid) or of any texel (orthographic),
-    // w projection: 0 perspective, 1 orthographic, 2 dual paraboloid
+    // w unused (the projection is `PROJECTION`)
     map: vec4f,
     // x light size (texels at unit depth ratio, pcss), y variable-width scale,
     // z variable-width exponent, w blocker-search radius (texels)
@@ -46,7 +54,7 @@ struct ShadowMap {
     // moments: x light-bleeding reduction, y exponent c (esm, evsm +),
     // z exponent c− (evsm), w moment bias (msm)
     moments: vec4f,
-    // x cascades (0: not cascaded), y fraction of each cascade blended into
+    // x cascades (0 when not `CASCADED`), y fraction of each cascade blended into
     // the next, z view depth where the first cascade starts
     cascade: vec4f,
     // view depth at which cascade i ends: [i / 4][i % 4]
@@ -55,8 +63,8 @@ struct ShadowMap {
     cascade_texel: array<vec4f, 2>,
     // row z of the view matrix of the camera the cascades were fitted to
     cascade_view_z: vec4f,
-    // xyz the direction the light travels, w 1 when the faces are warped
-    // (LiSPSM: the texel size varies over the map)
+    // xyz the direction the light travels, w unused (`WARPED`: the texel
+    // size varies over the map)
     warp: vec4f,
     // Warped faces store depth linear along the light, 0 nearest it:
     // dot(row, (p, 1)) — a perspective's z/w would tilt every surface and
@@ -128,18 +136,22 @@ struct DepthOut {
 
 // Linear depth in [0, 1] of a light-clip position.
 fn linear01(c: vec4f) -> f32 {
-    if sm.map.w > 0.5 {
+    if is_orthographic() || is_paraboloid() {
         return c.z; // orthographic, or the paraboloid's linear depth
     }
     return (c.w - sm.depth.x) / (sm.depth.y - sm.depth.x);
 }
 
 fn is_paraboloid() -> bool {
-    return sm.map.w > 1.5;
+    return PROJECTION == PROJECTION_PARABOLOID;
+}
+
+fn is_orthographic() -> bool {
+    return PROJECTION == PROJECTION_ORTHOGRAPHIC;
 }
 
 fn is_warped() -> bool {
-    return sm.warp.w > 0.5;
+    return WARPED;
 }
 
 // Dual-paraboloid projection (Brabec et al. 2002) of a world point for

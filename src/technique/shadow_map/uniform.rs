@@ -29,7 +29,7 @@ pub struct ShadowMapUniform {
     /// Row z of the view matrix of the camera the cascades were fitted to:
     /// a point's view depth is −dot(row, (p, 1)).
     pub cascade_view_z: Vec4,
-    /// xyz the direction the light travels, w 1 when the faces are warped.
+    /// xyz the direction the light travels, w unused (`MapShape::warped`).
     pub warp: Vec4,
     /// Warped faces: the row giving a point's stored (linear) depth.
     pub warp_depth: Vec4,

@@ -31,7 +31,7 @@ fn level_at(i: u32) -> VirtualLevel {
 // World size of one texel of `level` at world point p.
 fn level_texel_world(level: u32, p: vec3f) -> f32 {
     let t = level_at(level).texel_world;
-    if sm.map.w > 0.5 {
+    if is_orthographic() {
         return t;
     }
     return t * length(p - sm.light.xyz);
@@ -46,7 +46,7 @@ fn level_texel(level: u32, p: vec3f) -> vec4f {
     let d = p - frame.camera_pos.xyz;
     let c = sm.faces[l.view] * vec4f(d, 1.0);
     let ndc = c.xyz / select(c.w, 1e-6, abs(c.w) < 1e-6);
-    if sm.map.w > 0.5 {
+    if is_orthographic() {
         let t = vec2f(dot(vsm.axis_u, d), dot(vsm.axis_v, d)) / l.texel_world + l.eye_texel;
         return vec4f(t, ndc.z, 1.0);
     }
@@ -69,7 +69,7 @@ fn virtual_point(level: u32, g: vec3f, n: vec3f) -> VirtualPoint {
     let l = level_at(level);
     let t = level_texel(level, offset_point(g, n, level_texel_world(level, g)));
     let extent = f32(l.pages * vsm.page_texels);
-    let margin = select(0.0, sm.kernel.y + 1.0, sm.light.w > 1.5);
+    let margin = select(0.0, sm.kernel.y + 1.0, PROJECTION == PROJECTION_CUBE);
     let inside = t.w > 0.0 && all(t.xy >= vec2f(-margin)) && all(t.xy <= vec2f(extent + margin))
         && t.z >= 0.0 && t.z <= 1.0;
     return VirtualPoint(t.xy * sm.map.y, t.z, inside);
@@ -176,7 +176,7 @@ fn virtual_level_of(pixel: vec2i, p: vec3f, n: vec3f) -> u32 {
     let footprint = texel_footprint(dx, dy);
     let steps = clamp(floor(-log2(max(footprint, 1e-12))), 0.0, f32(vsm.view_levels - 1u));
     var level = base + u32(steps);
-    let clipmap = sm.map.w > 0.5;
+    let clipmap = is_orthographic();
     let reach = marked_reach();
     for (var i = 0u; i < vsm.view_levels; i++) {
         let l = level_at(level);
@@ -276,7 +276,7 @@ fn level_step(level: u32, g: vec3f, dg: vec3f) -> vec3f {
     let l = level_at(level);
     let m = sm.faces[l.view];
     let dc = m * vec4f(dg, 0.0);
-    if sm.map.w > 0.5 {
+    if is_orthographic() {
         let t = vec2f(dot(vsm.axis_u, dg), dot(vsm.axis_v, dg)) / l.texel_world;
         return vec3f(t * sm.map.y, dc.z);
     }

@@ -7,6 +7,7 @@
 //! perspective view, a point light six cube faces, each a mip chain: level l
 //! covers the whole view with `size`/2^l texels, down to one page.
 
+use super::super::pipelines::{MapProjection, MapShape};
 use super::super::setup::{self, FrustumParams};
 use crate::scene::{Aabb, Camera, Light, LightType};
 use glam::{DMat4, IVec2, Mat4, Vec2, Vec3};
@@ -201,6 +202,17 @@ impl VirtualLayout {
             far,
             page: p.page,
             table_len: n * pages * pages,
+        }
+    }
+
+    /// The shape of the views, as the shaders' constants: a clipmap is
+    /// orthographic, a point light's six views a cube; never cascaded or
+    /// warped.
+    pub fn shape(&self) -> MapShape {
+        MapShape {
+            projection: MapProjection::of(self.views.len(), self.orthographic, false),
+            cascaded: false,
+            warped: false,
         }
     }
 

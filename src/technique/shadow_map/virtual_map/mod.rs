@@ -395,7 +395,7 @@ impl ShadowMapTechnique {
                 p.virtual_size as f32,
                 1.0 / p.virtual_size as f32,
                 layout.levels[0].texel_world,
-                layout.orthographic as u32 as f32,
+                0.0,
             ),
             depth: Vec4::new(layout.near, layout.far, 0.0, 0.0),
             warp: ctx.light.direction.normalize_or_zero().extend(0.0),
@@ -410,6 +410,7 @@ impl ShadowMapTechnique {
             accumulate: false,
             edge_mask: false,
             virtual_map: true,
+            shape: layout.shape(),
         };
         // Adaptive maps refine a level per pass; a pass's pages are rendered
         // and submitted before the next pass marks (its edge test reads

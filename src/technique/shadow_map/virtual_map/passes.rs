@@ -136,8 +136,7 @@ impl ShadowMapTechnique {
                 slope_bits: c.slope_bias.to_bits(),
                 clamp_bits: 0,
                 moments: None,
-                paraboloid: false,
-                linear_depth: false,
+                shape: lookup_key.shape,
                 virtual_map: true,
             },
         );
