@@ -33,14 +33,13 @@ pub use setup::{CascadeSplit, FrustumParams, LightSetup, cube_views, light_setup
 use super::light_space::outside_clip_volume;
 use super::{Family, MaskContext, ParamValues, ShadowTechnique};
 use crate::gpu::GpuContext;
-use crate::scene::LightType;
 use crate::scene::area::area_samples;
 use anyhow::Result;
 use depth_bounds::{DepthReduction, SeenBounds};
 use edge_mask::{ChainSource, MinMaxChain};
 use glam::{Mat4, UVec4, Vec4};
 use maps::Maps;
-use pipelines::{DepthPassKey, LookupKey, MapShape, ShadowMapShared};
+use pipelines::{DepthPassKey, LookupKey, MapProjection, MapShape, ShadowMapShared};
 use std::sync::Arc;
 use uniform::{MAX_FACES, SLOTS, STRIDE, ShadowMapUniform};
 
@@ -254,7 +253,6 @@ impl ShadowTechnique for ShadowMapTechnique {
             _ => 0.0,
         };
         let setups = self.light_setups(ctx, encoder, &lights, aspect)?;
-        let paraboloid = c.omni == Omni::DualParaboloid;
         let layers = setups[0].faces.len() as u32;
         self.ensure_maps(ctx.gpu, size, layers, format, moments)?;
         let edge_mask = c.edge_masked() && c.stage == Stage::Full;
@@ -287,7 +285,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             let pack = |v: [f32; MAX_FACES]| [Vec4::from_slice(&v[..4]), Vec4::from_slice(&v[4..])];
             let base = ShadowMapUniform {
                 faces,
-                light: light.position.extend(layers as f32),
+                light: light.position.extend(0.0),
 
                 map: Vec4::new(
                     size as f32,
@@ -519,7 +517,7 @@ impl ShadowTechnique for ShadowMapTechnique {
         self.samples = lights.len();
         self.map_triangles = map_triangles;
         self.last_faces = setups.iter().flat_map(|s| s.faces.clone()).collect();
-        self.last_paraboloid = paraboloid && ctx.light.kind == LightType::Point;
+        self.last_paraboloid = shape.projection == MapProjection::Paraboloid;
         Ok(())
     }
 

@@ -30,9 +30,9 @@ struct ShadowMap {
     // world → light clip, one per face (1 for spot/directional, 6 for point,
     // one per cascade)
     faces: array<mat4x4f, 8>,
-    // xyz light position, w faces: 1, 6 (cube) or 2 (dual paraboloid, whose
-    // `faces` are the two hemispheres' view matrices); the shaders take the
-    // shape from `PROJECTION`
+    // xyz light position, w unused (the faces' layout is `PROJECTION`: one,
+    // six cube faces, or two paraboloid hemispheres whose `faces` are their
+    // view matrices)
     light: vec4f,
     // x filter radius (texels), y normal offset (texels), z slope-scaled
     // bias of warped depth passes (per depth slope per pixel), w 1 when the

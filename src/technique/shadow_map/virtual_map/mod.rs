@@ -390,7 +390,7 @@ impl ShadowMapTechnique {
         let normal_offset = c.normal_offset(ctx.light.kind);
         let base = ShadowMapUniform {
             faces,
-            light: ctx.light.position.extend(layout.views.len() as f32),
+            light: ctx.light.position.extend(0.0),
             map: Vec4::new(
                 p.virtual_size as f32,
                 1.0 / p.virtual_size as f32,
