@@ -7,10 +7,12 @@
 pub mod cache;
 pub mod helpers;
 pub mod readback;
+pub mod timestamps;
 
 pub use cache::{DeviceCache, PIPELINE_CACHE_BOUND};
 pub use helpers::*;
 pub use readback::{AsyncReadback, FrameFeedback};
+pub use timestamps::{Stamps, TimestampPairs};
 
 use anyhow::{Result, bail};
 

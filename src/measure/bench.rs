@@ -53,6 +53,8 @@ pub struct BenchRow {
     pub triangles_drawn: usize,
     pub caster_triangles: usize,
     pub shadow_resource_bytes: u64,
+    /// The techniques' counters: times (names ending in `_ms`) as the
+    /// median over the measured frames, the rest as of the last frame.
     pub counters: Vec<(String, f64)>,
     /// Frames measured (fewer than asked when `max_seconds` ran out).
     pub measured_frames: usize,
@@ -126,6 +128,8 @@ pub fn run(
             .map(|_| crate::technique::TechniqueInstance::new(gpu, choice.clone()))
             .collect::<Result<_>>()?;
         let mut timings: Vec<FrameTimings> = vec![];
+        // Per measured frame, the techniques' counters.
+        let mut frame_counters: Vec<Vec<(&'static str, f64)>> = vec![];
         let started = std::time::Instant::now();
         let mut i = 0;
         while i < warmup + frames {
@@ -143,6 +147,12 @@ pub fn run(
             let t = hf.render(gpu, scene, camera, lights, &settings)?;
             if i >= warmup {
                 timings.push(t);
+                frame_counters.push(
+                    hf.techniques
+                        .iter()
+                        .flat_map(|t| t.technique.counters())
+                        .collect(),
+                );
             }
             bar.inc(1);
             i += 1;
@@ -152,12 +162,7 @@ pub fn run(
             let v: Option<Vec<f64>> = timings.iter().map(|t| t.gpu.as_ref().map(f)).collect();
             v.map(Stat::of)
         };
-        let mut counters = vec![];
-        for t in &hf.techniques {
-            for (k, v) in t.technique.counters() {
-                counters.push((k.to_string(), v));
-            }
-        }
+        let counters = counter_summary(&frame_counters);
         rows.push(BenchRow {
             technique: label,
             frame_ms: Stat::of(timings.iter().map(|t| t.total_ms).collect()),
@@ -284,6 +289,28 @@ fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[BenchRow]) -> Strin
     s
 }
 
+/// [`BenchRow::counters`] from each measured frame's counters.
+fn counter_summary(frames: &[Vec<(&'static str, f64)>]) -> Vec<(String, f64)> {
+    let Some(last) = frames.last() else {
+        return vec![];
+    };
+    last.iter()
+        .enumerate()
+        .map(|(i, &(name, value))| {
+            let value = if name.ends_with("_ms") {
+                // The same counter of each frame (same place, same name).
+                let values = frames
+                    .iter()
+                    .filter_map(|f| f.get(i).filter(|c| c.0 == name));
+                Stat::of(values.map(|c| c.1).collect()).median
+            } else {
+                value
+            };
+            (name.to_string(), value)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -293,5 +320,22 @@ mod tests {
         let s = Stat::of((1..=101).map(f64::from).collect());
         assert_eq!((s.median, s.p5, s.p95), (51.0, 6.0, 96.0));
         assert_eq!(Stat::of(vec![]).median, 0.0);
+    }
+
+    #[test]
+    fn time_counters_are_medians_and_the_rest_the_last_frame() {
+        let frames = [
+            vec![("lookup_ms", 9.0), ("pages_rendered", 40.0)],
+            vec![("lookup_ms", 1.0), ("pages_rendered", 0.0)],
+            vec![("lookup_ms", 4.0), ("pages_rendered", 0.0)],
+        ];
+        assert_eq!(
+            counter_summary(&frames),
+            [
+                ("lookup_ms".to_string(), 4.0),
+                ("pages_rendered".to_string(), 0.0)
+            ]
+        );
+        assert!(counter_summary(&[]).is_empty());
     }
 }

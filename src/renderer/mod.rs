@@ -298,9 +298,9 @@ impl Renderer {
             Some(t) if settings.gpu_timing => Some(t.begin_frame()),
             _ => None,
         };
-        let stamp = |enc: &mut wgpu::CommandEncoder, i: u32| {
+        let stamp = |enc: &mut wgpu::CommandEncoder, pair: u32, end: bool| {
             if let Some(q) = &queries {
-                enc.write_timestamp(q, i);
+                q.stamp(enc, pair, end);
             }
         };
         let stage_wait = || -> Result<Instant> {
@@ -311,14 +311,14 @@ impl Renderer {
         };
 
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        stamp(&mut enc, 0);
+        stamp(&mut enc, timing::PREPASS, false);
         self.record_prepass(gpu, &mut enc, scene_gpu, frame, settings);
-        stamp(&mut enc, 1);
+        stamp(&mut enc, timing::PREPASS, true);
         gpu.queue.submit([enc.finish()]);
         let t1 = stage_wait()?;
 
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        stamp(&mut enc, 2);
+        stamp(&mut enc, timing::MASKS, false);
         for (i, light) in lights.iter().enumerate() {
             let ctx = MaskContext {
                 gpu,
@@ -334,7 +334,7 @@ impl Renderer {
             };
             techniques[i].technique.render_mask(&ctx, &mut enc)?;
         }
-        stamp(&mut enc, 3);
+        stamp(&mut enc, timing::MASKS, true);
         let t2 = if settings.stage_waits {
             gpu.queue.submit([enc.finish()]);
             enc = gpu.device.create_command_encoder(&Default::default());
@@ -342,9 +342,9 @@ impl Renderer {
         } else {
             Instant::now()
         };
-        stamp(&mut enc, 4);
+        stamp(&mut enc, timing::LIGHTING, false);
         self.record_lighting(gpu, &mut enc, scene, scene_gpu, frame, lights, settings);
-        stamp(&mut enc, 5);
+        stamp(&mut enc, timing::LIGHTING, true);
         if let Some(t) = self.timer.as_mut().filter(|_| settings.gpu_timing) {
             t.resolve(&mut enc);
         }

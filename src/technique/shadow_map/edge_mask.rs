@@ -12,6 +12,10 @@ use std::sync::Arc;
 
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 const WORKGROUP: u32 = 8;
+/// Map texels per side of a level-0 texel (`BLOCK` in `edge_mask.wgsl`):
+/// the kernels the mask serves span 3 texels or more, so finer levels would
+/// be built and never read.
+const BLOCK: u32 = 8;
 
 /// The reduction programs, shared per device.
 struct ChainShared {
@@ -88,7 +92,8 @@ pub enum ChainSource<'a> {
     Bytes(&'a wgpu::TextureView),
 }
 
-/// One light's min/max chain: levels from half the map's side down to 1×1.
+/// One light's min/max chain: levels from an eighth of the map's side down
+/// to 1×1.
 pub struct MinMaxChain {
     shared: Arc<ChainShared>,
     /// The map side and layers it was made for.
@@ -121,7 +126,7 @@ impl MinMaxChain {
     }
 
     fn new(gpu: &GpuContext, size: u32, layers: u32) -> Result<MinMaxChain> {
-        let sides: Vec<u32> = std::iter::successors(Some(size.div_ceil(2).max(1)), |&s| {
+        let sides: Vec<u32> = std::iter::successors(Some(size.div_ceil(BLOCK).max(1)), |&s| {
             (s > 1).then(|| s.div_ceil(2))
         })
         .collect();

@@ -13,6 +13,7 @@ pub mod config;
 mod debug;
 mod depth_bounds;
 mod edge_mask;
+mod lookup_timer;
 mod maps;
 pub mod paging_params;
 pub mod partition_params;
@@ -38,6 +39,7 @@ use anyhow::Result;
 use depth_bounds::{DepthReduction, SeenBounds};
 use edge_mask::{ChainSource, MinMaxChain};
 use glam::{Mat4, UVec4, Vec4};
+use lookup_timer::LookupTimer;
 use maps::Maps;
 use pipelines::{DepthPassKey, LookupKey, MapProjection, MapShape, ShadowMapShared};
 use std::sync::Arc;
@@ -117,6 +119,8 @@ pub struct ShadowMapTechnique {
     chain: Option<MinMaxChain>,
     /// `paging=virtual`: the pool, page table and cache across frames.
     virtual_state: Option<virtual_map::VirtualState>,
+    /// GPU time of the lookups (counter `lookup_ms`).
+    lookup_timer: LookupTimer,
 }
 
 impl ShadowMapTechnique {
@@ -143,6 +147,7 @@ impl ShadowMapTechnique {
             last_seen: None,
             chain: None,
             virtual_state: None,
+            lookup_timer: LookupTimer::default(),
         }
     }
 
@@ -397,6 +402,10 @@ impl ShadowTechnique for ShadowMapTechnique {
                 ..MapBindings::empty(shared, &self.uniforms)
             },
         );
+        let stamps = match c.stage {
+            Stage::Full => self.lookup_timer.begin(gpu, lights.len() as u32),
+            _ => None,
+        };
         let mut map_triangles = 0;
         for (si, setup) in setups.iter().enumerate() {
             for face in 0..layers {
@@ -466,6 +475,9 @@ impl ShadowTechnique for ShadowMapTechnique {
             if c.stage != Stage::Full {
                 continue;
             }
+            if let Some(s) = &stamps {
+                s.stamp(encoder, si as u32, false);
+            }
             if let Some(chain) = &self.chain {
                 chain.record(
                     gpu,
@@ -502,6 +514,13 @@ impl ShadowTechnique for ShadowMapTechnique {
             ctx.bind_frame_groups(&mut pass);
             pass.set_bind_group(crate::frame::OWN_GROUP, &lookup_group, &[slot(si, 0, 0)]);
             pass.draw(0..3, 0..1);
+            drop(pass);
+            if let Some(s) = &stamps {
+                s.stamp(encoder, si as u32, true);
+            }
+        }
+        if stamps.is_some() {
+            self.lookup_timer.resolve(encoder);
         }
         if c.stage != Stage::Full {
             // The maps alone: no lookup, a lit mask.
@@ -521,14 +540,14 @@ impl ShadowTechnique for ShadowMapTechnique {
         Ok(())
     }
 
-    fn after_frame(&mut self, _gpu: &GpuContext) -> Result<()> {
+    fn after_frame(&mut self, gpu: &GpuContext) -> Result<()> {
         if let Some(r) = &mut self.depth_reduction {
             r.after_frame();
         }
         if let Some(v) = &mut self.virtual_state {
             v.after_frame();
         }
-        Ok(())
+        self.lookup_timer.after_frame(gpu)
     }
 
     fn enable_debug(&mut self, on: bool) {
@@ -563,6 +582,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 ("virtual_levels", p.levels as f64),
                 ("refine_passes", p.refine_passes as f64),
                 ("page_feedback_ms", p.feedback_ms),
+                ("lookup_ms", self.lookup_timer.last_ms),
                 ("map_triangles", self.map_triangles as f64),
             ];
         }
@@ -574,6 +594,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     ("faces", m.layers as f64),
                     ("maps_per_face", self.samples as f64),
                     ("map_triangles", self.map_triangles as f64),
+                    ("lookup_ms", self.lookup_timer.last_ms),
                 ]
                 .into_iter()
                 .chain(self.last_seen.as_ref().map_or(vec![], |s| {
