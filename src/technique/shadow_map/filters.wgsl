@@ -5,7 +5,7 @@
 // Stored depth at a texel (nearest), from the depth map or the 8-bit map.
 fn stored(texel: vec2i, face: u32) -> f32 {
     if VIRTUAL {
-        return virtual_stored(texel, face);
+        return virtual_stored(texel, filtered_level);
     }
     let size = i32(sm.map.x);
     let t = clamp(texel, vec2i(0), vec2i(size - 1));
@@ -56,11 +56,19 @@ fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
         return textureSampleCompareLevel(depth_map, compare_sampler, uv, i32(face), z);
     }
     if VIRTUAL {
-        let v = virtual_pcf2x2(uv, face, z);
-        if v >= 0.0 {
-            return v;
+        // Four texel loads only where the taps straddle a page border: a
+        // loop, not a branch (llvmpipe runs both sides of a branch).
+        var v = virtual_pcf2x2(uv, z);
+        for (var straddles = v < 0.0; straddles; straddles = false) {
+            v = bilinear_compare(uv, face, z);
         }
+        return v;
     }
+    return bilinear_compare(uv, face, z);
+}
+
+// A 2×2 comparison filtered by hand from four texel loads.
+fn bilinear_compare(uv: vec2f, face: u32, z: f32) -> f32 {
     let p = uv * sm.map.x - 0.5;
     let b = vec2i(floor(p));
     let f = fract(p);
