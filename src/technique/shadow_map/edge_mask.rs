@@ -12,10 +12,17 @@ use std::sync::Arc;
 
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 const WORKGROUP: u32 = 8;
-/// Map texels per side of a level-0 texel (`BLOCK` in `edge_mask.wgsl`):
-/// the kernels the mask serves span 3 texels or more, so finer levels would
-/// be built and never read.
-const BLOCK: u32 = 8;
+/// log2 of the map texels per side of a level-0 texel (8): a kernel of
+/// radius 1 or more (the default is 1.5) spans 5 texels or more and reads
+/// 8-texel cells anyway; a narrower one gets a looser test, still exact.
+const BLOCK_LOG2: u32 = 3;
+const BLOCK: u32 = 1 << BLOCK_LOG2;
+
+/// The WGSL constant `CHAIN_BLOCK_LOG2` that the chain's reduction and the
+/// lookup's classification share.
+pub fn wgsl_constants() -> String {
+    format!("const CHAIN_BLOCK_LOG2: u32 = {BLOCK_LOG2}u;\n")
+}
 
 /// The reduction programs, shared per device.
 struct ChainShared {
@@ -68,7 +75,7 @@ impl ChainShared {
             device,
             "edge mask chain",
             &layout,
-            include_str!("edge_mask.wgsl"),
+            &(wgsl_constants() + include_str!("edge_mask.wgsl")),
             ["from_depth", "from_bytes", "from_level"],
         );
         ChainShared {

@@ -3,8 +3,9 @@
 // further level halves again. The lookup reads 2×2 texels of the level
 // whose texels cover the kernel's footprint and needs the full kernel only
 // where the receiver depth lies between them (a shadow edge). Level 0 reads
-// its block in one invocation: 2×2 steps would store (and dispatch) 16×
-// the texels, that the lookup never reads at a kernel of 3 texels or more.
+// its block in one invocation: levels built in 2×2 steps from the map would
+// store (and dispatch) 16× the texels, for levels that a kernel of radius 1
+// or more never reads (edge_mask.rs).
 
 @group(0) @binding(0) var source_depth: texture_depth_2d_array;
 @group(0) @binding(1) var source_values: texture_2d_array<f32>;
@@ -12,8 +13,8 @@
 // Nearest, clamped to the edge (as the lookup's taps are).
 @group(0) @binding(3) var nearest: sampler;
 
-// Map texels per side of a level-0 texel (`BLOCK` in edge_mask.rs).
-const BLOCK: u32 = 8u;
+// Map texels per side of a level-0 texel (CHAIN_BLOCK_LOG2 from edge_mask.rs).
+const BLOCK: u32 = 1u << CHAIN_BLOCK_LOG2;
 
 fn range_of(d: vec4f) -> vec2f {
     return vec2f(min(min(d.x, d.y), min(d.z, d.w)), max(max(d.x, d.y), max(d.z, d.w)));

@@ -229,18 +229,18 @@ fn blockers(uv: vec2f, face: u32, z: f32, radius_texels: f32, n: u32, phi: f32) 
 // from uv agrees on — 1 when the receiver depth range [z_lo, z_hi] is in
 // front of the least stored depth under the kernel, 0 when behind the
 // greatest — or −1 (a shadow edge: run the kernel). Reads 2×2 texels of
-// the chain level whose texels (8·2^level map texels each, edge_mask.wgsl)
+// the chain level whose texels (2^(CHAIN_BLOCK_LOG2 + level) map texels each)
 // cover the kernel's texel span, at most floor(2·reach) + 2 texels wherever
 // uv lies; so the level is the same for every pixel (a uniform mip level
 // keeps the four loads cheap).
 fn edge_class(uv: vec2f, face: u32, z_lo: f32, z_hi: f32, reach: f32) -> f32 {
-    let level = u32(max(ceil(log2(floor(2.0 * reach) + 2.0)) - 3.0, 0.0));
+    let level = u32(max(ceil(log2(floor(2.0 * reach) + 2.0)) - f32(CHAIN_BLOCK_LOG2), 0.0));
     if level >= textureNumLevels(minmax_map) {
         return -1.0;
     }
     let top = vec2f(sm.map.x - 1.0);
     let p = uv * sm.map.x;
-    let cover = f32(8u << level);
+    let cover = f32(1u << (CHAIN_BLOCK_LOG2 + level));
     let a = vec2i(clamp(floor(p - reach), vec2f(0.0), top) / cover);
     let b = vec2i(clamp(floor(p + reach), vec2f(0.0), top) / cover);
     let l = i32(face);

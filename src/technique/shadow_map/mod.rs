@@ -404,7 +404,11 @@ impl ShadowTechnique for ShadowMapTechnique {
         );
         let stamps = match c.stage {
             Stage::Full => self.lookup_timer.begin(gpu, lights.len() as u32),
-            _ => None,
+            // No lookup: no time, not an earlier stage's.
+            _ => {
+                self.lookup_timer = LookupTimer::default();
+                None
+            }
         };
         let mut map_triangles = 0;
         for (si, setup) in setups.iter().enumerate() {

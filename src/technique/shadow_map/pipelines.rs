@@ -192,8 +192,9 @@ impl ShadowMapShared {
                 crate::gpu::storage_entry(11, wgpu::ShaderStages::FRAGMENT, false),
             ],
         });
-        let constants =
-            Filter::wgsl_constants("FILTER") + &MapProjection::wgsl_constants("PROJECTION");
+        let constants = Filter::wgsl_constants("FILTER")
+            + &MapProjection::wgsl_constants("PROJECTION")
+            + &super::edge_mask::wgsl_constants();
         let module = crate::frame::technique_shader(
             device,
             "shadow map",
