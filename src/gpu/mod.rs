@@ -12,7 +12,7 @@ pub mod timestamps;
 pub use cache::{DeviceCache, PIPELINE_CACHE_BOUND};
 pub use helpers::*;
 pub use readback::{AsyncReadback, FrameFeedback};
-pub use timestamps::{Stamps, TimestampPairs};
+pub use timestamps::{SectionTimer, Stamps, TimestampPairs};
 
 use anyhow::{Result, bail};
 

@@ -108,3 +108,60 @@ impl Stamps {
         encoder.write_timestamp(&self.0, pair * 2 + end as u32);
     }
 }
+
+/// The GPU time of one stretch of each frame's work, summed over its
+/// pairs (one per light, say): a [`TimestampPairs`] made on first use and
+/// remade when the pair count changes; read a frame late, without a stall.
+pub struct SectionTimer {
+    label: &'static str,
+    pairs: Option<TimestampPairs>,
+    /// The newest frame's time whose timestamps arrived, ms.
+    pub last_ms: f64,
+}
+
+impl SectionTimer {
+    pub fn new(label: &'static str) -> SectionTimer {
+        SectionTimer {
+            label,
+            pairs: None,
+            last_ms: 0.0,
+        }
+    }
+
+    /// Starts a frame of `pairs` stretches; `None` without timestamps.
+    pub fn begin(&mut self, gpu: &GpuContext, pairs: u32) -> Option<Stamps> {
+        if !gpu.timestamps {
+            return None;
+        }
+        if self.pairs.as_ref().is_none_or(|p| p.pairs() != pairs) {
+            self.pairs = Some(TimestampPairs::new(&gpu.device, self.label, pairs));
+        }
+        self.pairs.as_mut().map(TimestampPairs::begin_frame)
+    }
+
+    /// Forgets the time: this frame has no such stretch.
+    pub fn clear(&mut self) {
+        self.pairs = None;
+        self.last_ms = 0.0;
+    }
+
+    /// After the frame's stretches are recorded, into the encoder that
+    /// holds the last of them.
+    pub fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(p) = &mut self.pairs {
+            p.resolve(encoder);
+        }
+    }
+
+    /// After the frame's submission: asks for its timestamps and takes the
+    /// newest that have arrived.
+    pub fn after_frame(&mut self, gpu: &GpuContext) -> Result<()> {
+        if let Some(p) = &mut self.pairs {
+            p.request_readback();
+            if let Some(t) = p.latest(gpu)? {
+                self.last_ms = t.iter().sum();
+            }
+        }
+        Ok(())
+    }
+}

@@ -6,10 +6,10 @@
 //! ([`Feedback`]), and widens it for the camera's motion in between.
 
 use super::partition_params::Fit;
-use crate::gpu::{FrameFeedback, GpuContext};
+use crate::gpu::{FrameFeedback, GpuContext, SectionTimer};
 use crate::technique::{Feedback, MaskContext};
 use anyhow::Result;
-use glam::{Mat4, Vec4};
+use glam::{Mat4, UVec4, Vec4};
 use std::sync::Arc;
 
 /// At most this many cascades (the uniform's split arrays).
@@ -17,8 +17,14 @@ const MAX_CASCADES: usize = 8;
 /// Result words: least and greatest depth, then 4 per cascade.
 const WORDS: usize = 2 + 4 * MAX_CASCADES;
 const RESULT_BYTES: u64 = (WORDS * 4) as u64;
-/// Pixels per workgroup along each axis: 8×8 invocations of 4×4 pixels.
-const WORKGROUP_PIXELS: u32 = 32;
+/// Pixels along each axis of the block one invocation reduces
+/// (`depth_bounds.wgsl`'s `TILE`).
+const TILE: u32 = 8;
+/// Pixels per workgroup along each axis: 8×8 invocations of `TILE`² pixels.
+const WORKGROUP_PIXELS: u32 = 8 * TILE;
+const BLOCKS_LABEL: &str = "sdsm block bounds";
+/// Bytes of one block's record (`BlockBounds`: vec2f, then vec4f at 16).
+const BLOCK_RECORD_BYTES: u64 = 32;
 
 /// A frame-late result covers this much more depth (factor on far, its
 /// inverse on near) and x/y extent (fraction of each half-extent per side).
@@ -65,6 +71,8 @@ struct ReduceParams {
     view_z: Vec4,
     light_view: Mat4,
     split: Vec4,
+    /// x, y: blocks of `TILE`² pixels along x and y.
+    blocks: UVec4,
 }
 
 /// What the reduction needs from the light set-up.
@@ -102,6 +110,7 @@ impl ReduceShared {
                 texture(1),
                 crate::gpu::uniform_entry(2, wgpu::ShaderStages::COMPUTE, false),
                 crate::gpu::storage_entry(3, wgpu::ShaderStages::COMPUTE, false),
+                crate::gpu::storage_entry(4, wgpu::ShaderStages::COMPUTE, false),
             ],
         });
         let [depth_range, cascade_bounds] = crate::gpu::compute_pipelines(
@@ -124,10 +133,17 @@ pub struct DepthReduction {
     shared: Arc<ReduceShared>,
     params: wgpu::Buffer,
     result: wgpu::Buffer,
+    /// Per block of pixels, its depth range and light-view box (grown to
+    /// the frame's size).
+    blocks: wgpu::Buffer,
     feedback: FrameFeedback,
     latest: Option<SeenBounds>,
-    /// Wall time of the last waited-for reduction (dispatch to result).
-    pub last_ms: f64,
+    /// GPU time of the reduction's passes (counter `sdsm_reduction_ms`).
+    pub timer: SectionTimer,
+    /// Wall time of the last waited-for reduction, from its submission to
+    /// the bounds on the CPU (counter `sdsm_wait_ms`): the GPU's work
+    /// before it, the passes and the read-back.
+    pub wait_ms: f64,
 }
 
 impl DepthReduction {
@@ -150,9 +166,16 @@ impl DepthReduction {
                 mapped_at_creation: false,
             }),
             result: buffer("sdsm bounds", U::STORAGE | U::COPY_SRC | U::COPY_DST),
+            blocks: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(BLOCKS_LABEL),
+                size: BLOCK_RECORD_BYTES,
+                usage: U::STORAGE,
+                mapped_at_creation: false,
+            }),
             feedback: FrameFeedback::new(&gpu.device, "sdsm bounds read-back", RESULT_BYTES),
             latest: None,
-            last_ms: 0.0,
+            timer: SectionTimer::new("sdsm reduction timestamps"),
+            wait_ms: 0.0,
         }
     }
 
@@ -171,7 +194,16 @@ impl DepthReduction {
         let wait = ctx.feedback == Feedback::ThisFrame;
         let start = std::time::Instant::now();
         let mut own = FrameFeedback::own_encoder(gpu, wait);
-        self.record(ctx, own.as_mut().unwrap_or(&mut *encoder), inputs);
+        let target = own.as_mut().unwrap_or(&mut *encoder);
+        let stamps = self.timer.begin(gpu, 1);
+        if let Some(s) = &stamps {
+            s.stamp(target, 0, false);
+        }
+        self.record(ctx, target, inputs);
+        if let Some(s) = &stamps {
+            s.stamp(target, 0, true);
+            self.timer.resolve(target);
+        }
         let bytes = self
             .feedback
             .collect(gpu, own, encoder, &self.result, RESULT_BYTES)?;
@@ -179,21 +211,35 @@ impl DepthReduction {
             self.latest = decode(&bytes, cascades as usize, samples);
         }
         if wait {
-            self.last_ms = start.elapsed().as_secs_f64() * 1e3;
+            self.wait_ms = start.elapsed().as_secs_f64() * 1e3;
             Ok(self.latest.clone())
         } else {
             Ok(self.latest.as_ref().map(SeenBounds::widened))
         }
     }
 
-    /// After the frame's submission: asks for the frame-late result.
-    pub fn after_frame(&mut self) {
+    /// After the frame's submission: asks for the frame-late result and
+    /// the passes' timestamps.
+    pub fn after_frame(&mut self, gpu: &GpuContext) -> Result<()> {
         self.feedback.after_frame();
+        self.timer.after_frame(gpu)
     }
 
     /// Records the reduction of the frame's G-buffer into `encoder`.
-    fn record(&self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder, inputs: &ReduceInputs) {
+    fn record(
+        &mut self,
+        ctx: &MaskContext,
+        encoder: &mut wgpu::CommandEncoder,
+        inputs: &ReduceInputs,
+    ) {
         let gpu = ctx.gpu;
+        let (bx, by) = (
+            ctx.frame.width().div_ceil(TILE),
+            ctx.frame.height().div_ceil(TILE),
+        );
+        let block_bytes = (bx * by) as u64 * BLOCK_RECORD_BYTES;
+        crate::gpu::grow_buffer(&gpu.device, &mut self.blocks, block_bytes, BLOCKS_LABEL);
+        let blocks = &self.blocks;
         let params = ReduceParams {
             view_z: ctx.fit_camera.view().row(2),
             light_view: inputs.light_view,
@@ -203,6 +249,7 @@ impl DepthReduction {
                 ctx.fit_camera.near,
                 inputs.far_limit,
             ),
+            blocks: UVec4::new(bx, by, 0, 0),
         };
         gpu.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
@@ -235,6 +282,10 @@ impl DepthReduction {
                 wgpu::BindGroupEntry {
                     binding: 3,
                     resource: self.result.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: blocks.as_entire_binding(),
                 },
             ],
         });

@@ -2,8 +2,12 @@
 // G-buffer: the least and greatest view depth of the pixels that receive
 // shadows (`depth_range`), then, with the cascade splits those depths give,
 // each cascade's light-view x/y bounds over the pixels it shades
-// (`cascade_bounds`). Workgroups reduce in shared memory, then one
-// invocation merges into the result with atomics on order-preserving bits.
+// (`cascade_bounds`). Each invocation reduces a block of pixels and keeps
+// the block's depth range and light-view box in `blocks`, so that the
+// second pass reads one record per block and goes back to the pixels only
+// for blocks that cross a split. Workgroups reduce in shared memory, then
+// one invocation merges into the result with atomics on order-preserving
+// bits.
 
 struct ReduceParams {
     // Row z of the fitted camera's view matrix: a point's view depth is
@@ -13,6 +17,9 @@ struct ReduceParams {
     light_view: mat4x4f,
     // x cascade count, y split λ, z camera near, w the farthest split allowed.
     split: vec4f,
+    // x, y: blocks of TILE×TILE pixels along x and y (the frame's, rounded
+    // up); z, w unused.
+    blocks: vec4u,
 };
 
 @group(0) @binding(0) var positions: texture_2d<f32>;
@@ -21,6 +28,15 @@ struct ReduceParams {
 // [0] least depth, [1] greatest depth, then per cascade i at 2 + 4i: least
 // x, least y, greatest x, greatest y — all as `ordered` bits.
 @group(0) @binding(3) var<storage, read_write> bounds: array<atomic<u32>>;
+// Per block of TILE×TILE pixels, row-major over the dispatch: its least and
+// greatest view depth (FAR_AWAY and 0 for a block that receives nothing),
+// then its light-view box (least x, y; greatest x, y).
+@group(0) @binding(4) var<storage, read_write> blocks: array<BlockBounds>;
+
+struct BlockBounds {
+    depth: vec2f,
+    light_box: vec4f,
+};
 
 const MAX_CASCADES: u32 = 8u;
 const EMPTY_LOW: u32 = 0xffffffffu;
@@ -53,9 +69,14 @@ fn seen_point(px: vec2u) -> vec4f {
 var<workgroup> group_bounds: array<atomic<u32>, 32>;
 
 // Each invocation reduces a TILE×TILE block of pixels in registers, so
-// that a workgroup of 8×8 invocations makes 64 shared atomics for 32×32
-// pixels, and one global atomic per value.
-const TILE: u32 = 4u;
+// that a workgroup of 8×8 invocations makes 64 shared atomics for 64×64
+// pixels, and one global atomic per value (depth_bounds.rs's `TILE`).
+const TILE: u32 = 8u;
+
+// The record of the block of invocation `id`.
+fn block_index(id: vec2u) -> u32 {
+    return id.y * params.blocks.x + id.x;
+}
 
 @compute @workgroup_size(8, 8)
 fn depth_range(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) li: u32) {
@@ -63,14 +84,23 @@ fn depth_range(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocati
         atomicStore(&group_bounds[li], select(0u, EMPTY_LOW, li == 0u));
     }
     workgroupBarrier();
-    var low = 3.0e38;
+    let light_x = light_row(0u);
+    let light_y = light_row(1u);
+    var low = FAR_AWAY;
     var high = 0.0;
+    var box_low = vec2f(FAR_AWAY);
+    var box_high = vec2f(-FAR_AWAY);
     for (var k = 0u; k < TILE * TILE; k++) {
-        let d = seen_point(id.xy * TILE + vec2u(k % TILE, k / TILE)).w;
-        if d > 0.0 {
-            low = min(low, d);
-            high = max(high, d);
-        }
+        let seen = seen_point(id.xy * TILE + vec2u(k % TILE, k / TILE));
+        let receives = seen.w > 0.0;
+        let l = light_xy(seen, light_x, light_y);
+        low = select(low, min(low, seen.w), receives);
+        high = select(high, max(high, seen.w), receives);
+        box_low = select(box_low, min(box_low, l), receives);
+        box_high = select(box_high, max(box_high, l), receives);
+    }
+    if all(id.xy < params.blocks.xy) {
+        blocks[block_index(id.xy)] = BlockBounds(vec2f(low, high), vec4f(box_low, box_high));
     }
     if high > 0.0 {
         atomicMin(&group_bounds[0], ordered(low));
@@ -84,6 +114,12 @@ fn depth_range(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocati
             atomicMax(&bounds[1], atomicLoad(&group_bounds[1]));
         }
     }
+}
+
+// Row `i` of the light's view.
+fn light_row(i: u32) -> vec4f {
+    let m = params.light_view;
+    return vec4f(m[0][i], m[1][i], m[2][i], m[3][i]);
 }
 
 // Far end of cascade i between `near` and `far`: z_{i+1} of
@@ -110,6 +146,17 @@ fn merge_box(cascade: u32, low: vec2f, high: vec2f) {
 
 const FAR_AWAY: f32 = 3.0e38;
 
+// The cascade of view depth `d` among ends `e0`…`e6`.
+fn cascade_at(d: f32, e0: f32, e1: f32, e2: f32, e3: f32, e4: f32, e5: f32, e6: f32) -> u32 {
+    return u32(d > e0) + u32(d > e1) + u32(d > e2) + u32(d > e3) + u32(d > e4) + u32(d > e5) + u32(d > e6);
+}
+
+// A seen point's light-view x and y, from rows x and y of the light's view.
+fn light_xy(seen: vec4f, light_x: vec4f, light_y: vec4f) -> vec2f {
+    let p = vec4f(seen.xyz, 1.0);
+    return vec2f(dot(light_x, p), dot(light_y, p));
+}
+
 @compute @workgroup_size(8, 8)
 fn cascade_bounds(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) li: u32) {
     let count = min(u32(params.split.x), MAX_CASCADES);
@@ -121,9 +168,6 @@ fn cascade_bounds(@builtin(global_invocation_id) id: vec3u, @builtin(local_invoc
     let seen_low = atomicLoad(&bounds[0]);
     let near = max(from_ordered(seen_low), params.split.z);
     let far = max(min(from_ordered(atomicLoad(&bounds[1])), params.split.w), near * 1.01);
-    // Rows x and y of the light's view.
-    let light_x = vec4f(params.light_view[0].x, params.light_view[1].x, params.light_view[2].x, params.light_view[3].x);
-    let light_y = vec4f(params.light_view[0].y, params.light_view[1].y, params.light_view[2].y, params.light_view[3].y);
     // Where each cascade but the last ends (one variable each: an indexed
     // local array costs lavapipe more than the rest of the loop).
     let e0 = split_end(0u, count, near, far);
@@ -133,33 +177,36 @@ fn cascade_bounds(@builtin(global_invocation_id) id: vec3u, @builtin(local_invoc
     let e4 = split_end(4u, count, near, far);
     let e5 = split_end(5u, count, near, far);
     let e6 = split_end(6u, count, near, far);
-    // The block's pixels mostly share a cascade: one box per run of a
-    // cascade, merged when the cascade changes and at the end.
-    var current = MAX_CASCADES;
-    var low = vec2f(FAR_AWAY);
-    var high = vec2f(-FAR_AWAY);
-    for (var k = 0u; k < TILE * TILE; k++) {
-        let px = id.xy * TILE + vec2u(k % TILE, k / TILE);
-        let seen = seen_point(px);
-        let d = seen.w;
-        if d > 0.0 {
-            let cascade = u32(d > e0) + u32(d > e1) + u32(d > e2) + u32(d > e3) + u32(d > e4) + u32(d > e5) + u32(d > e6);
-            if cascade != current {
-                if current < MAX_CASCADES {
-                    merge_box(current, low, high);
-                }
-                current = cascade;
-                low = vec2f(FAR_AWAY);
-                high = vec2f(-FAR_AWAY);
-            }
-            let p = vec4f(seen.xyz, 1.0);
-            let l = vec2f(dot(light_x, p), dot(light_y, p));
-            low = min(low, l);
-            high = max(high, l);
-        }
+    // A block's pixels mostly share a cascade: its record's box is merged
+    // whole. A block across a split (rare) goes back to its pixels for a
+    // box per cascade, in a one-trip loop, which llvmpipe skips when no lane
+    // of its SIMD group needs it (a branch runs under a lane mask whichever
+    // way it goes).
+    let inside = all(id.xy < params.blocks.xy);
+    let record = blocks[select(0u, block_index(id.xy), inside)];
+    let receives = inside && record.depth.y > 0.0;
+    let first = cascade_at(record.depth.x, e0, e1, e2, e3, e4, e5, e6);
+    let last = cascade_at(record.depth.y, e0, e1, e2, e3, e4, e5, e6);
+    if receives && first == last {
+        merge_box(first, record.light_box.xy, record.light_box.zw);
     }
-    if current < MAX_CASCADES {
-        merge_box(current, low, high);
+    let light_x = light_row(0u);
+    let light_y = light_row(1u);
+    for (var across = receives && first < last; across; across = false) {
+        for (var c = first; c <= last; c++) {
+            var low = vec2f(FAR_AWAY);
+            var high = vec2f(-FAR_AWAY);
+            for (var k = 0u; k < TILE * TILE; k++) {
+                let seen = seen_point(id.xy * TILE + vec2u(k % TILE, k / TILE));
+                let l = light_xy(seen, light_x, light_y);
+                let mine = seen.w > 0.0 && cascade_at(seen.w, e0, e1, e2, e3, e4, e5, e6) == c;
+                low = select(low, min(low, l), mine);
+                high = select(high, max(high, l), mine);
+            }
+            if low.x <= high.x {
+                merge_box(c, low, high);
+            }
+        }
     }
     workgroupBarrier();
     if li < 4u * count && seen_low != EMPTY_LOW {

@@ -13,7 +13,6 @@ pub mod config;
 mod debug;
 mod depth_bounds;
 mod edge_mask;
-mod lookup_timer;
 mod maps;
 pub mod paging_params;
 pub mod partition_params;
@@ -33,13 +32,12 @@ pub use setup::{CascadeSplit, FrustumParams, LightSetup, cube_views, light_setup
 
 use super::light_space::outside_clip_volume;
 use super::{Family, MaskContext, ParamValues, ShadowTechnique};
-use crate::gpu::GpuContext;
+use crate::gpu::{GpuContext, SectionTimer};
 use crate::scene::area::area_samples;
 use anyhow::Result;
 use depth_bounds::{DepthReduction, SeenBounds};
 use edge_mask::{ChainSource, MinMaxChain};
 use glam::{Mat4, UVec4, Vec4};
-use lookup_timer::LookupTimer;
 use maps::Maps;
 use pipelines::{DepthPassKey, LookupKey, MapProjection, MapShape, ShadowMapShared};
 use std::sync::Arc;
@@ -119,8 +117,11 @@ pub struct ShadowMapTechnique {
     chain: Option<MinMaxChain>,
     /// `paging=virtual`: the pool, page table and cache across frames.
     virtual_state: Option<virtual_map::VirtualState>,
-    /// GPU time of the lookups (counter `lookup_ms`).
-    lookup_timer: LookupTimer,
+    /// Counter `lookup_ms`: GPU time of the screen-space lookup of each
+    /// map sample, with the edge mask's min/max chain (part of the
+    /// lookup's cost), not the depth passes — the time the edge mask and the
+    /// virtual page table are meant to save.
+    lookup_timer: SectionTimer,
 }
 
 impl ShadowMapTechnique {
@@ -147,7 +148,7 @@ impl ShadowMapTechnique {
             last_seen: None,
             chain: None,
             virtual_state: None,
-            lookup_timer: LookupTimer::default(),
+            lookup_timer: SectionTimer::new("shadow map lookup timestamps"),
         }
     }
 
@@ -406,7 +407,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             Stage::Full => self.lookup_timer.begin(gpu, lights.len() as u32),
             // No lookup: no time, not an earlier stage's.
             _ => {
-                self.lookup_timer = LookupTimer::default();
+                self.lookup_timer.clear();
                 None
             }
         };
@@ -546,7 +547,7 @@ impl ShadowTechnique for ShadowMapTechnique {
 
     fn after_frame(&mut self, gpu: &GpuContext) -> Result<()> {
         if let Some(r) = &mut self.depth_reduction {
-            r.after_frame();
+            r.after_frame(gpu)?;
         }
         if let Some(v) = &mut self.virtual_state {
             v.after_frame();
@@ -607,7 +608,13 @@ impl ShadowTechnique for ShadowMapTechnique {
                         ("sdsm_far", s.far as f64),
                         (
                             "sdsm_reduction_ms",
-                            self.depth_reduction.as_ref().map_or(0.0, |r| r.last_ms),
+                            self.depth_reduction
+                                .as_ref()
+                                .map_or(0.0, |r| r.timer.last_ms),
+                        ),
+                        (
+                            "sdsm_wait_ms",
+                            self.depth_reduction.as_ref().map_or(0.0, |r| r.wait_ms),
                         ),
                     ]
                 }))
