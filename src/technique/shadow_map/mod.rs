@@ -550,7 +550,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             r.after_frame(gpu)?;
         }
         if let Some(v) = &mut self.virtual_state {
-            v.after_frame();
+            v.after_frame(gpu)?;
         }
         self.lookup_timer.after_frame(gpu)
     }
@@ -587,6 +587,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 ("virtual_levels", p.levels as f64),
                 ("refine_passes", p.refine_passes as f64),
                 ("page_feedback_ms", p.feedback_ms),
+                ("page_marking_ms", v.marking_ms()),
                 ("lookup_ms", self.lookup_timer.last_ms),
                 ("map_triangles", self.map_triangles as f64),
             ];

@@ -18,16 +18,19 @@ var<private> virtual_texel_world: f32 = 1.0;
 // storage read per tap costs llvmpipe more than the taps).
 var<private> filtered_level: VirtualLevel;
 
-// Level i's entry of the levels buffer. Read where needed: a cache of the
-// last one in private variables behind a branch measured 1.6× slower on
-// llvmpipe, which runs the read under a lane mask whatever the branch.
+// Level i's entry of the levels buffer. Read once per level visited and
+// passed on: each read is a gather across llvmpipe's lanes, and reading it
+// in every helper made the marking pass's level search cost more than all
+// the rest of it. (A cache of the last one in private variables behind a
+// branch measured 1.6× slower: llvmpipe runs the read under a lane mask
+// whatever the branch.)
 fn level_at(i: u32) -> VirtualLevel {
     return vsm.levels[i];
 }
 
-// World size of one texel of `level` at world point p.
-fn level_texel_world(level: u32, p: vec3f) -> f32 {
-    let t = level_at(level).texel_world;
+// World size of one texel of level `l` at world point p.
+fn level_texel_world(l: VirtualLevel, p: vec3f) -> f32 {
+    let t = l.texel_world;
     if is_orthographic() {
         return t;
     }
@@ -38,15 +41,16 @@ fn level_texel_world(level: u32, p: vec3f) -> f32 {
 // depth. A clipmap's are taken relative to the camera (a fine level's texel
 // is far below the float precision of uv over the whole square); the
 // views' matrices take points relative to the camera too.
-fn level_texel(level: u32, p: vec3f) -> vec4f {
-    let l = level_at(level);
+fn level_texel(l: VirtualLevel, p: vec3f) -> vec4f {
     let d = p - frame.camera_pos.xyz;
+    if is_orthographic() {
+        // A clipmap has one view, 0, with w = 1: a constant index, where
+        // `l.view` would make each lane gather its own matrix.
+        let t = vec2f(dot(vsm.axis_u, d), dot(vsm.axis_v, d)) / l.texel_world + l.eye_texel;
+        return vec4f(t, (sm.faces[0] * vec4f(d, 1.0)).z, 1.0);
+    }
     let c = sm.faces[l.view] * vec4f(d, 1.0);
     let ndc = c.xyz / select(c.w, 1e-6, abs(c.w) < 1e-6);
-    if is_orthographic() {
-        let t = vec2f(dot(vsm.axis_u, d), dot(vsm.axis_v, d)) / l.texel_world + l.eye_texel;
-        return vec4f(t, ndc.z, 1.0);
-    }
     return vec4f((vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) - l.origin) / l.texel, ndc.z, c.w);
 }
 
@@ -62,9 +66,8 @@ struct VirtualPoint {
 // (`sm.kernel.y` texels of the level) outside the cube face whose
 // direction holds the G-buffer point — at a coarse level a visible band
 // along the seams — and reads the face's border texels there.
-fn virtual_point(level: u32, g: vec3f, n: vec3f) -> VirtualPoint {
-    let l = level_at(level);
-    let t = level_texel(level, offset_point(g, n, level_texel_world(level, g)));
+fn virtual_point(l: VirtualLevel, g: vec3f, n: vec3f) -> VirtualPoint {
+    let t = level_texel(l, offset_point(g, n, level_texel_world(l, g)));
     let extent = f32(l.pages * vsm.page_texels);
     let margin = select(0.0, sm.kernel.y + 1.0, PROJECTION == PROJECTION_CUBE);
     let inside = t.w > 0.0 && all(t.xy >= vec2f(-margin)) && all(t.xy <= vec2f(extent + margin))
@@ -72,13 +75,9 @@ fn virtual_point(level: u32, g: vec3f, n: vec3f) -> VirtualPoint {
     return VirtualPoint(t.xy * sm.map.y, t.z, inside);
 }
 
-// The page-table entry of window page `page` of `level` (absolute page
+// The page-table entry of window page `page` of level `l` (absolute page
 // indices wrap around the window: a clipmap level that moves with the
 // camera keeps the entries of the pages it still covers).
-fn virtual_entry(level: u32, page: vec2i) -> u32 {
-    return entry_in(level_at(level), page);
-}
-
 fn entry_in(l: VirtualLevel, page: vec2i) -> u32 {
     // Windows, pages and the pool's rows are powers of two: masks and
     // shifts instead of integer division (scalar on SIMD CPUs).
@@ -86,10 +85,10 @@ fn entry_in(l: VirtualLevel, page: vec2i) -> u32 {
     return l.table + u32(w.y) * l.pages + u32(w.x);
 }
 
-// The window page holding texel t of `level` (clamped to the window).
-fn virtual_page_of(level: u32, t: vec2f) -> vec2i {
+// The window page holding texel t of level `l` (clamped to the window).
+fn virtual_page_of(l: VirtualLevel, t: vec2f) -> vec2i {
     let size = f32(vsm.page_texels);
-    let extent = f32(level_at(level).pages) * size;
+    let extent = f32(l.pages) * size;
     return vec2i(floor(clamp(t, vec2f(0.0), vec2f(extent - 1.0)) / size));
 }
 
@@ -144,7 +143,7 @@ fn virtual_stored(t: vec2i, l: VirtualLevel) -> f32 {
 // Texel offset per pixel step `step` at `pixel`, toward the neighbour
 // nearer to p on a receiver (the other one may lie across an edge); 0
 // when neither is a receiver.
-fn neighbour_delta(level: u32, pixel: vec2i, p: vec3f, step: vec2i) -> vec2f {
+fn neighbour_delta(l: VirtualLevel, pixel: vec2i, p: vec3f, step: vec2i) -> vec2f {
     // A neighbour outside the frame counts as no receiver.
     let top = vec2i(frame.size.xy) - 1;
     let pa = pixel + step;
@@ -162,7 +161,7 @@ fn neighbour_delta(level: u32, pixel: vec2i, p: vec3f, step: vec2i) -> vec2f {
     if q.w < 0.5 {
         return vec2f(0.0);
     }
-    let d = level_texel(level, q.xyz).xy - level_texel(level, p).xy;
+    let d = level_texel(l, q.xyz).xy - level_texel(l, p).xy;
     return select(d, -d, use_b);
 }
 
@@ -171,16 +170,21 @@ fn neighbour_delta(level: u32, pixel: vec2i, p: vec3f, step: vec2i) -> vec2f {
 // for a clipmap, moved up until the window holds the whole kernel.
 fn virtual_level_of(pixel: vec2i, p: vec3f, n: vec3f) -> u32 {
     let base = face_of(p) * vsm.view_levels;
-    let dx = neighbour_delta(base, pixel, p, vec2i(1, 0));
-    let dy = neighbour_delta(base, pixel, p, vec2i(0, 1));
+    let base_level = level_at(base);
+    let dx = neighbour_delta(base_level, pixel, p, vec2i(1, 0));
+    let dy = neighbour_delta(base_level, pixel, p, vec2i(0, 1));
     let footprint = texel_footprint(dx, dy);
     let steps = clamp(floor(-log2(max(footprint, 1e-12))), 0.0, f32(vsm.view_levels - 1u));
     var level = base + u32(steps);
     let clipmap = is_orthographic();
     let reach = marked_reach();
+    // The walk ends at the view's coarsest level (its own parent) at the
+    // latest, so `inside` is always the level returned.
+    var inside = false;
     for (var i = 0u; i < vsm.view_levels; i++) {
         let l = level_at(level);
-        let vp = virtual_point(level, p, n);
+        let vp = virtual_point(l, p, n);
+        inside = vp.inside;
         let t = vp.uv * sm.map.x;
         let extent = f32(l.pages * vsm.page_texels);
         let holds = !clipmap || (all(t >= vec2f(reach)) && all(t <= vec2f(extent - reach)));
@@ -189,10 +193,7 @@ fn virtual_level_of(pixel: vec2i, p: vec3f, n: vec3f) -> u32 {
         }
         level = l.parent;
     }
-    if !virtual_point(level, p, n).inside {
-        return NO_LEVEL;
-    }
-    return level;
+    return select(NO_LEVEL, level, inside);
 }
 
 // Texels around a pixel's lookup point whose pages are marked: the
@@ -201,65 +202,76 @@ fn marked_reach() -> f32 {
     return kernel_reach() + 0.5;
 }
 
-// Sets the bit of window page `page` of `level` (a plain read first: most
+// Sets the bit of window page `page` of level `l` (a plain read first: most
 // pixels find their pages already marked, and a read is cheaper than an
-// atomic write).
-fn mark_page(level: u32, page: vec2i) {
-    let e = virtual_entry(level, page);
+// atomic write). The write sits in a one-trip loop, which llvmpipe skips
+// when no lane of its SIMD group needs it; a branch would run it under a
+// lane mask whichever way it went.
+fn mark_page(l: VirtualLevel, page: vec2i) {
+    let e = entry_in(l, page);
     let bit = 1u << (e % 32u);
-    if (atomicLoad(&vsm_marks[e / 32u]) & bit) == 0u {
+    for (var unmarked = (atomicLoad(&vsm_marks[e / 32u]) & bit) == 0u; unmarked; unmarked = false) {
         atomicOr(&vsm_marks[e / 32u], bit);
     }
 }
 
-// Marks the pages a kernel around texel t of `level` reads: the corners of
-// its reach, one page or two or four across borders.
-fn mark_kernel(level: u32, t: vec2f) {
+// Marks the pages a kernel around texel t of level `l` reads: the corners of
+// its reach, one page or two or four across borders (those in a one-trip
+// loop, as in `mark_page`: most kernels lie in one page).
+fn mark_kernel(l: VirtualLevel, t: vec2f) {
     let r = marked_reach();
-    let lo = virtual_page_of(level, t - vec2f(r));
-    let hi = virtual_page_of(level, t + vec2f(r));
-    mark_page(level, lo);
-    if hi.x != lo.x {
-        mark_page(level, vec2i(hi.x, lo.y));
-    }
-    if hi.y != lo.y {
-        mark_page(level, vec2i(lo.x, hi.y));
-    }
-    if any(hi != lo) {
-        mark_page(level, hi);
+    let lo = virtual_page_of(l, t - vec2f(r));
+    let hi = virtual_page_of(l, t + vec2f(r));
+    mark_page(l, lo);
+    for (var across = any(hi != lo); across; across = false) {
+        if hi.x != lo.x {
+            mark_page(l, vec2i(hi.x, lo.y));
+        }
+        if hi.y != lo.y {
+            mark_page(l, vec2i(lo.x, hi.y));
+        }
+        mark_page(l, hi);
     }
 }
 
-// Whether every page a kernel around texel t of `level` reads is resident
-// (one table read where the kernel lies in one page, as it mostly does).
-fn kernel_resident(level: u32, t: vec2f) -> bool {
+// Marks the pages the kernel of G-buffer point g (normal n) reads in
+// `level`.
+fn mark_point(level: u32, g: vec3f, n: vec3f) {
+    let l = level_at(level);
+    mark_kernel(l, virtual_point(l, g, n).uv * sm.map.x);
+}
+
+// Whether every page a kernel around texel t of level `l` reads is
+// resident (one table read where the kernel lies in one page, as it mostly
+// does).
+fn kernel_resident(l: VirtualLevel, t: vec2f) -> bool {
     let r = marked_reach();
-    let lo = virtual_page_of(level, t - vec2f(r));
-    let hi = virtual_page_of(level, t + vec2f(r));
-    let resident = vsm_table[virtual_entry(level, lo)] != 0u;
+    let lo = virtual_page_of(l, t - vec2f(r));
+    let hi = virtual_page_of(l, t + vec2f(r));
+    let resident = vsm_table[entry_in(l, lo)] != 0u;
     if all(lo == hi) || !resident {
         return resident;
     }
-    return vsm_table[virtual_entry(level, vec2i(hi.x, lo.y))] != 0u
-        && vsm_table[virtual_entry(level, vec2i(lo.x, hi.y))] != 0u
-        && vsm_table[virtual_entry(level, hi)] != 0u;
+    return vsm_table[entry_in(l, vec2i(hi.x, lo.y))] != 0u
+        && vsm_table[entry_in(l, vec2i(lo.x, hi.y))] != 0u
+        && vsm_table[entry_in(l, hi)] != 0u;
 }
 
 // The finest level from `level` up (toward its view's coarsest) where the
 // point of G-buffer point g (normal n) is inside the window and every page
 // its kernel reads is resident; NO_LEVEL where none is (lit).
 fn resident_level(level: u32, g: vec3f, n: vec3f) -> u32 {
-    var l = level;
+    var index = level;
     for (var i = 0u; i < vsm.view_levels; i++) {
+        let l = level_at(index);
         let q = virtual_point(l, g, n);
         if q.inside && kernel_resident(l, q.uv * sm.map.x) {
-            return l;
+            return index;
         }
-        let parent = level_at(l).parent;
-        if parent == l {
+        if l.parent == index {
             break;
         }
-        l = parent;
+        index = l.parent;
     }
     return NO_LEVEL;
 }
@@ -299,7 +311,8 @@ fn level_gradient(level: u32, g: vec3f, gx: vec3f, gy: vec3f) -> vec2f {
 // one side of the receiver, compared along the receiver's plane
 // (`gradient`, d(depth)/d(uv) in this level) as the filters' taps are.
 fn adaptive_edge(level: u32, g: vec3f, n: vec3f, gradient: vec2f) -> bool {
-    let q = virtual_point(level, g, n);
+    let l = level_at(level);
+    let q = virtual_point(l, g, n);
     let t = q.uv * sm.map.x;
     let r = marked_reach() + 1.0;
     let lo = floor(t - vec2f(r));
@@ -315,7 +328,6 @@ fn adaptive_edge(level: u32, g: vec3f, n: vec3f, gradient: vec2f) -> bool {
     let first = vec2i(lo);
     let last = first + vec2i(i32(f32(count - 1u) * stride));
     let size = i32(vsm.page_texels);
-    let l = level_at(level);
     let extent = i32(l.pages) * size;
     let one_page = all(first >= vec2i(0)) && all(last < vec2i(extent))
         && all((first >> vec2u(countTrailingZeros(vsm.page_texels))) == (last >> vec2u(countTrailingZeros(vsm.page_texels))));
@@ -352,14 +364,12 @@ fn adaptive_edge(level: u32, g: vec3f, n: vec3f, gradient: vec2f) -> bool {
 fn adaptive_mark(need: u32, g: vec3f, n: vec3f, gx: vec3f, gy: vec3f) {
     let have = resident_level(need, g, n);
     if have == NO_LEVEL {
-        let root = root_level(need);
-        mark_kernel(root, virtual_point(root, g, n).uv * sm.map.x);
+        mark_point(root_level(need), g, n);
         return;
     }
-    mark_kernel(have, virtual_point(have, g, n).uv * sm.map.x);
+    mark_point(have, g, n);
     if have != need && adaptive_edge(have, g, n, level_gradient(have, g, gx, gy)) {
-        let finer = have - 1u;
-        mark_kernel(finer, virtual_point(finer, g, n).uv * sm.map.x);
+        mark_point(have - 1u, g, n);
     }
 }
 
@@ -398,7 +408,7 @@ fn marking_pixel(frag: vec4f) -> MarkingPixel {
 fn fs_virtual_mark(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let p = marking_pixel(frag);
     if p.level != NO_LEVEL {
-        mark_kernel(p.level, virtual_point(p.level, p.g.xyz, p.n).uv * sm.map.x);
+        mark_point(p.level, p.g.xyz, p.n);
     }
     return vec4f(1.0);
 }
@@ -422,7 +432,7 @@ fn fs_adaptive_mark(@builtin(position) frag: vec4f) -> @location(0) vec4f {
 fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f) -> f32 {
     let marked = vsm_pixel_level[pixel_index(vec2i(frag))];
     let first = select(marked, 0u, marked == NO_LEVEL);
-    let vp = virtual_point(first, g.xyz, n);
+    let vp = virtual_point(level_at(first), g.xyz, n);
     // Derivatives first, in uniform control flow.
     let gradient = receiver_plane(vec3f(vp.uv, vp.z));
     if marked == NO_LEVEL || g.w < 0.5 {
@@ -432,10 +442,10 @@ fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f) -> f32 {
     if level == NO_LEVEL {
         return 1.0;
     }
-    let q = virtual_point(level, g.xyz, n);
-    let scale = exp2(f32(level - first));
-    virtual_texel_world = level_texel_world(level, g.xyz);
     filtered_level = level_at(level);
+    let q = virtual_point(filtered_level, g.xyz, n);
+    let scale = exp2(f32(level - first));
+    virtual_texel_world = level_texel_world(filtered_level, g.xyz);
     return filtered(level, Projected(vec4f(0.0, 0.0, q.z, 1.0), q.uv, q.z, gradient * scale, q.inside), frag);
 }
 
@@ -449,7 +459,7 @@ fn virtual_debug_frame(frag: vec4f) -> DebugFrame {
     let first = select(marked, 0u, marked == NO_LEVEL);
     let found = resident_level(first, g.xyz, n);
     let level = select(found, first, found == NO_LEVEL);
-    let vp = virtual_point(level, g.xyz, n);
+    let vp = virtual_point(level_at(level), g.xyz, n);
     let texel = vp.uv * sm.map.x;
     let pixels_per_texel = texel_footprint(dpdx(texel), dpdy(texel));
     let texels_per_pixel = max(length(dpdx(texel)), length(dpdy(texel)));

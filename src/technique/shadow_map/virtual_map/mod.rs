@@ -27,7 +27,7 @@ use super::pipelines::LookupKey;
 use super::setup::FrustumParams;
 use super::uniform::{MAX_FACES, STRIDE, ShadowMapUniform};
 use super::{CullFace, ShadowMapTechnique};
-use crate::gpu::{FrameFeedback, GpuContext};
+use crate::gpu::{FrameFeedback, GpuContext, SectionTimer};
 use crate::scene::Aabb;
 use crate::technique::light_space::outside_clip_volume;
 use crate::technique::{DebugImage, Feedback, MaskContext};
@@ -99,6 +99,9 @@ pub struct VirtualState {
     marks: wgpu::Buffer,
     /// The marks read back.
     feedback: FrameFeedback,
+    /// GPU time of the frame's first marking pass (counter
+    /// `page_marking_ms`).
+    mark_timer: SectionTimer,
     /// Adaptive maps without waiting: the marks of an earlier frame, for
     /// the next frame's allocation.
     carried_marks: Option<Vec<u32>>,
@@ -137,6 +140,7 @@ impl VirtualState {
                 U::STORAGE | U::COPY_SRC | U::COPY_DST,
             ),
             feedback: FrameFeedback::new(&gpu.device, "virtual map marks read-back", 16),
+            mark_timer: SectionTimer::new("virtual map marking timestamps"),
             carried_marks: None,
             table: buffer(gpu, "virtual map page table", 16, U::STORAGE | U::COPY_DST),
             levels: buffer(gpu, "virtual map levels", 16, U::STORAGE | U::COPY_DST),
@@ -155,9 +159,17 @@ impl VirtualState {
         }
     }
 
-    /// After the frame's submission: asks for the frame-late marks.
-    pub fn after_frame(&mut self) {
+    /// The GPU time of the frame's first marking pass whose timestamps
+    /// arrived, ms.
+    pub fn marking_ms(&self) -> f64 {
+        self.mark_timer.last_ms
+    }
+
+    /// After the frame's submission: asks for the frame-late marks and the
+    /// marking pass's timestamps.
+    pub fn after_frame(&mut self, gpu: &GpuContext) -> Result<()> {
         self.feedback.after_frame();
+        self.mark_timer.after_frame(gpu)
     }
 
     /// The page table of each view as an image: its levels side by side,
@@ -428,7 +440,9 @@ impl ShadowMapTechnique {
                 state.carried_marks.take().unwrap_or_default()
             } else {
                 let start = std::time::Instant::now();
-                let marks = self.mark_pages(ctx, encoder, state, &base, lookup_key, words, wait)?;
+                let first = passes == 1;
+                let marks =
+                    self.mark_pages(ctx, encoder, state, &base, lookup_key, words, wait, first)?;
                 feedback_ms += start.elapsed().as_secs_f64() * 1e3;
                 marks.unwrap_or_default()
             };
@@ -480,7 +494,7 @@ impl ShadowMapTechnique {
         if refine && !wait {
             let start = std::time::Instant::now();
             state.carried_marks =
-                self.mark_pages(ctx, encoder, state, &base, lookup_key, words, false)?;
+                self.mark_pages(ctx, encoder, state, &base, lookup_key, words, false, true)?;
             feedback_ms += start.elapsed().as_secs_f64() * 1e3;
         }
         // The lookup through the page table.

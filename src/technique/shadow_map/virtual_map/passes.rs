@@ -39,6 +39,8 @@ impl ShadowMapTechnique {
 
     /// Records the marking pass (`words` words of page bits) and its read
     /// back: this pass's marks when `wait`, else the latest that arrived.
+    /// `timed`: the frame's first marking pass, whose GPU time is counter
+    /// `page_marking_ms`.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn mark_pages(
         &self,
@@ -49,6 +51,7 @@ impl ShadowMapTechnique {
         lookup_key: LookupKey,
         words: u64,
         wait: bool,
+        timed: bool,
     ) -> Result<Option<Vec<u32>>> {
         let gpu = ctx.gpu;
         gpu.queue
@@ -59,6 +62,14 @@ impl ShadowMapTechnique {
         {
             let encoder = own.as_mut().unwrap_or(&mut *encoder);
             encoder.clear_buffer(&state.marks, 0, Some(words * 4));
+            let stamps = if timed {
+                state.mark_timer.begin(gpu, 1)
+            } else {
+                None
+            };
+            if let Some(s) = &stamps {
+                s.stamp(encoder, 0, false);
+            }
             let mut pass = crate::technique::mask_pass_with(
                 encoder,
                 ctx,
@@ -73,6 +84,11 @@ impl ShadowMapTechnique {
             ctx.bind_frame_groups(&mut pass);
             pass.set_bind_group(crate::frame::OWN_GROUP, &mark_group, &[0]);
             pass.draw(0..3, 0..1);
+            drop(pass);
+            if let Some(s) = &stamps {
+                s.stamp(encoder, 0, true);
+                state.mark_timer.resolve(encoder);
+            }
         }
         Ok(state
             .feedback
