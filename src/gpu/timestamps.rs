@@ -139,6 +139,27 @@ impl SectionTimer {
         self.pairs.as_mut().map(TimestampPairs::begin_frame)
     }
 
+    /// Records `work` into `encoder` as the frame's one stretch, between a
+    /// pair of timestamps (none without timestamp support), and resolves
+    /// them into `encoder`.
+    pub fn time<R>(
+        &mut self,
+        gpu: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        work: impl FnOnce(&mut wgpu::CommandEncoder) -> R,
+    ) -> R {
+        let stamps = self.begin(gpu, 1);
+        if let Some(s) = &stamps {
+            s.stamp(encoder, 0, false);
+        }
+        let result = work(encoder);
+        if let Some(s) = &stamps {
+            s.stamp(encoder, 0, true);
+            self.resolve(encoder);
+        }
+        result
+    }
+
     /// Forgets the time: this frame has no such stretch.
     pub fn clear(&mut self) {
         self.pairs = None;

@@ -194,16 +194,7 @@ impl DepthReduction {
         let wait = ctx.feedback == Feedback::ThisFrame;
         let start = std::time::Instant::now();
         let mut own = FrameFeedback::own_encoder(gpu, wait);
-        let target = own.as_mut().unwrap_or(&mut *encoder);
-        let stamps = self.timer.begin(gpu, 1);
-        if let Some(s) = &stamps {
-            s.stamp(target, 0, false);
-        }
-        self.record(ctx, target, inputs);
-        if let Some(s) = &stamps {
-            s.stamp(target, 0, true);
-            self.timer.resolve(target);
-        }
+        self.record(ctx, own.as_mut().unwrap_or(&mut *encoder), inputs);
         let bytes = self
             .feedback
             .collect(gpu, own, encoder, &self.result, RESULT_BYTES)?;
@@ -225,7 +216,8 @@ impl DepthReduction {
         self.timer.after_frame(gpu)
     }
 
-    /// Records the reduction of the frame's G-buffer into `encoder`.
+    /// Records the reduction of the frame's G-buffer into `encoder`, its
+    /// passes timed.
     fn record(
         &mut self,
         ctx: &MaskContext,
@@ -239,7 +231,6 @@ impl DepthReduction {
         );
         let block_bytes = (bx * by) as u64 * BLOCK_RECORD_BYTES;
         crate::gpu::grow_buffer(&gpu.device, &mut self.blocks, block_bytes, BLOCKS_LABEL);
-        let blocks = &self.blocks;
         let params = ReduceParams {
             view_z: ctx.fit_camera.view().row(2),
             light_view: inputs.light_view,
@@ -285,7 +276,7 @@ impl DepthReduction {
                 },
                 wgpu::BindGroupEntry {
                     binding: 4,
-                    resource: blocks.as_entire_binding(),
+                    resource: self.blocks.as_entire_binding(),
                 },
             ],
         });
@@ -296,15 +287,17 @@ impl DepthReduction {
             passes.push(&self.shared.cascade_bounds);
         }
         // One pass per step: the second reads what the first wrote.
-        for pipeline in passes {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("sdsm reduction"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(w, h, 1);
-        }
+        self.timer.time(gpu, encoder, |encoder| {
+            for pipeline in passes {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("sdsm reduction"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, &group, &[]);
+                pass.dispatch_workgroups(w, h, 1);
+            }
+        });
     }
 }
 

@@ -500,21 +500,13 @@ impl ShadowMapTechnique {
         // The lookup through the page table.
         let atlas = state.atlas.as_ref().expect("made above");
         let lookup_group = self.page_group(ctx, state, &atlas.array);
-        let stamps = self.lookup_timer.begin(gpu, 1);
-        if let Some(s) = &stamps {
-            s.stamp(encoder, 0, false);
-        }
-        {
+        self.lookup_timer.time(gpu, encoder, |encoder| {
             let mut pass = crate::technique::mask_pass(encoder, ctx, "virtual shadow map lookup");
             pass.set_pipeline(&shared.lookup(gpu, lookup_key));
             ctx.bind_frame_groups(&mut pass);
             pass.set_bind_group(crate::frame::OWN_GROUP, &lookup_group, &[0]);
             pass.draw(0..3, 0..1);
-        }
-        if let Some(s) = &stamps {
-            s.stamp(encoder, 0, true);
-            self.lookup_timer.resolve(encoder);
-        }
+        });
         state.counters = PageCounters {
             needed: allocation.needed,
             rendered: rendered.len(),

@@ -62,32 +62,26 @@ impl ShadowMapTechnique {
         {
             let encoder = own.as_mut().unwrap_or(&mut *encoder);
             encoder.clear_buffer(&state.marks, 0, Some(words * 4));
-            let stamps = if timed {
-                state.mark_timer.begin(gpu, 1)
-            } else {
-                None
+            let mark = |encoder: &mut wgpu::CommandEncoder| {
+                let mut pass = crate::technique::mask_pass_with(
+                    encoder,
+                    ctx,
+                    "virtual shadow map marking",
+                    wgpu::LoadOp::Load,
+                );
+                pass.set_pipeline(&self.shared.virtual_mark(
+                    gpu,
+                    lookup_key,
+                    self.config.paging.is_adaptive(),
+                ));
+                ctx.bind_frame_groups(&mut pass);
+                pass.set_bind_group(crate::frame::OWN_GROUP, &mark_group, &[0]);
+                pass.draw(0..3, 0..1);
             };
-            if let Some(s) = &stamps {
-                s.stamp(encoder, 0, false);
-            }
-            let mut pass = crate::technique::mask_pass_with(
-                encoder,
-                ctx,
-                "virtual shadow map marking",
-                wgpu::LoadOp::Load,
-            );
-            pass.set_pipeline(&self.shared.virtual_mark(
-                gpu,
-                lookup_key,
-                self.config.paging.is_adaptive(),
-            ));
-            ctx.bind_frame_groups(&mut pass);
-            pass.set_bind_group(crate::frame::OWN_GROUP, &mark_group, &[0]);
-            pass.draw(0..3, 0..1);
-            drop(pass);
-            if let Some(s) = &stamps {
-                s.stamp(encoder, 0, true);
-                state.mark_timer.resolve(encoder);
+            if timed {
+                state.mark_timer.time(gpu, encoder, mark);
+            } else {
+                mark(encoder);
             }
         }
         Ok(state
