@@ -7,7 +7,7 @@ fn fs_debug_map(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let uv = frag.xy / 256.0;
     if VIRTUAL {
         // The physical pool's first layer: every page, as rendered.
-        let side = f32(vsm.atlas_pages * vsm.page_texels);
+        let side = f32(vsm.atlas_pages * vsm.slot_texels);
         return vec4f(vec3f(textureLoad(depth_map, vec2i(uv * side), 0, 0)), 1.0);
     }
     let t = vec2i(uv * sm.map.x);

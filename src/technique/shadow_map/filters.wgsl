@@ -56,13 +56,7 @@ fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
         return textureSampleCompareLevel(depth_map, compare_sampler, uv, i32(face), z);
     }
     if VIRTUAL {
-        // Four texel loads only where the taps straddle a page border: a
-        // loop, not a branch (llvmpipe runs both sides of a branch).
-        var v = virtual_pcf2x2(uv, z);
-        for (var straddles = v < 0.0; straddles; straddles = false) {
-            v = bilinear_compare(uv, face, z);
-        }
-        return v;
+        return virtual_pcf2x2(uv, z);
     }
     return bilinear_compare(uv, face, z);
 }

@@ -105,7 +105,7 @@ struct VirtualLevel {
 struct VirtualMap {
     // clipmaps: the world directions of the view's u and v axes
     axis_u: vec3f,
-    // pages per row of one atlas layer
+    // slots per row of one atlas layer
     atlas_pages: u32,
     axis_v: vec3f,
     // texels per page side
@@ -114,7 +114,9 @@ struct VirtualMap {
     layer_pages: u32,
     // levels per view
     view_levels: u32,
-    _pad: vec2u,
+    // texels per side of a pool slot: the page and its guard texels
+    slot_texels: u32,
+    _pad: u32,
     levels: array<VirtualLevel>,
 };
 

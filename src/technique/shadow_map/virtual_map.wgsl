@@ -105,29 +105,24 @@ fn atlas_texel_in(t: vec2i, l: VirtualLevel) -> vec3i {
     }
     let k = (entry - 1u) & (vsm.layer_pages - 1u);
     let row = vec2u(k & (vsm.atlas_pages - 1u), k >> countTrailingZeros(vsm.atlas_pages));
-    let at = vec2i(row) * size + (c & vec2i(size - 1));
+    let at = vec2i(row) * i32(vsm.slot_texels) + (c & vec2i(size - 1));
     return vec3i(at, i32((entry - 1u) >> countTrailingZeros(vsm.layer_pages)));
 }
 
-// Hardware 2×2 comparison at uv of the level being filtered where its
-// four texels lie in one page (the atlas's own bilinear footprint is then
-// the map's); −1 where they straddle a page border or no page is resident.
+// Hardware 2×2 comparison at uv of the level being filtered: its four
+// texels lie in the slot of the first one's page (which holds the guard
+// texels past the page's edges), so the atlas's own bilinear footprint is
+// the map's. Clamped to the window's edge texels, as one map's sampler
+// clamps; lit where the page is not resident (the lookup's level has its
+// kernel's pages).
 fn virtual_pcf2x2(uv: vec2f, z: f32) -> f32 {
-    let p = uv * sm.map.x - 0.5;
-    let b = vec2i(floor(p));
-    let size = i32(vsm.page_texels);
-    let extent = i32(filtered_level.pages) * size;
-    let inner = b & vec2i(size - 1);
-    if any(b < vec2i(0)) || any(b + 1 >= vec2i(extent)) || any(inner == vec2i(size - 1)) {
-        return -1.0;
-    }
-    let a = atlas_texel_in(b, filtered_level);
-    if a.z < 0 {
-        return -1.0;
-    }
-    let side = f32(vsm.atlas_pages * vsm.page_texels);
+    let extent = f32(filtered_level.pages * vsm.page_texels);
+    let p = clamp(uv * sm.map.x - 0.5, vec2f(0.0), vec2f(extent - 1.0));
+    let a = atlas_texel_in(vec2i(floor(p)), filtered_level);
+    let side = f32(vsm.atlas_pages * vsm.slot_texels);
     let atlas_uv = (vec2f(a.xy) + 0.5 + fract(p)) / side;
-    return textureSampleCompareLevel(depth_map, compare_sampler, atlas_uv, a.z, z);
+    let v = textureSampleCompareLevel(depth_map, compare_sampler, atlas_uv, max(a.z, 0), z);
+    return select(v, 1.0, a.z < 0);
 }
 
 // Stored depth at texel t of level `l`'s window, through the page table;

@@ -1,10 +1,18 @@
 //! The physical pool of a virtual map as a texture: layers of square
-//! rows of pages of d32f texels, and where each slot lies in it.
+//! rows of slots of d32f texels, and where each slot lies in it. A slot
+//! holds its page and a guard of the texels just past its right and bottom
+//! edges (the next pages' first), so that every 2×2 comparison whose first
+//! texel lies in a page reads one slot: one page-table read and one
+//! hardware comparison per tap, with no case for taps across page borders.
 
 use crate::gpu::GpuContext;
 use anyhow::Result;
 
-/// The physical pool: layers of `side`² pages of `page`² d32f texels.
+/// Texels past a page's right and bottom edges that its slot also holds.
+pub const GUARD_TEXELS: u32 = 1;
+
+/// The physical pool: layers of rows of slots, each `page` + [`GUARD_TEXELS`]
+/// texels square.
 pub struct Atlas {
     pub page: u32,
     pub capacity: u32,
@@ -19,15 +27,16 @@ pub struct Atlas {
 impl Atlas {
     pub fn new(gpu: &GpuContext, page: u32, capacity: u32) -> Result<Atlas> {
         let max = gpu.max_texture_size();
-        // Rows of a power of two pages (the shader masks and shifts).
-        let row_pages = (max / page)
+        // Rows of a power of two slots (the shader masks and shifts).
+        let slot = page + GUARD_TEXELS;
+        let row_pages = (max / slot)
             .min((capacity as f64).sqrt().ceil() as u32)
             .max(1)
             .next_power_of_two()
-            .min(prev_power_of_two(max / page).max(1));
+            .min(prev_power_of_two(max / slot).max(1));
         let layer_pages = row_pages * row_pages;
         let layers = capacity.div_ceil(layer_pages);
-        let side = row_pages * page;
+        let side = row_pages * slot;
         let bytes = side as u64 * side as u64 * layers as u64 * 4;
         gpu.check_allocation(
             &format!(
@@ -59,13 +68,18 @@ impl Atlas {
         })
     }
 
+    /// Texels per side of a slot: its page and the guard.
+    pub fn slot_texels(&self) -> u32 {
+        self.page + GUARD_TEXELS
+    }
+
     /// Layer and texel origin of a slot.
     pub fn place(&self, slot: u32) -> (usize, u32, u32) {
         let k = slot % self.layer_pages;
         (
             (slot / self.layer_pages) as usize,
-            (k % self.row_pages) * self.page,
-            (k / self.row_pages) * self.page,
+            (k % self.row_pages) * self.slot_texels(),
+            (k / self.row_pages) * self.slot_texels(),
         )
     }
 }

@@ -9,6 +9,7 @@
 
 use super::super::pipelines::{MapProjection, MapShape};
 use super::super::setup::{self, FrustumParams};
+use super::atlas::GUARD_TEXELS;
 use crate::scene::{Aabb, Camera, Light, LightType};
 use glam::{DMat4, IVec2, Mat4, Vec2, Vec3};
 
@@ -262,17 +263,19 @@ impl VirtualLayout {
         }
     }
 
-    /// World (relative to [`Self::eye`]) → clip of a page: its level's view
-    /// with the page's uv square stretched over the whole clip square (what
-    /// renders it into one page of the pool), composed in double precision.
+    /// World (relative to [`Self::eye`]) → clip of a page's pool slot: its
+    /// level's view with the uv square of the page and its guard texels
+    /// stretched over the whole clip square (what renders it into its
+    /// slot), composed in double precision.
     pub fn page_view_proj(&self, key: PageKey) -> Mat4 {
         let l = &self.levels[key.level as usize];
         let page_uv = l.texel as f64 * self.page as f64;
+        let slot_uv = l.texel as f64 * (self.page + GUARD_TEXELS) as f64;
         let (u0, v0) = (key.x as f64 * page_uv, key.y as f64 * page_uv);
         // uv → NDC: x = 2u − 1, y = 1 − 2v.
-        let cx = 2.0 * (u0 + 0.5 * page_uv) - 1.0;
-        let cy = 1.0 - 2.0 * (v0 + 0.5 * page_uv);
-        let s = 1.0 / page_uv;
+        let cx = 2.0 * (u0 + 0.5 * slot_uv) - 1.0;
+        let cy = 1.0 - 2.0 * (v0 + 0.5 * slot_uv);
+        let s = 1.0 / slot_uv;
         let stretch = DMat4::from_cols_array(&[
             s,
             0.0,
@@ -370,16 +373,18 @@ mod tests {
             y: lv.origin_page.y + 5,
         };
         let page_uv = lv.texel as f64 * 128.0;
+        let slot_uv = lv.texel as f64 * (128 + GUARD_TEXELS) as f64;
         let world_at = |u: f64, v: f64| {
             let ndc = DVec3::new(2.0 * u - 1.0, 1.0 - 2.0 * v, 0.5);
             l.views[0].inverse().project_point3(ndc).as_vec3()
         };
         let page = l.page_view_proj(key);
         let clip = |w: Vec3| page.project_point3(w - l.eye);
-        // The page's centre goes to the clip centre, its first texel corner to (−1, 1).
+        // The centre of the slot (the page and its guard texels) goes to the
+        // clip centre, the page's first texel corner to (−1, 1).
         let c = clip(world_at(
-            (key.x as f64 + 0.5) * page_uv,
-            (key.y as f64 + 0.5) * page_uv,
+            key.x as f64 * page_uv + 0.5 * slot_uv,
+            key.y as f64 * page_uv + 0.5 * slot_uv,
         ));
         assert!(c.truncate().length() < 1e-3, "{c}");
         let c = clip(world_at(key.x as f64 * page_uv, key.y as f64 * page_uv));

@@ -46,7 +46,8 @@ struct MapHeader {
     page_texels: u32,
     layer_pages: u32,
     view_levels: u32,
-    pad: [u32; 2],
+    slot_texels: u32,
+    pad: u32,
 }
 
 /// One level (`VirtualLevel` of shadow_map.wgsl).
@@ -371,7 +372,8 @@ impl ShadowMapTechnique {
             page_texels: layout.page,
             layer_pages: atlas.layer_pages,
             view_levels: layout.view_levels,
-            pad: [0; 2],
+            slot_texels: atlas.slot_texels(),
+            pad: 0,
         })
         .to_vec();
         for l in &layout.levels {

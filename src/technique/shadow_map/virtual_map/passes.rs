@@ -179,9 +179,9 @@ impl ShadowMapTechnique {
             ctx.bind_frame_groups(&mut pass);
             for (i, (_, slot)) in on_layer {
                 let (_, x, y) = atlas.place(*slot);
-                let page = atlas.page;
-                pass.set_viewport(x as f32, y as f32, page as f32, page as f32, 0.0, 1.0);
-                pass.set_scissor_rect(x, y, page, page);
+                let side = atlas.slot_texels();
+                pass.set_viewport(x as f32, y as f32, side as f32, side as f32, 0.0, 1.0);
+                pass.set_scissor_rect(x, y, side, side);
                 let offset = ((i as u64 + 1) * STRIDE) as u32;
                 pass.set_bind_group(crate::frame::OWN_GROUP, &render_group, &[offset]);
                 pass.set_pipeline(&clear_pipeline);
