@@ -363,6 +363,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             accumulate: false,
             edge_mask,
             virtual_map: false,
+            marked_resident: false,
             shape,
         };
         let maps = self.maps.as_ref().expect("ensured above");

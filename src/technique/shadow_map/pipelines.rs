@@ -111,6 +111,9 @@ pub struct LookupKey {
     pub edge_mask: bool,
     /// Texels read through a virtual map's page table.
     pub virtual_map: bool,
+    /// Every page a virtual map's pixels marked this frame is resident: the
+    /// lookup filters each pixel's own level without checking.
+    pub marked_resident: bool,
     pub shape: MapShape,
 }
 
@@ -124,6 +127,7 @@ impl LookupKey {
             ("RECEIVER_PLANE", self.receiver_plane as u32 as f64),
             ("EDGE_MASK", self.edge_mask as u32 as f64),
             ("VIRTUAL", self.virtual_map as u32 as f64),
+            ("MARKED_RESIDENT", self.marked_resident as u32 as f64),
         ];
         constants.extend(self.shape.constants());
         constants

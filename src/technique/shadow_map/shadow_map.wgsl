@@ -18,6 +18,10 @@ override EDGE_MASK: bool = false;
 // A virtual map (virtual_map.wgsl): texels are read through the page table
 // from the physical pool bound as `depth_map`.
 override VIRTUAL: bool = false;
+// A virtual map whose pages, as this frame's marks asked for them, are all
+// resident: the lookup filters each pixel's marked level without looking
+// for a coarser resident one.
+override MARKED_RESIDENT: bool = false;
 // The maps' shape (`MapShape`): how the faces project (`PROJECTION_*`),
 // whether they are cascades, whether they are warped. llvmpipe runs both
 // sides of a branch on a uniform under a lane mask: as constants, a

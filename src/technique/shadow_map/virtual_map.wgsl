@@ -160,35 +160,47 @@ fn neighbour_delta(l: VirtualLevel, pixel: vec2i, p: vec3f, step: vec2i) -> vec2
     return select(d, -d, use_b);
 }
 
+// A level found for a pixel: its index (NO_LEVEL for none), its entry and
+// the lookup point in it.
+struct FoundLevel {
+    index: u32,
+    level: VirtualLevel,
+    point: VirtualPoint,
+};
+
+// Whether a pixel's point is inside the window of level `f` and, for a
+// clipmap, the window holds the whole kernel around it.
+fn level_holds(f: FoundLevel) -> bool {
+    let t = f.point.uv * sm.map.x;
+    let reach = marked_reach();
+    let extent = f32(f.level.pages * vsm.page_texels);
+    let holds = all(t >= vec2f(reach)) && all(t <= vec2f(extent - reach));
+    return f.point.inside && (!is_orthographic() || holds);
+}
+
 // The level for G-buffer point p (normal n) at `pixel`: in its view, the
 // coarsest whose texels span at most one pixel (footprint × 2^level ≤ 1);
-// for a clipmap, moved up until the window holds the whole kernel.
-fn virtual_level_of(pixel: vec2i, p: vec3f, n: vec3f) -> u32 {
+// for a clipmap, moved up until the window holds the whole kernel. Its
+// entry and point come with it (the marks use them).
+fn virtual_level_of(pixel: vec2i, p: vec3f, n: vec3f) -> FoundLevel {
     let base = face_of(p) * vsm.view_levels;
     let base_level = level_at(base);
     let dx = neighbour_delta(base_level, pixel, p, vec2i(1, 0));
     let dy = neighbour_delta(base_level, pixel, p, vec2i(0, 1));
     let footprint = texel_footprint(dx, dy);
     let steps = clamp(floor(-log2(max(footprint, 1e-12))), 0.0, f32(vsm.view_levels - 1u));
-    var level = base + u32(steps);
-    let clipmap = is_orthographic();
-    let reach = marked_reach();
-    // The walk ends at the view's coarsest level (its own parent) at the
-    // latest, so `inside` is always the level returned.
-    var inside = false;
-    for (var i = 0u; i < vsm.view_levels; i++) {
-        let l = level_at(level);
-        let vp = virtual_point(l, p, n);
-        inside = vp.inside;
-        let t = vp.uv * sm.map.x;
-        let extent = f32(l.pages * vsm.page_texels);
-        let holds = !clipmap || (all(t >= vec2f(reach)) && all(t <= vec2f(extent - reach)));
-        if (vp.inside && holds) || l.parent == level {
-            break;
-        }
-        level = l.parent;
+    var found = FoundLevel(base + u32(steps), level_at(base + u32(steps)), VirtualPoint());
+    found.point = virtual_point(found.level, p, n);
+    // Up a level at a time, in a loop that llvmpipe leaves when no lane of
+    // its SIMD group is in it (most pixels hold at the first level); it
+    // ends at the view's coarsest level (its own parent) at the latest.
+    for (var up = !level_holds(found); up && found.level.parent != found.index; up = !level_holds(found)) {
+        found.index = found.level.parent;
+        found.level = level_at(found.index);
+        found.point = virtual_point(found.level, p, n);
     }
-    return select(NO_LEVEL, level, inside);
+    found.index = select(NO_LEVEL, found.index, found.point.inside);
+    return found;
 }
 
 // Texels around a pixel's lookup point whose pages are marked: the
@@ -210,8 +222,9 @@ fn mark_page(l: VirtualLevel, page: vec2i) {
     }
 }
 
-// Marks the pages a kernel around texel t of level `l` reads: the corners of
-// its reach, one page or two or four across borders (those in a one-trip
+// Marks the pages a kernel around texel t of level `l` reads: those from
+// the page of its reach's least corner to its greatest's — one, or across
+// borders 2×2, or 3×3 for a kernel wider than a page (those in a one-trip
 // loop, as in `mark_page`: most kernels lie in one page).
 fn mark_kernel(l: VirtualLevel, t: vec2f) {
     let r = marked_reach();
@@ -219,13 +232,12 @@ fn mark_kernel(l: VirtualLevel, t: vec2f) {
     let hi = virtual_page_of(l, t + vec2f(r));
     mark_page(l, lo);
     for (var across = any(hi != lo); across; across = false) {
-        if hi.x != lo.x {
-            mark_page(l, vec2i(hi.x, lo.y));
+        // `lo` again costs a plain read: its bit is set.
+        for (var y = lo.y; y <= hi.y; y++) {
+            for (var x = lo.x; x <= hi.x; x++) {
+                mark_page(l, vec2i(x, y));
+            }
         }
-        if hi.y != lo.y {
-            mark_page(l, vec2i(lo.x, hi.y));
-        }
-        mark_page(l, hi);
     }
 }
 
@@ -236,39 +248,48 @@ fn mark_point(level: u32, g: vec3f, n: vec3f) {
     mark_kernel(l, virtual_point(l, g, n).uv * sm.map.x);
 }
 
-// Whether every page a kernel around texel t of level `l` reads is
-// resident (one table read where the kernel lies in one page, as it mostly
-// does).
+// Marks the pages the kernel of a pixel's point reads in the level found.
+fn mark_found(f: FoundLevel) {
+    mark_kernel(f.level, f.point.uv * sm.map.x);
+}
+
+// Whether every page a kernel around texel t of level `l` reads (as
+// `mark_kernel` marks them) is resident: one table read where the kernel
+// lies in one page, as it mostly does.
 fn kernel_resident(l: VirtualLevel, t: vec2f) -> bool {
     let r = marked_reach();
     let lo = virtual_page_of(l, t - vec2f(r));
     let hi = virtual_page_of(l, t + vec2f(r));
-    let resident = vsm_table[entry_in(l, lo)] != 0u;
-    if all(lo == hi) || !resident {
-        return resident;
+    var resident = vsm_table[entry_in(l, lo)] != 0u;
+    for (var across = resident && any(hi != lo); across; across = false) {
+        for (var y = lo.y; y <= hi.y; y++) {
+            for (var x = lo.x; x <= hi.x; x++) {
+                resident = resident && vsm_table[entry_in(l, vec2i(x, y))] != 0u;
+            }
+        }
     }
-    return vsm_table[entry_in(l, vec2i(hi.x, lo.y))] != 0u
-        && vsm_table[entry_in(l, vec2i(lo.x, hi.y))] != 0u
-        && vsm_table[entry_in(l, hi)] != 0u;
+    return resident;
 }
 
 // The finest level from `level` up (toward its view's coarsest) where the
 // point of G-buffer point g (normal n) is inside the window and every page
 // its kernel reads is resident; NO_LEVEL where none is (lit).
-fn resident_level(level: u32, g: vec3f, n: vec3f) -> u32 {
+fn resident_level(level: u32, g: vec3f, n: vec3f) -> FoundLevel {
     var index = level;
     for (var i = 0u; i < vsm.view_levels; i++) {
         let l = level_at(index);
         let q = virtual_point(l, g, n);
         if q.inside && kernel_resident(l, q.uv * sm.map.x) {
-            return index;
+            return FoundLevel(index, l, q);
         }
         if l.parent == index {
             break;
         }
         index = l.parent;
     }
-    return NO_LEVEL;
+    var none: FoundLevel;
+    none.index = NO_LEVEL;
+    return none;
 }
 
 // The coarsest level of the view that `level` belongs to.
@@ -357,7 +378,7 @@ fn adaptive_edge(level: u32, g: vec3f, n: vec3f, gradient: vec2f) -> bool {
 // nothing resident yet, its view's coarsest level (the hierarchy's root).
 // gx, gy: the screen derivatives of the G-buffer position.
 fn adaptive_mark(need: u32, g: vec3f, n: vec3f, gx: vec3f, gy: vec3f) {
-    let have = resident_level(need, g, n);
+    let have = resident_level(need, g, n).index;
     if have == NO_LEVEL {
         mark_point(root_level(need), g, n);
         return;
@@ -372,14 +393,16 @@ fn pixel_index(pixel: vec2i) -> u32 {
     return u32(pixel.y) * u32(frame.size.x) + u32(pixel.x);
 }
 
-// Each receiving pixel's level (NO_LEVEL for none), stored for the lookup.
-fn pixel_level(pixel: vec2i, g: vec4f, n: vec3f) -> u32 {
-    var level = NO_LEVEL;
+// Each receiving pixel's level (index NO_LEVEL for none), stored for the
+// lookup.
+fn pixel_level(pixel: vec2i, g: vec4f, n: vec3f) -> FoundLevel {
+    var found: FoundLevel;
+    found.index = NO_LEVEL;
     if g.w >= 0.5 {
-        level = virtual_level_of(pixel, g.xyz, n);
+        found = virtual_level_of(pixel, g.xyz, n);
     }
-    vsm_pixel_level[pixel_index(pixel)] = level;
-    return level;
+    vsm_pixel_level[pixel_index(pixel)] = found.index;
+    return found;
 }
 
 // A marking pass's pixel: its G-buffer point and normal, and its level
@@ -387,7 +410,7 @@ fn pixel_level(pixel: vec2i, g: vec4f, n: vec3f) -> u32 {
 struct MarkingPixel {
     g: vec4f,
     n: vec3f,
-    level: u32,
+    found: FoundLevel,
 };
 
 fn marking_pixel(frag: vec4f) -> MarkingPixel {
@@ -402,8 +425,8 @@ fn marking_pixel(frag: vec4f) -> MarkingPixel {
 @fragment
 fn fs_virtual_mark(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let p = marking_pixel(frag);
-    if p.level != NO_LEVEL {
-        mark_point(p.level, p.g.xyz, p.n);
+    if p.found.index != NO_LEVEL {
+        mark_found(p.found);
     }
     return vec4f(1.0);
 }
@@ -415,33 +438,36 @@ fn fs_adaptive_mark(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     // The receiver's screen derivatives (uniform control flow).
     let gx = dpdx(p.g.xyz);
     let gy = dpdy(p.g.xyz);
-    if p.level != NO_LEVEL {
-        adaptive_mark(p.level, p.g.xyz, p.n, gx, gy);
+    if p.found.index != NO_LEVEL {
+        adaptive_mark(p.found.index, p.g.xyz, p.n, gx, gy);
     }
     return vec4f(1.0);
 }
 
 // The lookup: the pixel's level or, where its kernel's pages are not all
 // resident, the first coarser level of the view where they are; lit where
-// none is.
+// none is. With MARKED_RESIDENT, the pixel's level without that search.
 fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f) -> f32 {
     let marked = vsm_pixel_level[pixel_index(vec2i(frag))];
     let first = select(marked, 0u, marked == NO_LEVEL);
-    let vp = virtual_point(level_at(first), g.xyz, n);
+    var found = FoundLevel(first, level_at(first), VirtualPoint());
+    found.point = virtual_point(found.level, g.xyz, n);
     // Derivatives first, in uniform control flow.
-    let gradient = receiver_plane(vec3f(vp.uv, vp.z));
+    let gradient = receiver_plane(vec3f(found.point.uv, found.point.z));
     if marked == NO_LEVEL || g.w < 0.5 {
         return 1.0;
     }
-    let level = resident_level(first, g.xyz, n);
-    if level == NO_LEVEL {
-        return 1.0;
+    if !MARKED_RESIDENT {
+        found = resident_level(first, g.xyz, n);
+        if found.index == NO_LEVEL {
+            return 1.0;
+        }
     }
-    filtered_level = level_at(level);
-    let q = virtual_point(filtered_level, g.xyz, n);
-    let scale = exp2(f32(level - first));
+    filtered_level = found.level;
+    let q = found.point;
+    let scale = exp2(f32(found.index - first));
     virtual_texel_world = level_texel_world(filtered_level, g.xyz);
-    return filtered(level, Projected(vec4f(0.0, 0.0, q.z, 1.0), q.uv, q.z, gradient * scale, q.inside), frag);
+    return filtered(found.index, Projected(vec4f(0.0, 0.0, q.z, 1.0), q.uv, q.z, gradient * scale, q.inside), frag);
 }
 
 // Debug views of a virtual map: pages tinted by level over the scene, and
@@ -452,7 +478,7 @@ fn virtual_debug_frame(frag: vec4f) -> DebugFrame {
     let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
     let marked = vsm_pixel_level[pixel_index(pixel)];
     let first = select(marked, 0u, marked == NO_LEVEL);
-    let found = resident_level(first, g.xyz, n);
+    let found = resident_level(first, g.xyz, n).index;
     let level = select(found, first, found == NO_LEVEL);
     let vp = virtual_point(level_at(level), g.xyz, n);
     let texel = vp.uv * sm.map.x;

@@ -424,6 +424,7 @@ impl ShadowMapTechnique {
             accumulate: false,
             edge_mask: false,
             virtual_map: true,
+            marked_resident: false,
             shape: layout.shape(),
         };
         // Adaptive maps refine a level per pass; a pass's pages are rendered
@@ -499,7 +500,13 @@ impl ShadowMapTechnique {
                 self.mark_pages(ctx, encoder, state, &base, lookup_key, words, false, true)?;
             feedback_ms += start.elapsed().as_secs_f64() * 1e3;
         }
-        // The lookup through the page table.
+        // The lookup through the page table. Where the marks were this
+        // frame's, of each pixel's own level (not an adaptive map's), and all
+        // made resident, that level is the one to filter.
+        let lookup_key = LookupKey {
+            marked_resident: wait && !refine && allocation.degraded == 0 && allocation.dropped == 0,
+            ..lookup_key
+        };
         let atlas = state.atlas.as_ref().expect("made above");
         let lookup_group = self.page_group(ctx, state, &atlas.array);
         self.lookup_timer.time(gpu, encoder, |encoder| {
