@@ -54,7 +54,8 @@ fn virtual_pages_marked_for_a_known_view_match_the_hand_count_and_stay_cached() 
 /// virtual map of a spot light (a mip chain over the whole view, the same
 /// levels whatever the pages) cut into 32² pages and into 512² pages (each
 /// the full-resolution map of a quarter of the view) gives the same mask,
-/// filtered over a wide kernel.
+/// filtered over a wide kernel — and over one wider than a 32² page (taps
+/// beyond the 2×2 pages of its least corner).
 #[test]
 fn virtual_lookups_across_page_borders_match_one_full_map() {
     let scene = squares_over_floor(
@@ -65,7 +66,7 @@ fn virtual_lookups_across_page_borders_match_one_full_map() {
         Light::spot(Vec3::new(1.0, 5.0, 1.0), Vec3::ZERO, 1.0, 30.0, 40.0),
         false,
     );
-    let mask = |page: &str, pool: &str| {
+    let mask = |page: &str, pool: &str, radius: &str| {
         mask_of(
             &scene,
             "shadow-map:virtual",
@@ -75,19 +76,25 @@ fn virtual_lookups_across_page_borders_match_one_full_map() {
                 pool,
                 "clipmap_levels=6",
                 "filter=disk",
-                "radius=6",
+                radius,
                 "samples=5",
             ],
             256,
             256,
         )
     };
-    let paged = mask("page_size=32", "pool=4096");
-    let whole = mask("page_size=512", "pool=64");
-    let shadowed = whole.iter().filter(|v| **v < 0.5).count();
-    assert!(shadowed > 1000, "{shadowed}");
-    let differ = pixels_differing(&paged, &whole);
-    assert!(differ <= 6, "{differ} of {} pixels differ", paged.len());
+    for radius in ["radius=6", "radius=20"] {
+        let paged = mask("page_size=32", "pool=4096", radius);
+        let whole = mask("page_size=512", "pool=64", radius);
+        let shadowed = whole.iter().filter(|v| **v < 0.5).count();
+        assert!(shadowed > 1000, "{radius}: {shadowed}");
+        let differ = pixels_differing(&paged, &whole);
+        assert!(
+            differ <= 6,
+            "{radius}: {differ} of {} pixels differ",
+            paged.len()
+        );
+    }
 }
 
 /// A pool far too small for the view: finer levels give way to coarser

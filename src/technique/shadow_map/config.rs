@@ -571,6 +571,20 @@ pub struct ShadowMapConfig {
 }
 
 impl ShadowMapConfig {
+    /// How far in texels from its centre a pixel's kernel reads (the
+    /// lookup's `kernel_reach()`, `sm.map.w`): none (hard), the filter
+    /// radius (grid, disk) or the widest blocker search and penumbra (pcss,
+    /// varwidth, both capped at 64 texels), plus the half texel of a 2×2
+    /// tap (pcf2x2, the filters of taps, and a moment filter's bilinear read).
+    pub fn kernel_reach(&self) -> f32 {
+        match self.filter {
+            Filter::Hard => 0.0,
+            Filter::Grid | Filter::Disk => self.radius + 0.5,
+            Filter::Pcss | Filter::Varwidth => self.blocker_search.max(64.0) + 0.5,
+            _ => 0.5,
+        }
+    }
+
     pub fn parse(p: &ParamValues) -> Result<ShadowMapConfig> {
         Ok(ShadowMapConfig {
             filter: p.choice(&FILTER)?,

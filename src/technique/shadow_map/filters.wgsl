@@ -5,7 +5,7 @@
 // Stored depth at a texel (nearest), from the depth map or the 8-bit map.
 fn stored(texel: vec2i, face: u32) -> f32 {
     if VIRTUAL {
-        return virtual_stored(texel, filtered_level);
+        return atlas_stored(filtered_texel(texel));
     }
     let size = i32(sm.map.x);
     let t = clamp(texel, vec2i(0), vec2i(size - 1));
@@ -254,19 +254,8 @@ fn edge_class(uv: vec2f, face: u32, z_lo: f32, z_hi: f32, reach: f32) -> f32 {
     return -1.0;
 }
 
-// How far in texels from its centre a pixel's kernel reads: none (hard),
-// the filter radius (grid, disk) or the widest blocker search and penumbra
-// (pcss, varwidth, both capped at 64 texels), plus the half texel of a 2×2
-// tap (pcf2x2 and the filters of taps).
+// How far in texels from its centre a pixel's kernel reads
+// (`ShadowMapConfig::kernel_reach`).
 fn kernel_reach() -> f32 {
-    if FILTER_KIND == FILTER_HARD {
-        return 0.0;
-    }
-    if FILTER_KIND == FILTER_PCF2X2 {
-        return 0.5;
-    }
-    if FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK {
-        return sm.kernel.x + 0.5;
-    }
-    return max(64.0, sm.soft.w) + 0.5;
+    return sm.map.w;
 }

@@ -297,7 +297,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     size as f32,
                     1.0 / size as f32,
                     setup.texel_scale / size as f32,
-                    0.0,
+                    c.kernel_reach(),
                 ),
                 depth: Vec4::new(
                     setup.near,
@@ -364,6 +364,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             edge_mask,
             virtual_map: false,
             marked_resident: false,
+            wide_kernel: false,
             shape,
         };
         let maps = self.maps.as_ref().expect("ensured above");

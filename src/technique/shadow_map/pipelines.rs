@@ -114,6 +114,9 @@ pub struct LookupKey {
     /// Every page a virtual map's pixels marked this frame is resident: the
     /// lookup filters each pixel's own level without checking.
     pub marked_resident: bool,
+    /// A virtual map's kernel can read more than 2×2 pages (its marked
+    /// reach spans a page): taps beyond them read the page table.
+    pub wide_kernel: bool,
     pub shape: MapShape,
 }
 
@@ -128,6 +131,7 @@ impl LookupKey {
             ("EDGE_MASK", self.edge_mask as u32 as f64),
             ("VIRTUAL", self.virtual_map as u32 as f64),
             ("MARKED_RESIDENT", self.marked_resident as u32 as f64),
+            ("WIDE_KERNEL", self.wide_kernel as u32 as f64),
         ];
         constants.extend(self.shape.constants());
         constants

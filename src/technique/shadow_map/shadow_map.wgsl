@@ -22,6 +22,9 @@ override VIRTUAL: bool = false;
 // resident: the lookup filters each pixel's marked level without looking
 // for a coarser resident one.
 override MARKED_RESIDENT: bool = false;
+// A virtual map whose kernel can read more than 2×2 pages (its marked reach
+// spans a page): taps beyond the pixel's first 2×2 read the page table.
+override WIDE_KERNEL: bool = false;
 // The maps' shape (`MapShape`): how the faces project (`PROJECTION_*`),
 // whether they are cascades, whether they are warped. llvmpipe runs both
 // sides of a branch on a uniform under a lane mask: as constants, a

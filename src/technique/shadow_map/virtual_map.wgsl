@@ -92,21 +92,80 @@ fn virtual_page_of(l: VirtualLevel, t: vec2f) -> vec2i {
     return vec2i(floor(clamp(t, vec2f(0.0), vec2f(extent - 1.0)) / size));
 }
 
+// Where window page `page` of level `l` lies in the pool: its slot's
+// atlas texel minus the page's window texel, and its layer; layer −1
+// where the page is not resident.
+fn page_slot(l: VirtualLevel, page: vec2i) -> vec3i {
+    let entry = vsm_table[entry_in(l, page)];
+    let k = (entry - 1u) & (vsm.layer_pages - 1u);
+    let row = vec2u(k & (vsm.atlas_pages - 1u), k >> countTrailingZeros(vsm.atlas_pages));
+    let shift = vec2i(row) * i32(vsm.slot_texels) - page * i32(vsm.page_texels);
+    let layer = i32((entry - 1u) >> countTrailingZeros(vsm.layer_pages));
+    return select(vec3i(shift, layer), vec3i(0, 0, -1), entry == 0u);
+}
+
+// Window texel t of level `l` clamped to the window.
+fn window_texel(t: vec2i, l: VirtualLevel) -> vec2i {
+    return clamp(t, vec2i(0), vec2i(i32(l.pages * vsm.page_texels) - 1));
+}
+
+fn page_of_texel(t: vec2i) -> vec2i {
+    return t >> vec2u(countTrailingZeros(vsm.page_texels));
+}
+
 // The atlas texel of window texel t of level `l` (clamped to the window)
 // and its layer; layer −1 where no page is resident.
 fn atlas_texel_in(t: vec2i, l: VirtualLevel) -> vec3i {
-    let size = i32(vsm.page_texels);
-    let extent = i32(l.pages) * size;
-    let c = clamp(t, vec2i(0), vec2i(extent - 1));
-    let page = c >> vec2u(countTrailingZeros(vsm.page_texels));
-    let entry = vsm_table[entry_in(l, page)];
-    if entry == 0u {
-        return vec3i(0, 0, -1);
+    let c = window_texel(t, l);
+    let s = page_slot(l, page_of_texel(c));
+    return vec3i(c + s.xy, s.z);
+}
+
+// The pool slots (`page_slot`) of the 2×2 window pages from `first`, the
+// page of the least corner of the filtered kernel's reach (the pages past
+// `last`, the greatest corner's, unread), read once per pixel: the kernel's
+// taps take their slots from here instead of each reading the page table.
+struct KernelSlots {
+    first: vec2i,
+    last: vec2i,
+    at: array<vec3i, 4>,
+};
+var<private> kernel_slots: KernelSlots;
+
+// The slots of the pages under the kernel around texel t of level `l`:
+// one table read where the kernel lies in one page, as it mostly does;
+// the others in a one-trip loop (llvmpipe skips it when no lane needs it).
+fn kernel_slots_of(l: VirtualLevel, t: vec2f) -> KernelSlots {
+    let r = marked_reach();
+    var k: KernelSlots;
+    k.first = virtual_page_of(l, t - vec2f(r));
+    k.last = virtual_page_of(l, t + vec2f(r));
+    k.at[0] = page_slot(l, k.first);
+    k.at[1] = k.at[0];
+    k.at[2] = k.at[0];
+    k.at[3] = k.at[0];
+    for (var across = any(k.last != k.first); across; across = false) {
+        k.at[1] = page_slot(l, k.first + vec2i(1, 0));
+        k.at[2] = page_slot(l, k.first + vec2i(0, 1));
+        k.at[3] = page_slot(l, k.first + vec2i(1, 1));
     }
-    let k = (entry - 1u) & (vsm.layer_pages - 1u);
-    let row = vec2u(k & (vsm.atlas_pages - 1u), k >> countTrailingZeros(vsm.atlas_pages));
-    let at = vec2i(row) * i32(vsm.slot_texels) + (c & vec2i(size - 1));
-    return vec3i(at, i32((entry - 1u) >> countTrailingZeros(vsm.layer_pages)));
+    return k;
+}
+
+// The atlas texel and layer of window texel t of the level filtered
+// (clamped to the window), from the kernel's slots; through the page table
+// only beyond its first 2×2 pages, which only a WIDE_KERNEL reaches (the
+// loop's code alone, never run, costs llvmpipe a sixth of the lookup).
+fn filtered_texel(t: vec2i) -> vec3i {
+    let c = window_texel(t, filtered_level);
+    let page = page_of_texel(c);
+    let d = page - kernel_slots.first;
+    let right = d.x == 1;
+    var s = select(select(kernel_slots.at[0], kernel_slots.at[1], right), select(kernel_slots.at[2], kernel_slots.at[3], right), d.y == 1);
+    for (var beyond = WIDE_KERNEL && (any(d > vec2i(1)) || any(d < vec2i(0))); beyond; beyond = false) {
+        s = page_slot(filtered_level, page);
+    }
+    return vec3i(c + s.xy, s.z);
 }
 
 // Hardware 2×2 comparison at uv of the level being filtered: its four
@@ -118,21 +177,22 @@ fn atlas_texel_in(t: vec2i, l: VirtualLevel) -> vec3i {
 fn virtual_pcf2x2(uv: vec2f, z: f32) -> f32 {
     let extent = f32(filtered_level.pages * vsm.page_texels);
     let p = clamp(uv * sm.map.x - 0.5, vec2f(0.0), vec2f(extent - 1.0));
-    let a = atlas_texel_in(vec2i(floor(p)), filtered_level);
+    let a = filtered_texel(vec2i(floor(p)));
     let side = f32(vsm.atlas_pages * vsm.slot_texels);
     let atlas_uv = (vec2f(a.xy) + 0.5 + fract(p)) / side;
     let v = textureSampleCompareLevel(depth_map, compare_sampler, atlas_uv, max(a.z, 0), z);
     return select(v, 1.0, a.z < 0);
 }
 
-// Stored depth at texel t of level `l`'s window, through the page table;
-// 1 (lit) where no page is resident.
+// Stored depth at atlas texel a (layer a.z); 1 (lit) where no page is
+// resident (a.z = −1).
+fn atlas_stored(a: vec3i) -> f32 {
+    return select(textureLoad(depth_map, a.xy, max(a.z, 0), 0), 1.0, a.z < 0);
+}
+
+// Stored depth at texel t of level `l`'s window, through the page table.
 fn virtual_stored(t: vec2i, l: VirtualLevel) -> f32 {
-    let a = atlas_texel_in(t, l);
-    if a.z < 0 {
-        return 1.0;
-    }
-    return textureLoad(depth_map, a.xy, a.z, 0);
+    return atlas_stored(atlas_texel_in(t, l));
 }
 
 // Texel offset per pixel step `step` at `pixel`, toward the neighbour
@@ -465,6 +525,7 @@ fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f) -> f32 {
     }
     filtered_level = found.level;
     let q = found.point;
+    kernel_slots = kernel_slots_of(filtered_level, q.uv * sm.map.x);
     let scale = exp2(f32(found.index - first));
     virtual_texel_world = level_texel_world(filtered_level, g.xyz);
     return filtered(found.index, Projected(vec4f(0.0, 0.0, q.z, 1.0), q.uv, q.z, gradient * scale, q.inside), frag);

@@ -409,7 +409,7 @@ impl ShadowMapTechnique {
                 p.virtual_size as f32,
                 1.0 / p.virtual_size as f32,
                 layout.levels[0].texel_world,
-                0.0,
+                c.kernel_reach(),
             ),
             depth: Vec4::new(layout.near, layout.far, 0.0, 0.0),
             warp: ctx.light.direction.normalize_or_zero().extend(0.0),
@@ -425,6 +425,7 @@ impl ShadowMapTechnique {
             edge_mask: false,
             virtual_map: true,
             marked_resident: false,
+            wide_kernel: 2.0 * (c.kernel_reach() + 0.5) >= p.page_size as f32,
             shape: layout.shape(),
         };
         // Adaptive maps refine a level per pass; a pass's pages are rendered
