@@ -122,12 +122,11 @@ fn atlas_texel_in(t: vec2i, l: VirtualLevel) -> vec3i {
 }
 
 // The pool slots (`page_slot`) of the 2×2 window pages from `first`, the
-// page of the least corner of the filtered kernel's reach (the pages past
-// `last`, the greatest corner's, unread), read once per pixel: the kernel's
-// taps take their slots from here instead of each reading the page table.
+// first page of the filtered kernel's span, read once per pixel: the
+// kernel's taps take their slots from here instead of each reading the
+// page table.
 struct KernelSlots {
     first: vec2i,
-    last: vec2i,
     at: array<vec3i, 4>,
 };
 var<private> kernel_slots: KernelSlots;
@@ -136,15 +135,14 @@ var<private> kernel_slots: KernelSlots;
 // one table read where the kernel lies in one page, as it mostly does;
 // the others in a one-trip loop (llvmpipe skips it when no lane needs it).
 fn kernel_slots_of(l: VirtualLevel, t: vec2f) -> KernelSlots {
-    let r = marked_reach();
+    let span = kernel_pages(l, t);
     var k: KernelSlots;
-    k.first = virtual_page_of(l, t - vec2f(r));
-    k.last = virtual_page_of(l, t + vec2f(r));
+    k.first = span.first;
     k.at[0] = page_slot(l, k.first);
     k.at[1] = k.at[0];
     k.at[2] = k.at[0];
     k.at[3] = k.at[0];
-    for (var across = any(k.last != k.first); across; across = false) {
+    for (var across = any(span.last != span.first); across; across = false) {
         k.at[1] = page_slot(l, k.first + vec2i(1, 0));
         k.at[2] = page_slot(l, k.first + vec2i(0, 1));
         k.at[3] = page_slot(l, k.first + vec2i(1, 1));
@@ -269,6 +267,19 @@ fn marked_reach() -> f32 {
     return kernel_reach() + 0.5;
 }
 
+// The window pages a kernel reads: from the page of its marked reach's
+// least corner to its greatest corner's (clamped to the window).
+struct PageSpan {
+    first: vec2i,
+    last: vec2i,
+};
+
+// The pages of level `l` a kernel around texel t reads.
+fn kernel_pages(l: VirtualLevel, t: vec2f) -> PageSpan {
+    let r = marked_reach();
+    return PageSpan(virtual_page_of(l, t - vec2f(r)), virtual_page_of(l, t + vec2f(r)));
+}
+
 // Sets the bit of window page `page` of level `l` (a plain read first: most
 // pixels find their pages already marked, and a read is cheaper than an
 // atomic write). The write sits in a one-trip loop, which llvmpipe skips
@@ -287,14 +298,12 @@ fn mark_page(l: VirtualLevel, page: vec2i) {
 // borders 2×2, or 3×3 for a kernel wider than a page (those in a one-trip
 // loop, as in `mark_page`: most kernels lie in one page).
 fn mark_kernel(l: VirtualLevel, t: vec2f) {
-    let r = marked_reach();
-    let lo = virtual_page_of(l, t - vec2f(r));
-    let hi = virtual_page_of(l, t + vec2f(r));
-    mark_page(l, lo);
-    for (var across = any(hi != lo); across; across = false) {
-        // `lo` again costs a plain read: its bit is set.
-        for (var y = lo.y; y <= hi.y; y++) {
-            for (var x = lo.x; x <= hi.x; x++) {
+    let span = kernel_pages(l, t);
+    mark_page(l, span.first);
+    for (var across = any(span.last != span.first); across; across = false) {
+        // The first page again costs a plain read: its bit is set.
+        for (var y = span.first.y; y <= span.last.y; y++) {
+            for (var x = span.first.x; x <= span.last.x; x++) {
                 mark_page(l, vec2i(x, y));
             }
         }
@@ -317,13 +326,11 @@ fn mark_found(f: FoundLevel) {
 // `mark_kernel` marks them) is resident: one table read where the kernel
 // lies in one page, as it mostly does.
 fn kernel_resident(l: VirtualLevel, t: vec2f) -> bool {
-    let r = marked_reach();
-    let lo = virtual_page_of(l, t - vec2f(r));
-    let hi = virtual_page_of(l, t + vec2f(r));
-    var resident = vsm_table[entry_in(l, lo)] != 0u;
-    for (var across = resident && any(hi != lo); across; across = false) {
-        for (var y = lo.y; y <= hi.y; y++) {
-            for (var x = lo.x; x <= hi.x; x++) {
+    let span = kernel_pages(l, t);
+    var resident = vsm_table[entry_in(l, span.first)] != 0u;
+    for (var across = resident && any(span.last != span.first); across; across = false) {
+        for (var y = span.first.y; y <= span.last.y; y++) {
+            for (var x = span.first.x; x <= span.last.x; x++) {
                 resident = resident && vsm_table[entry_in(l, vec2i(x, y))] != 0u;
             }
         }

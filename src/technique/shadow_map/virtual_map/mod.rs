@@ -425,6 +425,8 @@ impl ShadowMapTechnique {
             edge_mask: false,
             virtual_map: true,
             marked_resident: false,
+            // The marked reach (`marked_reach()` of virtual_map.wgsl: the
+            // kernel's and half a texel) spans a page.
             wide_kernel: 2.0 * (c.kernel_reach() + 0.5) >= p.page_size as f32,
             shape: layout.shape(),
         };
