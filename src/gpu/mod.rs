@@ -306,7 +306,22 @@ impl GpuContext {
         layer: u32,
         bytes_per_pixel: u32,
     ) -> Result<Vec<u8>> {
-        let (w, h) = (texture.width(), texture.height());
+        self.read_texture_level(texture, layer, 0, bytes_per_pixel)
+    }
+
+    /// Copies one layer of one mip level of a 2D texture into memory, rows
+    /// tightly packed.
+    pub fn read_texture_level(
+        &self,
+        texture: &wgpu::Texture,
+        layer: u32,
+        level: u32,
+        bytes_per_pixel: u32,
+    ) -> Result<Vec<u8>> {
+        let (w, h) = (
+            (texture.width() >> level).max(1),
+            (texture.height() >> level).max(1),
+        );
         let unpadded = w * bytes_per_pixel;
         let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
             * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
@@ -320,7 +335,7 @@ impl GpuContext {
         enc.copy_texture_to_buffer(
             wgpu::TexelCopyTextureInfo {
                 texture,
-                mip_level: 0,
+                mip_level: level,
                 origin: wgpu::Origin3d {
                     x: 0,
                     y: 0,

@@ -201,7 +201,7 @@ pub const NORMAL_OFFSET_LOCAL: ParamSpec = ParamSpec::float(
 pub const EDGE_MASK: ParamSpec = ParamSpec::boolean(
     "edge_mask",
     false,
-    "grid, disk, pcss, varwidth: a min/max chain of the map classifies each pixel as lit, shadowed or at a shadow edge from 4 texels covering its kernel, and only edge pixels run the kernel (PCF at shadow silhouettes, 000 §4.3); the mask is the full kernel's",
+    "grid, disk, pcss, varwidth: a chain of depth bounds of the map (per block, two planes that follow a flat or sloped surface, or its least and greatest depth) classifies each pixel as lit, shadowed or at a shadow edge from 4 texels covering its kernel, compared along the receiver plane with receiver_plane=true, and only edge pixels run the kernel (PCF at shadow silhouettes, 000 §4.3); the mask is the full kernel's",
 );
 
 pub const RECEIVER_PLANE: ParamSpec = ParamSpec::boolean(
@@ -546,7 +546,7 @@ pub struct ShadowMapConfig {
     /// Normal offset × sin²θ between normal and light.
     pub normal_offset_slope: bool,
     pub receiver_plane: bool,
-    /// The kernel only at shadow edges (min/max chain).
+    /// The kernel only at shadow edges (the edge mask's bounds chain).
     pub edge_mask: bool,
     pub cull: CullFace,
     pub omni: Omni,

@@ -1,72 +1,130 @@
-// Edge-masked filtering's min/max chain: level 0 holds, per BLOCK×BLOCK
-// block of map texels, the least and greatest stored depth (x, y); each
-// further level halves again. The lookup reads 2×2 texels of the level
-// whose texels cover the kernel's footprint and needs the full kernel only
-// where the receiver depth lies between them (a shadow edge). Level 0 reads
-// its block in one invocation: levels built in 2×2 steps from the map would
+// Edge-masked filtering's bounding chain. Each level-0 texel bounds the
+// stored depths of a BLOCK×BLOCK block of map texels between two parallel
+// planes, and each further level bounds 2×2 texels of the level below. A
+// texel holds (lo, hi, gx, gy): every map texel of the cell stores a depth
+// within lo + g·u .. hi + g·u, u its centre's offset from the cell's centre
+// in cell sides (|u| ≤ ½) and g in depth per cell side. Where the cell holds
+// one flat or sloped surface the planes follow it (lo = hi but for
+// rounding), so a receiver on that surface is told lit although its depth
+// lies between the cell's least and greatest; elsewhere g = 0 and lo, hi
+// are the least and greatest depth (a min/max chain), whichever pair lies
+// closer together. The lookup reads 2×2 texels of the level whose texels
+// cover the kernel's span (`edge_class` in filters.wgsl). Level 0 reads its
+// block in one invocation: levels built in 2×2 steps from the map would
 // store (and dispatch) 16× the texels, for levels that a kernel of radius 1
 // or more never reads (edge_mask.rs).
 
 @group(0) @binding(0) var source_depth: texture_depth_2d_array;
 @group(0) @binding(1) var source_values: texture_2d_array<f32>;
-@group(0) @binding(2) var destination: texture_storage_2d_array<rg32float, write>;
+@group(0) @binding(2) var destination: texture_storage_2d_array<rgba32float, write>;
 // Nearest, clamped to the edge (as the lookup's taps are).
 @group(0) @binding(3) var nearest: sampler;
 
 // Map texels per side of a level-0 texel (CHAIN_BLOCK_LOG2 from edge_mask.rs).
 const BLOCK: u32 = 1u << CHAIN_BLOCK_LOG2;
+// 2×2 gathers per side of a level-0 block.
+const GATHERS: u32 = BLOCK / 2u;
 
-fn range_of(d: vec4f) -> vec2f {
-    return vec2f(min(min(d.x, d.y), min(d.z, d.w)), max(max(d.x, d.y), max(d.z, d.w)));
+// The narrower of two bounds of one cell, (lo, hi, g) and a flat (lo, hi),
+// compared at a point: the lookup reads the bound over a part of the cell,
+// where a plane that follows the surface holds it tightest.
+fn narrower(sloped: vec4f, flat: vec2f) -> vec4f {
+    if sloped.y - sloped.x < flat.y - flat.x {
+        return sloped;
+    }
+    return vec4f(flat, 0.0, 0.0);
 }
 
-// The least and greatest of the source texels under destination texel `t`
-// of `layer`: BLOCK×BLOCK texels of the depth map or the 8-bit map (kind 0,
-// 1), or 2×2 texels of the level below (kind 2). A gather at the corner
-// shared by four texels returns those four; the clamp repeats a map's last
-// texels past its side.
-fn source_range(t: vec2u, layer: u32, kind: u32) -> vec2f {
-    if kind == 2u {
-        let uv = (vec2f(t) * 2.0 + 1.0) / vec2f(textureDimensions(source_values));
-        let lo = textureGather(0, source_values, nearest, uv, layer);
-        let hi = textureGather(1, source_values, nearest, uv, layer);
-        return vec2f(range_of(lo).x, range_of(hi).y);
+// The 2×2 map texels whose shared corner is gather (i, j) of block t:
+// x (2i, 2j+1), y (2i+1, 2j+1), z (2i+1, 2j), w (2i, 2j) of the block (the
+// gather order). The clamp repeats a map's last texels past its side.
+fn block_gather(t: vec2u, i: u32, j: u32, layer: u32, from_depth: bool) -> vec4f {
+    let corner = vec2f(t * BLOCK + 2u * vec2u(i, j)) + 1.0;
+    if from_depth {
+        return textureGather(source_depth, nearest, corner / vec2f(textureDimensions(source_depth)), layer);
     }
-    var r = vec2f(3.4e38, -3.4e38);
-    for (var j = 0u; j < BLOCK / 2u; j++) {
-        for (var i = 0u; i < BLOCK / 2u; i++) {
-            let corner = vec2f(t * BLOCK + 2u * vec2u(i, j)) + 1.0;
-            var q: vec2f;
-            if kind == 0u {
-                q = range_of(textureGather(source_depth, nearest, corner / vec2f(textureDimensions(source_depth)), layer));
-            } else {
-                q = range_of(textureGather(0, source_values, nearest, corner / vec2f(textureDimensions(source_values)), layer));
-            }
-            r = vec2f(min(r.x, q.x), max(r.y, q.y));
+    return textureGather(0, source_values, nearest, corner / vec2f(textureDimensions(source_values)), layer);
+}
+
+// Level 0: the plane through three corner texels of the block (exact
+// where the block is one plane), then the least and greatest depth about
+// it in one pass, against the block's least and greatest depth.
+fn block_bounds(t: vec2u, layer: u32, from_depth: bool) -> vec4f {
+    let last = GATHERS - 1u;
+    let origin = block_gather(t, 0u, 0u, layer, from_depth).w;
+    let across = block_gather(t, last, 0u, layer, from_depth).z;
+    let down = block_gather(t, 0u, last, layer, from_depth).x;
+    // Depth per texel, and the first texel centre's offset from the
+    // block's centre.
+    let g = vec2f(across - origin, down - origin) / f32(BLOCK - 1u);
+    let first = 0.5 - f32(BLOCK) * 0.5;
+    var band = vec2f(3.4e38, -3.4e38);
+    var flat = vec2f(3.4e38, -3.4e38);
+    for (var j = 0u; j < GATHERS; j++) {
+        for (var i = 0u; i < GATHERS; i++) {
+            let v = block_gather(t, i, j, layer, from_depth);
+            let o = vec2f(2.0 * f32(i), 2.0 * f32(j)) + first;
+            let w = dot(g, o);
+            let r = v - vec4f(w + g.y, w + g.x + g.y, w + g.x, w);
+            band = vec2f(min(band.x, min(min(r.x, r.y), min(r.z, r.w))), max(band.y, max(max(r.x, r.y), max(r.z, r.w))));
+            flat = vec2f(min(flat.x, min(min(v.x, v.y), min(v.z, v.w))), max(flat.y, max(max(v.x, v.y), max(v.z, v.w))));
         }
     }
-    return r;
+    return narrower(vec4f(band, g * f32(BLOCK)), flat);
 }
 
-fn reduce(id: vec3u, kind: u32) {
-    let size = textureDimensions(destination);
-    if id.x >= size.x || id.y >= size.y {
-        return;
+// A further level: 2×2 cells of the level below under one plane of their
+// mean slope (each child's slope doubles in the parent's larger sides),
+// each child's band moved to the parent's centre and widened by how far
+// its slope departs from that one over its cell (a quarter of a parent
+// side each way); against the children's least and greatest depth.
+fn level_bounds(t: vec2u, layer: u32) -> vec4f {
+    let top = vec2i(textureDimensions(source_values)) - 1;
+    var child: array<vec4f, 4>;
+    var g = vec2f(0.0);
+    for (var k = 0u; k < 4u; k++) {
+        let at = min(vec2i(t * 2u + vec2u(k & 1u, k >> 1u)), top);
+        child[k] = textureLoad(source_values, at, layer, 0);
+        g += child[k].zw * 0.5;
     }
-    textureStore(destination, id.xy, id.z, vec4f(source_range(id.xy, id.z, kind), 0.0, 0.0));
+    var band = vec2f(3.4e38, -3.4e38);
+    var flat = vec2f(3.4e38, -3.4e38);
+    for (var k = 0u; k < 4u; k++) {
+        let c = child[k];
+        // The child's centre in parent sides.
+        let o = vec2f(f32(k & 1u), f32(k >> 1u)) * 0.5 - 0.25;
+        let departs = 0.25 * dot(abs(2.0 * c.zw - g), vec2f(1.0));
+        let shift = -dot(g, o);
+        band = vec2f(min(band.x, c.x + shift - departs), max(band.y, c.y + shift + departs));
+        let sway = 0.5 * dot(abs(c.zw), vec2f(1.0));
+        flat = vec2f(min(flat.x, c.x - sway), max(flat.y, c.y + sway));
+    }
+    return narrower(vec4f(band, g), flat);
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn from_depth(@builtin(global_invocation_id) id: vec3u) {
-    reduce(id, 0u);
+    let size = textureDimensions(destination);
+    if id.x >= size.x || id.y >= size.y {
+        return;
+    }
+    textureStore(destination, id.xy, id.z, block_bounds(id.xy, id.z, true));
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn from_bytes(@builtin(global_invocation_id) id: vec3u) {
-    reduce(id, 1u);
+    let size = textureDimensions(destination);
+    if id.x >= size.x || id.y >= size.y {
+        return;
+    }
+    textureStore(destination, id.xy, id.z, block_bounds(id.xy, id.z, false));
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn from_level(@builtin(global_invocation_id) id: vec3u) {
-    reduce(id, 2u);
+    let size = textureDimensions(destination);
+    if id.x >= size.x || id.y >= size.y {
+        return;
+    }
+    textureStore(destination, id.xy, id.z, level_bounds(id.xy, id.z));
 }

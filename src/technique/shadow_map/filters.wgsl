@@ -220,35 +220,57 @@ fn blockers(uv: vec2f, face: u32, z: f32, radius_texels: f32, n: u32, phi: f32) 
 }
 
 // Edge mask: the visibility every tap of a kernel reaching `reach` texels
-// from uv agrees on — 1 when the receiver depth range [z_lo, z_hi] is in
-// front of the least stored depth under the kernel, 0 when behind the
-// greatest — or −1 (a shadow edge: run the kernel). Reads 2×2 texels of
-// the chain level whose texels (2^(CHAIN_BLOCK_LOG2 + level) map texels each)
-// cover the kernel's texel span, at most floor(2·reach) + 2 texels wherever
-// uv lies; so the level is the same for every pixel (a uniform mip level
-// keeps the four loads cheap).
-fn edge_class(uv: vec2f, face: u32, z_lo: f32, z_hi: f32, reach: f32) -> f32 {
-    let level = u32(max(ceil(log2(floor(2.0 * reach) + 2.0)) - f32(CHAIN_BLOCK_LOG2), 0.0));
-    if level >= textureNumLevels(minmax_map) {
+// from uv agrees on — 1 when the receiver's depth z (along its plane of
+// `slope`, depth per texel, with receiver_plane) lies in front of every
+// stored depth under the kernel, 0 when behind every one — or −1 (a shadow
+// edge: run the kernel). Reads 2×2 texels of the chain level whose cells
+// (2^(CHAIN_BLOCK_LOG2 + level) map texels each) cover the kernel's texel
+// span, at most floor(2·reach) + 2 texels wherever uv lies; so the level is
+// the same for every pixel (a uniform mip level keeps the four loads cheap).
+// Float arithmetic throughout: llvmpipe splits integer division into lanes.
+fn edge_class(uv: vec2f, face: u32, z: f32, slope: vec2f, reach: f32) -> f32 {
+    let level = max(ceil(log2(floor(2.0 * reach) + 2.0)) - f32(CHAIN_BLOCK_LOG2), 0.0);
+    if u32(level) >= textureNumLevels(edge_bounds) {
         return -1.0;
     }
     let top = vec2f(sm.map.x - 1.0);
     let p = uv * sm.map.x;
-    let cover = f32(1u << (CHAIN_BLOCK_LOG2 + level));
-    let a = vec2i(clamp(floor(p - reach), vec2f(0.0), top) / cover);
-    let b = vec2i(clamp(floor(p + reach), vec2f(0.0), top) / cover);
-    let l = i32(face);
-    let i = i32(level);
-    let r0 = textureLoad(minmax_map, a, l, i).xy;
-    let r1 = textureLoad(minmax_map, vec2i(b.x, a.y), l, i).xy;
-    let r2 = textureLoad(minmax_map, vec2i(a.x, b.y), l, i).xy;
-    let r3 = textureLoad(minmax_map, b, l, i).xy;
-    let least = min(min(r0.x, r1.x), min(r2.x, r3.x));
-    let greatest = max(max(r0.y, r1.y), max(r2.y, r3.y));
-    if z_hi <= least {
+    let cover = exp2(f32(CHAIN_BLOCK_LOG2) + level);
+    // The kernel's first and last texel, their cells, and the box's texel
+    // centres inside each of the two cells a side: the middle and half extent.
+    let a = clamp(floor(p - reach), vec2f(0.0), top);
+    let b = clamp(floor(p + reach), vec2f(0.0), top);
+    let ka = floor(a / cover);
+    let kb = floor(b / cover);
+    let split_a = min(b, ka * cover + cover - 1.0);
+    let split_b = max(a, kb * cover);
+    let middle = array(vec2f(a + split_a + 1.0) * 0.5, vec2f(split_b + b + 1.0) * 0.5);
+    let half = array((split_a - a) * 0.5, (b - split_b) * 0.5);
+    let cells = array(ka, kb);
+    // A tap compares the texels within a texel of it against the receiver's
+    // plane at the tap: the slope's one-texel sway.
+    let sway = abs(slope.x) + abs(slope.y);
+    var m = vec2f(3.4e38, -3.4e38);
+    for (var j = 0u; j < 2u; j++) {
+        for (var i = 0u; i < 2u; i++) {
+            let k = vec2f(cells[i].x, cells[j].y);
+            let at = vec2f(middle[i].x, middle[j].y);
+            let extent = vec2f(half[i].x, half[j].y);
+            // The cell's depths lie between two planes (edge_mask.wgsl).
+            let cell = textureLoad(edge_bounds, vec2i(k), i32(face), i32(level));
+            let cell_slope = cell.zw / cover;
+            let offset = dot(cell_slope, at - (k + 0.5) * cover) - dot(slope, at - p) - z;
+            // Rounding: a plane that is not flat is widened by 1e-6 (depths
+            // lie in [0, 1]); a flat one stays exact.
+            let spread = dot(abs(cell_slope - slope), extent) + sway
+                + select(0.0, 1e-6, any(cell.zw != vec2f(0.0)) || sway > 0.0);
+            m = vec2f(min(m.x, cell.x + offset - spread), max(m.y, cell.y + offset + spread));
+        }
+    }
+    if m.x >= 0.0 {
         return 1.0;
     }
-    if z_lo > greatest {
+    if m.y < 0.0 {
         return 0.0;
     }
     return -1.0;

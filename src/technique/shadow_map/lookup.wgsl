@@ -197,10 +197,8 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
     var known = -1.0;
     if EDGE_MASK && (FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK
         || FILTER_KIND == FILTER_PCSS || FILTER_KIND == FILTER_VARWIDTH) {
-        // Taps compare against the receiver plane: its depth spread over the reach.
-        let reach = kernel_reach();
-        let spread = reach * sm.map.y * (abs(rp_gradient.x) + abs(rp_gradient.y));
-        known = edge_class(pr.uv, face, min(z, pr.z) - spread, max(z, pr.z) + spread, reach);
+        // Taps compare z along the receiver plane (depth per texel).
+        known = edge_class(pr.uv, face, z, rp_gradient * sm.map.y, kernel_reach());
         count = select(count, 0u, known >= 0.0);
     }
     return select(kernel(face, pr, z, frag, count), known, known >= 0.0);

@@ -36,7 +36,7 @@ use crate::gpu::{GpuContext, SectionTimer};
 use crate::scene::area::area_samples;
 use anyhow::Result;
 use depth_bounds::{DepthReduction, SeenBounds};
-use edge_mask::{ChainSource, MinMaxChain};
+use edge_mask::{BoundsChain, ChainSource};
 use glam::{Mat4, UVec4, Vec4};
 use maps::Maps;
 use pipelines::{DepthPassKey, LookupKey, MapProjection, MapShape, ShadowMapShared};
@@ -66,14 +66,14 @@ pub static FAMILY: Family = Family {
 };
 
 /// What a shadow-map bind group binds: the uniforms, the depth, 8-bit,
-/// moment and min/max arrays and a virtual map's buffers;
+/// moment and edge-bounds arrays and a virtual map's buffers;
 /// [`MapBindings::empty`] binds placeholders for all but the uniforms.
 struct MapBindings<'a> {
     uniforms: &'a wgpu::Buffer,
     depth: &'a wgpu::TextureView,
     bytes: &'a wgpu::TextureView,
     moments: &'a wgpu::TextureView,
-    minmax: &'a wgpu::TextureView,
+    bounds: &'a wgpu::TextureView,
     virtual_buffers: [&'a wgpu::Buffer; 4],
 }
 
@@ -84,7 +84,7 @@ impl<'a> MapBindings<'a> {
             depth: &shared.placeholder_depth,
             bytes: &shared.placeholder_bytes,
             moments: &shared.placeholder_moments,
-            minmax: &shared.placeholder_minmax,
+            bounds: &shared.placeholder_bounds,
             virtual_buffers: shared.placeholder_virtual.each_ref(),
         }
     }
@@ -113,15 +113,18 @@ pub struct ShadowMapTechnique {
     depth_reduction: Option<DepthReduction>,
     /// What the cascades were fitted to last frame with SDSM.
     last_seen: Option<SeenBounds>,
-    /// The edge mask's min/max chain of the maps (`edge_mask=true`).
-    chain: Option<MinMaxChain>,
+    /// The edge mask's bounds chain of the maps (`edge_mask=true`).
+    chain: Option<BoundsChain>,
     /// `paging=virtual`: the pool, page table and cache across frames.
     virtual_state: Option<virtual_map::VirtualState>,
     /// Counter `lookup_ms`: GPU time of the screen-space lookup of each
-    /// map sample, with the edge mask's min/max chain (part of the
+    /// map sample, with the edge mask's bounds chain (part of the
     /// lookup's cost), not the depth passes — the time the edge mask and the
     /// virtual page table are meant to save.
     lookup_timer: SectionTimer,
+    /// Counter `edge_chain_ms`: the part of `lookup_ms` that builds the
+    /// edge mask's bounding chain (it reads every texel of the maps).
+    chain_timer: SectionTimer,
 }
 
 impl ShadowMapTechnique {
@@ -149,6 +152,7 @@ impl ShadowMapTechnique {
             chain: None,
             virtual_state: None,
             lookup_timer: SectionTimer::new("shadow map lookup timestamps"),
+            chain_timer: SectionTimer::new("edge mask chain timestamps"),
         }
     }
 
@@ -204,7 +208,7 @@ impl ShadowMapTechnique {
                     },
                     view(5, b.bytes),
                     view(6, b.moments),
-                    view(7, b.minmax),
+                    view(7, b.bounds),
                     buffer(8, b.virtual_buffers[0]),
                     buffer(9, b.virtual_buffers[1]),
                     buffer(10, b.virtual_buffers[2]),
@@ -263,7 +267,7 @@ impl ShadowTechnique for ShadowMapTechnique {
         self.ensure_maps(ctx.gpu, size, layers, format, moments)?;
         let edge_mask = c.edge_masked() && c.stage == Stage::Full;
         if edge_mask {
-            MinMaxChain::ensure(&mut self.chain, ctx.gpu, size, layers)?;
+            BoundsChain::ensure(&mut self.chain, ctx.gpu, size, layers)?;
         } else {
             self.chain = None;
         }
@@ -398,10 +402,10 @@ impl ShadowTechnique for ShadowMapTechnique {
                     .moment
                     .as_ref()
                     .map_or(&shared.placeholder_moments, |m| &m[0].1),
-                minmax: self
+                bounds: self
                     .chain
                     .as_ref()
-                    .map_or(&shared.placeholder_minmax, |c| &c.view),
+                    .map_or(&shared.placeholder_bounds, |c| &c.view),
                 ..MapBindings::empty(shared, &self.uniforms)
             },
         );
@@ -410,6 +414,13 @@ impl ShadowTechnique for ShadowMapTechnique {
             // No lookup: no time, not an earlier stage's.
             _ => {
                 self.lookup_timer.clear();
+                None
+            }
+        };
+        let chain_stamps = match &self.chain {
+            Some(_) => self.chain_timer.begin(gpu, lights.len() as u32),
+            None => {
+                self.chain_timer.clear();
                 None
             }
         };
@@ -486,6 +497,9 @@ impl ShadowTechnique for ShadowMapTechnique {
                 s.stamp(encoder, si as u32, false);
             }
             if let Some(chain) = &self.chain {
+                if let Some(s) = &chain_stamps {
+                    s.stamp(encoder, si as u32, false);
+                }
                 chain.record(
                     gpu,
                     encoder,
@@ -494,6 +508,9 @@ impl ShadowTechnique for ShadowMapTechnique {
                         None => ChainSource::Depth(&maps.depth_array),
                     },
                 );
+                if let Some(s) = &chain_stamps {
+                    s.stamp(encoder, si as u32, true);
+                }
             }
             // One sample writes the mask; several add 1/N each onto a cleared mask.
             let (load, accumulate) = match (lights.len(), si) {
@@ -529,6 +546,9 @@ impl ShadowTechnique for ShadowMapTechnique {
         if stamps.is_some() {
             self.lookup_timer.resolve(encoder);
         }
+        if chain_stamps.is_some() {
+            self.chain_timer.resolve(encoder);
+        }
         if c.stage != Stage::Full {
             // The maps alone: no lookup, a lit mask.
             crate::frame::clear_mask(encoder, ctx.target, 1.0);
@@ -554,6 +574,7 @@ impl ShadowTechnique for ShadowMapTechnique {
         if let Some(v) = &mut self.virtual_state {
             v.after_frame(gpu)?;
         }
+        self.chain_timer.after_frame(gpu)?;
         self.lookup_timer.after_frame(gpu)
     }
 
@@ -605,6 +626,11 @@ impl ShadowTechnique for ShadowMapTechnique {
                     ("lookup_ms", self.lookup_timer.last_ms),
                 ]
                 .into_iter()
+                .chain(
+                    self.chain
+                        .as_ref()
+                        .map(|_| ("edge_chain_ms", self.chain_timer.last_ms)),
+                )
                 .chain(self.last_seen.as_ref().map_or(vec![], |s| {
                     vec![
                         ("sdsm_near", s.near as f64),

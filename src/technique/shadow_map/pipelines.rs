@@ -107,7 +107,7 @@ pub struct LookupKey {
     pub receiver_plane: bool,
     /// Adds `constant × visibility` onto the mask (area-light maps).
     pub accumulate: bool,
-    /// The kernel only where the min/max chain finds a shadow edge.
+    /// The kernel only where the edge mask's bounds chain finds a shadow edge.
     pub edge_mask: bool,
     /// Texels read through a virtual map's page table.
     pub virtual_map: bool,
@@ -164,7 +164,7 @@ pub struct ShadowMapShared {
     /// Bound in place of the maps while they are rendered.
     pub placeholder_depth: wgpu::TextureView,
     pub placeholder_moments: wgpu::TextureView,
-    pub placeholder_minmax: wgpu::TextureView,
+    pub placeholder_bounds: wgpu::TextureView,
     /// Bound in place of a virtual map's buffers (bindings 8 to 11).
     pub placeholder_virtual: [wgpu::Buffer; 4],
 }
@@ -230,7 +230,7 @@ impl ShadowMapShared {
             placeholder_bytes: placeholder(device, wgpu::TextureFormat::R8Unorm),
             placeholder_depth: placeholder(device, wgpu::TextureFormat::Depth32Float),
             placeholder_moments: placeholder(device, MOMENT_FORMAT),
-            placeholder_minmax: placeholder(device, wgpu::TextureFormat::Rg32Float),
+            placeholder_bounds: placeholder(device, wgpu::TextureFormat::Rgba32Float),
             placeholder_virtual: std::array::from_fn(|_| {
                 device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("virtual map placeholder"),

@@ -12,7 +12,7 @@ override FILTER_KIND: u32 = FILTER_GRID;
 override TAPS: u32 = 3u;
 override BYTE_MAP: bool = false;
 override RECEIVER_PLANE: bool = false;
-// Edge-masked filtering: the kernel runs only where the min/max chain
+// Edge-masked filtering: the kernel runs only where the bounds chain
 // (binding 7) cannot tell the answer.
 override EDGE_MASK: bool = false;
 // A virtual map (virtual_map.wgsl): texels are read through the page table
@@ -84,7 +84,7 @@ struct ShadowMap {
 @group(2) @binding(4) var compare_sampler: sampler_comparison;
 @group(2) @binding(5) var byte_map: texture_2d_array<f32>;
 @group(2) @binding(6) var moment_map: texture_2d_array<f32>;
-@group(2) @binding(7) var minmax_map: texture_2d_array<f32>;
+@group(2) @binding(7) var edge_bounds: texture_2d_array<f32>;
 
 // One level of a virtual map: a window of `pages`² pages over its view's
 // uv square (see virtual_map.wgsl).
