@@ -79,52 +79,63 @@ fn block_bounds(t: vec2u, layer: u32, from_depth: bool) -> vec4f {
 // its slope departs from that one over its cell (a quarter of a parent
 // side each way); against the children's least and greatest depth.
 fn level_bounds(t: vec2u, layer: u32) -> vec4f {
+    let c00 = child_cell(t, vec2u(0u, 0u), layer);
+    let c10 = child_cell(t, vec2u(1u, 0u), layer);
+    let c01 = child_cell(t, vec2u(0u, 1u), layer);
+    let c11 = child_cell(t, vec2u(1u, 1u), layer);
+    let g = (c00.zw + c10.zw + c01.zw + c11.zw) * 0.5;
+    // Each child's (band, flat) ranges; its centre in parent sides.
+    let r00 = child_ranges(c00, vec2f(-0.25, -0.25), g);
+    let r10 = child_ranges(c10, vec2f(0.25, -0.25), g);
+    let r01 = child_ranges(c01, vec2f(-0.25, 0.25), g);
+    let r11 = child_ranges(c11, vec2f(0.25, 0.25), g);
+    let lo = min(min(r00.xz, r10.xz), min(r01.xz, r11.xz));
+    let hi = max(max(r00.yw, r10.yw), max(r01.yw, r11.yw));
+    return narrower(vec4f(lo.x, hi.x, g), vec2f(lo.y, hi.y));
+}
+
+// Child `k` of level texel t (the clamp repeats a level's last texel).
+fn child_cell(t: vec2u, k: vec2u, layer: u32) -> vec4f {
     let top = vec2i(textureDimensions(source_values)) - 1;
-    var child: array<vec4f, 4>;
-    var g = vec2f(0.0);
-    for (var k = 0u; k < 4u; k++) {
-        let at = min(vec2i(t * 2u + vec2u(k & 1u, k >> 1u)), top);
-        child[k] = textureLoad(source_values, at, layer, 0);
-        g += child[k].zw * 0.5;
+    return textureLoad(source_values, min(vec2i(t * 2u + k), top), layer, 0);
+}
+
+// A child cell c centred at o (parent sides) under the parent's slope g:
+// its band about that plane (x, y) and its flat least and greatest (z, w).
+fn child_ranges(c: vec4f, o: vec2f, g: vec2f) -> vec4f {
+    let departs = 0.25 * dot(abs(2.0 * c.zw - g), vec2f(1.0));
+    let shift = -dot(g, o);
+    let sway = 0.5 * dot(abs(c.zw), vec2f(1.0));
+    return vec4f(c.x + shift - departs, c.y + shift + departs, c.x - sway, c.y + sway);
+}
+
+// Destination texel id's bounds from the depth map, the 8-bit map (kind 0,
+// 1) or the level below (kind 2).
+fn reduce(id: vec3u, kind: u32) {
+    let size = textureDimensions(destination);
+    if id.x >= size.x || id.y >= size.y {
+        return;
     }
-    var band = vec2f(3.4e38, -3.4e38);
-    var flat = vec2f(3.4e38, -3.4e38);
-    for (var k = 0u; k < 4u; k++) {
-        let c = child[k];
-        // The child's centre in parent sides.
-        let o = vec2f(f32(k & 1u), f32(k >> 1u)) * 0.5 - 0.25;
-        let departs = 0.25 * dot(abs(2.0 * c.zw - g), vec2f(1.0));
-        let shift = -dot(g, o);
-        band = vec2f(min(band.x, c.x + shift - departs), max(band.y, c.y + shift + departs));
-        let sway = 0.5 * dot(abs(c.zw), vec2f(1.0));
-        flat = vec2f(min(flat.x, c.x - sway), max(flat.y, c.y + sway));
+    var bounds: vec4f;
+    if kind == 2u {
+        bounds = level_bounds(id.xy, id.z);
+    } else {
+        bounds = block_bounds(id.xy, id.z, kind == 0u);
     }
-    return narrower(vec4f(band, g), flat);
+    textureStore(destination, id.xy, id.z, bounds);
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn from_depth(@builtin(global_invocation_id) id: vec3u) {
-    let size = textureDimensions(destination);
-    if id.x >= size.x || id.y >= size.y {
-        return;
-    }
-    textureStore(destination, id.xy, id.z, block_bounds(id.xy, id.z, true));
+    reduce(id, 0u);
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn from_bytes(@builtin(global_invocation_id) id: vec3u) {
-    let size = textureDimensions(destination);
-    if id.x >= size.x || id.y >= size.y {
-        return;
-    }
-    textureStore(destination, id.xy, id.z, block_bounds(id.xy, id.z, false));
+    reduce(id, 1u);
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn from_level(@builtin(global_invocation_id) id: vec3u) {
-    let size = textureDimensions(destination);
-    if id.x >= size.x || id.y >= size.y {
-        return;
-    }
-    textureStore(destination, id.xy, id.z, level_bounds(id.xy, id.z));
+    reduce(id, 2u);
 }

@@ -244,29 +244,16 @@ fn edge_class(uv: vec2f, face: u32, z: f32, slope: vec2f, reach: f32) -> f32 {
     let kb = floor(b / cover);
     let split_a = min(b, ka * cover + cover - 1.0);
     let split_b = max(a, kb * cover);
-    let middle = array(vec2f(a + split_a + 1.0) * 0.5, vec2f(split_b + b + 1.0) * 0.5);
-    let half = array((split_a - a) * 0.5, (b - split_b) * 0.5);
-    let cells = array(ka, kb);
-    // A tap compares the texels within a texel of it against the receiver's
-    // plane at the tap: the slope's one-texel sway.
-    let sway = abs(slope.x) + abs(slope.y);
-    var m = vec2f(3.4e38, -3.4e38);
-    for (var j = 0u; j < 2u; j++) {
-        for (var i = 0u; i < 2u; i++) {
-            let k = vec2f(cells[i].x, cells[j].y);
-            let at = vec2f(middle[i].x, middle[j].y);
-            let extent = vec2f(half[i].x, half[j].y);
-            // The cell's depths lie between two planes (edge_mask.wgsl).
-            let cell = textureLoad(edge_bounds, vec2i(k), i32(face), i32(level));
-            let cell_slope = cell.zw / cover;
-            let offset = dot(cell_slope, at - (k + 0.5) * cover) - dot(slope, at - p) - z;
-            // Rounding: a plane that is not flat is widened by 1e-6 (depths
-            // lie in [0, 1]); a flat one stays exact.
-            let spread = dot(abs(cell_slope - slope), extent) + sway
-                + select(0.0, 1e-6, any(cell.zw != vec2f(0.0)) || sway > 0.0);
-            m = vec2f(min(m.x, cell.x + offset - spread), max(m.y, cell.y + offset + spread));
-        }
-    }
+    let middle_a = (a + split_a + 1.0) * 0.5;
+    let middle_b = (split_b + b + 1.0) * 0.5;
+    let half_a = (split_a - a) * 0.5;
+    let half_b = (b - split_b) * 0.5;
+    let e = EdgeQuery(face, i32(level), cover, z, slope, p);
+    let m = range_union(
+        range_union(cell_margins(e, ka, middle_a, half_a),
+            cell_margins(e, vec2f(kb.x, ka.y), vec2f(middle_b.x, middle_a.y), vec2f(half_b.x, half_a.y))),
+        range_union(cell_margins(e, vec2f(ka.x, kb.y), vec2f(middle_a.x, middle_b.y), vec2f(half_a.x, half_b.y)),
+            cell_margins(e, kb, middle_b, half_b)));
     if m.x >= 0.0 {
         return 1.0;
     }
@@ -274,6 +261,38 @@ fn edge_class(uv: vec2f, face: u32, z: f32, slope: vec2f, reach: f32) -> f32 {
         return 0.0;
     }
     return -1.0;
+}
+
+// What `cell_margins` compares: the chain level's face, level and cell side
+// in texels, and the receiver's depth, plane slope (depth per texel) and
+// map point (texels).
+struct EdgeQuery {
+    face: u32,
+    level: i32,
+    cover: f32,
+    z: f32,
+    slope: vec2f,
+    p: vec2f,
+};
+
+fn range_union(a: vec2f, b: vec2f) -> vec2f {
+    return vec2f(min(a.x, b.x), max(a.y, b.y));
+}
+
+// The least and greatest of (stored − compared depth) over the kernel's
+// texel centres inside chain cell k, which lie `extent` texels about `at`.
+// The cell's depths lie between two planes (edge_mask.wgsl); a tap
+// compares the texels within a texel of it against the receiver's plane
+// at the tap, hence the slope's one-texel sway. Rounding: a plane that is
+// not flat is widened by 1e-6 (depths lie in [0, 1]); a flat one stays exact.
+fn cell_margins(e: EdgeQuery, k: vec2f, at: vec2f, extent: vec2f) -> vec2f {
+    let cell = textureLoad(edge_bounds, vec2i(k), i32(e.face), e.level);
+    let cell_slope = cell.zw / e.cover;
+    let offset = dot(cell_slope, at - (k + 0.5) * e.cover) - dot(e.slope, at - e.p) - e.z;
+    let sway = abs(e.slope.x) + abs(e.slope.y);
+    let spread = dot(abs(cell_slope - e.slope), extent) + sway
+        + select(0.0, 1e-6, any(cell.zw != vec2f(0.0)) || sway > 0.0);
+    return vec2f(cell.x + offset - spread, cell.y + offset + spread);
 }
 
 // How far in texels from its centre a pixel's kernel reads
