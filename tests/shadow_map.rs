@@ -27,6 +27,7 @@ fn texture_matrix_maps_a_known_point_to_its_texel_and_depth() {
         stabilize_size: None,
         previous_half: None,
         view_fit: Default::default(),
+        turn: Default::default(),
     };
     let s = light_setup(&light, &bounds, &cam, 1.0, &fp);
     let t = bias_matrix() * s.faces[0] * Vec4::new(0.0, 0.0, 0.0, 1.0);
@@ -507,8 +508,9 @@ fn texel_footprint_halves_with_twice_the_map_and_shrinks_with_cascades() {
 
 /// The warps (PSM, LiSPSM, TSM) on the landscape from the ground, one
 /// 2048² map each: against the unwarped map they replace (fitted to the
-/// view frustum, as their warps are, not to the pixels seen, with their
-/// normal offset and no bias cap, which warped maps lack), several times
+/// view frustum, as their warps are, not to the pixels seen, upright as
+/// their light view is, with their normal offset and no bias cap, which
+/// warped maps lack), several times
 /// fewer mismatched pixels and a clean interior with the sun from the side,
 /// and still under half of its mismatch with the sun low in front of the
 /// camera (the duelling frusta, where LiSPSM and TSM relax towards it).
@@ -520,7 +522,7 @@ fn warped_maps_beat_the_one_map_on_the_landscape() {
         land.lights = land.light_preset(light).unwrap();
         let one = compare(
             &land,
-            "shadow-map:pcf[fit=frustum,normal_offset_directional=1,slope_bias_clamp=0]",
+            "shadow-map:pcf[fit=frustum,roll=up,normal_offset_directional=1,slope_bias_clamp=0]",
             (320, 180),
         );
         for warp in ["shadow-map:psm", "shadow-map:lispsm", "shadow-map:tsm"] {
@@ -676,6 +678,51 @@ fn one_map_fitted_to_the_seen_pixels_covers_them_with_smaller_texels() {
     assert!(
         fitted.all.total_pct * 2.0 <= wide.all.total_pct,
         "fitted {fitted:?}\nfrustum {wide:?}"
+    );
+}
+
+/// The single map turned to the smallest square around the pixels seen
+/// (`roll=square`, the default): a wide view straight down onto squares in
+/// a row sees a floor strip 5.3 times longer than wide, along the world's
+/// x, which a sun in the y-z plane sees along its image's x axis (upright,
+/// the square's side is the strip's length; turned 45°, (length +
+/// width)/√2); the map turns off upright and clear of the world's axes, keeps every
+/// receiving pixel inside it with texels smaller than the upright map's,
+/// and its mask is as clean.
+#[test]
+fn one_map_turned_to_the_smallest_square_has_smaller_texels() {
+    let squares: Vec<(Vec3, f32)> = (0..7)
+        .map(|i| (Vec3::new(2.0 * (i as f32 - 3.0) + 1.0, 0.6, 4.0), 0.5))
+        .collect();
+    let mut scene = squares_over_floor(
+        &squares,
+        Light::directional(Vec3::new(0.0, -1.0, 0.4), 1.0),
+        false,
+    );
+    // Off the scene's centre, so that a box taken along the wrong
+    // directions would miss it.
+    scene.camera = shadowlab::scene::Camera {
+        up: Vec3::NEG_Z,
+        fov_y_deg: 20.0,
+        ..shadowlab::scene::Camera::new(Vec3::new(1.0, 8.0, 4.0), Vec3::new(1.0, 0.0, 4.0))
+    };
+    let (w, h) = (512, 96);
+    let (outside, turned) = map_coverage(&scene, "shadow-map:pcf", (w, h));
+    assert_eq!(outside, 0, "receiving pixels outside the map");
+    let (_, upright) = map_coverage(&scene, "shadow-map:pcf[roll=up]", (w, h));
+    assert!(
+        turned < 0.9 * upright,
+        "turned {turned} px/texel, upright {upright}"
+    );
+    let turn = |id: &str| counter(&frame_with_debug_views(&scene, id, w, h), "map_turn_deg");
+    let t = turn("shadow-map:pcf");
+    assert!((15.0..=75.0).contains(&t), "turned {t}°");
+    assert_eq!(turn("shadow-map:pcf[roll=up]"), 0.0);
+    let m = compare(&scene, "shadow-map:pcf", (w, h)).mask;
+    assert!(m.reference_shadowed_pct > 2.0, "{m:?}");
+    assert!(
+        m.interior.total_pct <= 0.05 && m.all.total_pct <= 1.0,
+        "{m:?}"
     );
 }
 

@@ -96,6 +96,19 @@ pub fn compute_pipelines<const N: usize>(
     source: &str,
     entries: [&str; N],
 ) -> [wgpu::ComputePipeline; N] {
+    compute_pipelines_with(device, label, layout, source, entries, &[])
+}
+
+/// [`compute_pipelines`] with the shader's pipeline-overridable
+/// `constants` set.
+pub fn compute_pipelines_with<const N: usize>(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    source: &str,
+    entries: [&str; N],
+    constants: &[(&str, f64)],
+) -> [wgpu::ComputePipeline; N] {
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(label),
         bind_group_layouts: &[Some(layout)],
@@ -108,7 +121,10 @@ pub fn compute_pipelines<const N: usize>(
             layout: Some(&pipeline_layout),
             module: &module,
             entry_point: Some(entry),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                ..Default::default()
+            },
             cache: None,
         })
     })

@@ -52,7 +52,9 @@ impl LightFrustum {
     }
 }
 
-fn up_for(dir: Vec3) -> Vec3 {
+/// The up vector of a light's view along `dir`: the world's up, or +z
+/// for a light looking (nearly) straight up or down.
+pub fn up_for(dir: Vec3) -> Vec3 {
     if dir.normalize().dot(Vec3::Y).abs() > 0.99 {
         Vec3::Z
     } else {

@@ -11,9 +11,9 @@ use anyhow::Result;
 use super::paging_params::{CLIPMAP_LEVELS, PAGE_SIZE, PAGING, POOL, REFINE_STEPS, VIRTUAL_SIZE};
 pub use super::paging_params::{Paging, PagingConfig};
 use super::partition_params::{
-    BLEND, CASCADES, FIT, LISPSM_N, MAX_DISTANCE, SPLIT_LAMBDA, STABILIZE, TSM_FOCUS, WARP,
+    BLEND, CASCADES, FIT, LISPSM_N, MAX_DISTANCE, ROLL, SPLIT_LAMBDA, STABILIZE, TSM_FOCUS, WARP,
 };
-pub use super::partition_params::{Cascades, Fit, Warp, WarpParams};
+pub use super::partition_params::{Cascades, Fit, Roll, Warp, WarpParams};
 
 choice_enum! {
     /// The lookup's filter.
@@ -387,6 +387,7 @@ pub const PARAMS: &[ParamSpec] = &[
     STABILIZE,
     BLEND,
     FIT,
+    ROLL,
     WARP,
     LISPSM_N,
     TSM_FOCUS,
@@ -566,6 +567,9 @@ pub struct ShadowMapConfig {
     pub moment_bias: f32,
     pub stage: Stage,
     pub cascades: Cascades,
+    /// A directional light's single unwarped map: upright, or turned to
+    /// the smallest square (`roll`).
+    pub roll: Roll,
     pub warp: WarpParams,
     pub paging: PagingConfig,
 }
@@ -618,6 +622,7 @@ impl ShadowMapConfig {
             moment_bias: p.float(&MOMENT_BIAS)?,
             stage: p.choice(&STAGE)?,
             cascades: Cascades::parse(p)?,
+            roll: p.choice(&ROLL)?,
             warp: WarpParams::parse(p)?,
             paging: PagingConfig::parse(p)?,
         })

@@ -6,6 +6,7 @@
 //! ([`Feedback`]), and widens it for the camera's motion in between.
 
 use super::partition_params::Fit;
+use super::roll::{DIRECTIONS, Supports};
 use crate::gpu::{FrameFeedback, GpuContext, SectionTimer};
 use crate::technique::{Feedback, MaskContext};
 use anyhow::Result;
@@ -14,8 +15,10 @@ use std::sync::Arc;
 
 /// At most this many cascades (the uniform's split arrays).
 const MAX_CASCADES: usize = 8;
-/// Result words: least and greatest depth, then 4 per cascade.
-const WORDS: usize = 2 + 4 * MAX_CASCADES;
+/// Result words: least and greatest depth, 4 per cascade, then the least
+/// and greatest extent along each support direction (`roll::Supports`).
+const SUPPORT_WORD: usize = 2 + 4 * MAX_CASCADES;
+const WORDS: usize = SUPPORT_WORD + 2 * DIRECTIONS;
 const RESULT_BYTES: u64 = (WORDS * 4) as u64;
 /// Pixels along each axis of the block one invocation reduces
 /// (`depth_bounds.wgsl`'s `TILE`).
@@ -40,6 +43,9 @@ pub struct SeenBounds {
     /// Per cascade `[min x, min y, max x, max y]`; `None` for a cascade
     /// that shades no pixel. Empty unless the fit is `samples`.
     pub cascades_xy: Vec<Option<[f32; 4]>>,
+    /// A single map fitted to the samples: their extents along the support
+    /// directions of the light view's image (its turns' boxes).
+    pub supports: Option<Supports>,
 }
 
 impl SeenBounds {
@@ -61,6 +67,7 @@ impl SeenBounds {
                     })
                 })
                 .collect(),
+            supports: self.supports.map(|s| s.widened(LATE_XY_MARGIN)),
         }
     }
 }
@@ -79,6 +86,9 @@ struct ReduceParams {
 pub struct ReduceInputs {
     pub fit: Fit,
     pub light_view: Mat4,
+    /// One map fitted to the samples: take the extents along the support
+    /// directions (for its turn, `roll`) instead of the cascades' boxes.
+    pub supports: bool,
     pub cascades: u32,
     pub split_lambda: f32,
     /// The farthest split allowed (`max_distance`, else the camera's far).
@@ -89,6 +99,8 @@ pub struct ReduceInputs {
 struct ReduceShared {
     layout: wgpu::BindGroupLayout,
     depth_range: wgpu::ComputePipeline,
+    /// `depth_range` with the extents along the support directions.
+    depth_range_supports: wgpu::ComputePipeline,
     cascade_bounds: wgpu::ComputePipeline,
 }
 
@@ -113,15 +125,25 @@ impl ReduceShared {
                 crate::gpu::storage_entry(4, wgpu::ShaderStages::COMPUTE, false),
             ],
         });
+        let source = include_str!("depth_bounds.wgsl");
         let [depth_range, cascade_bounds] = crate::gpu::compute_pipelines(
             device,
             "sdsm reduction",
             &layout,
-            include_str!("depth_bounds.wgsl"),
+            source,
             ["depth_range", "cascade_bounds"],
+        );
+        let [depth_range_supports] = crate::gpu::compute_pipelines_with(
+            device,
+            "sdsm reduction with supports",
+            &layout,
+            source,
+            ["depth_range"],
+            &[("SUPPORTS", 1.0)],
         );
         ReduceShared {
             depth_range,
+            depth_range_supports,
             cascade_bounds,
             layout,
         }
@@ -199,7 +221,7 @@ impl DepthReduction {
             .feedback
             .collect(gpu, own, encoder, &self.result, RESULT_BYTES)?;
         if let Some(bytes) = bytes {
-            self.latest = decode(&bytes, cascades as usize, samples);
+            self.latest = decode(&bytes, cascades as usize, samples, inputs.supports);
         }
         if wait {
             self.wait_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -251,6 +273,9 @@ impl DepthReduction {
             empty[2 + 4 * c] = u32::MAX;
             empty[3 + 4 * c] = u32::MAX;
         }
+        for k in 0..DIRECTIONS {
+            empty[SUPPORT_WORD + 2 * k] = u32::MAX;
+        }
         gpu.queue
             .write_buffer(&self.result, 0, bytemuck::cast_slice(&empty));
         let [position, normal] = ctx.frame.gbuffer_views();
@@ -282,10 +307,11 @@ impl DepthReduction {
         });
         let groups = |n: u32| n.div_ceil(WORKGROUP_PIXELS);
         let (w, h) = (groups(ctx.frame.width()), groups(ctx.frame.height()));
-        let mut passes = vec![&self.shared.depth_range];
-        if inputs.fit == Fit::Samples {
-            passes.push(&self.shared.cascade_bounds);
-        }
+        let passes = match (inputs.fit, inputs.supports) {
+            (Fit::Samples, true) => vec![&self.shared.depth_range_supports],
+            (Fit::Samples, false) => vec![&self.shared.depth_range, &self.shared.cascade_bounds],
+            _ => vec![&self.shared.depth_range],
+        };
         // One pass per step: the second reads what the first wrote.
         self.timer.time(gpu, encoder, |encoder| {
             for pipeline in passes {
@@ -311,12 +337,12 @@ fn from_ordered(u: u32) -> f32 {
 }
 
 /// The bounds in a result buffer; `None` when no pixel receives.
-fn decode(bytes: &[u8], cascades: usize, samples: bool) -> Option<SeenBounds> {
+fn decode(bytes: &[u8], cascades: usize, samples: bool, supports: bool) -> Option<SeenBounds> {
     let words: &[u32] = bytemuck::cast_slice(&bytes[..RESULT_BYTES as usize]);
     if words[0] == u32::MAX {
         return None;
     }
-    let cascades_xy = if samples {
+    let cascades_xy = if samples && !supports {
         (0..cascades)
             .map(|c| {
                 let w = &words[2 + 4 * c..6 + 4 * c];
@@ -330,6 +356,11 @@ fn decode(bytes: &[u8], cascades: usize, samples: bool) -> Option<SeenBounds> {
         near: from_ordered(words[0]),
         far: from_ordered(words[1]),
         cascades_xy,
+        supports: supports.then(|| {
+            Supports(std::array::from_fn(|k| {
+                [0, 1].map(|e| from_ordered(words[SUPPORT_WORD + 2 * k + e]))
+            }))
+        }),
     })
 }
 

@@ -26,7 +26,8 @@ struct ReduceParams {
 @group(0) @binding(1) var normals: texture_2d<f32>;
 @group(0) @binding(2) var<uniform> params: ReduceParams;
 // [0] least depth, [1] greatest depth, then per cascade i at 2 + 4i: least
-// x, least y, greatest x, greatest y — all as `ordered` bits.
+// x, least y, greatest x, greatest y, then at SUPPORT_WORD + 2k the least
+// and greatest extent along support direction k — all as `ordered` bits.
 @group(0) @binding(3) var<storage, read_write> bounds: array<atomic<u32>>;
 // Per block of TILE×TILE pixels, row-major over the dispatch: its least and
 // greatest view depth (FAR_AWAY and 0 for a block that receives nothing),
@@ -66,7 +67,39 @@ fn seen_point(px: vec2u) -> vec4f {
     return vec4f(g.xyz, max(-dot(params.view_z, vec4f(g.xyz, 1.0)), 0.0));
 }
 
-var<workgroup> group_bounds: array<atomic<u32>, 32>;
+// Workgroup bounds: `depth_range`'s depths at 0, 1 and support extents at
+// 2 + 2k, 3 + 2k; `cascade_bounds`' boxes at 4i.
+var<workgroup> group_bounds: array<atomic<u32>, 34>;
+
+// `depth_range` also takes the extents along the support directions (a
+// single map fitted to the samples; its own pipeline, so that the
+// cascades' reduction does not carry that code).
+override SUPPORTS: bool = false;
+
+// Where the support extents start in `bounds` (after 2 + 4·MAX_CASCADES).
+const SUPPORT_WORD: u32 = 34u;
+// Workgroup words of the depth range and the 16 support extents.
+const RANGE_WORDS: u32 = 34u;
+
+// The support directions k·180°/16 (roll.rs's `Supports`), four per
+// vector: their x components in SUPPORT_COS_i, y in SUPPORT_SIN_i.
+const SUPPORT_COS_0 = vec4f(1.0, 0.98078528, 0.92387953, 0.83146961);
+const SUPPORT_SIN_0 = vec4f(0.0, 0.19509032, 0.38268343, 0.55557023);
+const SUPPORT_COS_1 = vec4f(0.70710678, 0.55557023, 0.38268343, 0.19509032);
+const SUPPORT_SIN_1 = vec4f(0.70710678, 0.83146961, 0.92387953, 0.98078528);
+const SUPPORT_COS_2 = vec4f(0.0, -0.19509032, -0.38268343, -0.55557023);
+const SUPPORT_SIN_2 = vec4f(1.0, 0.98078528, 0.92387953, 0.83146961);
+const SUPPORT_COS_3 = vec4f(-0.70710678, -0.83146961, -0.92387953, -0.98078528);
+const SUPPORT_SIN_3 = vec4f(0.70710678, 0.55557023, 0.38268343, 0.19509032);
+
+// Merges the extents along four support directions (from `first`) into
+// the workgroup's.
+fn merge_supports(first: u32, low: vec4f, high: vec4f) {
+    for (var i = 0u; i < 4u; i++) {
+        atomicMin(&group_bounds[2u + 2u * (first + i)], ordered(low[i]));
+        atomicMax(&group_bounds[3u + 2u * (first + i)], ordered(high[i]));
+    }
+}
 
 // Each invocation reduces a TILE×TILE block of pixels in registers, so
 // that a workgroup of 8×8 invocations makes 64 shared atomics for 64×64
@@ -80,8 +113,10 @@ fn block_index(id: vec2u) -> u32 {
 
 @compute @workgroup_size(8, 8)
 fn depth_range(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocation_index) li: u32) {
-    if li < 2u {
-        atomicStore(&group_bounds[li], select(0u, EMPTY_LOW, li == 0u));
+    let words = select(2u, RANGE_WORDS, SUPPORTS);
+    if li < words {
+        // Least values (even words) start at the top of the order.
+        atomicStore(&group_bounds[li], select(0u, EMPTY_LOW, (li & 1u) == 0u));
     }
     workgroupBarrier();
     let light_x = light_row(0u);
@@ -90,6 +125,16 @@ fn depth_range(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocati
     var high = 0.0;
     var box_low = vec2f(FAR_AWAY);
     var box_high = vec2f(-FAR_AWAY);
+    // Extents along the support directions, four per vector (one variable
+    // each: lavapipe keeps them in registers).
+    var s_low0 = vec4f(FAR_AWAY);
+    var s_low1 = vec4f(FAR_AWAY);
+    var s_low2 = vec4f(FAR_AWAY);
+    var s_low3 = vec4f(FAR_AWAY);
+    var s_high0 = vec4f(-FAR_AWAY);
+    var s_high1 = vec4f(-FAR_AWAY);
+    var s_high2 = vec4f(-FAR_AWAY);
+    var s_high3 = vec4f(-FAR_AWAY);
     for (var k = 0u; k < TILE * TILE; k++) {
         let seen = seen_point(id.xy * TILE + vec2u(k % TILE, k / TILE));
         let receives = seen.w > 0.0;
@@ -98,6 +143,20 @@ fn depth_range(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocati
         high = select(high, max(high, seen.w), receives);
         box_low = select(box_low, min(box_low, l), receives);
         box_high = select(box_high, max(box_high, l), receives);
+        if SUPPORTS {
+            let a0 = SUPPORT_COS_0 * l.x + SUPPORT_SIN_0 * l.y;
+            let a1 = SUPPORT_COS_1 * l.x + SUPPORT_SIN_1 * l.y;
+            let a2 = SUPPORT_COS_2 * l.x + SUPPORT_SIN_2 * l.y;
+            let a3 = SUPPORT_COS_3 * l.x + SUPPORT_SIN_3 * l.y;
+            s_low0 = select(s_low0, min(s_low0, a0), receives);
+            s_low1 = select(s_low1, min(s_low1, a1), receives);
+            s_low2 = select(s_low2, min(s_low2, a2), receives);
+            s_low3 = select(s_low3, min(s_low3, a3), receives);
+            s_high0 = select(s_high0, max(s_high0, a0), receives);
+            s_high1 = select(s_high1, max(s_high1, a1), receives);
+            s_high2 = select(s_high2, max(s_high2, a2), receives);
+            s_high3 = select(s_high3, max(s_high3, a3), receives);
+        }
     }
     if all(id.xy < params.blocks.xy) {
         blocks[block_index(id.xy)] = BlockBounds(vec2f(low, high), vec4f(box_low, box_high));
@@ -105,13 +164,22 @@ fn depth_range(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocati
     if high > 0.0 {
         atomicMin(&group_bounds[0], ordered(low));
         atomicMax(&group_bounds[1], ordered(high));
+        if SUPPORTS {
+            merge_supports(0u, s_low0, s_high0);
+            merge_supports(4u, s_low1, s_high1);
+            merge_supports(8u, s_low2, s_high2);
+            merge_supports(12u, s_low3, s_high3);
+        }
     }
     workgroupBarrier();
-    if li == 0u {
-        let group_low = atomicLoad(&group_bounds[0]);
-        if group_low != EMPTY_LOW {
-            atomicMin(&bounds[0], group_low);
-            atomicMax(&bounds[1], atomicLoad(&group_bounds[1]));
+    let group_low = atomicLoad(&group_bounds[0]);
+    if li < words && group_low != EMPTY_LOW {
+        let v = atomicLoad(&group_bounds[li]);
+        let word = select(li, SUPPORT_WORD - 2u + li, li >= 2u);
+        if (li & 1u) == 0u {
+            atomicMin(&bounds[word], v);
+        } else {
+            atomicMax(&bounds[word], v);
         }
     }
 }

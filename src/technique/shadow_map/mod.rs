@@ -19,6 +19,7 @@ pub mod partition_params;
 mod perspective;
 mod pipelines;
 mod projection;
+mod roll;
 mod setup;
 mod trapezoid;
 mod uniform;
@@ -26,7 +27,7 @@ mod virtual_map;
 pub mod warp;
 
 pub use config::{
-    Cascades, CullFace, DepthFormat, Filter, Fit, Omni, ShadowMapConfig, Stage, Warp,
+    Cascades, CullFace, DepthFormat, Filter, Fit, Omni, Roll, ShadowMapConfig, Stage, Warp,
 };
 pub use setup::{CascadeSplit, FrustumParams, LightSetup, cube_views, light_setup};
 
@@ -105,6 +106,8 @@ pub struct ShadowMapTechnique {
     /// Per light sample: the half-extent of last frame's stabilised
     /// directional square (kept while it fits; `setup::KEPT_FIT_RATIO`).
     stable_halves: Vec<f32>,
+    /// A directional light's single map's turn last frame (`roll`).
+    turn: Option<usize>,
     last_paraboloid: bool,
     want_debug: bool,
     /// Triangles drawn into the maps last frame (after culling per face).
@@ -144,6 +147,7 @@ impl ShadowMapTechnique {
             debug_frame: None,
             last_faces: vec![],
             stable_halves: vec![],
+            turn: None,
             last_paraboloid: false,
             want_debug: false,
             map_triangles: 0,
@@ -630,6 +634,10 @@ impl ShadowTechnique for ShadowMapTechnique {
                     self.chain
                         .as_ref()
                         .map(|_| ("edge_chain_ms", self.chain_timer.last_ms)),
+                )
+                .chain(
+                    self.turn
+                        .map(|t| ("map_turn_deg", roll::turn_angle(t).to_degrees() as f64)),
                 )
                 .chain(self.last_seen.as_ref().map_or(vec![], |s| {
                     vec![

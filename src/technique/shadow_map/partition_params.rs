@@ -12,6 +12,11 @@ choice_enum! {
 }
 
 choice_enum! {
+    /// How a directional light's single map is turned about the light.
+    pub enum Roll { Up = "up", Square = "square" }
+}
+
+choice_enum! {
     /// What a directional light's cascades are fitted to.
     pub enum Fit { Frustum = "frustum", Depth = "depth", Samples = "samples" }
 }
@@ -61,6 +66,12 @@ pub const FIT: ParamSpec = ParamSpec::choice_of::<Fit>(
     "fit",
     Fit::Samples as usize,
     "directional lights: what the map, or each cascade, is fitted to — frustum: the view frustum up to max_distance (one map: up to where the view of the scene ends), clipped to the scene; depth: the view depths the camera sees (SDSM, Lauritzen, Salvi & Lefohn 2011: min/max of a GPU reduction of the prepass depth); samples: those depths and the light-view x/y box of the pixels the map (each cascade) shades — one map's box is stabilised as a frustum fit is, cascades fitted so are not; a single warped map is fitted by its warp. Measurements wait for the reduction; the viewer uses the previous frame's, widened",
+);
+
+pub const ROLL: ParamSpec = ParamSpec::choice_of::<Roll>(
+    "roll",
+    Roll::Square as usize,
+    "directional lights, one unwarped map: how its square is turned about the light — up: the world's up along the map's y axis (every vertical edge then lies along a texel column, where no filter recovers its sub-texel place); square: the turn, in steps of 90°/32, with the smallest square around the camera's view of the scene among those that keep the world's vertical 15° or more off the texel axes (city/sun at 640×360: 0.271 → 0.17 % total mismatch), last frame's kept while at most an eighth of an octave larger",
 );
 
 pub const WARP: ParamSpec = ParamSpec::choice_of::<Warp>(

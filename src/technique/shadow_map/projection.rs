@@ -6,9 +6,10 @@
 //! warps (`warp`, `trapezoid`).
 
 use super::depth_bounds::{DepthReduction, ReduceInputs};
+use super::setup::Turn;
 use super::setup::ViewFit;
 use super::{
-    Cascades, Fit, FrustumParams, LightSetup, Omni, ShadowMapTechnique, Warp, cascades,
+    Cascades, Fit, FrustumParams, LightSetup, Omni, Roll, ShadowMapTechnique, Warp, cascades,
     light_setup, setup, warp,
 };
 use crate::scene::{Light, LightType};
@@ -37,9 +38,12 @@ impl ShadowMapTechnique {
             stabilize_size: stabilize.then_some(size),
             previous_half: None,
             view_fit: ViewFit::Frustum,
+            turn: Turn::Upright,
         };
         let directional = ctx.light.kind == LightType::Directional;
         let cascaded = directional && c.cascades.count > 1;
+        // One unwarped map: fitted and turned by `directional_setup`.
+        let single = directional && !cascaded && c.warp.kind == Warp::None;
         // A single warped map is fitted by its warp, not to what was seen.
         let fits_seen = directional
             && c.cascades.fit != Fit::Frustum
@@ -52,6 +56,7 @@ impl ShadowMapTechnique {
                 fit: c.cascades.fit,
                 light_view: setup::light_view_of_scene(ctx.light.direction, &ctx.scene_gpu.bounds)
                     .0,
+                supports: single && c.cascades.fit == Fit::Samples,
                 cascades: c.cascades.count,
                 split_lambda: c.cascades.split_lambda,
                 far_limit: c.cascades.far_limit(ctx.fit_camera.far),
@@ -60,6 +65,7 @@ impl ShadowMapTechnique {
         } else {
             None
         };
+        let mut turns = vec![];
         let setups = lights
             .iter()
             .enumerate()
@@ -77,6 +83,26 @@ impl ShadowMapTechnique {
                         size,
                         self.last_seen.as_ref(),
                     )
+                } else if single {
+                    let (setup, turn) = setup::directional_setup(
+                        l,
+                        &ctx.scene_gpu.bounds,
+                        ctx.fit_camera,
+                        aspect,
+                        &FrustumParams {
+                            previous_half: self.stable_halves.get(i).copied(),
+                            view_fit: self.single_map_fit(ctx),
+                            turn: match c.roll {
+                                Roll::Up => Turn::Upright,
+                                Roll::Square => Turn::Fitted {
+                                    previous: self.turn,
+                                },
+                            },
+                            ..frustum_params
+                        },
+                    );
+                    turns.push(turn);
+                    setup
                 } else {
                     light_setup(
                         l,
@@ -85,7 +111,6 @@ impl ShadowMapTechnique {
                         aspect,
                         &FrustumParams {
                             previous_half: self.stable_halves.get(i).copied(),
-                            view_fit: self.single_map_fit(ctx),
                             ..frustum_params
                         },
                     )
@@ -103,6 +128,7 @@ impl ShadowMapTechnique {
                 setup
             })
             .collect::<Vec<LightSetup>>();
+        self.turn = turns.first().copied();
         // A stabilised single directional map's square, kept next frame
         // while it fits (`FrustumParams::previous_half`).
         self.stable_halves = match ctx.light.kind {
@@ -120,9 +146,12 @@ impl ShadowMapTechnique {
     fn single_map_fit(&self, ctx: &MaskContext) -> ViewFit {
         let c = &self.config.cascades;
         match (c.fit, self.last_seen.as_ref()) {
-            (Fit::Samples, Some(seen)) => match seen.cascades_xy.first() {
-                Some(Some(b)) => ViewFit::Box(setup::widen_for_kernels(*b, self.config.size)),
-                _ => ViewFit::Frustum,
+            (Fit::Samples, Some(seen)) => match seen.supports {
+                Some(supports) => ViewFit::Samples {
+                    supports,
+                    size: self.config.size,
+                },
+                None => ViewFit::Frustum,
             },
             (Fit::Depth, Some(seen)) => {
                 let (near, far) = cascades::partitioned_depths(

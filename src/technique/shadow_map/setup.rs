@@ -3,7 +3,9 @@
 //! orthographic box for directional lights fitted to the scene and clipped
 //! to what the camera sees (wgpu's [0, 1] depth).
 
+use super::roll::{self, Supports};
 use crate::scene::{Aabb, Camera, Light, LightType};
+use crate::technique::light_space::up_for;
 use glam::{Mat4, Vec3, Vec4};
 
 /// The light's matrices for one frame.
@@ -47,12 +49,19 @@ pub fn light_view_of_scene(dir: Vec3, scene_bounds: &Aabb) -> (Mat4, Aabb) {
     (view, scene_bounds.transformed(view))
 }
 
-fn up_for(dir: Vec3) -> Vec3 {
-    if dir.normalize().dot(Vec3::Y).abs() > 0.99 {
-        Vec3::Z
-    } else {
-        Vec3::Y
-    }
+/// The part of the camera's view between view depths `z0` and `z1` that
+/// lies in `scene_bounds`: the corners of that convex solid.
+pub fn view_in_scene(
+    camera: &Camera,
+    aspect: f32,
+    scene_bounds: &Aabb,
+    z0: f32,
+    z1: f32,
+) -> Vec<Vec3> {
+    clip_to_bounds(
+        &slice_corners(camera, aspect, z0, z1.max(z0 * 1.001)),
+        scene_bounds,
+    )
 }
 
 /// Near/far of a local light around `bounds`, unless given.
@@ -106,6 +115,19 @@ pub struct FrustumParams {
     pub previous_half: Option<f32>,
     /// Directional, one map: what its square is fitted to.
     pub view_fit: ViewFit,
+    /// Directional, one map: how it is turned about the light.
+    pub turn: Turn,
+}
+
+/// How a directional light's single map is turned about the light.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Turn {
+    /// The world's up along the map's y axis.
+    #[default]
+    Upright,
+    /// The smallest square clear of the vertical
+    /// ([`Supports::fitted_turn`]), given last frame's turn.
+    Fitted { previous: Option<usize> },
 }
 
 /// What a directional light's single map is fitted to, within the scene.
@@ -118,9 +140,10 @@ pub enum ViewFit {
     /// The camera's frustum between these view depths (SDSM's seen
     /// depths), clipped to the scene's bounds.
     Depths { near: f32, far: f32 },
-    /// This light-view box `[min x, min y, max x, max y]`: the pixels the
-    /// camera saw (SDSM's samples), widened by [`widen_for_kernels`].
-    Box([f32; 4]),
+    /// The pixels the camera saw (SDSM's samples), as their extents in the
+    /// unturned light view; the box of the map's turn is widened by
+    /// [`widen_for_kernels`] for a map of `size`².
+    Samples { supports: Supports, size: u32 },
 }
 
 /// Maps fitted to the pixels the camera saw reach this many texels past
@@ -297,11 +320,9 @@ pub fn light_setup(
         far,
         fov_deg,
         paraboloid,
-        stabilize_size,
-        previous_half,
-        view_fit,
+        ..
     } = *fp;
-    use glam::camera::rh::proj::directx::{orthographic, perspective};
+    use glam::camera::rh::proj::directx::perspective;
     match light.kind {
         LightType::Spot => {
             let (n, f) = near_far(light.position, scene_bounds, near, far);
@@ -359,52 +380,74 @@ pub fn light_setup(
                 warp_depth: None,
             }
         }
-        LightType::Directional => {
-            let (view, scene_ls) = light_view_of_scene(light.direction, scene_bounds);
-            let clipped_view = |z0: f32, z1: f32| {
-                let corners = slice_corners(camera, aspect, z0, z1.max(z0 * 1.001));
-                let inside = clip_to_bounds(&corners, scene_bounds);
-                (!inside.is_empty()).then(|| {
-                    let b = Aabb::from_points(inside.iter().map(|p| view.transform_point3(*p)));
-                    [b.min.x, b.min.y, b.max.x, b.max.y]
-                })
-            };
-            let fitted = match view_fit {
-                ViewFit::Box(b) => Some(b),
-                ViewFit::Frustum => clipped_view(camera.near, view_reach(camera, scene_bounds)),
-                ViewFit::Depths { near, far } => clipped_view(near, far),
-            };
-            let (half, cx, cy) = square_around(fitted.unwrap_or([
-                scene_ls.min.x,
-                scene_ls.min.y,
-                scene_ls.max.x,
-                scene_ls.max.y,
-            ]));
-            let (half, cx, cy) = match stabilize_size {
-                Some(size) => match previous_half {
-                    Some(p) if p >= half && p <= half * KEPT_FIT_RATIO => {
-                        snap_to_texels(p, cx, cy, size)
-                    }
-                    _ => stable_fit(half, cx, cy, size),
-                },
-                None => (half, cx, cy),
-            };
-            // View space looks down −z: depth range from the scene's z extent.
-            let (n, f) = (-scene_ls.max.z - 1e-3, -scene_ls.min.z + 1e-3);
-            LightSetup {
-                faces: vec![
-                    orthographic(cx - half, cx + half, cy - half, cy + half, n.max(0.0), f) * view,
-                ],
-                near: n.max(0.0),
-                far: f,
-                orthographic: true,
-                paraboloid: false,
-                texel_scale: 2.0 * half,
-                cascades: None,
-                warp_depth: None,
-            }
-        }
+        LightType::Directional => directional_setup(light, scene_bounds, camera, aspect, fp).0,
     }
+}
+
+/// A directional light's single map: the square around `fp.view_fit` in
+/// the light view turned as `fp.turn` says (stabilised with
+/// `fp.stabilize_size`), and the turn it took (`roll::turn_angle`'s index).
+pub fn directional_setup(
+    light: &Light,
+    scene_bounds: &Aabb,
+    camera: &Camera,
+    aspect: f32,
+    fp: &FrustumParams,
+) -> (LightSetup, usize) {
+    use glam::camera::rh::proj::directx::orthographic;
+    let base = light_view_of_scene(light.direction, scene_bounds).0;
+    let seen = |z0: f32, z1: f32| {
+        Supports::of_points(
+            view_in_scene(camera, aspect, scene_bounds, z0, z1)
+                .iter()
+                .map(|p| base.transform_point3(*p).truncate()),
+        )
+    };
+    let (supports, kernel_margin) = match fp.view_fit {
+        ViewFit::Samples { supports, size } => (Some(supports), Some(size)),
+        ViewFit::Frustum => (seen(camera.near, view_reach(camera, scene_bounds)), None),
+        ViewFit::Depths { near, far } => (seen(near, far), None),
+    };
+    let (turn, previous_half) = match (fp.turn, &supports) {
+        (Turn::Fitted { previous }, Some(s)) => {
+            let turn = s.fitted_turn(&roll::world_axes_in_image(base), previous);
+            // A turned grid moved every texel anyway.
+            (turn, fp.previous_half.filter(|_| previous == Some(turn)))
+        }
+        _ => (0, fp.previous_half),
+    };
+    let view = roll::rolled(base, roll::turn_angle(turn));
+    let scene_ls = scene_bounds.transformed(view);
+    let fitted = supports.map(|s| {
+        let b = s.box_at(turn);
+        kernel_margin.map_or(b, |size| widen_for_kernels(b, size))
+    });
+    let (half, cx, cy) = square_around(fitted.unwrap_or([
+        scene_ls.min.x,
+        scene_ls.min.y,
+        scene_ls.max.x,
+        scene_ls.max.y,
+    ]));
+    let (half, cx, cy) = match fp.stabilize_size {
+        Some(size) => match previous_half {
+            Some(p) if p >= half && p <= half * KEPT_FIT_RATIO => snap_to_texels(p, cx, cy, size),
+            _ => stable_fit(half, cx, cy, size),
+        },
+        None => (half, cx, cy),
+    };
+    // View space looks down −z: depth range from the scene's z extent.
+    let (n, f) = (-scene_ls.max.z - 1e-3, -scene_ls.min.z + 1e-3);
+    let setup = LightSetup {
+        faces: vec![orthographic(cx - half, cx + half, cy - half, cy + half, n.max(0.0), f) * view],
+        near: n.max(0.0),
+        far: f,
+        orthographic: true,
+        paraboloid: false,
+        texel_scale: 2.0 * half,
+        cascades: None,
+        warp_depth: None,
+    };
+    (setup, turn)
 }
 
 #[cfg(test)]

@@ -282,6 +282,7 @@ impl ShadowMapTechnique {
                 stabilize_size: None,
                 previous_half: None,
                 view_fit: Default::default(),
+                turn: Default::default(),
             },
             VirtualParams {
                 size: p.virtual_size,
