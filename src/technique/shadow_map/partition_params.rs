@@ -71,7 +71,7 @@ pub const FIT: ParamSpec = ParamSpec::choice_of::<Fit>(
 pub const ROLL: ParamSpec = ParamSpec::choice_of::<Roll>(
     "roll",
     Roll::Square as usize,
-    "directional lights, one unwarped map: how its square is turned about the light — up: the world's up along the map's y axis (every vertical edge then lies along a texel column, where no filter recovers its sub-texel place); square: the turn, in steps of 90°/32, with the smallest square around the camera's view of the scene among those that keep the world's vertical 15° or more off the texel axes (city/sun at 640×360: 0.271 → 0.17 % total mismatch), last frame's kept while at most an eighth of an octave larger",
+    "directional lights, one unwarped map: how its square is turned about the light — up: the world's up along the map's y axis (every vertical edge then lies along a texel column, where no filter recovers its sub-texel place); square: the turn, in steps of 11.25°, with the smallest square around what the map covers (the pixels seen with fit=samples, else the view of the scene) among those that keep the world's vertical 15° and its x and z axes 8° off the texel axes (city/sun at 640×360: 0.271 → 0.167 % total mismatch), last frame's kept while at most an eighth of an octave larger",
 );
 
 pub const WARP: ParamSpec = ParamSpec::choice_of::<Warp>(
