@@ -158,7 +158,9 @@ fn depth_range(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocati
             s_high3 = select(s_high3, max(s_high3, a3), receives);
         }
     }
-    if all(id.xy < params.blocks.xy) {
+    // Only `cascade_bounds` reads the records, and it does not run after
+    // the extents are taken.
+    if !SUPPORTS && all(id.xy < params.blocks.xy) {
         blocks[block_index(id.xy)] = BlockBounds(vec2f(low, high), vec4f(box_low, box_high));
     }
     if high > 0.0 {

@@ -113,12 +113,14 @@ pub struct Supports(pub [[f32; 2]; DIRECTIONS]);
 impl Supports {
     /// The extents of `points` (light-view x, y); `None` when there are none.
     pub fn of_points(points: impl IntoIterator<Item = Vec2>) -> Option<Supports> {
+        let directions: [Vec2; DIRECTIONS] =
+            std::array::from_fn(|k| Vec2::from_angle(turn_angle(k)));
         let mut along = [[f32::MAX, f32::MIN]; DIRECTIONS];
         let mut any = false;
         for p in points {
             any = true;
-            for (k, [lo, hi]) in along.iter_mut().enumerate() {
-                let d = p.dot(Vec2::from_angle(turn_angle(k)));
+            for ([lo, hi], direction) in along.iter_mut().zip(directions) {
+                let d = p.dot(direction);
                 *lo = lo.min(d);
                 *hi = hi.max(d);
             }
