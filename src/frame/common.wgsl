@@ -6,18 +6,14 @@ const LIGHT_POINT: u32 = 0u;
 const LIGHT_SPOT: u32 = 1u;
 const LIGHT_DIRECTIONAL: u32 = 2u;
 
+// A light; its kind and compose mode are the lighting pipeline's constants.
 struct LightGpu {
-    // xyz world position, w light type (0 point, 1 spot, 2 directional)
+    // xyz world position, w range (0 = no falloff)
     position: vec4f,
-    // xyz direction the light travels, w range (0 = no falloff)
+    // xyz unit direction the light travels, w cos(outer cone)
     direction: vec4f,
     // rgb colour × intensity, w cos(inner cone)
     color: vec4f,
-    // x cos(outer cone), y area radius or width, z area height,
-    // w area shape (0 none, 1 sphere, 2 rectangle)
-    cone: vec4f,
-    // x compose mode of this light's mask (0 relight, 1 darken)
-    extra: vec4f,
 };
 
 struct Frame {

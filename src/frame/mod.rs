@@ -12,7 +12,7 @@ pub use scene_gpu::{DrawCall, MaterialVariant, SceneGpu};
 pub use targets::{FrameTargets, clear_mask, write_mask};
 
 use crate::gpu::{GpuContext, storage_entry, texture_entry, uniform_entry};
-use crate::scene::{Camera, Light, LightArea, LightType, Scene};
+use crate::scene::{Camera, Light, Scene};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec4};
 use serde::Serialize;
@@ -62,18 +62,21 @@ pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferL
     attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4],
 };
 
+/// A light as the lighting pass reads it (`LightGpu` in common.wgsl). Its
+/// kind and compose mode are pipeline constants (`renderer::LitLights`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable, Default)]
 pub struct LightGpu {
+    /// xyz world position, w range (0: no falloff).
     pub position: Vec4,
+    /// xyz unit direction the light travels, w cos(outer cone).
     pub direction: Vec4,
+    /// rgb colour × intensity, w cos(inner cone).
     pub color: Vec4,
-    pub cone: Vec4,
-    pub extra: Vec4,
 }
 
 /// How the lighting pass uses a light's visibility mask `v`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Compose {
     /// `ambient + v · (diffuse + specular)`: the shadow removes the light.
@@ -84,23 +87,14 @@ pub enum Compose {
 }
 
 impl LightGpu {
-    pub fn from_light(l: &Light, compose: Compose) -> LightGpu {
-        let kind = match l.kind {
-            LightType::Point => 0.0,
-            LightType::Spot => 1.0,
-            LightType::Directional => 2.0,
-        };
-        let (a, b, shape) = match l.area {
-            None => (0.0, 0.0, 0.0),
-            Some(LightArea::Sphere { radius }) => (radius, 0.0, 1.0),
-            Some(LightArea::Rect { width, height }) => (width, height, 2.0),
-        };
+    pub fn from_light(l: &Light) -> LightGpu {
         LightGpu {
-            position: l.position.extend(kind),
-            direction: l.direction.normalize_or_zero().extend(l.range),
+            position: l.position.extend(l.range),
+            direction: l
+                .direction
+                .normalize_or_zero()
+                .extend(l.outer_cone_deg.to_radians().cos()),
             color: (l.color * l.intensity).extend(l.inner_cone_deg.to_radians().cos()),
-            cone: Vec4::new(l.outer_cone_deg.to_radians().cos(), a, b, shape),
-            extra: Vec4::new((compose == Compose::Darken) as u32 as f32, 0.0, 0.0, 0.0),
         }
     }
 }
@@ -232,13 +226,12 @@ pub fn technique_shader(
     )
 }
 
-/// The frame uniform for a camera and lights (each with its mask's compose
-/// mode) at a frame size; `infinite_far_plane` for shadow volumes.
+/// The frame uniform for a camera and lights at a frame size;
+/// `infinite_far_plane` for shadow volumes.
 pub fn frame_uniform(
     scene: &Scene,
     camera: &Camera,
     lights: &[Light],
-    compose: &[Compose],
     infinite_far_plane: bool,
     width: u32,
     height: u32,
@@ -252,8 +245,8 @@ pub fn frame_uniform(
     };
     let view_proj = proj * view;
     let mut gl = [LightGpu::default(); MAX_LIGHTS];
-    for (i, (g, l)) in gl.iter_mut().zip(lights).enumerate() {
-        *g = LightGpu::from_light(l, compose.get(i).copied().unwrap_or(Compose::Relight));
+    for (g, l) in gl.iter_mut().zip(lights) {
+        *g = LightGpu::from_light(l);
     }
     FrameUniform {
         view_proj,

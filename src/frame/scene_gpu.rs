@@ -229,10 +229,9 @@ impl SceneGpu {
     }
 
     /// Binds the vertex and index buffers and draws every non-plane object
-    /// that `filter` accepts, with `instance_index` = object id. The caller
-    /// sets pipeline and bind groups 0 and 1.
-    /// Draws every object but shadow planes that `filter` keeps; returns
-    /// the number of triangles drawn.
+    /// that `filter` accepts, with `instance_index` = object id; returns the
+    /// number of triangles drawn. The caller sets pipeline and bind groups 0
+    /// and 1.
     pub fn draw_objects(
         &self,
         pass: &mut wgpu::RenderPass,

@@ -1,17 +1,88 @@
-//! The lighting pass, specialised per pipeline: light count, shading mode,
-//! specular model and the material's features (diffuse texture, normal map,
+//! The lighting pass, specialised per pipeline: the lights (count, and per
+//! light its kind, range window and compose mode), shading mode, specular
+//! model and the material's features (diffuse texture, normal map,
 //! procedural kind) are pipeline-overridable constants of `scene.wgsl`, so
-//! a pixel runs only its own variant's code; Gouraud has its own entry
-//! points and is the only variant that carries per-vertex lighting.
+//! a pixel runs only its own variant's code (lavapipe runs both sides of a
+//! branch on a uniform value); Gouraud has its own entry points and is the
+//! only variant that carries per-vertex lighting.
 
 use super::{LightingModel, MipFilter, RenderSettings, Shading};
-use crate::frame::{self, FrameLayouts, FrameTargets, MaterialVariant, SceneGpu};
+use crate::frame::{
+    self, Compose, FrameLayouts, FrameTargets, MAX_LIGHTS, MaterialVariant, SceneGpu,
+};
 use crate::gpu::GpuContext;
+use crate::scene::{Light, LightType};
 
 /// The lighting pass's own groups: the material's, and the masks with the
 /// material sampler.
 const MATERIAL_GROUP: u32 = frame::OWN_GROUP;
 const LIGHTING_GROUP: u32 = 3;
+
+/// What the lighting pass specialises on for one light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct LitLight {
+    pub kind: LightType,
+    /// The range window `(1 − (d/range)⁴)²` applies (point and spot lights
+    /// with a range).
+    pub windowed: bool,
+    pub compose: Compose,
+}
+
+impl LitLight {
+    pub fn of(light: &Light, compose: Compose) -> LitLight {
+        LitLight {
+            kind: light.kind,
+            windowed: light.kind != LightType::Directional && light.range > 0.0,
+            compose,
+        }
+    }
+
+    /// Four bits of `scene.wgsl`'s `LIGHT_SPECS`: the kind (`LIGHT_*`),
+    /// 4 if windowed, 8 if the mask darkens.
+    fn spec_bits(&self) -> u32 {
+        let kind = match self.kind {
+            LightType::Point => 0,
+            LightType::Spot => 1,
+            LightType::Directional => 2,
+        };
+        kind | (self.windowed as u32) << 2 | ((self.compose == Compose::Darken) as u32) << 3
+    }
+}
+
+/// The lights of a frame as the lighting pass specialises on them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct LitLights {
+    lights: [Option<LitLight>; MAX_LIGHTS],
+}
+
+impl LitLights {
+    /// `lights` with their masks' compose modes (relight where none is
+    /// given); at most [`MAX_LIGHTS`] are taken.
+    pub fn of(lights: &[Light], compose: &[Compose]) -> LitLights {
+        let mut out = LitLights::default();
+        for (i, (slot, l)) in out.lights.iter_mut().zip(lights).enumerate() {
+            *slot = Some(LitLight::of(
+                l,
+                compose.get(i).copied().unwrap_or(Compose::Relight),
+            ));
+        }
+        out
+    }
+
+    fn count(&self) -> u32 {
+        self.lights.iter().flatten().count() as u32
+    }
+
+    /// `LIGHT_SPECS`: light i's [`LitLight::spec_bits`] from bit 4i.
+    fn specs(&self) -> u32 {
+        self.lights
+            .iter()
+            .flatten()
+            .enumerate()
+            .map(|(i, l)| l.spec_bits() << (4 * i))
+            .sum()
+    }
+}
 
 /// Everything a lighting pipeline depends on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -19,16 +90,17 @@ pub struct LitKey {
     pub cull_back_faces: bool,
     pub shading: Shading,
     pub specular: LightingModel,
-    pub lights: u32,
+    pub lights: LitLights,
     pub material: MaterialVariant,
 }
 
 impl LitKey {
     /// The values of `scene.wgsl`'s pipeline-overridable constants.
-    fn constants(&self) -> [(&'static str, f64); 6] {
+    fn constants(&self) -> [(&'static str, f64); 7] {
         let b = |v: bool| v as u32 as f64;
         [
-            ("LIGHT_COUNT", self.lights as f64),
+            ("LIGHT_COUNT", self.lights.count() as f64),
+            ("LIGHT_SPECS", self.lights.specs() as f64),
             (
                 "SHADING",
                 match self.shading {
@@ -198,7 +270,7 @@ impl Lighting {
         pass: &mut wgpu::RenderPass,
         scene_gpu: &SceneGpu,
         frame: &FrameTargets,
-        lights: u32,
+        lights: LitLights,
         settings: &RenderSettings,
     ) {
         pass.set_bind_group(frame::FRAME_GROUP, frame.frame_bind_group(), &[]);
@@ -243,5 +315,26 @@ impl Lighting {
                 d.object..d.object + 1,
             );
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn light_specs_pack_four_bits_per_light() {
+        let mut point = Light::point(Vec3::Y, 1.0);
+        point.range = 5.0;
+        let spot = Light::spot(Vec3::Y, Vec3::ZERO, 1.0, 20.0, 30.0);
+        let mut sun = Light::point(Vec3::Y, 1.0);
+        sun.kind = LightType::Directional;
+        sun.range = 5.0; // no window for a directional light
+        let lit = LitLights::of(&[point, spot, sun], &[Compose::Relight, Compose::Darken]);
+        assert_eq!(lit.count(), 3);
+        // point 0 | windowed 4; spot 1 | darken 8; directional 2, relight by default
+        assert_eq!(lit.specs(), 4 | (1 | 8) << 4 | 2 << 8);
+        assert_eq!(LitLights::of(&[], &[]).count(), 0);
     }
 }

@@ -12,7 +12,7 @@ mod lines;
 mod overlay;
 mod timing;
 
-pub use lighting::LitKey;
+pub use lighting::{LitKey, LitLight, LitLights};
 pub use timing::{FrameTimings, GpuPassTimes};
 
 use crate::frame::{self, FrameLayouts, FrameTargets, MAX_LIGHTS, SceneGpu};
@@ -288,7 +288,6 @@ impl Renderer {
                 scene,
                 camera,
                 lights,
-                &needs.compose,
                 needs.infinite_far_plane,
                 frame.width(),
                 frame.height(),
@@ -343,7 +342,10 @@ impl Renderer {
             Instant::now()
         };
         stamp(&mut enc, timing::LIGHTING, false);
-        self.record_lighting(gpu, &mut enc, scene, scene_gpu, frame, lights, settings);
+        let lit = LitLights::of(lights, &needs.compose);
+        self.record_lighting(
+            gpu, &mut enc, scene, scene_gpu, frame, lights, lit, settings,
+        );
         stamp(&mut enc, timing::LIGHTING, true);
         if let Some(t) = self.timer.as_mut().filter(|_| settings.gpu_timing) {
             t.resolve(&mut enc);
@@ -416,6 +418,7 @@ impl Renderer {
         scene_gpu: &SceneGpu,
         frame: &FrameTargets,
         lights: &[Light],
+        lit: LitLights,
         settings: &RenderSettings,
     ) {
         let bg = settings.background.unwrap_or(scene.background);
@@ -440,14 +443,8 @@ impl Renderer {
             }),
             ..Default::default()
         });
-        self.lighting.draw(
-            gpu,
-            &mut pass,
-            scene_gpu,
-            frame,
-            lights.len() as u32,
-            settings,
-        );
+        self.lighting
+            .draw(gpu, &mut pass, scene_gpu, frame, lit, settings);
         if settings.show_light_icons {
             self.icons
                 .draw(gpu, &mut pass, frame, lights, &scene_gpu.bounds);

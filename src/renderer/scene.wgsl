@@ -72,6 +72,10 @@ fn fs_gbuffer(i: GOut) -> GBuffer {
 // loop, and the shading mode, specular model and material features are
 // constants, so no pipeline branches on them per pixel.
 override LIGHT_COUNT: u32 = 1u;
+// Per light i, four bits from bit 4i (`LitLight::spec_bits`): the kind
+// (LIGHT_*, two bits), 4 if its range window applies, 8 if its mask darkens
+// the lit colour instead of removing the light.
+override LIGHT_SPECS: u32 = 0u;
 // Shading mode: 0 flat, 1 Gouraud, 2 per-pixel (entry points differ for Gouraud).
 override SHADING: u32 = 2u;
 // 0 Phong (V·R)^n, 1 Blinn-Phong (N·H)^n.
@@ -84,6 +88,13 @@ override PROCEDURAL: u32 = 0u;
 const SHADING_FLAT: u32 = 0u;
 const SHADING_PIXEL: u32 = 2u;
 const SPECULAR_PHONG: u32 = 0u;
+
+const SPEC_WINDOWED: u32 = 4u;
+const SPEC_DARKEN: u32 = 8u;
+
+fn light_spec(i: u32) -> u32 {
+    return (LIGHT_SPECS >> (4u * i)) & 15u;
+}
 
 struct LitOut {
     @invariant @builtin(position) clip: vec4f,
@@ -124,7 +135,7 @@ struct LightSample {
 fn sample_light(i: u32, pos: vec3f) -> LightSample {
     let l = frame.lights[i];
     var s: LightSample;
-    let kind = u32(l.position.w);
+    let kind = light_spec(i) & 3u;
     if kind == LIGHT_DIRECTIONAL {
         s.to_light = -l.direction.xyz;
         s.radiance = l.color.rgb;
@@ -134,8 +145,8 @@ fn sample_light(i: u32, pos: vec3f) -> LightSample {
     let dist = length(d);
     s.to_light = d / max(dist, 1e-6);
     var att = 1.0;
-    let range = l.direction.w;
-    if range > 0.0 {
+    if (light_spec(i) & SPEC_WINDOWED) != 0u {
+        let range = l.position.w;
         // x = 1 − (dist / range)⁴, squared (without pow: exp2/log2 per pixel)
         let q = dist * dist / (range * range);
         let x = clamp(1.0 - q * q, 0.0, 1.0);
@@ -143,7 +154,7 @@ fn sample_light(i: u32, pos: vec3f) -> LightSample {
     }
     if kind == LIGHT_SPOT {
         let c = dot(-s.to_light, l.direction.xyz);
-        att *= smoothstep(l.cone.x, l.color.w, c);
+        att *= smoothstep(l.direction.w, l.color.w, c);
     }
     s.radiance = l.color.rgb * att;
     return s;
@@ -257,7 +268,7 @@ struct Composed {
 fn compose_light(acc: Composed, l: u32, vis: f32, terms: LightTerms, kd: vec3f) -> Composed {
     let direct = terms.diffuse * kd + terms.specular * material.ks.rgb;
     var out = acc;
-    if frame.lights[l].extra.x > 0.5 {
+    if (light_spec(l) & SPEC_DARKEN) != 0u {
         out.color += direct;
         out.darken *= vis;
     } else {
