@@ -171,7 +171,7 @@ pub const SLOPE_BIAS_CLAMP: ParamSpec = ParamSpec::float(
     0.0,
     64.0,
     0.25,
-    "directional maps (one map or cascades, unwarped): the depth bias is capped at this many texel widths of depth (the depth step across one texel of a 45° surface, per cascade), so that casters lit at grazing angles do not push their stored depth far behind them and leak light onto what they shade; 0 = no cap",
+    "directional maps (one map, cascades or a virtual clipmap, unwarped): the depth bias is capped at this many texel widths of depth (the depth step across one texel of a 45° surface, per cascade or clipmap level), so that casters lit at grazing angles do not push their stored depth far behind them and leak light onto what they shade; 0 = no cap",
 );
 
 pub const NORMAL_OFFSET_DIRECTIONAL: ParamSpec = ParamSpec::float(
@@ -513,7 +513,7 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "virtual",
-        summary: "virtual shadow map: 16384² per clipmap level (directional) or view, 128² pages from a pool of 4096, cached across frames, 3×3 PCF grid; slope bias 1 (its texels cover at most a pixel: 2 leaked light at grazing creases, 0.07–0.09 % interior false lit on curved/pipe, 1 at most 0.024 % on 23 views with no acne)",
+        summary: "virtual shadow map: 16384² per clipmap level (directional) or view, 128² pages from a pool of 4096, cached across frames, 3×3 PCF grid; slope bias 1 (2 leaks light at grazing creases under point and spot lights, whose perspective views have no bias cap: interior false lit on curved/pipe 0.075 % point, 0.085 % spot at 640×360; 1: 0.006 and 0.021 %)",
         values: &[("paging", "virtual"), ("slope_bias", "1")],
     },
     Preset {

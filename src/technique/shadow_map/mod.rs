@@ -670,12 +670,10 @@ impl ShadowTechnique for ShadowMapTechnique {
     }
 }
 
-/// The depth bias's cap for `face` of `setup` in the map's depth units:
-/// `texels` texel widths of depth — the texel's world size over the
-/// orthographic depth range — rounded to a quarter octave (few pipelines);
-/// 0 (no cap) for perspective and warped maps or `texels` = 0.
+/// The depth bias's cap for `face` of `setup` in the map's depth units
+/// ([`texel_bias_clamp`]); 0 (no cap) for perspective and warped maps.
 fn bias_clamp(setup: &LightSetup, face: usize, size: u32, texels: f32) -> f32 {
-    if !setup.orthographic || setup.warp_depth.is_some() || texels <= 0.0 {
+    if !setup.orthographic || setup.warp_depth.is_some() {
         return 0.0;
     }
     let scale = setup
@@ -683,7 +681,18 @@ fn bias_clamp(setup: &LightSetup, face: usize, size: u32, texels: f32) -> f32 {
         .as_ref()
         .and_then(|s| s.texel_scales.get(face).copied())
         .unwrap_or(setup.texel_scale);
-    let clamp = texels * scale / size as f32 / (setup.far - setup.near).max(1e-6);
+    texel_bias_clamp(scale / size as f32, setup.far - setup.near, texels)
+}
+
+/// The depth bias's cap of an orthographic map whose texels are
+/// `texel_world` wide over a depth range `depth_range`: `texels` texel
+/// widths of depth, rounded to a quarter octave (few pipelines); 0 (no cap)
+/// for `texels` = 0.
+fn texel_bias_clamp(texel_world: f32, depth_range: f32, texels: f32) -> f32 {
+    if texels <= 0.0 {
+        return 0.0;
+    }
+    let clamp = texels * texel_world / depth_range.max(1e-6);
     2f32.powf((clamp.log2() * 4.0).round() / 4.0)
 }
 

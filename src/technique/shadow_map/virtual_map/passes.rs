@@ -10,7 +10,9 @@ use crate::technique::MaskContext;
 use crate::technique::light_space::outside_clip_volume;
 use crate::technique::shadow_map::pipelines::{DepthPassKey, LookupKey};
 use crate::technique::shadow_map::uniform::{MAX_FACES, STRIDE, ShadowMapUniform};
-use crate::technique::shadow_map::{DepthFormat, MapBindings, ShadowMapTechnique};
+use crate::technique::shadow_map::{
+    DepthFormat, MapBindings, ShadowMapTechnique, texel_bias_clamp,
+};
 use anyhow::Result;
 use glam::{Mat4, UVec4};
 
@@ -137,19 +139,38 @@ impl ShadowMapTechnique {
             return 0;
         }
         let render_group = self.page_group(ctx, state, &self.shared.placeholder_depth);
-        let depth_pipeline = self.shared.depth_pass(
-            gpu,
-            DepthPassKey {
-                format: DepthFormat::D32f,
-                cull: c.cull,
-                bias: c.depth_bias,
-                slope_bits: c.slope_bias.to_bits(),
-                clamp_bits: 0,
-                moments: None,
-                shape: lookup_key.shape,
-                virtual_map: true,
-            },
-        );
+        // A clipmap level's bias cap follows its texels, as a cascade's
+        // does; each level's pipeline is looked up once, when it has pages.
+        let mut depth_pipelines: Vec<Option<wgpu::RenderPipeline>> =
+            vec![None; layout.levels.len()];
+        let mut depth_pipeline = |level: u32| {
+            depth_pipelines[level as usize]
+                .get_or_insert_with(|| {
+                    let clamp = if layout.orthographic {
+                        texel_bias_clamp(
+                            layout.levels[level as usize].texel_world,
+                            layout.far - layout.near,
+                            c.slope_bias_clamp,
+                        )
+                    } else {
+                        0.0
+                    };
+                    self.shared.depth_pass(
+                        gpu,
+                        DepthPassKey {
+                            format: DepthFormat::D32f,
+                            cull: c.cull,
+                            bias: c.depth_bias,
+                            slope_bits: c.slope_bias.to_bits(),
+                            clamp_bits: clamp.to_bits(),
+                            moments: None,
+                            shape: lookup_key.shape,
+                            virtual_map: true,
+                        },
+                    )
+                })
+                .clone()
+        };
         let clear_pipeline = self.shared.clear_page(gpu, lookup_key);
         let atlas = state.atlas.as_ref().expect("made before rendering");
         let mut map_triangles = 0;
@@ -177,7 +198,7 @@ impl ShadowMapTechnique {
                 ..Default::default()
             });
             ctx.bind_frame_groups(&mut pass);
-            for (i, (_, slot)) in on_layer {
+            for (i, (key, slot)) in on_layer {
                 let (_, x, y) = atlas.place(*slot);
                 let side = atlas.slot_texels();
                 pass.set_viewport(x as f32, y as f32, side as f32, side as f32, 0.0, 1.0);
@@ -186,7 +207,7 @@ impl ShadowMapTechnique {
                 pass.set_bind_group(crate::frame::OWN_GROUP, &render_group, &[offset]);
                 pass.set_pipeline(&clear_pipeline);
                 pass.draw(0..3, 0..1);
-                pass.set_pipeline(&depth_pipeline);
+                pass.set_pipeline(&depth_pipeline(key.level));
                 let m = page_matrices[i];
                 let eye = layout.eye;
                 map_triangles += ctx.scene_gpu.draw_objects(&mut pass, |d| {
