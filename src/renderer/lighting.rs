@@ -29,7 +29,7 @@ pub struct LitLight {
 }
 
 impl LitLight {
-    pub fn of(light: &Light, compose: Compose) -> LitLight {
+    fn of(light: &Light, compose: Compose) -> LitLight {
         LitLight {
             kind: light.kind,
             windowed: light.kind != LightType::Directional && light.range > 0.0,

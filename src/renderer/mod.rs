@@ -12,7 +12,8 @@ mod lines;
 mod overlay;
 mod timing;
 
-pub use lighting::{LitKey, LitLight, LitLights};
+pub use lighting::LitKey;
+use lighting::LitLights;
 pub use timing::{FrameTimings, GpuPassTimes};
 
 use crate::frame::{self, FrameLayouts, FrameTargets, MAX_LIGHTS, SceneGpu};
