@@ -149,6 +149,7 @@ pub fn cascade_setup(
 
 #[cfg(test)]
 mod tests {
+    use super::super::partition_params::Select;
     use super::*;
     use glam::{Mat4, Vec4};
 
@@ -213,6 +214,7 @@ mod tests {
             max_distance: 60.0,
             stabilize: true,
             blend: 0.0,
+            select: Select::Depth,
             fit: Fit::Frustum,
         };
         let size = 512;
@@ -281,6 +283,7 @@ mod tests {
                 max_distance: 40.0,
                 stabilize,
                 blend: 0.1,
+                select: Select::Depth,
                 fit: Fit::Frustum,
             };
             let s = cascade_setup(

@@ -15,6 +15,9 @@ struct CascadePick {
 };
 
 fn cascade_of(p: vec3f) -> CascadePick {
+    if sm.cascade.w > 0.5 {
+        return cascade_by_map(p);
+    }
     let d = -dot(sm.cascade_view_z, vec4f(p, 1.0));
     let count = u32(sm.cascade.x);
     var i = 0u;
@@ -26,6 +29,42 @@ fn cascade_of(p: vec3f) -> CascadePick {
         let start = select(sm.cascade.z, cascade_far(i - 1u), i > 0u);
         let band = sm.cascade.y * (cascade_far(i) - start);
         pick.next_weight = clamp((d - (cascade_far(i) - band)) / band, 0.0, 1.0);
+    }
+    return pick;
+}
+
+// How far p lies towards the border of cascade i's map: the larger |ndc|
+// of x and y over the part that holds a lookup (the kernel's reach and a
+// texel for the normal offset inside the border; 1 on that line), or
+// above 1 where p is outside that part or the map's depth range.
+fn border_reach(i: u32, p: vec3f) -> f32 {
+    let c = sm.faces[i] * vec4f(p, 1.0);
+    let held = 1.0 - 2.0 * (sm.map.w + 1.0) / sm.map.x;
+    let outside = select(0.0, 2.0, c.z < 0.0 || c.z > 1.0);
+    return max(max(abs(c.x), abs(c.y)) / held, outside);
+}
+
+// select=map: the finest cascade whose map holds p, and the weight of the
+// next one over the outer `blend` fraction of that map (where the next
+// one holds p too).
+fn cascade_by_map(p: vec3f) -> CascadePick {
+    let count = u32(sm.cascade.x);
+    var i = 0u;
+    var reach = 2.0;
+    loop {
+        if i >= count {
+            break;
+        }
+        reach = border_reach(i, p);
+        if reach < 1.0 {
+            break;
+        }
+        i++;
+    }
+    var pick = CascadePick(i, 0.0);
+    let blend = sm.cascade.y;
+    if i + 1u < count && blend > 0.0 && border_reach(i + 1u, p) < 1.0 {
+        pick.next_weight = clamp((reach - (1.0 - blend)) / blend, 0.0, 1.0);
     }
     return pick;
 }

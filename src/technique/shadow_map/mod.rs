@@ -40,6 +40,7 @@ use depth_bounds::{DepthReduction, SeenBounds};
 use edge_mask::{BoundsChain, ChainSource};
 use glam::{Mat4, UVec4, Vec4};
 use maps::Maps;
+use partition_params::Select;
 use pipelines::{DepthPassKey, LookupKey, MapProjection, MapShape, ShadowMapShared};
 use std::sync::Arc;
 use uniform::{MAX_FACES, SLOTS, STRIDE, ShadowMapUniform};
@@ -318,7 +319,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     setup.cascades.as_ref().map_or(0, |s| s.far.len()) as f32,
                     c.cascades.blend,
                     setup.cascades.as_ref().map_or(0.0, |s| s.near),
-                    0.0,
+                    (c.cascades.select == Select::Map) as u32 as f32,
                 ),
                 cascade_far: pack(cascade_far),
                 cascade_texel: pack(cascade_texel),

@@ -58,8 +58,13 @@ fn view_in_scene(camera: &Camera, aspect: f32, scene_bounds: &Aabb, z0: f32, z1:
     )
 }
 
-/// Near/far of a local light around `bounds`, unless given.
-fn near_far(pos: Vec3, bounds: &Aabb, near: f32, far: f32) -> (f32, f32) {
+/// Near/far of a local light around `bounds`, unless given. A point of the
+/// scene at distance r from the light, seen in a face whose corner rays
+/// make an angle with its axis of cosine `corner_cos`, lies at a depth of at
+/// least r·`corner_cos` along that axis: the near plane stays below the
+/// closest distance times that (a light outside the scene, off a corner or
+/// an edge of its box, sees the box's nearer parts obliquely).
+fn near_far(pos: Vec3, bounds: &Aabb, near: f32, far: f32, corner_cos: f32) -> (f32, f32) {
     let auto_far = bounds
         .corners()
         .iter()
@@ -72,7 +77,7 @@ fn near_far(pos: Vec3, bounds: &Aabb, near: f32, far: f32) -> (f32, f32) {
     let n = if near > 0.0 {
         near
     } else {
-        (closest * 0.95).max(f * 2e-3)
+        (closest * 0.95 * corner_cos).max(f * 2e-3)
     };
     (n, f.max(n * 1.01))
 }
@@ -319,13 +324,15 @@ pub fn light_setup(
     use glam::camera::rh::proj::directx::perspective;
     match light.kind {
         LightType::Spot => {
-            let (n, f) = near_far(light.position, scene_bounds, near, far);
             let fov = if fov_deg > 0.0 {
                 fov_deg
             } else {
                 (2.0 * light.outer_cone_deg + 4.0).min(170.0)
             }
             .to_radians();
+            let half = (fov * 0.5).tan();
+            let corner_cos = 1.0 / (1.0 + 2.0 * half * half).sqrt();
+            let (n, f) = near_far(light.position, scene_bounds, near, far, corner_cos);
             let view = glam::camera::rh::view::look_to_mat4(
                 light.position,
                 light.direction,
@@ -343,7 +350,8 @@ pub fn light_setup(
             }
         }
         LightType::Point if paraboloid => {
-            let (n, f) = near_far(light.position, scene_bounds, near, far);
+            // Depth along the ray from the light: no corners.
+            let (n, f) = near_far(light.position, scene_bounds, near, far, 1.0);
             let v = |d: Vec3| glam::camera::rh::view::look_to_mat4(light.position, d, Vec3::Z);
             LightSetup {
                 faces: vec![v(Vec3::NEG_Y), v(Vec3::Y)],
@@ -358,7 +366,8 @@ pub fn light_setup(
             }
         }
         LightType::Point => {
-            let (n, f) = near_far(light.position, scene_bounds, near, far);
+            // A 90° face's corner rays: cos = 1/√3.
+            let (n, f) = near_far(light.position, scene_bounds, near, far, 3f32.sqrt().recip());
             let proj = perspective(std::f32::consts::FRAC_PI_2, 1.0, n, f);
             LightSetup {
                 faces: cube_views(light.position)
@@ -446,6 +455,40 @@ pub fn directional_setup(
 
 #[cfg(test)]
 mod tests {
+    /// A point light off an edge of the scene's box sees the box's nearer
+    /// parts obliquely in a cube face: every point of the box inside a
+    /// face's frustum lies beyond that face's near plane (the near plane at
+    /// 0.95 of the closest distance clipped them: the box's side at x = 0.2
+    /// seen from (−1, −1, 0.5) in the +x face lies at depth 1.2, nearer
+    /// than 0.95·√2 = 1.34).
+    #[test]
+    fn a_light_off_the_scenes_edge_keeps_the_whole_scene_beyond_the_near_plane() {
+        let bounds = Aabb {
+            min: Vec3::ZERO,
+            max: Vec3::ONE,
+        };
+        let light = Light::point(Vec3::new(-1.0, -1.0, 0.5), 1.0);
+        let camera = Camera::new(Vec3::new(3.0, 3.0, 3.0), Vec3::splat(0.5));
+        let s = light_setup(&light, &bounds, &camera, 1.0, &FrustumParams::default());
+        let steps = 20;
+        let mut seen = 0;
+        for i in 0..=steps {
+            for j in 0..=steps {
+                for k in 0..=steps {
+                    let p = Vec3::new(i as f32, j as f32, k as f32) / steps as f32;
+                    for face in &s.faces {
+                        let c = *face * p.extend(1.0);
+                        if c.w > 0.0 && c.x.abs() <= c.w && c.y.abs() <= c.w {
+                            seen += 1;
+                            assert!(c.z >= 0.0 && c.z <= c.w, "{p} clipped: z/w = {}", c.z / c.w);
+                        }
+                    }
+                }
+            }
+        }
+        assert!(seen >= 21 * 21 * 21, "{seen}");
+    }
+
     use super::*;
 
     /// The view of a camera at the origin looking down −z with a 90° field

@@ -20,7 +20,8 @@ pub struct ShadowMapUniform {
     pub face: UVec4,
     pub moments: Vec4,
     /// x cascades (0: not cascaded), y blend fraction, z view depth where
-    /// the first cascade starts.
+    /// the first cascade starts, w 1 where the maps choose the cascade
+    /// (`select=map`), 0 where the view depth does.
     pub cascade: Vec4,
     /// View depth at which each cascade ends.
     pub cascade_far: [Vec4; 2],
