@@ -36,12 +36,15 @@ fn cascade_of(p: vec3f) -> CascadePick {
 // How far p lies towards the border of cascade i's map: the larger |ndc|
 // of x and y over the part that holds a lookup (the kernel's reach and a
 // texel for the normal offset inside the border; 1 on that line), or
-// above 1 where p is outside that part or the map's depth range.
+// above 1 where p is outside that part, behind a warped cascade's
+// projection centre, or outside an unwarped map's depth range.
 fn border_reach(i: u32, p: vec3f) -> f32 {
     let c = sm.faces[i] * vec4f(p, 1.0);
+    let ndc = c.xyz / select(c.w, 1e-6, abs(c.w) < 1e-6);
     let held = 1.0 - 2.0 * (sm.map.w + 1.0) / sm.map.x;
-    let outside = select(0.0, 2.0, c.z < 0.0 || c.z > 1.0);
-    return max(max(abs(c.x), abs(c.y)) / held, outside);
+    let deep = !is_warped() && (ndc.z < 0.0 || ndc.z > 1.0);
+    let outside = select(0.0, 2.0, deep || c.w <= 0.0);
+    return max(max(abs(ndc.x), abs(ndc.y)) / held, outside);
 }
 
 // select=map: the finest cascade whose map holds p, and the weight of the
