@@ -4,6 +4,7 @@
 mod common;
 use common::*;
 use glam::{Mat4, Vec3, Vec4};
+use shadowlab::measure::flicker::CameraPath;
 use shadowlab::scene::{Camera, Light, Material, Scene, builtin, shapes};
 use shadowlab::technique::light_space::bias_matrix;
 use shadowlab::technique::shadow_map::light_setup;
@@ -448,34 +449,48 @@ fn cascade_selection_and_blending_on_a_plane_match_the_reference() {
     }
 }
 
+/// Flicker (% of considered pixels, per technique of `techniques`) along
+/// `path` over [`squares_along_the_view`] against `raytraced`.
+fn flicker_over_squares(
+    techniques: &str,
+    path: CameraPath,
+    size: (u32, u32),
+    frames: u32,
+) -> Vec<f64> {
+    let scene = squares_along_the_view(0.5, 2.0);
+    let list = shadowlab::measure::parse_technique_list(techniques).unwrap();
+    let reference = shadowlab::technique::resolve("raytraced").unwrap();
+    shadowlab::measure::flicker::run(
+        gpu(),
+        &scene,
+        &scene.camera,
+        &scene.lights,
+        size,
+        &list,
+        &reference,
+        path,
+        frames,
+        &tmpdir("flicker"),
+    )
+    .unwrap()
+    .iter()
+    .map(|r| r.flicker_pct)
+    .collect()
+}
+
 /// Stabilised maps keep their texel grid while the camera strafes and
 /// turns: no surface point changes its shadow state; maps refitted to the
 /// frustum slide. (The default one map, fitted to the pixels seen, is
 /// stabilised too.)
 #[test]
 fn stabilised_maps_do_not_flicker_along_a_camera_path() {
-    use shadowlab::measure::flicker::{self, CameraPath};
-    let scene = squares_along_the_view(0.5, 2.0);
-    let list = shadowlab::measure::parse_technique_list(
-        "shadow-map:pcf[size=256,fit=frustum],shadow-map:pcf[size=256,fit=frustum,stabilize=false],shadow-map:csm[size=256],shadow-map:csm[size=256,stabilize=false],shadow-map:pcf[size=256]",
-    )
-    .unwrap();
-    let reference = shadowlab::technique::resolve("raytraced").unwrap();
     for path in [CameraPath::Strafe, CameraPath::Turn] {
-        let rows = flicker::run(
-            gpu(),
-            &scene,
-            &scene.camera,
-            &scene.lights,
-            (200, 150),
-            &list,
-            &reference,
+        let pct = flicker_over_squares(
+            "shadow-map:pcf[size=256,fit=frustum],shadow-map:pcf[size=256,fit=frustum,stabilize=false],shadow-map:csm[size=256],shadow-map:csm[size=256,stabilize=false],shadow-map:pcf[size=256]",
             path,
+            (200, 150),
             4,
-            &tmpdir("flicker"),
-        )
-        .unwrap();
-        let pct: Vec<f64> = rows.iter().map(|r| r.flicker_pct).collect();
+        );
         assert!(
             pct[0] <= 0.01 && pct[2] <= 0.01 && pct[4] <= 0.01,
             "{path:?}: {pct:?}"
@@ -491,27 +506,13 @@ fn stabilised_maps_do_not_flicker_along_a_camera_path() {
 /// whole texels).
 #[test]
 fn map_selection_keeps_cascade_borders_still_on_a_dolly() {
-    use shadowlab::measure::flicker::{self, CameraPath};
-    let scene = squares_along_the_view(0.5, 2.0);
-    let list = shadowlab::measure::parse_technique_list(
+    let pct = flicker_over_squares(
         "shadow-map:csm[size=256,select=depth],shadow-map:csm[size=256,select=map]",
-    )
-    .unwrap();
-    let reference = shadowlab::technique::resolve("raytraced").unwrap();
-    let rows = flicker::run(
-        gpu(),
-        &scene,
-        &scene.camera,
-        &scene.lights,
-        (320, 240),
-        &list,
-        &reference,
         CameraPath::Dolly,
+        (320, 240),
         6,
-        &tmpdir("flicker-dolly"),
-    )
-    .unwrap();
-    let (depth, map) = (rows[0].flicker_pct, rows[1].flicker_pct);
+    );
+    let (depth, map) = (pct[0], pct[1]);
     // Measured: depth 0.0108 %, map 0.0010 %.
     assert!(depth > 0.005, "depth selection: {depth}, map {map}");
     assert!(map * 4.0 <= depth, "map selection {map}, depth {depth}");

@@ -27,7 +27,7 @@ mod virtual_map;
 pub mod warp;
 
 pub use config::{
-    Cascades, CullFace, DepthFormat, Filter, Fit, Omni, Roll, ShadowMapConfig, Stage, Warp,
+    Cascades, CullFace, DepthFormat, Filter, Fit, Omni, Roll, Select, ShadowMapConfig, Stage, Warp,
 };
 pub use setup::{CascadeSplit, FrustumParams, LightSetup, cube_views, light_setup};
 
@@ -40,7 +40,6 @@ use depth_bounds::{DepthReduction, SeenBounds};
 use edge_mask::{BoundsChain, ChainSource};
 use glam::{Mat4, UVec4, Vec4};
 use maps::Maps;
-use partition_params::Select;
 use pipelines::{DepthPassKey, LookupKey, MapProjection, MapShape, ShadowMapShared};
 use std::sync::Arc;
 use uniform::{MAX_FACES, SLOTS, STRIDE, ShadowMapUniform};
