@@ -31,7 +31,8 @@ struct Frame {
 struct ObjectGpu {
     model: mat4x4f,
     normal_matrix: mat4x4f,
-    // x material, y casts shadow, z receives shadow, w shadow plane
+    // x material, y casts shadow, z receives shadow, w bounds a solid (closed,
+    // wound outward: its back faces lie behind its front faces)
     info: vec4u,
 };
 

@@ -7,6 +7,7 @@ use crate::scene::{Aabb, Material, Scene};
 use anyhow::{Result, bail};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
+use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 #[repr(C)]
@@ -38,6 +39,8 @@ pub struct DrawCall {
     pub material: usize,
     pub casts_shadow: bool,
     pub shadow_plane: bool,
+    /// The mesh bounds a solid ([`crate::scene::Mesh::bounds_solid`]).
+    pub solid: bool,
     /// World-space bounds of the object (for culling against light views).
     pub bounds: Aabb,
 }
@@ -100,6 +103,7 @@ impl SceneGpu {
         if vertices.is_empty() || indices.is_empty() {
             bail!("scene '{}' has no triangles", scene.name);
         }
+        let solid: Vec<bool> = scene.meshes.par_iter().map(|m| m.bounds_solid()).collect();
         let objects: Vec<ObjectGpu> = scene
             .objects
             .iter()
@@ -110,7 +114,7 @@ impl SceneGpu {
                     o.material as u32,
                     o.casts_shadow as u32,
                     o.receives_shadow as u32,
-                    o.shadow_plane as u32,
+                    solid[o.mesh] as u32,
                 ],
             })
             .collect();
@@ -128,6 +132,7 @@ impl SceneGpu {
                     material: o.material,
                     casts_shadow: o.casts_shadow,
                     shadow_plane: o.shadow_plane,
+                    solid: solid[o.mesh],
                     bounds: scene.meshes[o.mesh].bounds().transformed(o.transform),
                 }
             })

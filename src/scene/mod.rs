@@ -12,6 +12,7 @@ pub mod obj;
 pub mod planes;
 pub mod shapes;
 pub mod toml_scene;
+pub mod topology;
 
 use anyhow::{Context, Result, bail};
 use glam::{Mat4, Vec2, Vec3, Vec4};

@@ -87,16 +87,18 @@ impl DepthFormat {
 }
 
 choice_enum! {
-    /// Faces culled in the depth pass.
-    pub enum CullFace { Back = "back", Front = "front", None = "none" }
+    /// Faces culled in the depth pass; `Solids` culls by caster (see [`CULL`]).
+    pub enum CullFace { Solids = "solids", Back = "back", Front = "front", None = "none" }
 }
 
 impl CullFace {
+    /// The rasteriser's culling; `Solids` passes draw the casters that are
+    /// not solids with both faces.
     pub fn face(self) -> Option<wgpu::Face> {
         match self {
             CullFace::Back => Some(wgpu::Face::Back),
             CullFace::Front => Some(wgpu::Face::Front),
-            CullFace::None => None,
+            CullFace::None | CullFace::Solids => None,
         }
     }
 }
@@ -213,8 +215,17 @@ pub const RECEIVER_PLANE: ParamSpec = ParamSpec::boolean(
 
 pub const CULL: ParamSpec = ParamSpec::choice_of::<CullFace>(
     "cull",
-    CullFace::None as usize,
-    "faces culled in the depth pass; back or front culling leaks light through open meshes (bunny, teapot)",
+    CullFace::Solids as usize,
+    "faces culled in the depth pass — solids: casters that bound a solid (closed, wound outward) store their back faces without bias, so a lit surface is never compared against itself and takes no normal offset, while its shadow edges stay where its silhouette puts them (second-depth shadow maps, Wang & Molnar 1994); other casters store both faces with the bias (columns/sun at 640×360: none 0.0251 % total mismatch, solids 0.0158 %); back or front culling for every caster leaks light through open meshes (bunny, teapot)",
+);
+
+pub const SOLID_FRONT_BIAS: ParamSpec = ParamSpec::float(
+    "solid_front_bias",
+    4.0,
+    0.0,
+    64.0,
+    0.5,
+    "cull=solids, maps whose bias is capped (unwarped directional: one map, cascades, clipmap levels): solids also store their front faces, with this many times the slope bias and its cap: where a back face lies too close before a receiver to shadow it (a smooth solid shadowing itself near its terminator), the pushed front face still does; 0 = back faces only (bunny/sun at 640×360: 0 gives 0.117 % total mismatch, 4 gives 0.032 %, cull=none 0.044 %)",
 );
 
 pub const OMNI: ParamSpec = ParamSpec::choice_of::<Omni>(
@@ -366,6 +377,7 @@ pub const PARAMS: &[ParamSpec] = &[
     RECEIVER_PLANE,
     EDGE_MASK,
     CULL,
+    SOLID_FRONT_BIAS,
     OMNI,
     NEAR,
     FAR,
@@ -553,6 +565,9 @@ pub struct ShadowMapConfig {
     /// The kernel only at shadow edges (the edge mask's bounds chain).
     pub edge_mask: bool,
     pub cull: CullFace,
+    /// `cull=solids`: solids' front faces stored with this many times the
+    /// slope bias and its cap (0: not stored).
+    pub solid_front_bias: f32,
     pub omni: Omni,
     pub near: f32,
     pub far: f32,
@@ -608,6 +623,7 @@ impl ShadowMapConfig {
             receiver_plane: p.flag(&RECEIVER_PLANE)?,
             edge_mask: p.flag(&EDGE_MASK)?,
             cull: p.choice(&CULL)?,
+            solid_front_bias: p.float(&SOLID_FRONT_BIAS)?,
             omni: p.choice(&OMNI)?,
             near: p.float(&NEAR)?,
             far: p.float(&FAR)?,

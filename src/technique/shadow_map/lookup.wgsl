@@ -109,7 +109,7 @@ fn linear_depth(z: f32) -> f32 {
 @fragment
 fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let g = textureLoad(gbuffer_position, vec2i(frag.xy), 0);
-    let n = normalize(textureLoad(gbuffer_normal, vec2i(frag.xy), 0).xyz);
+    let n = offset_direction(g, normalize(textureLoad(gbuffer_normal, vec2i(frag.xy), 0).xyz));
     if VIRTUAL {
         return vec4f(virtual_visibility(frag.xy, g, n));
     }
@@ -163,7 +163,17 @@ fn warped_texel_world(face: u32, p: vec3f) -> f32 {
     return step / max(min(along_t, along_b) * sm.map.x, 1e-9);
 }
 
-// G-buffer point g with normal n moved along the normal by `sm.kernel.y`
+// The direction the normal offset moves G-buffer point g (w: object index
+// + 1) along: its geometric normal n, or none on a solid when `sm.light.w`
+// is set (`cull=solids`: its own surface is not in the map).
+fn offset_direction(g: vec4f, n: vec3f) -> vec3f {
+    if sm.light.w > 0.5 && g.w >= 0.5 && objects[u32(g.w) - 1u].info.w != 0u {
+        return vec3f(0.0);
+    }
+    return n;
+}
+
+// G-buffer point g moved along `offset_direction` n by `sm.kernel.y`
 // texels of world size `texel_world` (× sin²θ between normal and light
 // when `sm.kernel.w` is set: full at grazing light, none facing it).
 fn offset_point(g: vec3f, n: vec3f, texel_world: f32) -> vec3f {

@@ -40,7 +40,7 @@ use depth_bounds::{DepthReduction, SeenBounds};
 use edge_mask::{BoundsChain, ChainSource};
 use glam::{Mat4, UVec4, Vec4};
 use maps::Maps;
-use pipelines::{DepthPassKey, LookupKey, MapProjection, MapShape, ShadowMapShared};
+use pipelines::{DepthDraw, DepthPassKey, LookupKey, MapProjection, MapShape, ShadowMapShared};
 use std::sync::Arc;
 use uniform::{MAX_FACES, SLOTS, STRIDE, ShadowMapUniform};
 
@@ -299,8 +299,6 @@ impl ShadowTechnique for ShadowMapTechnique {
             let pack = |v: [f32; MAX_FACES]| [Vec4::from_slice(&v[..4]), Vec4::from_slice(&v[4..])];
             let base = ShadowMapUniform {
                 faces,
-                light: light.position.extend(0.0),
-
                 map: Vec4::new(
                     size as f32,
                     1.0 / size as f32,
@@ -325,7 +323,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 cascade_view_z: ctx.fit_camera.view().row(2),
                 warp: light.direction.normalize_or_zero().extend(0.0),
                 warp_depth: setup.warp_depth.unwrap_or(Vec4::ZERO),
-                ..ShadowMapUniform::with_filter(&c, normal_offset)
+                ..ShadowMapUniform::with_filter(&c, normal_offset, light.position)
             };
             for f in 0..MAX_FACES as u32 {
                 for k in 0..3u32 {
@@ -344,12 +342,15 @@ impl ShadowTechnique for ShadowMapTechnique {
         let floor = c.stage == Stage::Floor;
         // Every sample of an area light has the first one's shape.
         let shape = MapShape::of(&setups[0]);
-        let pipeline_for = |setup: &LightSetup, face: usize| {
+        let pipelines_for = |setup: &LightSetup, face: usize| {
             if floor {
-                return self.shared.floor(gpu, format.depth_texture(), shape);
+                return vec![DepthDraw {
+                    pipeline: self.shared.floor(gpu, format.depth_texture(), shape),
+                    solid: None,
+                }];
             }
             let clamp = bias_clamp(setup, face, size, c.slope_bias_clamp);
-            self.shared.depth_pass(
+            self.shared.depth_passes(
                 gpu,
                 DepthPassKey {
                     format,
@@ -357,10 +358,12 @@ impl ShadowTechnique for ShadowMapTechnique {
                     bias: c.depth_bias,
                     slope_bits: c.slope_bias.to_bits(),
                     clamp_bits: clamp.to_bits(),
+                    linear_bias: true,
                     moments: moments.then_some(c.filter),
                     shape,
                     virtual_map: false,
                 },
+                c.solid_front_bias,
             )
         };
         let lookup_key = LookupKey {
@@ -457,16 +460,18 @@ impl ShadowTechnique for ShadowMapTechnique {
                     }),
                     ..Default::default()
                 });
-                pass.set_pipeline(&pipeline_for(setup, f));
                 ctx.bind_frame_groups(&mut pass);
                 pass.set_bind_group(crate::frame::OWN_GROUP, &render_group, &[slot(si, face, 0)]);
                 // Casters outside this face's (or cascade's) view are not
                 // drawn; paraboloid faces are view matrices, not frusta.
                 let view_proj = setup.faces[f];
                 let paraboloid = setup.paraboloid;
-                map_triangles += ctx.scene_gpu.draw_objects(&mut pass, |d| {
-                    d.casts_shadow && (paraboloid || !outside_clip_volume(&d.bounds, view_proj))
-                });
+                for draw in pipelines_for(setup, f) {
+                    pass.set_pipeline(&draw.pipeline);
+                    map_triangles += ctx.scene_gpu.draw_objects(&mut pass, |d| {
+                        draw.takes(d) && (paraboloid || !outside_clip_volume(&d.bounds, view_proj))
+                    });
+                }
             }
             if let (Some(m), Some(groups), true) = (&maps.moment, &blur_groups, blur > 0 && !floor)
             {

@@ -25,6 +25,9 @@ override MARKED_RESIDENT: bool = false;
 // A virtual map whose kernel can read more than 2×2 pages (its marked reach
 // spans a page): taps beyond the pixel's first 2×2 read the page table.
 override WIDE_KERNEL: bool = false;
+// Warped depth passes bias in their fragment stage; not on solids' back
+// faces (`cull=solids`).
+override LINEAR_BIAS: bool = true;
 // The maps' shape (`MapShape`): how the faces project (`PROJECTION_*`),
 // whether they are cascades, whether they are warped. llvmpipe runs both
 // sides of a branch on a uniform under a lane mask: as constants, a
@@ -37,7 +40,9 @@ struct ShadowMap {
     // world → light clip, one per face (1 for spot/directional, 6 for point,
     // one per cascade)
     faces: array<mat4x4f, 8>,
-    // xyz light position, w unused (the faces' layout is `PROJECTION`: one,
+    // xyz light position, w 1 where receivers on solids take no normal
+    // offset (`cull=solids`: their own surfaces are not in the map); the
+    // faces' layout is `PROJECTION`: one,
     // six cube faces, or two paraboloid hemispheres whose `faces` are their
     // view matrices)
     light: vec4f,

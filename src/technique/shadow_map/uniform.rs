@@ -1,9 +1,9 @@
 //! The shadow-map family's uniform (`ShadowMap` of shadow_map.wgsl) and
 //! its slots: one per face for the depth pass and lookup, two for the blur.
 
-use super::config::ShadowMapConfig;
+use super::config::{CullFace, ShadowMapConfig};
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, UVec4, Vec4};
+use glam::{Mat4, UVec4, Vec3, Vec4};
 
 /// The most faces (cube) or cascades one light's maps have.
 pub const MAX_FACES: usize = 8;
@@ -12,6 +12,8 @@ pub const MAX_FACES: usize = 8;
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct ShadowMapUniform {
     pub faces: [Mat4; MAX_FACES],
+    /// xyz the light's position, w 1 where receivers on solids take no
+    /// normal offset (`cull=solids`).
     pub light: Vec4,
     pub kernel: Vec4,
     pub map: Vec4,
@@ -37,10 +39,15 @@ pub struct ShadowMapUniform {
 }
 
 impl ShadowMapUniform {
-    /// The fields the parameters alone fix: kernel, soft-shadow and moment
-    /// terms; the rest zero.
-    pub fn with_filter(c: &ShadowMapConfig, normal_offset: f32) -> ShadowMapUniform {
+    /// The fields the parameters and the light's position fix: light,
+    /// kernel, soft-shadow and moment terms; the rest zero.
+    pub fn with_filter(
+        c: &ShadowMapConfig,
+        normal_offset: f32,
+        light_position: Vec3,
+    ) -> ShadowMapUniform {
         ShadowMapUniform {
+            light: light_position.extend((c.cull == CullFace::Solids) as u32 as f32),
             kernel: Vec4::new(
                 c.radius,
                 normal_offset,

@@ -483,7 +483,7 @@ struct MarkingPixel {
 fn marking_pixel(frag: vec4f) -> MarkingPixel {
     let pixel = vec2i(frag.xy);
     let g = textureLoad(gbuffer_position, pixel, 0);
-    let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
+    let n = offset_direction(g, normalize(textureLoad(gbuffer_normal, pixel, 0).xyz));
     return MarkingPixel(g, n, pixel_level(pixel, g, n));
 }
 
@@ -543,7 +543,7 @@ fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f) -> f32 {
 fn virtual_debug_frame(frag: vec4f) -> DebugFrame {
     let pixel = vec2i(frag.xy);
     let g = textureLoad(gbuffer_position, pixel, 0);
-    let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
+    let n = offset_direction(g, normalize(textureLoad(gbuffer_normal, pixel, 0).xyz));
     let marked = vsm_pixel_level[pixel_index(pixel)];
     let first = select(marked, 0u, marked == NO_LEVEL);
     let found = resident_level(first, g.xyz, n).index;

@@ -6,10 +6,10 @@
 //! multiplicity is a sum over its faces (see [`Edge::multiplicity`]).
 
 use crate::scene::Mesh;
+use crate::scene::topology::Welded;
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
-use std::collections::HashMap;
 
 /// No face (an open edge's second use).
 pub const NO_FACE: u32 = u32::MAX;
@@ -112,30 +112,10 @@ impl Adjacency {
     }
 
     pub fn of(mesh: &Mesh) -> Adjacency {
-        // Weld: the first vertex with a given position (−0 = +0) stands for all.
-        let key = |p: Vec3| p.to_array().map(|c| (c + 0.0).to_bits());
-        let mut first: HashMap<[u32; 3], u32> = HashMap::with_capacity(mesh.positions.len());
-        let mut positions = vec![];
-        let remap: Vec<u32> = mesh
-            .positions
-            .iter()
-            .map(|&p| {
-                *first.entry(key(p)).or_insert_with(|| {
-                    positions.push(p);
-                    positions.len() as u32 - 1
-                })
-            })
-            .collect();
-        let mut triangles = Vec::with_capacity(mesh.indices.len() / 3);
-        let mut degenerate_triangles = 0;
-        for t in mesh.indices.chunks_exact(3) {
-            let w = [t[0], t[1], t[2]].map(|i| remap[i as usize]);
-            if w[0] == w[1] || w[1] == w[2] || w[2] == w[0] {
-                degenerate_triangles += 1;
-            } else {
-                triangles.push(w);
-            }
-        }
+        let welded = Welded::of(mesh);
+        let triangles = welded.triangles(mesh);
+        let degenerate_triangles = mesh.indices.len() / 3 - triangles.len();
+        let positions = welded.positions;
         let planes = triangles
             .par_iter()
             .map(|t| {

@@ -405,7 +405,6 @@ impl ShadowMapTechnique {
         let normal_offset = c.normal_offset(ctx.light.kind);
         let base = ShadowMapUniform {
             faces,
-            light: ctx.light.position.extend(0.0),
             map: Vec4::new(
                 p.virtual_size as f32,
                 1.0 / p.virtual_size as f32,
@@ -415,7 +414,7 @@ impl ShadowMapTechnique {
             depth: Vec4::new(layout.near, layout.far, 0.0, 0.0),
             warp: ctx.light.direction.normalize_or_zero().extend(0.0),
             cascade_view_z: ctx.fit_camera.view().row(2),
-            ..ShadowMapUniform::with_filter(&c, normal_offset)
+            ..ShadowMapUniform::with_filter(&c, normal_offset, ctx.light.position)
         };
         let lookup_key = LookupKey {
             filter: c.filter,

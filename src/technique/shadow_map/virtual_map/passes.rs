@@ -8,7 +8,7 @@ use crate::gpu::FrameFeedback;
 use crate::scene::Aabb;
 use crate::technique::MaskContext;
 use crate::technique::light_space::outside_clip_volume;
-use crate::technique::shadow_map::pipelines::{DepthPassKey, LookupKey};
+use crate::technique::shadow_map::pipelines::{DepthDraw, DepthPassKey, LookupKey};
 use crate::technique::shadow_map::uniform::{MAX_FACES, STRIDE, ShadowMapUniform};
 use crate::technique::shadow_map::{
     DepthFormat, MapBindings, ShadowMapTechnique, texel_bias_clamp,
@@ -141,8 +141,7 @@ impl ShadowMapTechnique {
         let render_group = self.page_group(ctx, state, &self.shared.placeholder_depth);
         // A clipmap level's bias cap follows its texels, as a cascade's
         // does; each level's pipeline is looked up once, when it has pages.
-        let mut depth_pipelines: Vec<Option<wgpu::RenderPipeline>> =
-            vec![None; layout.levels.len()];
+        let mut depth_pipelines: Vec<Option<Vec<DepthDraw>>> = vec![None; layout.levels.len()];
         let mut depth_pipeline = |level: u32| {
             depth_pipelines[level as usize]
                 .get_or_insert_with(|| {
@@ -155,7 +154,7 @@ impl ShadowMapTechnique {
                     } else {
                         0.0
                     };
-                    self.shared.depth_pass(
+                    self.shared.depth_passes(
                         gpu,
                         DepthPassKey {
                             format: DepthFormat::D32f,
@@ -163,10 +162,12 @@ impl ShadowMapTechnique {
                             bias: c.depth_bias,
                             slope_bits: c.slope_bias.to_bits(),
                             clamp_bits: clamp.to_bits(),
+                            linear_bias: true,
                             moments: None,
                             shape: lookup_key.shape,
                             virtual_map: true,
                         },
+                        c.solid_front_bias,
                     )
                 })
                 .clone()
@@ -207,19 +208,21 @@ impl ShadowMapTechnique {
                 pass.set_bind_group(crate::frame::OWN_GROUP, &render_group, &[offset]);
                 pass.set_pipeline(&clear_pipeline);
                 pass.draw(0..3, 0..1);
-                pass.set_pipeline(&depth_pipeline(key.level));
                 let m = page_matrices[i];
                 let eye = layout.eye;
-                map_triangles += ctx.scene_gpu.draw_objects(&mut pass, |d| {
-                    d.casts_shadow
-                        && !outside_clip_volume(
-                            &Aabb {
-                                min: d.bounds.min - eye,
-                                max: d.bounds.max - eye,
-                            },
-                            m,
-                        )
-                });
+                for draw in depth_pipeline(key.level) {
+                    pass.set_pipeline(&draw.pipeline);
+                    map_triangles += ctx.scene_gpu.draw_objects(&mut pass, |d| {
+                        draw.takes(d)
+                            && !outside_clip_volume(
+                                &Aabb {
+                                    min: d.bounds.min - eye,
+                                    max: d.bounds.max - eye,
+                                },
+                                m,
+                            )
+                    });
+                }
             }
         }
         map_triangles
