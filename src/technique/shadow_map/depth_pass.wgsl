@@ -20,14 +20,11 @@ fn vs_depth(v: VertexIn) -> DepthOut {
     return o;
 }
 
-// Warped faces: the linear depth with the depth pass's bias (if any) applied here,
+// Warped faces: the linear depth with the depth pass's bias applied here,
 // as polygon offset would (constant + slope factor × the larger screen
 // slope of the depth).
 @fragment
 fn fs_depth_linear(i: DepthOut) -> @builtin(frag_depth) f32 {
-    if !LINEAR_BIAS {
-        return clamp(i.linear, 0.0, 1.0);
-    }
     let slope = max(abs(dpdx(i.linear)), abs(dpdy(i.linear)));
     return clamp(i.linear + sm.depth.w + sm.kernel.z * slope, 0.0, 1.0);
 }

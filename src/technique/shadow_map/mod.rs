@@ -284,6 +284,9 @@ impl ShadowTechnique for ShadowMapTechnique {
             slots * STRIDE,
             "shadow map uniforms",
         );
+        // Every sample of an area light has the first one's shape.
+        let shape = MapShape::of(&setups[0]);
+        let cull = c.cull.for_shape(shape);
         let mut data = vec![0u8; (slots * STRIDE) as usize];
         for (si, (light, setup)) in lights.iter().zip(&setups).enumerate() {
             let mut faces = [Mat4::IDENTITY; MAX_FACES];
@@ -323,7 +326,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 cascade_view_z: ctx.fit_camera.view().row(2),
                 warp: light.direction.normalize_or_zero().extend(0.0),
                 warp_depth: setup.warp_depth.unwrap_or(Vec4::ZERO),
-                ..ShadowMapUniform::with_filter(&c, normal_offset, light.position)
+                ..ShadowMapUniform::with_filter(&c, normal_offset, light.position, cull)
             };
             for f in 0..MAX_FACES as u32 {
                 for k in 0..3u32 {
@@ -340,8 +343,6 @@ impl ShadowTechnique for ShadowMapTechnique {
         }
         ctx.gpu.queue.write_buffer(&self.uniforms, 0, &data);
         let floor = c.stage == Stage::Floor;
-        // Every sample of an area light has the first one's shape.
-        let shape = MapShape::of(&setups[0]);
         let pipelines_for = |setup: &LightSetup, face: usize| {
             if floor {
                 return vec![DepthDraw {
@@ -354,11 +355,10 @@ impl ShadowTechnique for ShadowMapTechnique {
                 gpu,
                 DepthPassKey {
                     format,
-                    cull: c.cull,
+                    cull,
                     bias: c.depth_bias,
                     slope_bits: c.slope_bias.to_bits(),
                     clamp_bits: clamp.to_bits(),
-                    linear_bias: true,
                     moments: moments.then_some(c.filter),
                     shape,
                     virtual_map: false,

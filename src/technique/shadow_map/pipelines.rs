@@ -87,9 +87,6 @@ pub struct DepthPassKey {
     pub slope_bits: u32,
     /// The bias's cap in the map's depth units (`f32` bits; 0: none).
     pub clamp_bits: u32,
-    /// Warped passes bias in their fragment stage from the uniform's terms;
-    /// not on solids' back faces (see [`DepthPassKey::draws`]).
-    pub linear_bias: bool,
     /// The moment filter whose moments the pass stores, if any.
     pub moments: Option<Filter>,
     /// The maps' shape: a paraboloid's pass drops what lies behind the
@@ -98,6 +95,21 @@ pub struct DepthPassKey {
     pub shape: MapShape,
     /// Pages of a virtual map: positions relative to the camera.
     pub virtual_map: bool,
+}
+
+impl CullFace {
+    /// The culling maps of `shape` get: `Solids` becomes `None` on warped
+    /// maps (a perspective warp can mirror the light's image, which swaps
+    /// front and back faces: PSM and TSM stored lit faces unbiased, 7 %
+    /// false shadow on landscape/ground/sun-side) and on paraboloid
+    /// hemispheres (projected in the vertex stage).
+    pub fn for_shape(self, shape: MapShape) -> CullFace {
+        let keeps_facing = !shape.warped && shape.projection != MapProjection::Paraboloid;
+        match self {
+            CullFace::Solids if !keeps_facing => CullFace::None,
+            c => c,
+        }
+    }
 }
 
 /// One pipeline of a depth pass and the casters it draws.
@@ -135,7 +147,6 @@ impl DepthPassKey {
             bias: 0,
             slope_bits: 0,
             clamp_bits: 0,
-            linear_bias: false,
             ..self
         };
         let scaled = |bits: u32| (f32::from_bits(bits) * solid_front_bias).to_bits();
@@ -500,7 +511,6 @@ impl ShadowMapShared {
                     key.moments.map_or(Filter::Grid, |f| f).index() as f64,
                 ),
                 ("VIRTUAL", key.virtual_map as u32 as f64),
-                ("LINEAR_BIAS", key.linear_bias as u32 as f64),
             ];
             constants.extend(key.shape.constants());
             let options = wgpu::PipelineCompilationOptions {
@@ -590,5 +600,79 @@ impl ShadowMapShared {
                         cache: None,
                     })
             })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn key(cull: CullFace, projection: MapProjection, warped: bool, clamp: f32) -> DepthPassKey {
+        DepthPassKey {
+            format: DepthFormat::D32f,
+            cull,
+            bias: 2,
+            slope_bits: 2.0f32.to_bits(),
+            clamp_bits: clamp.to_bits(),
+            moments: None,
+            shape: MapShape {
+                projection,
+                cascaded: false,
+                warped,
+            },
+            virtual_map: false,
+        }
+    }
+
+    #[test]
+    fn solids_draw_back_faces_unbiased_and_front_faces_only_under_a_capped_bias() {
+        let ortho = key(CullFace::Solids, MapProjection::Orthographic, false, 0.01);
+        let draws = ortho.draws(4.0);
+        let kinds: Vec<_> = draws
+            .iter()
+            .map(|(k, solid)| (k.cull, *solid, k.bias, f32::from_bits(k.slope_bits)))
+            .collect();
+        assert_eq!(
+            kinds,
+            [
+                (CullFace::None, Some(false), 2, 2.0),
+                (CullFace::Front, Some(true), 0, 0.0),
+                (CullFace::Back, Some(true), 2, 8.0),
+            ]
+        );
+        assert_eq!(f32::from_bits(draws[1].0.clamp_bits), 0.0);
+        assert_eq!(f32::from_bits(draws[2].0.clamp_bits), 0.04);
+        assert_eq!(ortho.draws(0.0).len(), 2, "no front faces at 0");
+        let cube = key(CullFace::Solids, MapProjection::Cube, false, 0.0);
+        assert_eq!(cube.draws(4.0).len(), 2, "uncapped: back faces only");
+        let none = key(CullFace::None, MapProjection::Orthographic, false, 0.01);
+        assert_eq!(none.draws(4.0), [(none, None)]);
+    }
+
+    #[test]
+    fn warped_and_paraboloid_maps_draw_both_faces_for_solids() {
+        let shape = |projection, warped| key(CullFace::Solids, projection, warped, 0.0).shape;
+        let solids = CullFace::Solids;
+        assert_eq!(
+            solids.for_shape(shape(MapProjection::Orthographic, false)),
+            solids
+        );
+        assert_eq!(solids.for_shape(shape(MapProjection::Cube, false)), solids);
+        assert_eq!(
+            solids.for_shape(shape(MapProjection::Perspective, false)),
+            solids
+        );
+        assert_eq!(
+            solids.for_shape(shape(MapProjection::Orthographic, true)),
+            CullFace::None
+        );
+        assert_eq!(
+            solids.for_shape(shape(MapProjection::Paraboloid, false)),
+            CullFace::None
+        );
+        assert_eq!(
+            CullFace::Back.for_shape(shape(MapProjection::Orthographic, true)),
+            CullFace::Back
+        );
     }
 }

@@ -25,9 +25,6 @@ override MARKED_RESIDENT: bool = false;
 // A virtual map whose kernel can read more than 2×2 pages (its marked reach
 // spans a page): taps beyond the pixel's first 2×2 read the page table.
 override WIDE_KERNEL: bool = false;
-// Warped depth passes bias in their fragment stage; not on solids' back
-// faces (`cull=solids`).
-override LINEAR_BIAS: bool = true;
 // The maps' shape (`MapShape`): how the faces project (`PROJECTION_*`),
 // whether they are cascades, whether they are warped. llvmpipe runs both
 // sides of a branch on a uniform under a lane mask: as constants, a

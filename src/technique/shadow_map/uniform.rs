@@ -39,15 +39,17 @@ pub struct ShadowMapUniform {
 }
 
 impl ShadowMapUniform {
-    /// The fields the parameters and the light's position fix: light,
-    /// kernel, soft-shadow and moment terms; the rest zero.
+    /// The fields the parameters, the light's position and the maps' culling
+    /// (`CullFace::for_shape`) fix: light, kernel, soft-shadow and moment
+    /// terms; the rest zero.
     pub fn with_filter(
         c: &ShadowMapConfig,
         normal_offset: f32,
         light_position: Vec3,
+        cull: CullFace,
     ) -> ShadowMapUniform {
         ShadowMapUniform {
-            light: light_position.extend((c.cull == CullFace::Solids) as u32 as f32),
+            light: light_position.extend((cull == CullFace::Solids) as u32 as f32),
             kernel: Vec4::new(
                 c.radius,
                 normal_offset,

@@ -414,7 +414,12 @@ impl ShadowMapTechnique {
             depth: Vec4::new(layout.near, layout.far, 0.0, 0.0),
             warp: ctx.light.direction.normalize_or_zero().extend(0.0),
             cascade_view_z: ctx.fit_camera.view().row(2),
-            ..ShadowMapUniform::with_filter(&c, normal_offset, ctx.light.position)
+            ..ShadowMapUniform::with_filter(
+                &c,
+                normal_offset,
+                ctx.light.position,
+                c.cull.for_shape(layout.shape()),
+            )
         };
         let lookup_key = LookupKey {
             filter: c.filter,

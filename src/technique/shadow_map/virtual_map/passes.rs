@@ -158,11 +158,10 @@ impl ShadowMapTechnique {
                         gpu,
                         DepthPassKey {
                             format: DepthFormat::D32f,
-                            cull: c.cull,
+                            cull: c.cull.for_shape(lookup_key.shape),
                             bias: c.depth_bias,
                             slope_bits: c.slope_bias.to_bits(),
                             clamp_bits: clamp.to_bits(),
-                            linear_bias: true,
                             moments: None,
                             shape: lookup_key.shape,
                             virtual_map: true,
