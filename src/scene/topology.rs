@@ -44,6 +44,20 @@ impl Welded {
     }
 }
 
+/// The edges of welded `triangles` run more often one way than the other
+/// (open, inconsistently wound or an odd fin): 0 for an oriented closed
+/// surface.
+pub fn unbalanced_edges(triangles: &[[u32; 3]]) -> usize {
+    let mut balance: HashMap<(u32, u32), i32> = HashMap::with_capacity(triangles.len() * 2);
+    for t in triangles {
+        for k in 0..3 {
+            let (u, v) = (t[k], t[(k + 1) % 3]);
+            *balance.entry((u.min(v), u.max(v))).or_default() += if u < v { 1 } else { -1 };
+        }
+    }
+    balance.values().filter(|&&b| b != 0).count()
+}
+
 impl Mesh {
     /// Bounds a solid: closed after welding (every edge run as often in one
     /// direction as in the other) and wound outward, with a volume (the
@@ -54,14 +68,7 @@ impl Mesh {
     pub fn bounds_solid(&self) -> bool {
         let welded = Welded::of(self);
         let triangles = welded.triangles(self);
-        let mut balance: HashMap<(u32, u32), i32> = HashMap::with_capacity(triangles.len() * 2);
-        for t in &triangles {
-            for k in 0..3 {
-                let (u, v) = (t[k], t[(k + 1) % 3]);
-                *balance.entry((u.min(v), u.max(v))).or_default() += if u < v { 1 } else { -1 };
-            }
-        }
-        if triangles.is_empty() || balance.values().any(|&b| b != 0) {
+        if triangles.is_empty() || unbalanced_edges(&triangles) > 0 {
             return false;
         }
         let p = |i: u32| welded.positions[i as usize].as_dvec3();

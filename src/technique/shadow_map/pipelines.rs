@@ -149,13 +149,6 @@ impl DepthPassKey {
             clamp_bits: 0,
             ..self
         };
-        let scaled = |bits: u32| (f32::from_bits(bits) * solid_front_bias).to_bits();
-        let front = DepthPassKey {
-            cull: CullFace::Back,
-            slope_bits: scaled(self.slope_bits),
-            clamp_bits: scaled(self.clamp_bits),
-            ..self
-        };
         let mut draws = vec![
             (
                 DepthPassKey {
@@ -167,6 +160,13 @@ impl DepthPassKey {
             (back, Some(true)),
         ];
         if solid_front_bias > 0.0 && f32::from_bits(self.clamp_bits) > 0.0 {
+            let scaled = |bits: u32| (f32::from_bits(bits) * solid_front_bias).to_bits();
+            let front = DepthPassKey {
+                cull: CullFace::Back,
+                slope_bits: scaled(self.slope_bits),
+                clamp_bits: scaled(self.clamp_bits),
+                ..self
+            };
             draws.push((front, Some(true)));
         }
         draws

@@ -6,7 +6,7 @@
 //! multiplicity is a sum over its faces (see [`Edge::multiplicity`]).
 
 use crate::scene::Mesh;
-use crate::scene::topology::Welded;
+use crate::scene::topology::{Welded, unbalanced_edges};
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
@@ -141,6 +141,7 @@ impl Adjacency {
             .collect();
         uses.par_sort_unstable();
         let mut adjacency = Adjacency {
+            unbalanced_edges: unbalanced_edges(&triangles),
             positions,
             triangles,
             planes,
@@ -149,13 +150,6 @@ impl Adjacency {
         };
         for group in uses.chunk_by(|x, y| x.0 == y.0) {
             let (a, b) = ((group[0].0 >> 32) as u32, group[0].0 as u32);
-            let balance: i32 = group
-                .iter()
-                .map(|u| if u.1 & 1 == 0 { 1 } else { -1 })
-                .sum();
-            if balance != 0 {
-                adjacency.unbalanced_edges += 1;
-            }
             match group.len() {
                 1 => adjacency.open_edges += 1,
                 2 if (group[0].1 & 1) == (group[1].1 & 1) => adjacency.inconsistent_edges += 1,
