@@ -3,6 +3,7 @@
 
 use super::{FrameLayouts, Vertex, textures};
 use crate::gpu::GpuContext;
+use crate::scene::clusters::{CLUSTER_TRIANGLES, Cluster, clustered};
 use crate::scene::{Aabb, Material, Scene};
 use anyhow::{Result, bail};
 use bytemuck::{Pod, Zeroable};
@@ -43,6 +44,18 @@ pub struct DrawCall {
     pub solid: bool,
     /// World-space bounds of the object (for culling against light views).
     pub bounds: Aabb,
+    /// Its clusters: `SceneGpu::parts[first_part..first_part + part_count]`.
+    pub first_part: u32,
+    pub part_count: u32,
+}
+
+/// One cluster of an object's triangles ([`crate::scene::clusters`]).
+#[derive(Clone, Copy, Debug)]
+pub struct DrawPart {
+    pub first_index: u32,
+    pub index_count: u32,
+    /// World-space bounds of the cluster.
+    pub bounds: Aabb,
 }
 
 /// The scene's GPU buffers: all meshes in one vertex and one index buffer,
@@ -53,6 +66,8 @@ pub struct SceneGpu {
     pub object_buffer: wgpu::Buffer,
     pub object_bind_group: wgpu::BindGroup,
     pub draws: Vec<DrawCall>,
+    /// Every draw call's clusters, in draw order.
+    pub parts: Vec<DrawPart>,
     pub material_bind_groups: Vec<wgpu::BindGroup>,
     /// Per material, the shader features the lighting pass specialises on.
     pub material_variants: Vec<MaterialVariant>,
@@ -88,7 +103,12 @@ impl SceneGpu {
         let mut vertices: Vec<Vertex> = vec![];
         let mut indices: Vec<u32> = vec![];
         let mut ranges = vec![];
-        for m in &scene.meshes {
+        let clustered: Vec<_> = scene
+            .meshes
+            .par_iter()
+            .map(|m| clustered(m, CLUSTER_TRIANGLES))
+            .collect();
+        for (m, c) in scene.meshes.iter().zip(&clustered) {
             let base = vertices.len() as i32;
             let first = indices.len() as u32;
             vertices.extend((0..m.positions.len()).map(|i| Vertex {
@@ -97,7 +117,7 @@ impl SceneGpu {
                 uv: m.uvs[i].into(),
                 tangent: m.tangents[i].into(),
             }));
-            indices.extend_from_slice(&m.indices);
+            indices.extend_from_slice(&c.indices);
             ranges.push((base, first, m.indices.len() as u32));
         }
         if vertices.is_empty() || indices.is_empty() {
@@ -118,12 +138,24 @@ impl SceneGpu {
                 ],
             })
             .collect();
+        let mut parts = vec![];
         let draws = scene
             .objects
             .iter()
             .enumerate()
             .map(|(i, o)| {
                 let (base_vertex, first_index, index_count) = ranges[o.mesh];
+                let first_part = parts.len() as u32;
+                parts.extend(
+                    clustered[o.mesh]
+                        .clusters
+                        .iter()
+                        .map(|c: &Cluster| DrawPart {
+                            first_index: first_index + c.first_index,
+                            index_count: c.index_count,
+                            bounds: c.bounds.transformed(o.transform),
+                        }),
+                );
                 DrawCall {
                     object: i as u32,
                     first_index,
@@ -134,6 +166,8 @@ impl SceneGpu {
                     shadow_plane: o.shadow_plane,
                     solid: solid[o.mesh],
                     bounds: scene.meshes[o.mesh].bounds().transformed(o.transform),
+                    first_part,
+                    part_count: parts.len() as u32 - first_part,
                 }
             })
             .collect();
@@ -225,6 +259,7 @@ impl SceneGpu {
             object_buffer,
             object_bind_group,
             draws,
+            parts,
             material_bind_groups,
             material_variants: scene.materials.iter().map(MaterialVariant::of).collect(),
             triangle_count: scene.triangle_count(),
@@ -252,6 +287,38 @@ impl SceneGpu {
                 d.object..d.object + 1,
             );
             triangles += d.index_count as u64 / 3;
+        }
+        triangles
+    }
+
+    /// Like [`Self::draw_objects`] for a view with a culling test: draws,
+    /// of each object that `filter` accepts and whose bounds `visible`
+    /// accepts, only the clusters whose bounds it accepts; returns the
+    /// number of triangles drawn.
+    pub fn draw_visible(
+        &self,
+        pass: &mut wgpu::RenderPass,
+        filter: impl Fn(&DrawCall) -> bool,
+        visible: impl Fn(&Aabb) -> bool,
+    ) -> u64 {
+        pass.set_vertex_buffer(0, self.vertex_buffer.slice(..));
+        pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+        let mut triangles = 0;
+        for d in self
+            .draws
+            .iter()
+            .filter(|d| !d.shadow_plane && filter(d) && visible(&d.bounds))
+        {
+            let parts = &self.parts[d.first_part as usize..(d.first_part + d.part_count) as usize];
+            let whole = parts.len() == 1;
+            for p in parts.iter().filter(|p| whole || visible(&p.bounds)) {
+                pass.draw_indexed(
+                    p.first_index..p.first_index + p.index_count,
+                    d.base_vertex,
+                    d.object..d.object + 1,
+                );
+                triangles += p.index_count as u64 / 3;
+            }
         }
         triangles
     }

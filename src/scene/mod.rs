@@ -5,6 +5,7 @@
 pub mod area;
 pub mod builtin;
 pub mod bvh;
+pub mod clusters;
 pub mod embree;
 pub mod gltf_io;
 pub mod landscape;

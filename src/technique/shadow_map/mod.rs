@@ -9,6 +9,7 @@
 //! rotated Vogel disk, PCSS, or the documents' variable-width PCF.
 
 pub mod cascades;
+mod caster_cull;
 pub mod config;
 mod debug;
 mod depth_bounds;
@@ -34,8 +35,10 @@ pub use setup::{CascadeSplit, FrustumParams, LightSetup, cube_views, light_setup
 use super::light_space::outside_clip_volume;
 use super::{Family, MaskContext, ParamValues, ShadowTechnique};
 use crate::gpu::{GpuContext, SectionTimer};
+use crate::scene::LightType;
 use crate::scene::area::area_samples;
 use anyhow::Result;
+use caster_cull::CasterCull;
 use depth_bounds::{DepthReduction, SeenBounds};
 use edge_mask::{BoundsChain, ChainSource};
 use glam::{Mat4, UVec4, Vec4};
@@ -433,6 +436,18 @@ impl ShadowTechnique for ShadowMapTechnique {
         };
         let mut map_triangles = 0;
         for (si, setup) in setups.iter().enumerate() {
+            // Directional light: only casters over the camera's view of
+            // the scene, seen from the light, are drawn.
+            let caster_cull = (lights[si].kind == LightType::Directional)
+                .then(|| {
+                    CasterCull::of(
+                        lights[si].direction,
+                        ctx.camera,
+                        aspect,
+                        &ctx.scene_gpu.bounds,
+                    )
+                })
+                .flatten();
             for face in 0..layers {
                 let f = face as usize;
                 let color = match (&maps.moment, &maps.byte, floor) {
@@ -468,9 +483,14 @@ impl ShadowTechnique for ShadowMapTechnique {
                 let paraboloid = setup.paraboloid;
                 for draw in pipelines_for(setup, f) {
                     pass.set_pipeline(&draw.pipeline);
-                    map_triangles += ctx.scene_gpu.draw_objects(&mut pass, |d| {
-                        draw.takes(d) && (paraboloid || !outside_clip_volume(&d.bounds, view_proj))
-                    });
+                    map_triangles += ctx.scene_gpu.draw_visible(
+                        &mut pass,
+                        |d| draw.takes(d),
+                        |b| {
+                            (paraboloid || !outside_clip_volume(b, view_proj))
+                                && caster_cull.as_ref().is_none_or(|c| c.may_shadow(b))
+                        },
+                    );
                 }
             }
             if let (Some(m), Some(groups), true) = (&maps.moment, &blur_groups, blur > 0 && !floor)

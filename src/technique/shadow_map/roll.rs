@@ -136,6 +136,20 @@ impl Supports {
         }))
     }
 
+    /// Each extent grown by `margin` on both sides.
+    pub fn grown(&self, margin: f32) -> Supports {
+        Supports(self.0.map(|[lo, hi]| [lo - margin, hi + margin]))
+    }
+
+    /// Whether the two sets' extents overlap along every direction (their
+    /// 16-sided outer polygons meet).
+    pub fn overlaps(&self, other: &Supports) -> bool {
+        self.0
+            .iter()
+            .zip(&other.0)
+            .all(|([lo, hi], [other_lo, other_hi])| lo <= other_hi && other_lo <= hi)
+    }
+
     /// The box `[min x, min y, max x, max y]` in the view turned by turn `j`.
     pub fn box_at(&self, j: usize) -> [f32; 4] {
         let ([x0, x1], [y0, y1]) = (self.0[j], self.0[j + TURNS]);

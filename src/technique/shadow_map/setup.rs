@@ -51,7 +51,13 @@ pub fn light_view_of_scene(dir: Vec3, scene_bounds: &Aabb) -> (Mat4, Aabb) {
 
 /// The part of the camera's view between view depths `z0` and `z1` that
 /// lies in `scene_bounds`: the corners of that convex solid.
-fn view_in_scene(camera: &Camera, aspect: f32, scene_bounds: &Aabb, z0: f32, z1: f32) -> Vec<Vec3> {
+pub fn view_in_scene(
+    camera: &Camera,
+    aspect: f32,
+    scene_bounds: &Aabb,
+    z0: f32,
+    z1: f32,
+) -> Vec<Vec3> {
     clip_to_bounds(
         &slice_corners(camera, aspect, z0, z1.max(z0 * 1.001)),
         scene_bounds,

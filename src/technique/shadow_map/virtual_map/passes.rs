@@ -211,16 +211,19 @@ impl ShadowMapTechnique {
                 let eye = layout.eye;
                 for draw in depth_pipeline(key.level) {
                     pass.set_pipeline(&draw.pipeline);
-                    map_triangles += ctx.scene_gpu.draw_objects(&mut pass, |d| {
-                        draw.takes(d)
-                            && !outside_clip_volume(
+                    map_triangles += ctx.scene_gpu.draw_visible(
+                        &mut pass,
+                        |d| draw.takes(d),
+                        |b| {
+                            !outside_clip_volume(
                                 &Aabb {
-                                    min: d.bounds.min - eye,
-                                    max: d.bounds.max - eye,
+                                    min: b.min - eye,
+                                    max: b.max - eye,
                                 },
                                 m,
                             )
-                    });
+                        },
+                    );
                 }
             }
         }
