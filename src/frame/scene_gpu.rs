@@ -4,6 +4,7 @@
 use super::{FrameLayouts, Vertex, textures};
 use crate::gpu::GpuContext;
 use crate::scene::clusters::{CLUSTER_TRIANGLES, Cluster, clustered};
+use crate::scene::topology::SolidKind;
 use crate::scene::{Aabb, Material, Scene};
 use anyhow::{Result, bail};
 use bytemuck::{Pod, Zeroable};
@@ -40,8 +41,8 @@ pub struct DrawCall {
     pub material: usize,
     pub casts_shadow: bool,
     pub shadow_plane: bool,
-    /// The mesh bounds a solid ([`crate::scene::Mesh::bounds_solid`]).
-    pub solid: bool,
+    /// What the mesh encloses ([`crate::scene::Mesh::solid_kind`]).
+    pub solid: SolidKind,
     /// World-space bounds of the object (for culling against light views).
     pub bounds: Aabb,
     /// Its clusters: `SceneGpu::parts[first_part..first_part + part_count]`.
@@ -123,7 +124,7 @@ impl SceneGpu {
         if vertices.is_empty() || indices.is_empty() {
             bail!("scene '{}' has no triangles", scene.name);
         }
-        let solid: Vec<bool> = scene.meshes.par_iter().map(|m| m.bounds_solid()).collect();
+        let solid: Vec<SolidKind> = scene.meshes.par_iter().map(|m| m.solid_kind()).collect();
         let objects: Vec<ObjectGpu> = scene
             .objects
             .iter()
@@ -134,7 +135,7 @@ impl SceneGpu {
                     o.material as u32,
                     o.casts_shadow as u32,
                     o.receives_shadow as u32,
-                    solid[o.mesh] as u32,
+                    (solid[o.mesh] != SolidKind::NotSolid) as u32,
                 ],
             })
             .collect();

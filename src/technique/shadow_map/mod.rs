@@ -43,7 +43,9 @@ use depth_bounds::{DepthReduction, SeenBounds};
 use edge_mask::{BoundsChain, ChainSource};
 use glam::{Mat4, UVec4, Vec4};
 use maps::Maps;
-use pipelines::{DepthDraw, DepthPassKey, LookupKey, MapProjection, MapShape, ShadowMapShared};
+use pipelines::{
+    Casters, DepthDraw, DepthPassKey, LookupKey, MapProjection, MapShape, ShadowMapShared,
+};
 use std::sync::Arc;
 use uniform::{MAX_FACES, SLOTS, STRIDE, ShadowMapUniform};
 
@@ -350,7 +352,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             if floor {
                 return vec![DepthDraw {
                     pipeline: self.shared.floor(gpu, format.depth_texture(), shape),
-                    solid: None,
+                    casters: Casters::All,
                 }];
             }
             let clamp = bias_clamp(setup, face, size, c.slope_bias_clamp);

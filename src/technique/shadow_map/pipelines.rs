@@ -9,6 +9,7 @@ use super::config::{CullFace, DepthFormat, Filter};
 use super::setup::LightSetup;
 use crate::frame::{DrawCall, MASK_FORMAT, VERTEX_LAYOUT};
 use crate::gpu::GpuContext;
+use crate::scene::topology::SolidKind;
 use crate::technique::params::{Choice, choice_enum};
 
 choice_enum! {
@@ -112,35 +113,58 @@ impl CullFace {
     }
 }
 
+/// Which casters a depth-pass pipeline draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Casters {
+    All,
+    /// Those that do not bound a solid.
+    NotSolids,
+    Solids,
+    /// Solids that can shadow themselves ([`SolidKind::Concave`]).
+    ConcaveSolids,
+}
+
+impl Casters {
+    /// Whether the set holds `d`, a shadow caster.
+    fn holds(self, d: &DrawCall) -> bool {
+        match self {
+            Casters::All => true,
+            Casters::NotSolids => d.solid == SolidKind::NotSolid,
+            Casters::Solids => d.solid != SolidKind::NotSolid,
+            Casters::ConcaveSolids => d.solid == SolidKind::Concave,
+        }
+    }
+}
+
 /// One pipeline of a depth pass and the casters it draws.
 #[derive(Clone)]
 pub struct DepthDraw {
     pub pipeline: wgpu::RenderPipeline,
-    /// `Some(solid)`: the casters whose [`DrawCall::solid`] is `solid`;
-    /// `None`: all.
-    pub solid: Option<bool>,
+    pub casters: Casters,
 }
 
 impl DepthDraw {
-    /// Whether this draw takes `d`: a shadow caster of its kind.
+    /// Whether this draw takes `d`: a shadow caster of its set.
     pub fn takes(&self, d: &DrawCall) -> bool {
-        d.casts_shadow && self.solid.is_none_or(|s| d.solid == s)
+        d.casts_shadow && self.casters.holds(d)
     }
 }
 
 impl DepthPassKey {
     /// The pipelines a depth pass draws with, each with the casters it
-    /// draws ([`DepthDraw::solid`]). With `cull=solids`, the casters that
-    /// are not solids take both faces and the bias; solids their back faces
-    /// without bias and, where the bias is capped (unwarped orthographic
-    /// maps) and `solid_front_bias` is not 0, their front faces too, with
-    /// that many times the slope bias and its cap. Uncapped, at grazing
+    /// draws. With `cull=solids`, the casters that are not solids take
+    /// both faces and the bias; solids their back faces without bias and,
+    /// where the bias is capped (unwarped orthographic maps) and
+    /// `solid_front_bias` is not 0, concave solids their front faces too,
+    /// with that many times the slope bias and its cap: a concave solid's
+    /// back face can lie too close before the part of it that it shadows
+    /// (a convex one never shadows its own lit side). Uncapped, at grazing
     /// light the pushed front faces still meet the lit faces they come from,
     /// which take no normal offset (columns/point at 640×360: 0.048 → 0.54 %
     /// total mismatch with them).
-    fn draws(self, solid_front_bias: f32) -> Vec<(DepthPassKey, Option<bool>)> {
+    fn draws(self, solid_front_bias: f32) -> Vec<(DepthPassKey, Casters)> {
         if self.cull != CullFace::Solids {
-            return vec![(self, None)];
+            return vec![(self, Casters::All)];
         }
         let back = DepthPassKey {
             cull: CullFace::Front,
@@ -155,9 +179,9 @@ impl DepthPassKey {
                     cull: CullFace::None,
                     ..self
                 },
-                Some(false),
+                Casters::NotSolids,
             ),
-            (back, Some(true)),
+            (back, Casters::Solids),
         ];
         if solid_front_bias > 0.0 && f32::from_bits(self.clamp_bits) > 0.0 {
             let scaled = |bits: u32| (f32::from_bits(bits) * solid_front_bias).to_bits();
@@ -167,7 +191,7 @@ impl DepthPassKey {
                 clamp_bits: scaled(self.clamp_bits),
                 ..self
             };
-            draws.push((front, Some(true)));
+            draws.push((front, Casters::ConcaveSolids));
         }
         draws
     }
@@ -484,9 +508,9 @@ impl ShadowMapShared {
     ) -> Vec<DepthDraw> {
         key.draws(solid_front_bias)
             .into_iter()
-            .map(|(key, solid)| DepthDraw {
+            .map(|(key, casters)| DepthDraw {
                 pipeline: self.depth_pass(gpu, key),
-                solid,
+                casters,
             })
             .collect()
     }
@@ -625,19 +649,19 @@ mod tests {
     }
 
     #[test]
-    fn solids_draw_back_faces_unbiased_and_front_faces_only_under_a_capped_bias() {
+    fn solids_draw_back_faces_unbiased_and_concave_ones_front_faces_under_a_capped_bias() {
         let ortho = key(CullFace::Solids, MapProjection::Orthographic, false, 0.01);
         let draws = ortho.draws(4.0);
         let kinds: Vec<_> = draws
             .iter()
-            .map(|(k, solid)| (k.cull, *solid, k.bias, f32::from_bits(k.slope_bits)))
+            .map(|(k, casters)| (k.cull, *casters, k.bias, f32::from_bits(k.slope_bits)))
             .collect();
         assert_eq!(
             kinds,
             [
-                (CullFace::None, Some(false), 2, 2.0),
-                (CullFace::Front, Some(true), 0, 0.0),
-                (CullFace::Back, Some(true), 2, 8.0),
+                (CullFace::None, Casters::NotSolids, 2, 2.0),
+                (CullFace::Front, Casters::Solids, 0, 0.0),
+                (CullFace::Back, Casters::ConcaveSolids, 2, 8.0),
             ]
         );
         assert_eq!(f32::from_bits(draws[1].0.clamp_bits), 0.0);
@@ -646,7 +670,7 @@ mod tests {
         let cube = key(CullFace::Solids, MapProjection::Cube, false, 0.0);
         assert_eq!(cube.draws(4.0).len(), 2, "uncapped: back faces only");
         let none = key(CullFace::None, MapProjection::Orthographic, false, 0.01);
-        assert_eq!(none.draws(4.0), [(none, None)]);
+        assert_eq!(none.draws(4.0), [(none, Casters::All)]);
     }
 
     #[test]
