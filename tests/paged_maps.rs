@@ -7,28 +7,6 @@ use common::*;
 use glam::Vec3;
 use shadowlab::scene::{Light, Scene, builtin};
 
-/// One frame of `technique_id` (with settings) on `scene`, kept for more frames.
-fn paged_frame(
-    technique_id: &str,
-    scene: &Scene,
-    set: &[&str],
-    w: u32,
-    h: u32,
-) -> shadowlab::headless::HeadlessFrame {
-    let mut hf = frame_of(scene, technique_id, set, w, h);
-    render_again(&mut hf, scene);
-    hf
-}
-
-fn render_again(hf: &mut shadowlab::headless::HeadlessFrame, scene: &Scene) {
-    let settings = shadowlab::renderer::RenderSettings {
-        show_light_icons: false,
-        ..Default::default()
-    };
-    hf.render(gpu(), scene, &scene.camera, &scene.lights, &settings)
-        .unwrap();
-}
-
 /// A sun straight down on the 20×20 floor, the camera 8 above looking
 /// down (50° square view): every pixel sees 7.46/256 = 0.0291 of floor.
 /// With 1024² windows of 128² pages and 6 clipmap levels over the scene's
@@ -40,7 +18,7 @@ fn render_again(hf: &mut shadowlab::headless::HeadlessFrame, scene: &Scene) {
 fn virtual_pages_marked_for_a_known_view_match_the_hand_count_and_stay_cached() {
     let scene = square_under_the_sun(Vec3::new(0.0, 1.0, 0.0));
     let set = SMALL_CLIPMAP;
-    let mut hf = paged_frame("shadow-map:virtual", &scene, &set, 256, 256);
+    let mut hf = rendered_frame(&scene, "shadow-map:virtual", &set, 256, 256);
     assert_eq!(counter(&hf, "pages_needed"), 16.0);
     assert_eq!(counter(&hf, "pages_rendered"), 16.0);
     // A still camera and light: nothing to render, everything cached.
@@ -102,9 +80,9 @@ fn virtual_lookups_across_page_borders_match_one_full_map() {
 #[test]
 fn a_virtual_pool_too_small_degrades_to_coarser_pages_without_garbage() {
     let scene = builtin::by_name("columns").unwrap().unwrap();
-    let full = paged_frame("shadow-map:virtual", &scene, &[], 320, 180);
+    let full = rendered_frame(&scene, "shadow-map:virtual", &[], 320, 180);
     let needed = counter(&full, "pages_needed");
-    let small = paged_frame("shadow-map:virtual", &scene, &["pool=16"], 320, 180);
+    let small = rendered_frame(&scene, "shadow-map:virtual", &["pool=16"], 320, 180);
     assert!(needed > 16.0, "{needed}");
     assert!(counter(&small, "pages_degraded") > 0.0);
     assert!(counter(&small, "pages_resident") <= 16.0);
@@ -138,7 +116,7 @@ fn square_under_the_sun(centre: Vec3) -> Scene {
 fn an_adaptive_map_without_shadow_edges_stays_at_its_root() {
     let scene = square_under_the_sun(Vec3::new(8.0, 1.0, 8.0));
     let set = SMALL_CLIPMAP;
-    let mut hf = paged_frame("shadow-map:adaptive", &scene, &set, 256, 256);
+    let mut hf = rendered_frame(&scene, "shadow-map:adaptive", &set, 256, 256);
     assert_eq!(counter(&hf, "pages_needed"), 4.0);
     assert_eq!(counter(&hf, "pages_rendered"), 4.0);
     assert_eq!(counter(&hf, "refine_passes"), 2.0);
@@ -157,7 +135,7 @@ fn an_adaptive_map_without_shadow_edges_stays_at_its_root() {
 fn an_adaptive_map_refines_only_at_shadow_edges_and_matches_the_virtual_map() {
     let scene = square_under_the_sun(Vec3::new(0.0, 1.0, 0.0));
     let set = SMALL_CLIPMAP;
-    let hf = paged_frame("shadow-map:adaptive", &scene, &set, 256, 256);
+    let hf = rendered_frame(&scene, "shadow-map:adaptive", &set, 256, 256);
     assert_eq!(counter(&hf, "pages_needed"), 8.0);
     assert_eq!(counter(&hf, "refine_passes"), 3.0);
     let adaptive = mask_of(&scene, "shadow-map:adaptive", &set, 256, 256);

@@ -536,9 +536,7 @@ fn texel_footprint_halves_with_twice_the_map_and_shrinks_with_cascades() {
     let large = p95(&scene, "shadow-map:pcf[size=1024]", (256, 192));
     assert!((small / large - 2.0).abs() < 0.1, "{small} / {large}");
     assert!(compare(&scene, "none", (64, 48)).aliasing.is_none());
-    let mut land = shadowlab::scene::load("landscape").unwrap();
-    land.camera = land.camera_preset("ground").unwrap();
-    land.lights = land.light_preset("sun-side").unwrap();
+    let land = preset("landscape", "ground", "sun-side");
     let one = p95(&land, "shadow-map:pcf", (320, 180));
     let cascades = p95(&land, "shadow-map:csm", (320, 180));
     assert!(cascades * 4.0 <= one, "csm {cascades}, one map {one}");
@@ -700,9 +698,7 @@ fn sdsm_cascades_cover_every_pixel_with_smaller_texels() {
 /// the frustum-fitted map's and less than half of its mismatch.
 #[test]
 fn one_map_fitted_to_the_seen_pixels_covers_them_with_smaller_texels() {
-    let mut land = shadowlab::scene::load("landscape").unwrap();
-    land.camera = land.camera_preset("ground").unwrap();
-    land.lights = land.light_preset("sun-low-front").unwrap();
+    let land = preset("landscape", "ground", "sun-low-front");
     let (w, h) = (256, 144);
     let (outside, seen) = map_coverage(&land, "shadow-map:pcf", (w, h));
     assert_eq!(outside, 0, "receiving pixels outside the map");
@@ -871,13 +867,8 @@ fn solids_store_their_back_faces_and_keep_shadow_edges_in_place() {
 /// match the reference's in the interior.
 #[test]
 fn cascades_draw_only_the_casters_that_can_shadow_the_view() {
-    let mut land = shadowlab::scene::load("landscape").unwrap();
-    land.camera = land.camera_preset("ground").unwrap();
-    land.lights = land.light_preset("sun-side").unwrap();
-    let mut hf = frame_of(&land, "shadow-map:csm", &[], 320, 180);
-    let settings = shadowlab::renderer::RenderSettings::default();
-    hf.render(gpu(), &land, &land.camera, &land.lights, &settings)
-        .unwrap();
+    let land = preset("landscape", "ground", "sun-side");
+    let hf = rendered_frame(&land, "shadow-map:csm", &[], 320, 180);
     let drawn = counter(&hf, "map_triangles");
     let casters = land.caster_triangle_count() as f64;
     assert!(

@@ -4,19 +4,11 @@
 mod common;
 use common::*;
 use glam::{Mat4, Vec3};
-use shadowlab::scene::{Camera, Light, LightType, Material, Scene, builtin, shapes};
+use shadowlab::scene::{Camera, Light, LightType, Material, Scene, shapes};
 use shadowlab::technique::ParamValues;
 use shadowlab::technique::shadow_volume::config::VolumeConfig;
 use shadowlab::technique::shadow_volume::silhouette::{CasterPlan, VolumeKind};
 use shadowlab::technique::shadow_volume::{self, ShadowVolumeRenderer};
-
-/// A built-in scene seen from a camera preset under a light preset.
-fn preset(scene: &str, camera: &str, light: &str) -> Scene {
-    let mut s = builtin::by_name(scene).unwrap().unwrap();
-    s.camera = s.camera_preset(camera).unwrap();
-    s.lights = s.light_preset(light).unwrap();
-    s
-}
 
 /// Triangles of an index list, each rotated to start at its smallest
 /// index (orientation kept), sorted.

@@ -278,24 +278,14 @@ impl SceneGpu {
         pass: &mut wgpu::RenderPass,
         filter: impl Fn(&DrawCall) -> bool,
     ) -> u64 {
-        pass.set_vertex_buffer(0, self.vertex_buffer.slice(..));
-        pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-        let mut triangles = 0;
-        for d in self.draws.iter().filter(|d| !d.shadow_plane && filter(d)) {
-            pass.draw_indexed(
-                d.first_index..d.first_index + d.index_count,
-                d.base_vertex,
-                d.object..d.object + 1,
-            );
-            triangles += d.index_count as u64 / 3;
-        }
-        triangles
+        self.draw_visible(pass, filter, |_| true)
     }
 
     /// Like [`Self::draw_objects`] for a view with a culling test: draws,
     /// of each object that `filter` accepts and whose bounds `visible`
-    /// accepts, only the clusters whose bounds it accepts; returns the
-    /// number of triangles drawn.
+    /// accepts, only the clusters whose bounds it accepts (consecutive ones
+    /// in one draw: an object wholly seen is one draw); returns the number
+    /// of triangles drawn.
     pub fn draw_visible(
         &self,
         pass: &mut wgpu::RenderPass,
@@ -305,6 +295,10 @@ impl SceneGpu {
         pass.set_vertex_buffer(0, self.vertex_buffer.slice(..));
         pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
         let mut triangles = 0;
+        let mut draw = |indices: std::ops::Range<u32>, d: &DrawCall| {
+            triangles += indices.len() as u64 / 3;
+            pass.draw_indexed(indices, d.base_vertex, d.object..d.object + 1);
+        };
         for d in self
             .draws
             .iter()
@@ -312,13 +306,18 @@ impl SceneGpu {
         {
             let parts = &self.parts[d.first_part as usize..(d.first_part + d.part_count) as usize];
             let whole = parts.len() == 1;
-            for p in parts.iter().filter(|p| whole || visible(&p.bounds)) {
-                pass.draw_indexed(
-                    p.first_index..p.first_index + p.index_count,
-                    d.base_vertex,
-                    d.object..d.object + 1,
-                );
-                triangles += p.index_count as u64 / 3;
+            // The run of consecutive visible clusters not yet drawn.
+            let mut run: Option<std::ops::Range<u32>> = None;
+            for p in parts {
+                if whole || visible(&p.bounds) {
+                    let end = p.first_index + p.index_count;
+                    run = Some(run.map_or(p.first_index..end, |r| r.start..end));
+                } else if let Some(r) = run.take() {
+                    draw(r, d);
+                }
+            }
+            if let Some(r) = run {
+                draw(r, d);
             }
         }
         triangles

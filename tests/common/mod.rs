@@ -140,6 +140,37 @@ pub fn frame_of(scene: &Scene, technique_id: &str, set: &[&str], w: u32, h: u32)
     HeadlessFrame::new(gpu(), scene, &[choice], w, h).unwrap()
 }
 
+/// A built-in scene seen from a camera preset under a light preset.
+pub fn preset(scene: &str, camera: &str, light: &str) -> Scene {
+    let mut s = shadowlab::scene::builtin::by_name(scene).unwrap().unwrap();
+    s.camera = s.camera_preset(camera).unwrap();
+    s.lights = s.light_preset(light).unwrap();
+    s
+}
+
+/// [`frame_of`], rendered once (kept for more frames).
+pub fn rendered_frame(
+    scene: &Scene,
+    technique_id: &str,
+    set: &[&str],
+    w: u32,
+    h: u32,
+) -> HeadlessFrame {
+    let mut hf = frame_of(scene, technique_id, set, w, h);
+    render_again(&mut hf, scene);
+    hf
+}
+
+/// Renders `hf` again from the scene's camera and lights (no light icons).
+pub fn render_again(hf: &mut HeadlessFrame, scene: &Scene) {
+    let settings = RenderSettings {
+        show_light_icons: false,
+        ..Default::default()
+    };
+    hf.render(gpu(), scene, &scene.camera, &scene.lights, &settings)
+        .unwrap();
+}
+
 /// A technique's counter after the frame `hf` rendered last.
 pub fn counter(hf: &HeadlessFrame, name: &str) -> f64 {
     hf.techniques[0]
