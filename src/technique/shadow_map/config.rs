@@ -476,12 +476,12 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "csm",
-        summary: "4 stabilised cascades of 1024² fitted to the view frustum (the memory of one 2048² map), λ 0.95 (Sascha Willems' sample), each pixel in the finest map that holds it (select=map: dolly flicker on city/default/sun at 640×360 0.0128 → 0.0015 %), 10 % blended, normal offset ½ texel of each cascade (1 pushed lookups at building corners into the next wall's shadow: 0.12 % interior false shadow on city/street/sun at 640×360, ½: 0.004 %)",
+        summary: "4 stabilised cascades of 1024² fitted to the view frustum (the memory of one 2048² map), λ 0.95 (Sascha Willems' sample), each pixel in the finest map that holds it (select=map: dolly flicker on city/default/sun at 640×360 0.0128 → 0.0015 %), 5 % blended (a pixel whose cascades disagree flips where the blend crosses ½, and the band moves with the camera: 10 % → 5 % took dolly flicker on landscape/flyover/sun at 640×360 over 16 frames from 0.0084 to 0.0064 %, seams unchanged), normal offset ½ texel of each cascade (1 pushed lookups at building corners into the next wall's shadow: 0.12 % interior false shadow on city/street/sun at 640×360, ½: 0.004 %)",
         values: &[
             ("cascades", "4"),
             ("size", "1024"),
             ("split_lambda", "0.95"),
-            ("blend", "0.1"),
+            ("blend", "0.05"),
             ("select", "map"),
             ("fit", "frustum"),
             ("normal_offset_directional", "0.5"),
