@@ -210,7 +210,7 @@ pub const EDGE_MASK: ParamSpec = ParamSpec::boolean(
 pub const RECEIVER_PLANE: ParamSpec = ParamSpec::boolean(
     "receiver_plane",
     false,
-    "receiver-plane depth bias (Isidoro 2006): each tap compares against the receiver's plane at the tap, from screen derivatives of the light-space position",
+    "receiver-plane depth bias (Isidoro 2006): each texel a tap reads is compared against the receiver's plane (from its geometric normal) at the texel's centre, not against one depth — a lit wall then never falls behind the back face that meets it at its own corner (city/street/sun at 640×360: interior false shadow 0.105 → 0.015 %), but the plane passes in front of a caster that touches the receiver at a steep angle (a trunk under its canopy: landscape/ground/sun 0.44 → 0.55 % total mismatch); the virtual map takes the plane from screen derivatives",
 );
 
 pub const CULL: ParamSpec = ParamSpec::choice_of::<CullFace>(

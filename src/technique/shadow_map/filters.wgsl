@@ -33,8 +33,9 @@ fn solve_plane(dx: vec3f, dy: vec3f, limit: f32) -> vec2f {
     return clamp(g, vec2f(-limit), vec2f(limit));
 }
 
-// The receiver plane from the screen derivatives of (u, v, depth); 0 when
-// off. Must run in uniform control flow.
+// The virtual map's receiver plane, from the screen derivatives of
+// (u, v, depth); 0 when off. Must run in uniform control flow. (The other
+// maps take it from the surface's normal: `receiver_plane_at`.)
 fn receiver_plane(t: vec3f) -> vec2f {
     let g = solve_plane(dpdx(t), dpdy(t), 4.0);
     return select(vec2f(0.0), g, RECEIVER_PLANE);
@@ -52,6 +53,9 @@ fn lit_at(texel: vec2i, face: u32, z: f32) -> f32 {
 
 // Bilinear (hardware-style 2×2) comparison at uv.
 fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
+    if !VIRTUAL && any(rp_gradient != vec2f(0.0)) {
+        return bilinear_compare(uv, face, z);
+    }
     if !BYTE_MAP && !VIRTUAL {
         return textureSampleCompareLevel(depth_map, compare_sampler, uv, i32(face), z);
     }
@@ -61,14 +65,22 @@ fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
     return bilinear_compare(uv, face, z);
 }
 
-// A 2×2 comparison filtered by hand from four texel loads.
+// A 2×2 comparison filtered by hand from four texel loads; with the
+// receiver plane each texel is compared against the plane at its centre.
 fn bilinear_compare(uv: vec2f, face: u32, z: f32) -> f32 {
     let p = uv * sm.map.x - 0.5;
     let b = vec2i(floor(p));
     let f = fract(p);
-    let a = mix(lit_at(b, face, z), lit_at(b + vec2i(1, 0), face, z), f.x);
-    let c = mix(lit_at(b + vec2i(0, 1), face, z), lit_at(b + vec2i(1, 1), face, z), f.x);
+    let a = mix(lit_at_plane(b, face, z, uv), lit_at_plane(b + vec2i(1, 0), face, z, uv), f.x);
+    let c = mix(lit_at_plane(b + vec2i(0, 1), face, z, uv), lit_at_plane(b + vec2i(1, 1), face, z, uv), f.x);
     return mix(a, c, f.y);
+}
+
+// `lit_at` against the receiver depth z at uv carried along the receiver
+// plane to the texel's centre.
+fn lit_at_plane(texel: vec2i, face: u32, z: f32, uv: vec2f) -> f32 {
+    let centre = (vec2f(texel) + 0.5) * sm.map.y;
+    return lit_at(texel, face, z + dot(centre - uv, rp_gradient));
 }
 
 fn moment_texel(t: vec2i, face: u32) -> vec4f {
@@ -283,7 +295,8 @@ fn range_union(a: vec2f, b: vec2f) -> vec2f {
 // texel centres inside chain cell k, which lie `extent` texels about `at`.
 // The cell's depths lie between two planes (edge_mask.wgsl); a tap
 // compares the texels within a texel of it against the receiver's plane
-// at the tap, hence the slope's one-texel sway. Rounding: a plane that is
+// at each texel's centre (the virtual map: at the tap), within the slope's
+// one-texel sway. Rounding: a plane that is
 // not flat is widened by 1e-6 (depths lie in [0, 1]); a flat one stays exact.
 fn cell_margins(e: EdgeQuery, k: vec2f, at: vec2f, extent: vec2f) -> vec2f {
     let cell = textureLoad(edge_bounds, vec2i(k), i32(e.face), e.level);

@@ -109,31 +109,27 @@ fn linear_depth(z: f32) -> f32 {
 @fragment
 fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let g = textureLoad(gbuffer_position, vec2i(frag.xy), 0);
-    let n = offset_direction(g, normalize(textureLoad(gbuffer_normal, vec2i(frag.xy), 0).xyz));
+    let normal = normalize(textureLoad(gbuffer_normal, vec2i(frag.xy), 0).xyz);
+    let n = offset_direction(g, normal);
     if VIRTUAL {
         return vec4f(virtual_visibility(frag.xy, g, n));
     }
     if !CASCADED {
         let face = face_of(g.xyz);
-        return vec4f(filtered(face, projected(face, g, n), frag.xy));
+        return vec4f(filtered(face, projected(face, g, n, normal), frag.xy));
     }
-    // Cascades: this pixel's, blended into the next one's over the band.
-    // Both projections run in uniform control flow (their screen
-    // derivatives); the next cascade is filtered only inside the band.
+    // Cascades: this pixel's, blended into the next one's over the band
+    // (where the next cascade exists: `cascade_of`).
     let pick = cascade_of(g.xyz);
-    let count = u32(sm.cascade.x);
-    let face = min(pick.index, count - 1u);
-    let next_face = min(pick.index + 1u, count - 1u);
-    let here = projected(face, g, n);
-    let next = projected(next_face, g, n);
-    if pick.index >= count {
+    if pick.index >= u32(sm.cascade.x) {
         return vec4f(1.0); // beyond the last cascade
     }
-    var v = filtered(face, here, frag.xy);
+    var v = filtered(pick.index, projected(pick.index, g, n, normal), frag.xy);
     // A loop, not a branch: llvmpipe runs both sides of a branch under a
     // lane mask but leaves a loop as soon as no lane is still in it.
     for (var in_band = pick.next_weight > 0.0; in_band; in_band = false) {
-        v = mix(v, filtered(next_face, next, frag.xy), pick.next_weight);
+        let next = pick.index + 1u;
+        v = mix(v, filtered(next, projected(next, g, n, normal), frag.xy), pick.next_weight);
     }
     return vec4f(v);
 }
@@ -197,9 +193,41 @@ struct Projected {
     inside: bool,
 };
 
-// Projects G-buffer point g (normal n) into `face`. Must run in uniform
-// control flow (the receiver plane's derivatives).
-fn projected(face: u32, g: vec4f, n: vec3f) -> Projected {
+// A world point's light-clip position in `face`.
+fn clip_of(face: u32, p: vec3f) -> vec4f {
+    if is_paraboloid() {
+        return paraboloid(vec4f(p, 1.0), face);
+    }
+    return sm.faces[face] * vec4f(p, 1.0);
+}
+
+// A world point's map uv and compared depth in `face`.
+fn map_point(face: u32, p: vec3f) -> vec3f {
+    let c = clip_of(face, p);
+    let ndc = c.xyz / select(c.w, 1e-6, abs(c.w) < 1e-6);
+    let z = select(ndc.z, dot(sm.warp_depth, vec4f(p, 1.0)), is_warped());
+    return vec3f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5, z);
+}
+
+// The receiver plane (Isidoro 2006) from the surface itself: d(depth)/d(uv)
+// of the plane through p with normal `normal`, from the map points of two
+// steps of `step` along it (screen derivatives break where a pixel quad
+// straddles an edge, exactly where the plane matters); 0 when off.
+fn receiver_plane_at(face: u32, p: vec3f, normal: vec3f, at: vec3f, step: f32) -> vec2f {
+    if !RECEIVER_PLANE {
+        return vec2f(0.0);
+    }
+    let helper = select(vec3f(1.0, 0.0, 0.0), vec3f(0.0, 1.0, 0.0), abs(normal.x) > 0.7);
+    let t = normalize(cross(normal, helper));
+    let b = cross(normal, t);
+    let dx = map_point(face, p + t * step) - at;
+    let dy = map_point(face, p + b * step) - at;
+    return solve_plane(dx, dy, 4.0);
+}
+
+// Projects G-buffer point g into `face`, moved along `offset_n` (its normal,
+// or none), with the receiver plane of its geometric `normal`.
+fn projected(face: u32, g: vec4f, offset_n: vec3f, normal: vec3f) -> Projected {
     // Normal offset: move the lookup point along the geometric normal by a
     // number of shadow-map texels (their world size grows with distance for
     // perspective maps, and with each cascade).
@@ -211,19 +239,14 @@ fn projected(face: u32, g: vec4f, n: vec3f) -> Projected {
     } else if !is_orthographic() {
         texel_world = sm.map.z * length(g.xyz - sm.light.xyz);
     }
-    let p = offset_point(g.xyz, n, texel_world);
-    var c = sm.faces[face] * vec4f(p, 1.0);
-    if is_paraboloid() {
-        c = paraboloid(vec4f(p, 1.0), face);
-    }
-    let ndc = c.xyz / select(c.w, 1e-6, abs(c.w) < 1e-6);
-    let uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-    let z = select(ndc.z, dot(sm.warp_depth, vec4f(p, 1.0)), is_warped());
-    let gradient = receiver_plane(vec3f(uv, z));
+    let p = offset_point(g.xyz, offset_n, texel_world);
+    let c = clip_of(face, p);
+    let at = map_point(face, p);
+    let gradient = receiver_plane_at(face, p, normal, at, texel_world);
     // Outside the map counts as lit.
-    let inside = g.w >= 0.5 && c.w > 0.0 && all(uv >= vec2f(0.0)) && all(uv <= vec2f(1.0))
-        && z <= 1.0 && z >= 0.0;
-    return Projected(c, uv, z, gradient, inside);
+    let inside = g.w >= 0.5 && c.w > 0.0 && all(at.xy >= vec2f(0.0)) && all(at.xy <= vec2f(1.0))
+        && at.z <= 1.0 && at.z >= 0.0;
+    return Projected(c, at.xy, at.z, gradient, inside);
 }
 
 // The filtered visibility of a projected point in `face`.
@@ -233,10 +256,6 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
     }
     rp_gradient = pr.gradient;
     rp_origin = pr.uv;
-    // With the receiver plane, a 2×2 comparison still sees texels up to one
-    // texel away at a single depth: take off that slope (Isidoro's
-    // fractional sampling error), capped.
-    let z = pr.z - min(2.0 * dot(vec2f(sm.map.y), abs(rp_gradient)), 0.01);
     if FILTER_KIND >= FILTER_VSM {
         return moment_visibility(moments_at(pr.uv, face), select(linear01(pr.clip), pr.z, is_warped()));
     }
@@ -250,23 +269,24 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
     if EDGE_MASK && (FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK
         || FILTER_KIND == FILTER_PCSS || FILTER_KIND == FILTER_VARWIDTH) {
         // Taps compare z along the receiver plane (depth per texel).
-        known = edge_class(pr.uv, face, z, rp_gradient * sm.map.y, kernel_reach());
+        known = edge_class(pr.uv, face, pr.z, rp_gradient * sm.map.y, kernel_reach());
         count = select(count, 0u, known >= 0.0);
     }
-    return select(kernel(face, pr, z, frag, count), known, known >= 0.0);
+    return select(kernel(face, pr, frag, count), known, known >= 0.0);
 }
 
-// The filter's kernel at a projected point whose compared depth is z, with
-// `count` taps per side (0: none, and no blocker search).
-fn kernel(face: u32, pr: Projected, z: f32, frag: vec2f, count: u32) -> f32 {
+// The filter's kernel at a projected point, with `count` taps per side (0:
+// none, and no blocker search).
+fn kernel(face: u32, pr: Projected, frag: vec2f, count: u32) -> f32 {
     let uv = pr.uv;
+    let z = pr.z;
     let radius = sm.kernel.x;
     let phi = ign(frag) * 6.2831853;
     var v = 1.0;
     switch FILTER_KIND {
         case FILTER_HARD: {
             let t = floor(uv * sm.map.x);
-            v = lit_at(vec2i(t), face, tap_z(pr.z, (t + 0.5) * sm.map.y));
+            v = lit_at(vec2i(t), face, tap_z(z, (t + 0.5) * sm.map.y));
         }
         case FILTER_PCF2X2: {
             v = pcf2x2(uv, face, z);
