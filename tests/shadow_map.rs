@@ -767,9 +767,7 @@ fn one_map_turned_to_the_smallest_square_has_smaller_texels() {
 /// virtual map's clipmap levels, each capped by its own texel size.
 #[test]
 fn capping_the_slope_bias_stops_light_leaking_at_grazing_casters() {
-    let mut pipe = shadowlab::scene::load("curved").unwrap();
-    pipe.camera = pipe.camera_preset("pipe").unwrap();
-    pipe.lights = pipe.light_preset("sun").unwrap();
+    let pipe = preset("curved", "pipe", "sun");
     for (technique, capped_at_most, uncapped_at_least) in [
         ("shadow-map:pcf", 0.05, 0.2),
         ("shadow-map:virtual", 0.01, 0.03),
@@ -840,16 +838,14 @@ fn edge_masked_filters_equal_the_full_kernel_on_the_builtin_scenes() {
 /// bias (`solid_front_bias`) still do.
 #[test]
 fn solids_store_their_back_faces_and_keep_shadow_edges_in_place() {
-    let mut columns = shadowlab::scene::load("columns").unwrap();
-    columns.lights = columns.light_preset("sun").unwrap();
+    let columns = preset("columns", "default", "sun");
     let solids = compare(&columns, "shadow-map:pcf", (640, 360)).mask;
     let both = compare(&columns, "shadow-map:pcf[cull=none]", (640, 360)).mask;
     assert!(
         solids.all.total_pct <= 0.8 * both.all.total_pct && solids.interior.false_shadow_pct == 0.0,
         "solids {solids:?}\nboth faces {both:?}"
     );
-    let mut bunny = shadowlab::scene::load("bunny").unwrap();
-    bunny.lights = bunny.light_preset("sun").unwrap();
+    let bunny = preset("bunny", "default", "sun");
     let with_front = compare(&bunny, "shadow-map:pcf", (640, 360)).mask;
     let back_only = compare(&bunny, "shadow-map:pcf[solid_front_bias=0]", (640, 360)).mask;
     assert!(

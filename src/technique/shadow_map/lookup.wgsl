@@ -134,13 +134,6 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     return vec4f(v);
 }
 
-// The map uv of world point p in `face`.
-fn map_uv(face: u32, p: vec3f) -> vec2f {
-    let c = sm.faces[face] * vec4f(p, 1.0);
-    let ndc = c.xy / select(c.w, 1e-6, abs(c.w) < 1e-6);
-    return vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-}
-
 // A warped map's world texel size at p, across the light: the larger of
 // the texel's extents along two directions perpendicular to the light,
 // from the uv change over a short step.
@@ -153,9 +146,9 @@ fn warped_texel_world(face: u32, p: vec3f) -> f32 {
     t = normalize(t);
     let b = cross(l, t);
     let step = 1e-3 * max(length(p - frame.camera_pos.xyz), 1e-3);
-    let uv = map_uv(face, p);
-    let along_t = length(map_uv(face, p + t * step) - uv);
-    let along_b = length(map_uv(face, p + b * step) - uv);
+    let uv = map_point(face, p).xy;
+    let along_t = length(map_point(face, p + t * step).xy - uv);
+    let along_b = length(map_point(face, p + b * step).xy - uv);
     return step / max(min(along_t, along_b) * sm.map.x, 1e-9);
 }
 

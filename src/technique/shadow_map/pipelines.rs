@@ -516,7 +516,7 @@ impl ShadowMapShared {
     }
 
     /// The depth pass from the light.
-    pub fn depth_pass(&self, gpu: &GpuContext, key: DepthPassKey) -> wgpu::RenderPipeline {
+    fn depth_pass(&self, gpu: &GpuContext, key: DepthPassKey) -> wgpu::RenderPipeline {
         gpu.cache.render_pipeline("shadow map depth", &key, || {
             let (entry, color) = if key.moments.is_some() {
                 (Some("fs_depth_moments"), Some(MOMENT_FORMAT))

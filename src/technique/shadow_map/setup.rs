@@ -461,6 +461,8 @@ pub fn directional_setup(
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     /// A point light off an edge of the scene's box sees the box's nearer
     /// parts obliquely in a cube face: every point of the box inside a
     /// face's frustum lies beyond that face's near plane (the near plane at
@@ -494,8 +496,6 @@ mod tests {
         }
         assert!(seen >= 21 * 21 * 21, "{seen}");
     }
-
-    use super::*;
 
     /// The view of a camera at the origin looking down −z with a 90° field
     /// and a square frame, between depths 1 and 10.
