@@ -105,7 +105,11 @@ fn a_frame_waits_once_and_its_gpu_times_still_arrive() {
         return;
     }
     let scene = room_with_spot();
-    let choice = technique::resolve("shadow-map:pcf").unwrap();
+    // The whole cone: a map focused on the pixels seen (`fit=samples`)
+    // waits for its reduction too in measurements.
+    let choice = shadowlab::measure::parse_technique_list("shadow-map:pcf[fit=frustum]")
+        .unwrap()
+        .remove(0);
     let mut hf = HeadlessFrame::new(&gpu, &scene, &[choice], 96, 54).unwrap();
     let settings = RenderSettings {
         gpu_timing: true,

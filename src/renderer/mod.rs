@@ -156,6 +156,9 @@ pub struct Renderer {
     icons: icons::LightIcons,
     lines: lines::LineRenderer,
     timer: Option<timing::GpuTimer>,
+    /// The G-buffer seen from [`FrameCameras::fit`] where that is not the
+    /// frame's camera ([`MaskContext::fit_frame`]); made on first use.
+    fit_frame: Option<FrameTargets>,
 }
 
 impl Renderer {
@@ -173,6 +176,7 @@ impl Renderer {
             icons: icons::LightIcons::new(gpu, &layouts.frame),
             lines: lines::LineRenderer::new(gpu, &layouts.frame),
             timer: gpu.timestamps.then(|| timing::GpuTimer::new(device)),
+            fit_frame: None,
             gbuffer_layout,
             module,
         }
@@ -315,6 +319,18 @@ impl Renderer {
         self.record_prepass(gpu, &mut enc, scene_gpu, frame, settings);
         stamp(&mut enc, timing::PREPASS, true);
         gpu.queue.submit([enc.finish()]);
+        let separate_fit = cameras.fit != camera;
+        if separate_fit {
+            let uniform = frame::frame_uniform(
+                scene,
+                cameras.fit,
+                lights,
+                needs.infinite_far_plane,
+                frame.width(),
+                frame.height(),
+            );
+            self.render_fit_prepass(gpu, scene_gpu, frame, uniform, settings)?;
+        }
         let t1 = stage_wait()?;
 
         let mut enc = gpu.device.create_command_encoder(&Default::default());
@@ -329,6 +345,10 @@ impl Renderer {
                 light,
                 camera,
                 fit_camera: cameras.fit,
+                fit_frame: match &self.fit_frame {
+                    Some(f) if separate_fit => f,
+                    _ => frame,
+                },
                 target: frame.mask_layer(i),
                 feedback: settings.feedback,
             };
@@ -375,6 +395,40 @@ impl Renderer {
     }
 
     /// Depth, stencil (cleared) and G-buffer of every object.
+    /// The prepass seen from the fit camera (`uniform`) into
+    /// [`Renderer::fit_frame`], sized as `frame`: what the camera the light
+    /// views are fitted to sees, for fits to the pixels seen (SDSM's
+    /// reduction).
+    fn render_fit_prepass(
+        &mut self,
+        gpu: &GpuContext,
+        scene_gpu: &SceneGpu,
+        frame: &FrameTargets,
+        uniform: frame::FrameUniform,
+        settings: &RenderSettings,
+    ) -> Result<()> {
+        let (w, h) = (frame.width(), frame.height());
+        if self
+            .fit_frame
+            .as_ref()
+            .is_none_or(|f| (f.width(), f.height()) != (w, h))
+        {
+            self.fit_frame = Some(FrameTargets::new(gpu, w, h)?);
+        }
+        let fit_frame = self.fit_frame.as_mut().expect("made above");
+        fit_frame.set_uniform(gpu, uniform);
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        self.record_prepass(
+            gpu,
+            &mut enc,
+            scene_gpu,
+            self.fit_frame.as_ref().expect("made above"),
+            settings,
+        );
+        gpu.queue.submit([enc.finish()]);
+        Ok(())
+    }
+
     fn record_prepass(
         &self,
         gpu: &GpuContext,

@@ -34,6 +34,10 @@ pub struct MaskContext<'a> {
     /// the scene a map covers): the frame's, except when measuring how maps
     /// move with the camera over fixed surface points (`compare --path`).
     pub fit_camera: &'a crate::scene::Camera,
+    /// The targets whose G-buffer shows what `fit_camera` sees (fits to
+    /// the pixels seen): `frame`, except where `fit_camera` is another
+    /// camera.
+    pub fit_frame: &'a FrameTargets,
     /// The mask layer to write (format [`crate::frame::MASK_FORMAT`]).
     pub target: &'a wgpu::TextureView,
     /// How results the GPU computes for the CPU reach it this frame.

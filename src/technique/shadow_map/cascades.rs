@@ -7,9 +7,9 @@
 
 use super::depth_bounds::SeenBounds;
 use super::partition_params::{Cascades, Fit};
-use super::setup::{
-    CascadeSplit, LightSetup, light_view_of_scene, quantize_down, quantize_up, slice_corners,
-    snap_to_texels, square_around, view_reach, widen_for_kernels,
+use super::setup::{CascadeSplit, LightSetup, light_view_of_scene, slice_corners, view_reach};
+use super::stable_square::{
+    quantize_down, quantize_up, snap_to_texels, square_around, widen_for_kernels,
 };
 use crate::scene::{Aabb, Camera};
 use glam::Vec3;
@@ -30,7 +30,7 @@ pub fn split_distances(near: f32, far: f32, count: u32, lambda: f32) -> Vec<f32>
 /// the slice's bounding sphere, its radius rounded up to 1/64 of a unit
 /// (float noise must not resize it) and its centre snapped to the texel
 /// grid of a `size`² map. (A single map keeps its fitted square instead,
-/// made stable by `setup::stable_fit`.)
+/// made stable by `stable_square::stable_fit`.)
 pub fn stable_square(corners_ls: &[Vec3; 8], size: u32) -> (f32, f32, f32) {
     let centre = corners_ls.iter().copied().sum::<Vec3>() / 8.0;
     let radius = corners_ls
@@ -253,7 +253,7 @@ mod tests {
 
     #[test]
     fn stable_sizes_are_eighth_octaves_and_centres_whole_texels() {
-        use crate::technique::shadow_map::setup::{quantize_up, stable_fit};
+        use crate::technique::shadow_map::stable_square::{quantize_up, stable_fit};
         assert!((quantize_up(1.0) - 1.0).abs() < 1e-6);
         assert!((quantize_up(1.01) - 2f32.powf(0.125)).abs() < 1e-5);
         // log2 100 = 6.644: the next eighth is 54/8.

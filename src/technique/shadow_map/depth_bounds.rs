@@ -10,7 +10,7 @@ use super::roll::{DIRECTIONS, Supports};
 use crate::gpu::{FrameFeedback, GpuContext, SectionTimer};
 use crate::technique::{Feedback, MaskContext};
 use anyhow::Result;
-use glam::{Mat4, UVec4, Vec4};
+use glam::{Mat4, UVec4, Vec3, Vec4};
 use std::sync::Arc;
 
 /// At most this many cascades (the uniform's split arrays).
@@ -80,6 +80,9 @@ struct ReduceParams {
     split: Vec4,
     /// x, y: blocks of `TILE`² pixels along x and y.
     blocks: UVec4,
+    /// A spot light's image (`ReduceInputs::spot`): x the tangent of its
+    /// cone's half-angle, yzw its position; x = 0 for a directional view.
+    spot: Vec4,
 }
 
 /// What the reduction needs from the light set-up.
@@ -89,10 +92,22 @@ pub struct ReduceInputs {
     /// One map fitted to the samples: take the extents along the support
     /// directions (for its turn, `roll`) instead of the cascades' boxes.
     pub supports: bool,
+    /// A spot light's map (`light_view` its view): the extents are taken in
+    /// its image (x/−z, y/−z) over the pixels it reaches — inside its cone
+    /// and facing it ([`Light::reaches`](crate::scene::Light::reaches)).
+    pub spot: Option<SpotImage>,
     pub cascades: u32,
     pub split_lambda: f32,
     /// The farthest split allowed (`max_distance`, else the camera's far).
     pub far_limit: f32,
+}
+
+/// What the reduction needs of a spot light.
+#[derive(Clone, Copy, Debug)]
+pub struct SpotImage {
+    /// Tangent of the cone's half-angle.
+    pub cone_tan: f32,
+    pub position: Vec3,
 }
 
 /// The device's reduction programs.
@@ -248,8 +263,8 @@ impl DepthReduction {
     ) {
         let gpu = ctx.gpu;
         let (bx, by) = (
-            ctx.frame.width().div_ceil(TILE),
-            ctx.frame.height().div_ceil(TILE),
+            ctx.fit_frame.width().div_ceil(TILE),
+            ctx.fit_frame.height().div_ceil(TILE),
         );
         let block_bytes = (bx * by) as u64 * BLOCK_RECORD_BYTES;
         crate::gpu::grow_buffer(&gpu.device, &mut self.blocks, block_bytes, BLOCKS_LABEL);
@@ -263,6 +278,9 @@ impl DepthReduction {
                 inputs.far_limit,
             ),
             blocks: UVec4::new(bx, by, 0, 0),
+            spot: inputs.spot.map_or(Vec4::ZERO, |s| {
+                Vec4::new(s.cone_tan, s.position.x, s.position.y, s.position.z)
+            }),
         };
         gpu.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
@@ -278,7 +296,7 @@ impl DepthReduction {
         }
         gpu.queue
             .write_buffer(&self.result, 0, bytemuck::cast_slice(&empty));
-        let [position, normal] = ctx.frame.gbuffer_views();
+        let [position, normal] = ctx.fit_frame.gbuffer_views();
         let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("sdsm reduction"),
             layout: &self.shared.layout,
@@ -306,7 +324,10 @@ impl DepthReduction {
             ],
         });
         let groups = |n: u32| n.div_ceil(WORKGROUP_PIXELS);
-        let (w, h) = (groups(ctx.frame.width()), groups(ctx.frame.height()));
+        let (w, h) = (
+            groups(ctx.fit_frame.width()),
+            groups(ctx.fit_frame.height()),
+        );
         let passes = match (inputs.fit, inputs.supports) {
             (Fit::Samples, true) => vec![&self.shared.depth_range_supports],
             (Fit::Samples, false) => vec![&self.shared.depth_range, &self.shared.cascade_bounds],

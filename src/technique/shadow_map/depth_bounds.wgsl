@@ -20,6 +20,10 @@ struct ReduceParams {
     // x, y: blocks of TILE×TILE pixels along x and y (the frame's, rounded
     // up); z, w unused.
     blocks: vec4u,
+    // A spot light (x > 0): x the tangent of its cone's half-angle, yzw its
+    // position; `light_view` is its view, and the supports are taken in its
+    // image (x/−z, y/−z) over the pixels it reaches.
+    spot: vec4f,
 };
 
 @group(0) @binding(0) var positions: texture_2d<f32>;
@@ -136,9 +140,15 @@ fn depth_range(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocati
     var s_high2 = vec4f(-FAR_AWAY);
     var s_high3 = vec4f(-FAR_AWAY);
     for (var k = 0u; k < TILE * TILE; k++) {
-        let seen = seen_point(id.xy * TILE + vec2u(k % TILE, k / TILE));
-        let receives = seen.w > 0.0;
-        let l = light_xy(seen, light_x, light_y);
+        let px = id.xy * TILE + vec2u(k % TILE, k / TILE);
+        let seen = seen_point(px);
+        var receives = seen.w > 0.0;
+        var l = light_xy(seen, light_x, light_y);
+        if SUPPORTS && params.spot.x > 0.0 {
+            let image = spot_image(px, seen, l);
+            receives = receives && image.z > 0.0;
+            l = image.xy;
+        }
         low = select(low, min(low, seen.w), receives);
         high = select(high, max(high, seen.w), receives);
         box_low = select(box_low, min(box_low, l), receives);
@@ -184,6 +194,19 @@ fn depth_range(@builtin(global_invocation_id) id: vec3u, @builtin(local_invocati
             atomicMax(&bounds[word], v);
         }
     }
+}
+
+// A spot light's image of the receiving point `seen` at `px`, whose
+// light-view x, y are `l`: (x/−z, y/−z, 1) where the light reaches it —
+// before the light, inside its cone, on the side its normal faces
+// (compare.rs's considered pixels) — else z = 0.
+fn spot_image(px: vec2u, seen: vec4f, l: vec2f) -> vec3f {
+    let depth = -dot(light_row(2u), vec4f(seen.xyz, 1.0));
+    let n = textureLoad(normals, vec2i(px), 0).xyz;
+    let faces = dot(n, params.spot.yzw - seen.xyz) > 0.0;
+    let image = l / max(depth, 1e-12);
+    let inside = depth > 0.0 && length(image) <= params.spot.x;
+    return vec3f(image, select(0.0, 1.0, faces && inside));
 }
 
 // Row `i` of the light's view.

@@ -22,6 +22,8 @@ mod pipelines;
 mod projection;
 mod roll;
 mod setup;
+mod spot_focus;
+mod stable_square;
 mod trapezoid;
 mod uniform;
 mod virtual_map;
@@ -109,7 +111,7 @@ pub struct ShadowMapTechnique {
     debug_frame: Option<[wgpu::Texture; 3]>,
     last_faces: Vec<Mat4>,
     /// Per light sample: the half-extent of last frame's stabilised
-    /// directional square (kept while it fits; `setup::KEPT_FIT_RATIO`).
+    /// directional square (kept while it fits; `stable_square::Hold`).
     stable_halves: Vec<f32>,
     /// A directional light's single map's turn last frame (`roll`).
     turn: Option<usize>,

@@ -5,7 +5,7 @@
 //! default), to what the camera saw (`cascades`, `depth_bounds`), and the
 //! warps (`warp`, `trapezoid`).
 
-use super::depth_bounds::{DepthReduction, ReduceInputs};
+use super::depth_bounds::{DepthReduction, ReduceInputs, SpotImage};
 use super::setup::Turn;
 use super::setup::ViewFit;
 use super::{
@@ -44,19 +44,34 @@ impl ShadowMapTechnique {
         let cascaded = directional && c.cascades.count > 1;
         // One unwarped map: fitted and turned by `directional_setup`.
         let single = directional && !cascaded && c.warp.kind == Warp::None;
+        // A spot light's map focused on what the camera sees of its cone
+        // (`spot_focus`); not an area light's maps, each from another point.
+        let spot = (ctx.light.kind == LightType::Spot
+            && c.cascades.fit == Fit::Samples
+            && lights.len() == 1)
+            .then(|| SpotImage {
+                cone_tan: (ctx.light.outer_cone_deg.to_radians()).tan(),
+                position: ctx.light.position,
+            });
         // A single warped map is fitted by its warp, not to what was seen.
-        let fits_seen = directional
-            && c.cascades.fit != Fit::Frustum
-            && (cascaded || c.warp.kind == Warp::None);
+        let fits_seen = spot.is_some()
+            || (directional
+                && c.cascades.fit != Fit::Frustum
+                && (cascaded || c.warp.kind == Warp::None));
         self.last_seen = if fits_seen {
             let reduction = self
                 .depth_reduction
                 .get_or_insert_with(|| DepthReduction::new(ctx.gpu));
             let inputs = ReduceInputs {
                 fit: c.cascades.fit,
-                light_view: setup::light_view_of_scene(ctx.light.direction, &ctx.scene_gpu.bounds)
-                    .0,
-                supports: single && c.cascades.fit == Fit::Samples,
+                light_view: match spot {
+                    Some(_) => setup::spot_view(ctx.light),
+                    None => {
+                        setup::light_view_of_scene(ctx.light.direction, &ctx.scene_gpu.bounds).0
+                    }
+                },
+                supports: spot.is_some() || (single && c.cascades.fit == Fit::Samples),
+                spot,
                 cascades: c.cascades.count,
                 split_lambda: c.cascades.split_lambda,
                 far_limit: c.cascades.far_limit(ctx.fit_camera.far),
@@ -64,6 +79,12 @@ impl ShadowMapTechnique {
             reduction.seen(ctx, encoder, &inputs)?
         } else {
             None
+        };
+        let fitted_turn = match c.roll {
+            Roll::Up => Turn::Upright,
+            Roll::Square => Turn::Fitted {
+                previous: self.turn,
+            },
         };
         let mut turns = vec![];
         let setups = lights
@@ -92,12 +113,20 @@ impl ShadowMapTechnique {
                         &FrustumParams {
                             previous_half: self.stable_halves.get(i).copied(),
                             view_fit: self.single_map_fit(ctx),
-                            turn: match c.roll {
-                                Roll::Up => Turn::Upright,
-                                Roll::Square => Turn::Fitted {
-                                    previous: self.turn,
-                                },
-                            },
+                            turn: fitted_turn,
+                            ..frustum_params
+                        },
+                    );
+                    turns.push(turn);
+                    setup
+                } else if spot.is_some() {
+                    let (setup, turn) = setup::spot_setup(
+                        l,
+                        &ctx.scene_gpu.bounds,
+                        &FrustumParams {
+                            previous_half: self.stable_halves.get(i).copied(),
+                            view_fit: self.single_map_fit(ctx),
+                            turn: fitted_turn,
                             ..frustum_params
                         },
                     );
@@ -129,13 +158,12 @@ impl ShadowMapTechnique {
             })
             .collect::<Vec<LightSetup>>();
         self.turn = turns.first().copied();
-        // A stabilised single directional map's square, kept next frame
+        // A stabilised single directional or focused spot map's square, kept next frame
         // while it fits (`FrustumParams::previous_half`).
-        self.stable_halves = match ctx.light.kind {
-            LightType::Directional if stabilize && !cascaded => {
-                setups.iter().map(|s| s.texel_scale * 0.5).collect()
-            }
-            _ => vec![],
+        self.stable_halves = if stabilize && (spot.is_some() || single) {
+            setups.iter().map(|s| s.texel_scale * 0.5).collect()
+        } else {
+            vec![]
         };
         Ok(setups)
     }

@@ -73,10 +73,28 @@ pub struct AxisClearance {
     pub clearance: f32,
 }
 
-/// The world's axes as seen in the image of the light view `view`, with
-/// their clearances; an axis seen shorter than sin 10° (within 10° of the
-/// light's direction, its edges shrink to points) is left out.
+/// The world's axes as seen in the image of the orthographic light view
+/// `view`, with their clearances; an axis seen shorter than sin 10°
+/// (within 10° of the light's direction, its edges shrink to points) is
+/// left out.
 pub fn world_axes_in_image(view: Mat4) -> Vec<AxisClearance> {
+    axes_seen(view, |v| v.truncate())
+}
+
+/// The same for a perspective view (a spot light's), whose image is
+/// (x/−z, y/−z): a line along view-space direction v through the point
+/// seen at `at` runs along v.xy + at·v.z there (the derivative of the
+/// projection), so the world's axes turn across the image, and are taken
+/// where the map is centred.
+pub fn world_axes_in_perspective_image(view: Mat4, at: Vec2) -> Vec<AxisClearance> {
+    axes_seen(view, |v| {
+        (v.truncate() + at * v.z) / (1.0 + at.length_squared()).sqrt()
+    })
+}
+
+/// The world's axes whose image direction (`image` of the view-space
+/// axis) is at least sin 10° long.
+fn axes_seen(view: Mat4, image: impl Fn(Vec3) -> Vec2) -> Vec<AxisClearance> {
     [
         (Vec3::Y, VERTICAL_CLEARANCE_DEG),
         (Vec3::X, HORIZONTAL_CLEARANCE_DEG),
@@ -84,7 +102,7 @@ pub fn world_axes_in_image(view: Mat4) -> Vec<AxisClearance> {
     ]
     .into_iter()
     .filter_map(|(axis, clearance)| {
-        let v = view.transform_vector3(axis).truncate();
+        let v = image(view.transform_vector3(axis));
         (v.length() >= 10f32.to_radians().sin()).then(|| AxisClearance {
             angle: v.to_angle(),
             clearance: clearance.to_radians(),

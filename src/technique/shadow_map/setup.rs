@@ -4,9 +4,11 @@
 //! to what the camera sees (wgpu's [0, 1] depth).
 
 use super::roll::{self, Supports};
+use super::spot_focus;
+use super::stable_square::{Hold, square_around, stabilized, widen_for_kernels};
 use crate::scene::{Aabb, Camera, Light, LightType};
 use crate::technique::light_space::up_for;
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 
 /// The light's matrices for one frame.
 #[derive(Clone, Debug)]
@@ -64,6 +66,11 @@ pub fn view_in_scene(
     )
 }
 
+/// A spot light's view: from its position along its direction.
+pub fn spot_view(light: &Light) -> Mat4 {
+    glam::camera::rh::view::look_to_mat4(light.position, light.direction, up_for(light.direction))
+}
+
 /// Near/far of a local light around `bounds`, unless given. A point of the
 /// scene at distance r from the light, seen in a face whose corner rays
 /// make an angle with its axis of cosine `corner_cos`, lies at a depth of at
@@ -109,22 +116,26 @@ pub struct FrustumParams {
     pub fov_deg: f32,
     /// Point lights: two paraboloid hemispheres instead of six faces.
     pub paraboloid: bool,
-    /// Directional lights: the fitted square's size rounded up to eighths
-    /// of an octave and its centre snapped to whole texels of a map of
-    /// `size`², so that small camera moves leave the texel grid in place.
+    /// Directional lights and focused spot maps: the fitted square's size
+    /// rounded up to eighths of an octave and its centre snapped to whole
+    /// texels of a map of `size`², so that small camera moves leave the
+    /// texel grid in place.
     pub stabilize_size: Option<u32>,
-    /// Directional, stabilised: the previous frame's half-extent, kept
+    /// The same, stabilised: the previous frame's half-extent, kept
     /// while it still holds the view's square and exceeds it by at most
     /// [`KEPT_FIT_RATIO`] (hysteresis: a size at a rounding step does not
     /// flip from frame to frame, moving every texel edge).
     pub previous_half: Option<f32>,
-    /// Directional, one map: what its square is fitted to.
+    /// Directional, one map: what its square is fitted to; spot lights:
+    /// `Samples` focuses the map on them (`spot_focus`), in the light's
+    /// image (x/−z, y/−z) rather than its view.
     pub view_fit: ViewFit,
     /// Directional, one map: how it is turned about the light.
     pub turn: Turn,
 }
 
-/// How a directional light's single map is turned about the light.
+/// How a directional light's single map, or a focused spot light's, is
+/// turned about the light.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Turn {
     /// The world's up along the map's y axis.
@@ -133,6 +144,16 @@ pub enum Turn {
     /// The smallest square clear of the world's axes
     /// ([`Supports::fitted_turn`]), given last frame's turn.
     Fitted { previous: Option<usize> },
+}
+
+impl Turn {
+    /// Last frame's turn, where one is kept.
+    fn previous(self) -> Option<usize> {
+        match self {
+            Turn::Fitted { previous } => previous,
+            Turn::Upright => None,
+        }
+    }
 }
 
 /// What a directional light's single map is fitted to, within the scene.
@@ -150,38 +171,6 @@ pub enum ViewFit {
     /// [`widen_for_kernels`] for a map of `size`².
     Samples { supports: Supports, size: u32 },
 }
-
-/// Maps fitted to the pixels the camera saw reach this many texels past
-/// their box on each side (filter kernels, normal offset and blending
-/// look there).
-const SAMPLE_FIT_MARGIN_TEXELS: f32 = 16.0;
-
-/// A light-view box `[min x, min y, max x, max y]` grown on each side by
-/// [`SAMPLE_FIT_MARGIN_TEXELS`] texels of the square `size`² map that will
-/// hold it: the square's half-extent h satisfies h·(1 − 2m/size) = the
-/// box's larger half-extent.
-pub fn widen_for_kernels(b: [f32; 4], size: u32) -> [f32; 4] {
-    let [x0, y0, x1, y1] = b;
-    let (half, _, _) = square_around(b);
-    let margin = half / (1.0 - 2.0 * SAMPLE_FIT_MARGIN_TEXELS / size as f32).max(0.5) - half;
-    [x0 - margin, y0 - margin, x1 + margin, y1 + margin]
-}
-
-/// The square (half-extent, at least 1 mm, and centre) around a light-view
-/// box `[min x, min y, max x, max y]`: square texels, the larger extent on
-/// both axes.
-pub fn square_around([x0, y0, x1, y1]: [f32; 4]) -> (f32, f32, f32) {
-    (
-        ((x1 - x0).max(y1 - y0) * 0.5).max(1e-3),
-        (x0 + x1) * 0.5,
-        (y0 + y1) * 0.5,
-    )
-}
-
-/// How much larger than the fitted square a stabilised map's previous
-/// square may be and still be kept: a quarter octave (a fresh fit is at
-/// most an eighth larger).
-pub const KEPT_FIT_RATIO: f32 = 1.189_207_1;
 
 /// The eight world-space corners of the camera's view between view depths
 /// `z0` and `z1`.
@@ -277,30 +266,13 @@ pub fn linear_depth_row(scene_ls: &Aabb) -> Vec4 {
     (Vec4::W * z_max - Vec4::Z) / (z_max - z_min)
 }
 
-/// `v` rounded up to the next 2^(k/8) (at most 9 % more): sizes that stay
-/// put under small changes.
-pub fn quantize_up(v: f32) -> f32 {
-    2f32.powf((v.max(1e-6).log2() * 8.0).ceil() / 8.0)
-}
-
-/// `v` rounded down to the previous 2^(k/8).
-pub fn quantize_down(v: f32) -> f32 {
-    2f32.powf((v.max(1e-6).log2() * 8.0).floor() / 8.0)
-}
-
-/// A fitted square (half-extent, centre) made stable for a `size`² map:
-/// the half-extent rounded up to 2^(k/8) (at most 9 % larger), the centre
-/// snapped to the texel grid that extent gives.
-pub fn stable_fit(half: f32, cx: f32, cy: f32, size: u32) -> (f32, f32, f32) {
-    snap_to_texels(quantize_up(half), cx, cy, size)
-}
-
-/// A square of half-extent `half` with its centre (cx, cy) moved down to
-/// the nearest corner of the texel grid of a `size`² map over it.
-pub fn snap_to_texels(half: f32, cx: f32, cy: f32, size: u32) -> (f32, f32, f32) {
-    let texel = 2.0 * half / size as f32;
-    let snap = |v: f32| (v / texel).floor() * texel;
-    (half, snap(cx), snap(cy))
+/// A fitted square before it is stabilised: its turn, half-extent, centre
+/// and how it is kept.
+struct FittedSquare {
+    turn: usize,
+    half: f32,
+    centre: Vec2,
+    hold: Hold,
 }
 
 /// How far from the camera its view of the scene can reach: to the far
@@ -323,38 +295,12 @@ pub fn light_setup(
     let FrustumParams {
         near,
         far,
-        fov_deg,
         paraboloid,
         ..
     } = *fp;
     use glam::camera::rh::proj::directx::perspective;
     match light.kind {
-        LightType::Spot => {
-            let fov = if fov_deg > 0.0 {
-                fov_deg
-            } else {
-                (2.0 * light.outer_cone_deg + 4.0).min(170.0)
-            }
-            .to_radians();
-            let half = (fov * 0.5).tan();
-            let corner_cos = 1.0 / (1.0 + 2.0 * half * half).sqrt();
-            let (n, f) = near_far(light.position, scene_bounds, near, far, corner_cos);
-            let view = glam::camera::rh::view::look_to_mat4(
-                light.position,
-                light.direction,
-                up_for(light.direction),
-            );
-            LightSetup {
-                faces: vec![perspective(fov, 1.0, n, f) * view],
-                near: n,
-                far: f,
-                orthographic: false,
-                paraboloid: false,
-                texel_scale: 2.0 * (fov * 0.5).tan(),
-                cascades: None,
-                warp_depth: None,
-            }
-        }
+        LightType::Spot => spot_setup(light, scene_bounds, fp).0,
         LightType::Point if paraboloid => {
             // Depth along the ray from the light: no corners.
             let (n, f) = near_far(light.position, scene_bounds, near, far, 1.0);
@@ -393,6 +339,57 @@ pub fn light_setup(
     }
 }
 
+/// A spot light's map: a perspective over its cone (`fp.fov_deg`, else
+/// the cone plus 4°) or, with `fp.view_fit` the samples, over the square
+/// of its image they need (`spot_focus`), turned as `fp.turn` says; and
+/// the turn it took (`roll::turn_angle`'s index).
+pub fn spot_setup(light: &Light, scene_bounds: &Aabb, fp: &FrustumParams) -> (LightSetup, usize) {
+    use glam::camera::rh::proj::directx::perspective;
+    let fov = if fp.fov_deg > 0.0 {
+        fp.fov_deg
+    } else {
+        (2.0 * light.outer_cone_deg + 4.0).min(170.0)
+    }
+    .to_radians();
+    let full = (fov * 0.5).tan();
+    let corner_cos = 1.0 / (1.0 + 2.0 * full * full).sqrt();
+    let (n, f) = near_far(light.position, scene_bounds, fp.near, fp.far, corner_cos);
+    let base = spot_view(light);
+    let (turn, half, centre) = match fp.view_fit {
+        ViewFit::Samples { supports, size } => {
+            let turn = match fp.turn {
+                Turn::Fitted { previous } => {
+                    supports.fitted_turn(&spot_focus::axes_over_seen(base, &supports), previous)
+                }
+                Turn::Upright => 0,
+            };
+            let kept = FrustumParams {
+                previous_half: fp
+                    .previous_half
+                    .filter(|_| fp.turn.previous() == Some(turn)),
+                ..*fp
+            };
+            let (half, centre) = spot_focus::focused_square(full, &supports, size, turn, &kept);
+            (turn, half, centre)
+        }
+        _ => (0, full, Vec2::ZERO),
+    };
+    let view = roll::rolled(base, roll::turn_angle(turn));
+    let setup = LightSetup {
+        faces: vec![
+            spot_focus::image_window(full, half, centre) * perspective(fov, 1.0, n, f) * view,
+        ],
+        near: n,
+        far: f,
+        orthographic: false,
+        paraboloid: false,
+        texel_scale: 2.0 * half,
+        cascades: None,
+        warp_depth: None,
+    };
+    (setup, turn)
+}
+
 /// A directional light's single map: the square around `fp.view_fit` in
 /// the light view turned as `fp.turn` says (stabilised with
 /// `fp.stabilize_size`), and the turn it took (`roll::turn_angle`'s index).
@@ -412,38 +409,70 @@ pub fn directional_setup(
                 .map(|p| base.transform_point3(*p).truncate()),
         )
     };
-    let (supports, kernel_margin) = match fp.view_fit {
-        ViewFit::Samples { supports, size } => (Some(supports), Some(size)),
-        ViewFit::Frustum => (seen(camera.near, view_reach(camera, scene_bounds)), None),
-        ViewFit::Depths { near, far } => (seen(near, far), None),
-    };
-    let (turn, previous_half) = match (fp.turn, &supports) {
-        (Turn::Fitted { previous }, Some(s)) => {
-            let turn = s.fitted_turn(&roll::world_axes_in_image(base), previous);
-            // A turned grid moved every texel anyway.
-            (turn, fp.previous_half.filter(|_| previous == Some(turn)))
+    // The square around a set's extents in the view turned as `fp.turn`
+    // says (widened for the kernels on a `size`² map where given).
+    let square_of = |s: Supports, margin: Option<u32>, hold: Hold| {
+        let turn = match fp.turn {
+            Turn::Fitted { previous } => s.fitted_turn(&roll::world_axes_in_image(base), previous),
+            Turn::Upright => 0,
+        };
+        let b = s.box_at(turn);
+        let (half, cx, cy) = square_around(margin.map_or(b, |size| widen_for_kernels(b, size)));
+        FittedSquare {
+            turn,
+            half,
+            centre: Vec2::new(cx, cy),
+            hold,
         }
-        _ => (0, fp.previous_half),
+    };
+    let frustum = || {
+        seen(camera.near, view_reach(camera, scene_bounds)).map(|s| square_of(s, None, Hold::VIEW))
+    };
+    let fitted = match fp.view_fit {
+        // The pixels seen, with room to grow; never more than the view of
+        // the scene needs, which is steadier.
+        ViewFit::Samples { supports, size } => {
+            let samples = square_of(supports, Some(size), Hold::SAMPLES);
+            match frustum() {
+                Some(f) if f.half <= samples.half * Hold::SAMPLES.headroom => Some(f),
+                _ => Some(samples),
+            }
+        }
+        ViewFit::Frustum => frustum(),
+        ViewFit::Depths { near, far } => seen(near, far).map(|s| square_of(s, None, Hold::VIEW)),
+    };
+    let turn = fitted.as_ref().map_or(0, |f| f.turn);
+    // A turned grid moved every texel anyway.
+    let kept = FrustumParams {
+        previous_half: fp.previous_half.filter(|_| match fp.turn {
+            Turn::Fitted { previous } => previous == Some(turn),
+            Turn::Upright => true,
+        }),
+        ..*fp
     };
     let view = roll::rolled(base, roll::turn_angle(turn));
     let scene_ls = scene_bounds.transformed(view);
-    let fitted = supports.map(|s| {
-        let b = s.box_at(turn);
-        kernel_margin.map_or(b, |size| widen_for_kernels(b, size))
+    let fitted = fitted.unwrap_or_else(|| {
+        let (half, cx, cy) = square_around([
+            scene_ls.min.x,
+            scene_ls.min.y,
+            scene_ls.max.x,
+            scene_ls.max.y,
+        ]);
+        FittedSquare {
+            turn,
+            half,
+            centre: Vec2::new(cx, cy),
+            hold: Hold::VIEW,
+        }
     });
-    let (half, cx, cy) = square_around(fitted.unwrap_or([
-        scene_ls.min.x,
-        scene_ls.min.y,
-        scene_ls.max.x,
-        scene_ls.max.y,
-    ]));
-    let (half, cx, cy) = match fp.stabilize_size {
-        Some(size) => match previous_half {
-            Some(p) if p >= half && p <= half * KEPT_FIT_RATIO => snap_to_texels(p, cx, cy, size),
-            _ => stable_fit(half, cx, cy, size),
-        },
-        None => (half, cx, cy),
-    };
+    let (half, cx, cy) = stabilized(
+        fitted.half,
+        fitted.centre.x,
+        fitted.centre.y,
+        &kept,
+        fitted.hold,
+    );
     // View space looks down −z: depth range from the scene's z extent.
     let (n, f) = (-scene_ls.max.z - 1e-3, -scene_ls.min.z + 1e-3);
     let setup = LightSetup {
@@ -536,62 +565,5 @@ mod tests {
             max: Vec3::new(1.0, 1.0, 4.0),
         };
         assert!(clip_to_bounds(&slice(), &behind).is_empty());
-    }
-}
-
-#[cfg(test)]
-mod stable_fit_tests {
-    use super::*;
-
-    /// A sun straight down over a 200 × 200 floor and a narrow camera 10 m
-    /// above it at z = `eye_z`, looking down −z and seeing 60 m: the one
-    /// map's half-extent, stabilised for 2048² or not.
-    fn fit(eye_z: f32, stabilize_size: Option<u32>, previous_half: Option<f32>) -> f32 {
-        let light = Light::directional(Vec3::new(0.0, -1.0, 0.0), 1.0);
-        let bounds = Aabb {
-            min: Vec3::new(-100.0, 0.0, -100.0),
-            max: Vec3::new(100.0, 1.0, 100.0),
-        };
-        let mut camera = Camera::new(
-            Vec3::new(0.0, 10.0, eye_z),
-            Vec3::new(0.0, 0.0, eye_z - 30.0),
-        );
-        camera.far = 60.0;
-        camera.fov_y_deg = 30.0;
-        let fp = FrustumParams {
-            stabilize_size,
-            previous_half,
-            ..Default::default()
-        };
-        light_setup(&light, &bounds, &camera, 1.0, &fp).texel_scale * 0.5
-    }
-
-    #[test]
-    fn a_stabilised_map_keeps_its_square_while_it_fits_and_is_not_too_large() {
-        let stable = Some(2048);
-        let first = fit(0.0, stable, None);
-        // A previous square too large: a fresh fit.
-        assert_eq!(fit(0.0, stable, Some(f32::MAX)), first);
-        // A fresh fit is the needed square rounded up to an eighth octave.
-        let needed = fit(0.0, None, None);
-        assert!(
-            first >= needed && first < needed * 1.0906,
-            "{first} vs {needed}"
-        );
-        // Kept: up to a quarter octave above what the view needs.
-        let kept = needed * 1.15;
-        assert_eq!(fit(0.0, stable, Some(kept)), kept);
-        // Not kept: too small to hold the view, or more than a quarter octave larger.
-        assert_eq!(fit(0.0, stable, Some(needed * 0.99)), first);
-        assert_eq!(fit(0.0, stable, Some(needed * 1.25)), first);
-        // A dolly towards the floor's far edge shrinks the needed square: at
-        // the first step where a fresh fit rounds to another size, the
-        // previous square still holds the view and is kept.
-        let z = (1..400)
-            .map(|k| -0.25 * k as f32)
-            .find(|&z| fit(z, stable, None) != first)
-            .expect("the dolly crosses a rounding step");
-        assert!(fit(z, None, None) <= first);
-        assert_eq!(fit(z, stable, Some(first)), first);
     }
 }

@@ -1,0 +1,171 @@
+//! A spot light's map focused on what the camera sees of its cone
+//! (`fit=samples`, the one-map default): the map's square in the light's
+//! image — the plane z = −1 of its view, where a point sits at
+//! (x/−z, y/−z) — is fitted around the pixels the light reaches, from
+//! SDSM's reduction (`depth_bounds.wgsl`), instead of the whole cone.
+//! Seen from inside a scene a spot covers, the camera sees a small part of
+//! the cone, and every texel spent on the rest is lost: `city`/`street`/
+//! `spot` saw a grazing wall's shadow edge as a staircase of whole texels.
+//! Casters need no room of their own: one that shades a seen pixel lies on
+//! the ray from the light to it, so at the same place in the image. The
+//! square is stabilised as a directional map's is (its size in eighths of
+//! an octave, its centre on whole texels, last frame's kept while it fits),
+//! so that it does not slide its texel grid as the camera moves.
+
+use super::roll::{AxisClearance, Supports, TURNS, turn_angle, world_axes_in_perspective_image};
+use super::setup::FrustumParams;
+use super::stable_square::{Hold, snap_to_texels, square_around, stabilized, widen_for_kernels};
+use glam::{Mat4, Vec2};
+
+/// The focused square in the light's image turned by `turn`
+/// (`roll::turn_angle`'s index): its half-extent and centre (x/−z, y/−z),
+/// inside the cone's square of half-extent `full`; the
+/// cone's square itself where the seen pixels need most of it.
+pub fn focused_square(
+    full: f32,
+    supports: &Supports,
+    size: u32,
+    turn: usize,
+    fp: &FrustumParams,
+) -> (f32, Vec2) {
+    let (half, cx, cy) = square_around(widen_for_kernels(supports.box_at(turn), size));
+    let (half, cx, cy) = stabilized(half, cx, cy, fp, Hold::SAMPLES);
+    if half >= full {
+        return (full, Vec2::ZERO);
+    }
+    // Inside the cone's square: the centre moved in (whole texels of the
+    // rounded size, so that the grid stays where it was).
+    let room = full - half;
+    let (cx, cy) = (cx.clamp(-room, room), cy.clamp(-room, room));
+    match fp.stabilize_size {
+        Some(size) => {
+            let (_, cx, cy) = snap_to_texels(half, cx, cy, size);
+            (half, Vec2::new(cx, cy))
+        }
+        None => (half, Vec2::new(cx, cy)),
+    }
+}
+
+/// The world's axes as seen over the pixels the map is focused on: in a
+/// spot's perspective image they turn from place to place (edges along
+/// the vertical radiate from its vanishing point), so they are taken at
+/// the corners and the centre of the tightest box around the samples —
+/// the box of least area among the turns, which hugs a strip (a street
+/// seen along its length) where an upright one would not. A turn then
+/// keeps clear of them everywhere, or comes nearest to
+/// ([`Supports::fitted_turn`]).
+pub fn axes_over_seen(view: Mat4, supports: &Supports) -> Vec<AxisClearance> {
+    let area = |j: usize| {
+        let [x0, y0, x1, y1] = supports.box_at(j);
+        (x1 - x0) * (y1 - y0)
+    };
+    let tight = (0..TURNS)
+        .min_by(|&a, &b| area(a).total_cmp(&area(b)))
+        .unwrap_or(0);
+    let [x0, y0, x1, y1] = supports.box_at(tight);
+    let unturn = Vec2::from_angle(turn_angle(tight));
+    [
+        (x0, y0),
+        (x1, y0),
+        (x0, y1),
+        (x1, y1),
+        ((x0 + x1) * 0.5, (y0 + y1) * 0.5),
+    ]
+    .into_iter()
+    .flat_map(|(x, y)| world_axes_in_perspective_image(view, unturn.rotate(Vec2::new(x, y))))
+    .collect()
+}
+
+/// The clip-space window that turns a perspective over the square of
+/// half-extent `full` into one over the square `(half, centre)`:
+/// x' = (full·x − centre.x·w)/half (and y alike), so that x'/w =
+/// (x/−z − centre.x)/half.
+pub fn image_window(full: f32, half: f32, centre: Vec2) -> Mat4 {
+    let s = full / half;
+    Mat4::from_cols(
+        glam::Vec4::new(s, 0.0, 0.0, 0.0),
+        glam::Vec4::new(0.0, s, 0.0, 0.0),
+        glam::Vec4::Z,
+        (-centre / half).extend(0.0).extend(1.0),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{Vec3, Vec4};
+
+    /// The supports of a box of the light's image.
+    fn seen(x0: f32, y0: f32, x1: f32, y1: f32) -> Supports {
+        Supports::of_points([(x0, y0), (x1, y0), (x1, y1), (x0, y1)].map(|(x, y)| Vec2::new(x, y)))
+            .unwrap()
+    }
+
+    #[test]
+    fn the_window_maps_the_focused_square_onto_the_map() {
+        // A 90° perspective (full = 1) focused on the square of half-extent
+        // 0.25 around (0.5, −0.25): its corners go to the map's corners, at
+        // any depth.
+        let proj =
+            glam::camera::rh::proj::directx::perspective(90f32.to_radians(), 1.0, 0.1, 100.0);
+        let m = image_window(1.0, 0.25, Vec2::new(0.5, -0.25)) * proj;
+        for z in [0.5f32, 7.0] {
+            for (u, v, want) in [
+                (0.25, -0.5, (-1.0, -1.0)),
+                (0.75, 0.0, (1.0, 1.0)),
+                (0.5, -0.25, (0.0, 0.0)),
+            ] {
+                let c = m * Vec4::new(u * z, v * z, -z, 1.0);
+                let ndc = Vec3::new(c.x, c.y, c.z) / c.w;
+                assert!(
+                    (ndc.x - want.0).abs() < 1e-5 && (ndc.y - want.1).abs() < 1e-5,
+                    "{ndc}"
+                );
+                // Depth is the full perspective's.
+                let d = proj * Vec4::new(0.0, 0.0, -z, 1.0);
+                assert!((ndc.z - d.z / d.w).abs() < 1e-6);
+            }
+        }
+    }
+
+    #[test]
+    fn a_small_view_of_the_cone_gets_a_small_square_inside_it() {
+        let fp = FrustumParams::default();
+        // The seen pixels span 0.2 × 0.1 near the cone's edge (full 0.7):
+        // the square holds them with the kernels' margin and stays inside.
+        let (half, c) = focused_square(0.7, &seen(0.4, 0.1, 0.6, 0.2), 2048, 0, &fp);
+        assert!(half > 0.1 && half < 0.1 * 1.02, "{half}");
+        assert!(
+            c.x - half <= 0.4 && c.x + half >= 0.6 && c.y - half <= 0.1 && c.y + half >= 0.2,
+            "{c} {half}"
+        );
+        // Near the edge: moved in to stay inside the cone's square.
+        let (half, c) = focused_square(0.7, &seen(0.55, -0.1, 0.75, 0.1), 2048, 0, &fp);
+        assert!((c.x + half - 0.7).abs() < 1e-5, "{c} {half}");
+        // Seen everywhere: the cone's square, centred.
+        assert_eq!(
+            focused_square(0.7, &seen(-0.7, -0.7, 0.7, 0.7), 2048, 0, &fp),
+            (0.7, Vec2::ZERO)
+        );
+    }
+
+    #[test]
+    fn a_stabilised_square_keeps_its_texel_grid_under_a_small_move() {
+        let fp = FrustumParams {
+            stabilize_size: Some(1024),
+            ..Default::default()
+        };
+        let (half, a) = focused_square(1.0, &seen(0.1, 0.1, 0.3, 0.3), 1024, 0, &fp);
+        // A tenth of a texel further: the same size, and the centre on the
+        // same grid (whole texels apart).
+        let texel = 2.0 * half / 1024.0;
+        let d = texel * 0.1;
+        let (half_b, b) = focused_square(1.0, &seen(0.1 + d, 0.1, 0.3 + d, 0.3), 1024, 0, &fp);
+        assert_eq!(half, half_b);
+        let steps = (b - a) / texel;
+        assert!(
+            (steps - steps.round()).abs().max_element() < 1e-3,
+            "{steps}"
+        );
+    }
+}
