@@ -394,7 +394,6 @@ impl Renderer {
         })
     }
 
-    /// Depth, stencil (cleared) and G-buffer of every object.
     /// The prepass seen from the fit camera (`uniform`) into
     /// [`Renderer::fit_frame`], sized as `frame`: what the camera the light
     /// views are fitted to sees, for fits to the pixels seen (SDSM's
@@ -408,27 +407,19 @@ impl Renderer {
         settings: &RenderSettings,
     ) -> Result<()> {
         let (w, h) = (frame.width(), frame.height());
-        if self
-            .fit_frame
-            .as_ref()
-            .is_none_or(|f| (f.width(), f.height()) != (w, h))
-        {
-            self.fit_frame = Some(FrameTargets::new(gpu, w, h)?);
-        }
-        let fit_frame = self.fit_frame.as_mut().expect("made above");
+        let mut fit_frame = match self.fit_frame.take() {
+            Some(f) if (f.width(), f.height()) == (w, h) => f,
+            _ => FrameTargets::new(gpu, w, h)?,
+        };
         fit_frame.set_uniform(gpu, uniform);
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        self.record_prepass(
-            gpu,
-            &mut enc,
-            scene_gpu,
-            self.fit_frame.as_ref().expect("made above"),
-            settings,
-        );
+        self.record_prepass(gpu, &mut enc, scene_gpu, &fit_frame, settings);
         gpu.queue.submit([enc.finish()]);
+        self.fit_frame = Some(fit_frame);
         Ok(())
     }
 
+    /// Depth, stencil (cleared) and G-buffer of every object.
     fn record_prepass(
         &self,
         gpu: &GpuContext,

@@ -3,7 +3,7 @@
 //! orthographic box for directional lights fitted to the scene and clipped
 //! to what the camera sees (wgpu's [0, 1] depth).
 
-use super::roll::{self, Supports};
+use super::roll::{self, AxisClearance, Supports};
 use super::spot_focus;
 use super::stable_square::{Hold, square_around, stabilized, widen_for_kernels};
 use crate::scene::{Aabb, Camera, Light, LightType};
@@ -134,6 +134,17 @@ pub struct FrustumParams {
     pub turn: Turn,
 }
 
+impl FrustumParams {
+    /// These parameters with last frame's square dropped where `turn`
+    /// differs from last frame's ([`Turn::keeps_square`]).
+    fn kept_under(&self, turn: usize) -> FrustumParams {
+        FrustumParams {
+            previous_half: self.previous_half.filter(|_| self.turn.keeps_square(turn)),
+            ..*self
+        }
+    }
+}
+
 /// How a directional light's single map, or a focused spot light's, is
 /// turned about the light.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -147,11 +158,22 @@ pub enum Turn {
 }
 
 impl Turn {
-    /// Last frame's turn, where one is kept.
-    fn previous(self) -> Option<usize> {
+    /// The turn (`roll::turn_angle`'s index) for a set with extents
+    /// `supports`: upright, or [`Supports::fitted_turn`] clear of the
+    /// world's axes (`axes`, computed only then).
+    fn of(self, supports: &Supports, axes: impl FnOnce() -> Vec<AxisClearance>) -> usize {
         match self {
-            Turn::Fitted { previous } => previous,
-            Turn::Upright => None,
+            Turn::Fitted { previous } => supports.fitted_turn(&axes(), previous),
+            Turn::Upright => 0,
+        }
+    }
+
+    /// Whether last frame's square may be kept under `turn`: a turned grid
+    /// moved every texel anyway.
+    fn keeps_square(self, turn: usize) -> bool {
+        match self {
+            Turn::Fitted { previous } => previous == Some(turn),
+            Turn::Upright => true,
         }
     }
 }
@@ -357,18 +379,10 @@ pub fn spot_setup(light: &Light, scene_bounds: &Aabb, fp: &FrustumParams) -> (Li
     let base = spot_view(light);
     let (turn, half, centre) = match fp.view_fit {
         ViewFit::Samples { supports, size } => {
-            let turn = match fp.turn {
-                Turn::Fitted { previous } => {
-                    supports.fitted_turn(&spot_focus::axes_over_seen(base, &supports), previous)
-                }
-                Turn::Upright => 0,
-            };
-            let kept = FrustumParams {
-                previous_half: fp
-                    .previous_half
-                    .filter(|_| fp.turn.previous() == Some(turn)),
-                ..*fp
-            };
+            let turn = fp
+                .turn
+                .of(&supports, || spot_focus::axes_over_seen(base, &supports));
+            let kept = fp.kept_under(turn);
             let (half, centre) = spot_focus::focused_square(full, &supports, size, turn, &kept);
             (turn, half, centre)
         }
@@ -412,10 +426,7 @@ pub fn directional_setup(
     // The square around a set's extents in the view turned as `fp.turn`
     // says (widened for the kernels on a `size`² map where given).
     let square_of = |s: Supports, margin: Option<u32>, hold: Hold| {
-        let turn = match fp.turn {
-            Turn::Fitted { previous } => s.fitted_turn(&roll::world_axes_in_image(base), previous),
-            Turn::Upright => 0,
-        };
+        let turn = fp.turn.of(&s, || roll::world_axes_in_image(base));
         let b = s.box_at(turn);
         let (half, cx, cy) = square_around(margin.map_or(b, |size| widen_for_kernels(b, size)));
         FittedSquare {
@@ -442,14 +453,7 @@ pub fn directional_setup(
         ViewFit::Depths { near, far } => seen(near, far).map(|s| square_of(s, None, Hold::VIEW)),
     };
     let turn = fitted.as_ref().map_or(0, |f| f.turn);
-    // A turned grid moved every texel anyway.
-    let kept = FrustumParams {
-        previous_half: fp.previous_half.filter(|_| match fp.turn {
-            Turn::Fitted { previous } => previous == Some(turn),
-            Turn::Upright => true,
-        }),
-        ..*fp
-    };
+    let kept = fp.kept_under(turn);
     let view = roll::rolled(base, roll::turn_angle(turn));
     let scene_ls = scene_bounds.transformed(view);
     let fitted = fitted.unwrap_or_else(|| {

@@ -117,15 +117,13 @@ mod tests {
     use super::*;
     use crate::scene::{Aabb, Camera, Light};
     use crate::technique::shadow_map::roll::Supports;
-    use crate::technique::shadow_map::setup::{
-        FrustumParams, ViewFit, directional_setup, light_setup,
-    };
+    use crate::technique::shadow_map::setup::{FrustumParams, ViewFit, directional_setup};
     use glam::{Vec2, Vec3};
 
     /// A sun straight down over a 200 × 200 floor and a narrow camera 10 m
     /// above it at z = `eye_z`, looking down −z and seeing 60 m: the one
-    /// map's half-extent, stabilised for 2048² or not.
-    fn fit(eye_z: f32, stabilize_size: Option<u32>, previous_half: Option<f32>) -> f32 {
+    /// map's half-extent under `fp`.
+    fn half_extent(eye_z: f32, fp: &FrustumParams) -> f32 {
         let light = Light::directional(Vec3::new(0.0, -1.0, 0.0), 1.0);
         let bounds = Aabb {
             min: Vec3::new(-100.0, 0.0, -100.0),
@@ -137,25 +135,25 @@ mod tests {
         );
         camera.far = 60.0;
         camera.fov_y_deg = 30.0;
+        directional_setup(&light, &bounds, &camera, 1.0, fp)
+            .0
+            .texel_scale
+            * 0.5
+    }
+
+    /// That map fitted to the view, stabilised for 2048² or not.
+    fn fit(eye_z: f32, stabilize_size: Option<u32>, previous_half: Option<f32>) -> f32 {
         let fp = FrustumParams {
             stabilize_size,
             previous_half,
             ..Default::default()
         };
-        light_setup(&light, &bounds, &camera, 1.0, &fp).texel_scale * 0.5
+        half_extent(eye_z, &fp)
     }
 
-    /// The same camera's map fitted to pixels seen over a `side`-wide
-    /// square of the light's image around its origin, for 2048².
+    /// That map from z = 0 fitted to pixels seen over a `side`-wide square
+    /// of the light's image around its origin, stabilised for 2048².
     fn fit_to_samples(side: f32, previous_half: Option<f32>) -> f32 {
-        let light = Light::directional(Vec3::new(0.0, -1.0, 0.0), 1.0);
-        let bounds = Aabb {
-            min: Vec3::new(-100.0, 0.0, -100.0),
-            max: Vec3::new(100.0, 1.0, 100.0),
-        };
-        let mut camera = Camera::new(Vec3::new(0.0, 10.0, 0.0), Vec3::new(0.0, 0.0, -30.0));
-        camera.far = 60.0;
-        camera.fov_y_deg = 30.0;
         let h = side * 0.5;
         let supports =
             Supports::of_points([(-h, -h), (h, -h), (h, h), (-h, h)].map(|(x, y)| Vec2::new(x, y)))
@@ -169,10 +167,7 @@ mod tests {
             },
             ..Default::default()
         };
-        directional_setup(&light, &bounds, &camera, 1.0, &fp)
-            .0
-            .texel_scale
-            * 0.5
+        half_extent(0.0, &fp)
     }
 
     /// A map fitted to the pixels seen takes a quarter octave of room on a
