@@ -6,9 +6,12 @@
 //! at 0.5) differs between the two: the shadow moved on the surface because
 //! the map moved with the camera — what stabilisation removes. The
 //! reference's state at a fixed point never changes, so every change is the
-//! technique's. Reported per technique and light as the mean over the
-//! path's steps, in % of the considered pixels, and over the reference's
-//! shadow edges (2 px band) alone.
+//! technique's. Only points the later camera still sees count: a point
+//! hidden behind a nearer surface (or out of the frame) one step later is
+//! not on screen in both frames, so it cannot be seen to flicker — the
+//! reprojection test of temporal methods. Reported per technique and light
+//! as the mean over the path's steps, in % of the considered pixels, and
+//! over the reference's shadow edges (2 px band) alone.
 
 use super::compare::considered_pixels;
 use super::quality::edge_band;
@@ -19,7 +22,7 @@ use crate::renderer::{FrameCameras, RenderSettings};
 use crate::scene::{Camera, Light, Scene};
 use crate::technique::TechniqueChoice;
 use anyhow::{Context, Result, bail};
-use glam::Quat;
+use glam::{Quat, Vec3, Vec4Swizzles};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -90,6 +93,60 @@ pub struct FlickerRow {
     pub per_step_counters: Vec<Vec<(&'static str, f64)>>,
 }
 
+/// How far (relative view depth) a point may lie behind the surface the
+/// later camera sees there and still count as that surface: rounding of
+/// the stored positions, not geometry.
+const SEEN_DEPTH_TOLERANCE: f32 = 1e-3;
+
+/// Which of `positions` (world positions, `w` > 0.5 where a surface was
+/// seen, one per pixel of a `width`-wide frame) the camera `later` still
+/// sees, given the world positions `later_positions` of its own frame of
+/// the same size: the point projects into the frame and is not behind all
+/// of the 2×2 surface samples around where it lands (a nearer surface
+/// there hides it; background or a farther sample means it is in view).
+pub fn seen_from(
+    positions: &[[f32; 4]],
+    later: &Camera,
+    later_positions: &[[f32; 4]],
+    width: usize,
+) -> Vec<bool> {
+    let height = positions.len() / width.max(1);
+    let view = later.view();
+    let view_proj = later.projection(width as f32 / height as f32) * view;
+    let depth = |p: Vec3| -view.transform_point3(p).z;
+    positions
+        .iter()
+        .map(|p| {
+            if p[3] <= 0.5 {
+                return false;
+            }
+            let point = Vec3::new(p[0], p[1], p[2]);
+            let clip = view_proj * point.extend(1.0);
+            if clip.w <= 0.0 {
+                return false;
+            }
+            let ndc = clip.xy() / clip.w;
+            if ndc.x.abs() > 1.0 || ndc.y.abs() > 1.0 {
+                return false;
+            }
+            let x = (ndc.x * 0.5 + 0.5) * width as f32 - 0.5;
+            let y = (0.5 - ndc.y * 0.5) * height as f32 - 0.5;
+            let (x0, y0) = (x.floor().max(0.0) as usize, y.floor().max(0.0) as usize);
+            let mut farthest = 0.0f32;
+            for yi in y0..=(y0 + 1).min(height - 1) {
+                for xi in x0..=(x0 + 1).min(width - 1) {
+                    let q = later_positions[yi * width + xi];
+                    if q[3] <= 0.5 {
+                        return true;
+                    }
+                    farthest = farthest.max(depth(Vec3::new(q[0], q[1], q[2])));
+                }
+            }
+            depth(point) <= farthest * (1.0 + SEEN_DEPTH_TOLERANCE)
+        })
+        .collect()
+}
+
 /// Flicker of one step: of the `considered` pixels, the percentage whose
 /// shadow state differs between the masks `before` and `after` (the same
 /// surface points), over all of them and over the `edges`.
@@ -147,12 +204,19 @@ pub fn run(
         let choices = vec![choice.clone(); lights.len().max(1)];
         HeadlessFrame::new(gpu, scene, &choices, size.0, size.1)
     };
-    // Per step: the considered pixels and the reference's edges, per light.
+    // Per camera: the surface positions; per step: the considered pixels
+    // (seen from both cameras) and the reference's edges, per light.
     let mut reference_frame = frame_of(reference)?;
+    let mut positions = vec![];
     let mut considered = vec![];
     let mut edges = vec![];
-    for camera in &cameras[..cameras.len() - 1] {
+    for (frame, camera) in cameras.iter().enumerate() {
         reference_frame.render(gpu, scene, camera, lights, &settings)?;
+        let bytes = gpu.read_texture(reference_frame.frame.gbuffer_position(), 0, 16)?;
+        positions.push(bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec());
+        if frame + 1 == cameras.len() {
+            break;
+        }
         let cons = considered_pixels(gpu, &reference_frame, lights)?;
         let images = headless::read_back(gpu, &reference_frame.frame, lights.len())?;
         edges.push(
@@ -162,6 +226,23 @@ pub fn run(
                 .collect::<Vec<_>>(),
         );
         considered.push(cons);
+    }
+    let mut hidden_pct = vec![];
+    for (step, cons) in considered.iter_mut().enumerate() {
+        let seen = seen_from(
+            &positions[step],
+            &cameras[step + 1],
+            &positions[step + 1],
+            w,
+        );
+        let surface = positions[step].iter().filter(|p| p[3] > 0.5).count();
+        hidden_pct.push(percent(
+            surface - seen.iter().filter(|s| **s).count(),
+            surface,
+        ));
+        for c in cons.iter_mut() {
+            c.iter_mut().zip(&seen).for_each(|(c, s)| *c &= *s);
+        }
     }
     let mut rows = vec![];
     for choice in techniques {
@@ -216,7 +297,8 @@ pub fn run(
         "lights": lights,
         "reference": choice_label(reference),
         "adapter": gpu.adapter_summary(),
-        "pixels": "per step, the surface points seen from the earlier camera are held fixed; a pixel flickers when the technique's shadow state (visibility < 0.5) there differs between light views fitted to the earlier and to the later camera; % of considered pixels (receiving, N·L > 0), mean over the steps; edge = within 2 px of a reference shadow boundary",
+        "pixels": "per step, the surface points seen from the earlier camera are held fixed; a pixel flickers when the technique's shadow state (visibility < 0.5) there differs between light views fitted to the earlier and to the later camera; % of considered pixels (receiving, N·L > 0, still seen by the later camera), mean over the steps; edge = within 2 px of a reference shadow boundary",
+        "hidden_pct_per_step": hidden_pct,
     });
     std::fs::write(
         out.join("flicker.json"),
@@ -309,6 +391,48 @@ mod tests {
         let o = path_camera(&c, CameraPath::Orbit, 10);
         assert_eq!(o.target, c.target);
         assert!(((o.eye - o.target).length() - 10.0).abs() < 1e-4);
+    }
+
+    /// The plane z = `z` seen through each pixel centre of a `w`×`h` frame.
+    fn plane_positions(c: &Camera, w: usize, h: usize, z: f32) -> Vec<[f32; 4]> {
+        let inverse = (c.projection(w as f32 / h as f32) * c.view()).inverse();
+        (0..w * h)
+            .map(|i| {
+                let ndc_x = ((i % w) as f32 + 0.5) / w as f32 * 2.0 - 1.0;
+                let ndc_y = 1.0 - ((i / w) as f32 + 0.5) / h as f32 * 2.0;
+                let far = inverse.project_point3(Vec3::new(ndc_x, ndc_y, 1.0));
+                let dir = far - c.eye;
+                let p = c.eye + dir * ((z - c.eye.z) / dir.z);
+                [p.x, p.y, p.z, 1.0]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn points_count_only_where_the_later_camera_still_sees_them() {
+        let (w, h) = (8, 6);
+        let c = camera();
+        let wall = plane_positions(&c, w, h, 0.0);
+        assert!(seen_from(&wall, &c, &wall, w).iter().all(|s| *s));
+        // A nearer surface in front of every pixel hides the wall.
+        let screen = plane_positions(&c, w, h, 1.0);
+        assert!(seen_from(&wall, &c, &screen, w).iter().all(|s| !*s));
+        // A farther surface or background does not.
+        let far = plane_positions(&c, w, h, -1.0);
+        assert!(seen_from(&wall, &c, &far, w).iter().all(|s| *s));
+        let sky = vec![[0.0; 4]; w * h];
+        assert!(seen_from(&wall, &c, &sky, w).iter().all(|s| *s));
+        // Points out of the later frame, behind the camera, or no surface.
+        let turned = Camera {
+            target: c.eye + Vec3::X,
+            ..c
+        };
+        assert!(seen_from(&wall, &turned, &wall, w).iter().all(|s| !*s));
+        let mut odd = wall.clone();
+        odd[0] = [0.0, 2.0, 20.0, 1.0];
+        odd[1][3] = 0.0;
+        let seen = seen_from(&odd, &c, &wall, w);
+        assert!(!seen[0] && !seen[1] && seen[2]);
     }
 
     #[test]
