@@ -57,6 +57,13 @@ pub fn plane_pixels(gpu: &GpuContext, hf: &HeadlessFrame, scene: &Scene) -> Resu
         .collect())
 }
 
+/// The world positions of the frame's G-buffer (`w` > 0.5 where a surface
+/// was drawn), one per pixel.
+pub fn gbuffer_positions(gpu: &GpuContext, hf: &HeadlessFrame) -> Result<Vec<[f32; 4]>> {
+    let bytes = gpu.read_texture(hf.frame.gbuffer_position(), 0, 16)?;
+    Ok(bytemuck::cast_slice(&bytes).to_vec())
+}
+
 /// Per light, the pixels that count: geometry drawn that receives shadows
 /// and that the light's direct light reaches (facing it, inside a spot's
 /// cone, within range).
@@ -65,9 +72,18 @@ pub fn considered_pixels(
     hf: &HeadlessFrame,
     lights: &[Light],
 ) -> Result<Vec<Vec<bool>>> {
-    let pos = gpu.read_texture(hf.frame.gbuffer_position(), 0, 16)?;
+    considered_at(gpu, hf, &gbuffer_positions(gpu, hf)?, lights)
+}
+
+/// [`considered_pixels`] for the frame's G-buffer positions `pos`, already
+/// read back ([`gbuffer_positions`]).
+pub fn considered_at(
+    gpu: &GpuContext,
+    hf: &HeadlessFrame,
+    pos: &[[f32; 4]],
+    lights: &[Light],
+) -> Result<Vec<Vec<bool>>> {
     let nrm = gpu.read_texture(hf.frame.gbuffer_normal(), 0, 8)?;
-    let pos: &[[f32; 4]] = bytemuck::cast_slice(&pos);
     let nrm: &[[half::f16; 4]] = bytemuck::cast_slice(&nrm);
     Ok(lights
         .iter()

@@ -13,7 +13,7 @@
 //! as the mean over the path's steps, in % of the considered pixels, and
 //! over the reference's shadow edges (2 px band) alone.
 
-use super::compare::considered_pixels;
+use super::compare::{considered_at, gbuffer_positions};
 use super::quality::edge_band;
 use super::{choice_label, percent, write_csv};
 use crate::gpu::GpuContext;
@@ -212,12 +212,11 @@ pub fn run(
     let mut edges = vec![];
     for (frame, camera) in cameras.iter().enumerate() {
         reference_frame.render(gpu, scene, camera, lights, &settings)?;
-        let bytes = gpu.read_texture(reference_frame.frame.gbuffer_position(), 0, 16)?;
-        positions.push(bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec());
+        positions.push(gbuffer_positions(gpu, &reference_frame)?);
         if frame + 1 == cameras.len() {
             break;
         }
-        let cons = considered_pixels(gpu, &reference_frame, lights)?;
+        let cons = considered_at(gpu, &reference_frame, &positions[frame], lights)?;
         let images = headless::read_back(gpu, &reference_frame.frame, lights.len())?;
         edges.push(
             cons.iter()

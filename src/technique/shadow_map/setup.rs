@@ -122,9 +122,8 @@ pub struct FrustumParams {
     /// texel grid in place.
     pub stabilize_size: Option<u32>,
     /// The same, stabilised: the previous frame's half-extent, kept
-    /// while it still holds the view's square and exceeds it by at most
-    /// [`KEPT_FIT_RATIO`] (hysteresis: a size at a rounding step does not
-    /// flip from frame to frame, moving every texel edge).
+    /// while the fit's [`Hold`] keeps it (hysteresis: a size at a rounding
+    /// step does not flip from frame to frame, moving every texel edge).
     pub previous_half: Option<f32>,
     /// Directional, one map: what its square is fitted to; spot lights:
     /// `Samples` focuses the map on them (`spot_focus`), in the light's

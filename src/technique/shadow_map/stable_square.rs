@@ -34,10 +34,8 @@ pub fn square_around([x0, y0, x1, y1]: [f32; 4]) -> (f32, f32, f32) {
     )
 }
 
-/// How much larger than the fitted square a stabilised map's previous
-/// square may be and still be kept: a quarter octave (a fresh fit is at
-/// most an eighth larger).
-pub const KEPT_FIT_RATIO: f32 = 1.189_207_1;
+/// A quarter octave, 2^(1/4): the room and hysteresis of [`Hold`].
+const QUARTER_OCTAVE: f32 = 1.189_207_1;
 
 /// `v` rounded up to the next 2^(k/8) (at most 9 % more): sizes that stay
 /// put under small changes.
@@ -79,10 +77,11 @@ pub struct Hold {
 impl Hold {
     /// Fits to the camera's view (frustum, seen depths, cascades): they
     /// change smoothly with the camera; a quarter octave of hysteresis
-    /// keeps a size at a rounding step from flipping.
+    /// (a fresh fit is at most an eighth larger) keeps a size at a
+    /// rounding step from flipping.
     pub const VIEW: Hold = Hold {
         headroom: 1.0,
-        kept_ratio: KEPT_FIT_RATIO,
+        kept_ratio: QUARTER_OCTAVE,
     };
     /// Fits to the pixels seen: their extents jump when a far feature comes
     /// into view or leaves it by a pixel (the box of `landscape`/`ground`/
@@ -93,7 +92,7 @@ impl Hold {
     /// four `landscape`/`ground` sun views): 0.15–0.90 % held tight, see the
     /// issue notes for the figures held so.
     pub const SAMPLES: Hold = Hold {
-        headroom: 1.189_207_1,
+        headroom: QUARTER_OCTAVE,
         kept_ratio: std::f32::consts::SQRT_2,
     };
 }
