@@ -34,7 +34,15 @@ struct ObjectGpu {
     // x material, y casts shadow, z receives shadow, w bounds a solid (closed,
     // wound outward: its back faces lie behind its front faces)
     info: vec4u,
+    // x the global ID of the object's convex parts less one (IDs are unique
+    // in the scene; 0 is no part), yzw unused
+    parts: vec4u,
 };
+
+// The scene-wide ID of `object`'s convex part `part` (0: none).
+fn part_id(object: u32, part: u32) -> u32 {
+    return select(0u, objects[object].parts.x + part, part != 0u);
+}
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(1) @binding(0) var<storage, read> objects: array<ObjectGpu>;
@@ -44,6 +52,8 @@ struct VertexIn {
     @location(1) normal: vec3f,
     @location(2) uv: vec2f,
     @location(3) tangent: vec4f,
+    // the mesh's convex part (from 1), 0 for none: `part_id` makes it global
+    @location(4) part: u32,
     @builtin(instance_index) object: u32,
 };
 

@@ -5,3 +5,5 @@
 @group(3) @binding(0) var gbuffer_position: texture_2d<f32>;
 // xyz geometric normal facing the camera, w 1 if the surface receives shadows
 @group(3) @binding(1) var gbuffer_normal: texture_2d<f32>;
+// the convex part drawn (`part_id` in common.wgsl), 0: none
+@group(3) @binding(2) var gbuffer_part: texture_2d<u32>;

@@ -25,6 +25,8 @@ pub const MASK_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R16Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth24PlusStencil8;
 pub const GBUFFER_POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const GBUFFER_NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// The G-buffer's convex part IDs (`part_id` in common.wgsl; 0: none).
+pub const GBUFFER_PART_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 /// The colour image's format unless a frame asks for another of
 /// [`COLOR_FORMATS`] (the viewer takes its window's, so that the view reaches
 /// the window by a plain copy).
@@ -54,12 +56,15 @@ pub struct Vertex {
     pub normal: [f32; 3],
     pub uv: [f32; 2],
     pub tangent: [f32; 4],
+    /// The mesh's convex part the vertex lies on (from 1), or 0
+    /// ([`crate::scene::topology::Solidity`]).
+    pub part: u32,
 }
 
 pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     array_stride: std::mem::size_of::<Vertex>() as u64,
     step_mode: wgpu::VertexStepMode::Vertex,
-    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4],
+    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4, 4 => Uint32],
 };
 
 /// A light as the lighting pass reads it (`LightGpu` in common.wgsl). Its
@@ -147,7 +152,19 @@ impl FrameLayouts {
                     "objects",
                     &[storage_entry(0, vf | wgpu::ShaderStages::COMPUTE, true)],
                 ),
-                gbuffer: layout("gbuffer", &[gbuffer_texture(0), gbuffer_texture(1)]),
+                gbuffer: layout(
+                    "gbuffer",
+                    &[
+                        gbuffer_texture(0),
+                        gbuffer_texture(1),
+                        crate::gpu::sampled_texture_entry(
+                            2,
+                            wgpu::ShaderStages::FRAGMENT,
+                            wgpu::TextureSampleType::Uint,
+                            wgpu::TextureViewDimension::D2,
+                        ),
+                    ],
+                ),
                 lighting: layout(
                     "lighting",
                     &[
@@ -200,6 +217,7 @@ pub fn check_formats(gpu: &GpuContext) -> anyhow::Result<()> {
         (DEPTH_FORMAT, "the depth buffer"),
         (GBUFFER_POSITION_FORMAT, "the G-buffer's positions"),
         (GBUFFER_NORMAL_FORMAT, "the G-buffer's normals"),
+        (GBUFFER_PART_FORMAT, "the G-buffer's convex parts"),
         (MASK_FORMAT, "the visibility masks"),
         (COLOR_FORMAT, "the colour image"),
     ] {

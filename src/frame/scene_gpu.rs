@@ -4,9 +4,9 @@
 use super::{FrameLayouts, Vertex, textures};
 use crate::gpu::GpuContext;
 use crate::scene::clusters::{CLUSTER_TRIANGLES, Cluster, clustered};
-use crate::scene::topology::SolidKind;
+use crate::scene::topology::{SolidKind, Solidity};
 use crate::scene::{Aabb, Material, Scene};
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 use rayon::prelude::*;
@@ -18,6 +18,8 @@ struct ObjectGpu {
     model: Mat4,
     normal_matrix: Mat4,
     info: [u32; 4],
+    /// x: the global ID of the object's convex parts less one.
+    parts: [u32; 4],
 }
 
 #[repr(C)]
@@ -109,7 +111,8 @@ impl SceneGpu {
             .par_iter()
             .map(|m| clustered(m, CLUSTER_TRIANGLES))
             .collect();
-        for (m, c) in scene.meshes.iter().zip(&clustered) {
+        let solidity: Vec<Solidity> = scene.meshes.par_iter().map(|m| m.solidity()).collect();
+        for ((m, c), s) in scene.meshes.iter().zip(&clustered).zip(&solidity) {
             let base = vertices.len() as i32;
             let first = indices.len() as u32;
             vertices.extend((0..m.positions.len()).map(|i| Vertex {
@@ -117,6 +120,7 @@ impl SceneGpu {
                 normal: m.normals[i].into(),
                 uv: m.uvs[i].into(),
                 tangent: m.tangents[i].into(),
+                part: s.vertex_parts[i],
             }));
             indices.extend_from_slice(&c.indices);
             ranges.push((base, first, m.indices.len() as u32));
@@ -124,11 +128,24 @@ impl SceneGpu {
         if vertices.is_empty() || indices.is_empty() {
             bail!("scene '{}' has no triangles", scene.name);
         }
-        let solid: Vec<SolidKind> = scene.meshes.par_iter().map(|m| m.solid_kind()).collect();
+        let solid: Vec<SolidKind> = solidity.iter().map(|s| s.kind).collect();
+        // Each object's parts take the next IDs after the previous object's.
+        let mut next_part = 0u32;
+        let mut part_bases = Vec::with_capacity(scene.objects.len());
+        for o in &scene.objects {
+            part_bases.push(next_part);
+            next_part = next_part
+                .checked_add(solidity[o.mesh].parts)
+                .filter(|&n| n < u32::MAX)
+                .with_context(|| {
+                    format!("scene '{}' has more than 2^32 convex parts", scene.name)
+                })?;
+        }
         let objects: Vec<ObjectGpu> = scene
             .objects
             .iter()
-            .map(|o| ObjectGpu {
+            .zip(&part_bases)
+            .map(|(o, &part_base)| ObjectGpu {
                 model: o.transform,
                 normal_matrix: o.transform.inverse().transpose(),
                 info: [
@@ -137,6 +154,7 @@ impl SceneGpu {
                     o.receives_shadow as u32,
                     (solid[o.mesh] != SolidKind::NotSolid) as u32,
                 ],
+                parts: [part_base, 0, 0, 0],
             })
             .collect();
         let mut parts = vec![];

@@ -5,7 +5,7 @@
 
 use super::{
     COLOR_FORMAT, COLOR_FORMATS, DEPTH_FORMAT, FrameLayouts, FrameUniform, GBUFFER_NORMAL_FORMAT,
-    GBUFFER_POSITION_FORMAT, MASK_FORMAT, MAX_LIGHTS,
+    GBUFFER_PART_FORMAT, GBUFFER_POSITION_FORMAT, MASK_FORMAT, MAX_LIGHTS,
 };
 use crate::gpu::GpuContext;
 use anyhow::{Result, bail};
@@ -20,6 +20,7 @@ pub struct FrameTargets {
     gbuffer_position_view: wgpu::TextureView,
     gbuffer_normal: wgpu::Texture,
     gbuffer_normal_view: wgpu::TextureView,
+    gbuffer_part_view: wgpu::TextureView,
     gbuffer_bind_group: wgpu::BindGroup,
     masks: wgpu::Texture,
     mask_layer_views: Vec<wgpu::TextureView>,
@@ -57,8 +58,8 @@ impl FrameTargets {
                 "frame size {width}x{height} is outside 1..={max} (the device's largest texture)"
             );
         }
-        // Depth, G-buffer position and normal, the mask layers and colour.
-        let bytes_per_pixel = 4 + 16 + 8 + 2 * MAX_LIGHTS as u64 + 4;
+        // Depth, G-buffer position, normal and part, the mask layers and colour.
+        let bytes_per_pixel = 4 + 16 + 8 + 4 + 2 * MAX_LIGHTS as u64 + 4;
         gpu.check_allocation(
             &format!("frame {width}x{height}"),
             (width, height, MAX_LIGHTS as u32),
@@ -93,6 +94,15 @@ impl FrameTargets {
             height,
             1,
             GBUFFER_NORMAL_FORMAT,
+            gusage,
+        );
+        let gbuffer_part = crate::gpu::texture_2d(
+            device,
+            "gbuffer part",
+            width,
+            height,
+            1,
+            GBUFFER_PART_FORMAT,
             gusage,
         );
         let masks = crate::gpu::texture_2d(
@@ -132,6 +142,7 @@ impl FrameTargets {
         });
         let gbuffer_position_view = gbuffer_position.create_view(&Default::default());
         let gbuffer_normal_view = gbuffer_normal.create_view(&Default::default());
+        let gbuffer_part_view = gbuffer_part.create_view(&Default::default());
         let gbuffer_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("gbuffer"),
             layout: &layouts.gbuffer,
@@ -144,6 +155,10 @@ impl FrameTargets {
                     binding: 1,
                     resource: wgpu::BindingResource::TextureView(&gbuffer_normal_view),
                 },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&gbuffer_part_view),
+                },
             ],
         });
         Ok(FrameTargets {
@@ -151,6 +166,7 @@ impl FrameTargets {
             height,
             gbuffer_position_view,
             gbuffer_normal_view,
+            gbuffer_part_view,
             gbuffer_bind_group,
             depth_view,
             gbuffer_position,
@@ -196,7 +212,7 @@ impl FrameTargets {
         &self.frame_bind_group
     }
 
-    /// Group 3 of technique passes: the G-buffer's position and normal.
+    /// Group 3 of technique passes: the G-buffer's position, normal and part.
     pub fn gbuffer_bind_group(&self) -> &wgpu::BindGroup {
         &self.gbuffer_bind_group
     }
@@ -209,9 +225,14 @@ impl FrameTargets {
         &self.gbuffer_normal
     }
 
-    /// The prepass's colour attachments: G-buffer position and normal.
+    /// The G-buffer's position and normal.
     pub fn gbuffer_views(&self) -> [&wgpu::TextureView; 2] {
         [&self.gbuffer_position_view, &self.gbuffer_normal_view]
+    }
+
+    /// The G-buffer's convex part IDs.
+    pub fn gbuffer_part_view(&self) -> &wgpu::TextureView {
+        &self.gbuffer_part_view
     }
 
     /// The mask array (one layer per light).

@@ -214,6 +214,7 @@ impl Renderer {
                         targets: &[
                             Some(frame::GBUFFER_POSITION_FORMAT.into()),
                             Some(frame::GBUFFER_NORMAL_FORMAT.into()),
+                            Some(frame::GBUFFER_PART_FORMAT.into()),
                         ],
                     }),
                     multiview_mask: None,
@@ -419,7 +420,8 @@ impl Renderer {
         Ok(())
     }
 
-    /// Depth, stencil (cleared) and G-buffer of every object.
+    /// Depth, stencil (cleared) and G-buffer (position, normal, convex
+    /// part) of every object.
     fn record_prepass(
         &self,
         gpu: &GpuContext,
@@ -434,6 +436,10 @@ impl Renderer {
             color_attachments: &[
                 Some(color_attachment(position, wgpu::Color::TRANSPARENT)),
                 Some(color_attachment(normal, wgpu::Color::TRANSPARENT)),
+                Some(color_attachment(
+                    frame.gbuffer_part_view(),
+                    wgpu::Color::TRANSPARENT,
+                )),
             ],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: frame.depth_view(),

@@ -31,6 +31,7 @@ struct GOut {
     @location(0) world_pos: vec3f,
     @location(1) @interpolate(flat) object: u32,
     @location(2) @interpolate(flat) receives: u32,
+    @location(3) @interpolate(flat) part: u32,
 };
 
 @vertex
@@ -40,6 +41,7 @@ fn vs_gbuffer(v: VertexIn) -> GOut {
     o.world_pos = (objects[v.object].model * vec4f(v.position, 1.0)).xyz;
     o.object = v.object;
     o.receives = objects[v.object].info.z;
+    o.part = part_id(v.object, v.part);
     return o;
 }
 
@@ -57,6 +59,8 @@ struct GBuffer {
     @location(0) position: vec4f,
     // xyz geometric normal facing the camera, w 1 if the surface receives shadows
     @location(1) normal: vec4f,
+    // the convex part drawn (`part_id`), 0: none
+    @location(2) part: u32,
 };
 
 @fragment
@@ -64,6 +68,7 @@ fn fs_gbuffer(i: GOut) -> GBuffer {
     var g: GBuffer;
     g.position = vec4f(i.world_pos, f32(i.object + 1u));
     g.normal = vec4f(face_normal(i.world_pos), f32(i.receives));
+    g.part = i.part;
     return g;
 }
 

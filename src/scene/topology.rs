@@ -70,7 +70,23 @@ pub enum SolidKind {
     Concave,
 }
 
+/// A mesh's solidity: what it encloses, and its convex parts.
+pub struct Solidity {
+    pub kind: SolidKind,
+    /// Per vertex of the mesh, its convex part (numbered from 1 within the
+    /// mesh) or 0: not a solid, in a part with a concave edge, or welded
+    /// to a vertex of another part.
+    pub vertex_parts: Vec<u32>,
+    /// The number of convex parts.
+    pub parts: u32,
+}
+
 impl Mesh {
+    /// What the mesh encloses ([`Mesh::solidity`]).
+    pub fn solid_kind(&self) -> SolidKind {
+        self.solidity().kind
+    }
+
     /// Bounds a solid: closed after welding (every edge run as often in one
     /// direction as in the other) and wound outward, with a volume (the
     /// signed volume Σ a·(b × c)/6 positive and not a rounding residue of the
@@ -79,33 +95,120 @@ impl Mesh {
     /// faces are, seen from anywhere, behind its front faces. Convex when
     /// every edge is (a closed surface convex at every edge is convex in
     /// each connected part).
-    pub fn solid_kind(&self) -> SolidKind {
+    ///
+    /// Its convex parts are the sets of triangles joined across shared
+    /// edges that are convex at every edge and enclose a volume, and share
+    /// no vertex with another set (two boxes meeting at a corner are one
+    /// surface but not one convex body): such a part never shadows its own
+    /// lit side (Hourcade & Nicolas 1985 give each one an ID in the map).
+    pub fn solidity(&self) -> Solidity {
+        let none = |kind| Solidity {
+            kind,
+            vertex_parts: vec![0; self.positions.len()],
+            parts: 0,
+        };
         let welded = Welded::of(self);
-        let triangles = welded.triangles(self);
+        // The welded triangles and the mesh's own triangle each comes from.
+        let (triangles, sources): (Vec<[u32; 3]>, Vec<usize>) = self
+            .indices
+            .chunks_exact(3)
+            .enumerate()
+            .map(|(i, t)| ([t[0], t[1], t[2]].map(|v| welded.remap[v as usize]), i))
+            .filter(|(w, _)| w[0] != w[1] && w[1] != w[2] && w[2] != w[0])
+            .unzip();
         if triangles.is_empty() || unbalanced_edges(&triangles) > 0 {
-            return SolidKind::NotSolid;
+            return none(SolidKind::NotSolid);
         }
         let p = |i: u32| welded.positions[i as usize].as_dvec3();
-        let volume: f64 = triangles
-            .iter()
-            .map(|t| p(t[0]).dot(p(t[1]).cross(p(t[2]))) / 6.0)
-            .sum();
+        let volume_of = |ts: &mut dyn Iterator<Item = &[u32; 3]>| -> f64 {
+            ts.map(|t| p(t[0]).dot(p(t[1]).cross(p(t[2]))) / 6.0).sum()
+        };
         let extent = self.bounds().size().as_dvec3();
         let extent = extent.x.max(extent.y).max(extent.z);
-        if volume <= 1e-9 * extent.powi(3) {
-            SolidKind::NotSolid
-        } else if concave_edges(&triangles, &p, 1e-6 * extent) > 0 {
+        let least_volume = 1e-9 * extent.powi(3);
+        if volume_of(&mut triangles.iter()) <= least_volume {
+            return none(SolidKind::NotSolid);
+        }
+        let mut shape = edge_shape(&triangles, &p, 1e-6 * extent);
+        let kind = if shape.concave.iter().any(|&c| c) {
             SolidKind::Concave
         } else {
             SolidKind::Convex
+        };
+        // Parts: components of the triangles joined across edges.
+        let component: Vec<usize> = (0..triangles.len()).map(|t| shape.root(t)).collect();
+        let mut usable: HashMap<usize, bool> = HashMap::new();
+        let mut owner: HashMap<u32, usize> = HashMap::new();
+        for (t, tri) in triangles.iter().enumerate() {
+            let c = component[t];
+            let ok = usable.entry(c).or_insert(true);
+            *ok &= !shape.concave[t];
+            for &v in tri {
+                let first = *owner.entry(v).or_insert(c);
+                if first != c {
+                    usable.insert(c, false);
+                    usable.insert(first, false);
+                }
+            }
+        }
+        let mut members: HashMap<usize, Vec<usize>> = HashMap::new();
+        for (t, &c) in component.iter().enumerate() {
+            members.entry(c).or_default().push(t);
+        }
+        let mut id_of: HashMap<usize, u32> = HashMap::new();
+        let mut parts = 0;
+        let mut vertex_parts = vec![0; self.positions.len()];
+        for (t, &c) in component.iter().enumerate() {
+            if !usable[&c] {
+                continue;
+            }
+            let id = *id_of.entry(c).or_insert_with(|| {
+                let volume = volume_of(&mut members[&c].iter().map(|&m| &triangles[m]));
+                if volume <= least_volume {
+                    return 0;
+                }
+                parts += 1;
+                parts
+            });
+            for &v in &self.indices[sources[t] * 3..sources[t] * 3 + 3] {
+                vertex_parts[v as usize] = id;
+            }
+        }
+        Solidity {
+            kind,
+            vertex_parts,
+            parts,
         }
     }
 }
 
+/// How a closed, outward-wound surface folds at its edges: which triangles
+/// have a concave edge, and which are joined across edges.
+struct EdgeShape {
+    /// Per triangle: a neighbour rises above its plane, or an edge has no
+    /// single twin.
+    concave: Vec<bool>,
+    /// Union-find parents joining triangles that share an edge.
+    parent: Vec<usize>,
+}
+
+impl EdgeShape {
+    /// The representative of triangle `t`'s connected set (halving the
+    /// path on the way).
+    fn root(&mut self, mut t: usize) -> usize {
+        while self.parent[t] != t {
+            self.parent[t] = self.parent[self.parent[t]];
+            t = self.parent[t];
+        }
+        t
+    }
+}
+
 /// The edges of a closed, outward-wound surface (welded `triangles` over
-/// positions `p`) where a triangle's neighbour rises more than `tolerance`
-/// above its plane; an edge shared by more than two triangles counts.
-fn concave_edges(triangles: &[[u32; 3]], p: &impl Fn(u32) -> DVec3, tolerance: f64) -> usize {
+/// positions `p`): a triangle is concave where a neighbour rises more than
+/// `tolerance` above its plane or an edge is shared by more than two
+/// triangles.
+fn edge_shape(triangles: &[[u32; 3]], p: &impl Fn(u32) -> DVec3, tolerance: f64) -> EdgeShape {
     let mut across: HashMap<(u32, u32), Vec<u32>> = HashMap::with_capacity(triangles.len() * 3);
     for (i, t) in triangles.iter().enumerate() {
         for k in 0..3 {
@@ -115,27 +218,31 @@ fn concave_edges(triangles: &[[u32; 3]], p: &impl Fn(u32) -> DVec3, tolerance: f
                 .push(i as u32);
         }
     }
-    let mut concave = 0;
-    for t in triangles {
+    let mut shape = EdgeShape {
+        concave: vec![false; triangles.len()],
+        parent: (0..triangles.len()).collect(),
+    };
+    for (i, t) in triangles.iter().enumerate() {
         let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
         let normal = (b - a).cross(c - a).normalize_or_zero();
         for k in 0..3 {
             let (u, v) = (t[k], t[(k + 1) % 3]);
             match across.get(&(v, u)).map(Vec::as_slice) {
                 Some([twin]) => {
-                    let w = triangles[*twin as usize]
+                    let twin = *twin as usize;
+                    let w = triangles[twin]
                         .into_iter()
                         .find(|&w| w != u && w != v)
                         .expect("a welded triangle has three corners");
-                    if normal.dot(p(w) - a) > tolerance {
-                        concave += 1;
-                    }
+                    shape.concave[i] |= normal.dot(p(w) - a) > tolerance;
+                    let (ra, rb) = (shape.root(i), shape.root(twin));
+                    shape.parent[ra.max(rb)] = ra.min(rb);
                 }
-                _ => concave += 1,
+                _ => shape.concave[i] = true,
             }
         }
     }
-    concave
+    shape
 }
 
 #[cfg(test)]
@@ -191,15 +298,47 @@ mod tests {
             SolidKind::Concave
         );
         // Two separate boxes are each convex.
-        let mut two = shapes::cuboid(Vec3::ONE);
-        let second = shapes::cuboid(Vec3::ONE);
-        let base = two.positions.len() as u32;
-        two.positions
-            .extend(second.positions.iter().map(|p| *p + Vec3::X * 3.0));
-        two.normals.extend(&second.normals);
-        two.uvs.extend(&second.uvs);
-        two.tangents.extend(&second.tangents);
-        two.indices.extend(second.indices.iter().map(|i| i + base));
+        let cube = shapes::cuboid(Vec3::ONE);
+        let two = joined(&cube, &cube, Vec3::X * 3.0);
         assert_eq!(two.solid_kind(), SolidKind::Convex);
+    }
+
+    /// `a` with `b`'s triangles appended, moved by `shift`.
+    fn joined(a: &Mesh, b: &Mesh, shift: Vec3) -> Mesh {
+        let mut m = a.clone();
+        let base = m.positions.len() as u32;
+        m.positions.extend(b.positions.iter().map(|p| *p + shift));
+        m.normals.extend(&b.normals);
+        m.uvs.extend(&b.uvs);
+        m.tangents.extend(&b.tangents);
+        m.indices.extend(b.indices.iter().map(|i| i + base));
+        m
+    }
+
+    #[test]
+    fn convex_parts_are_numbered_per_vertex_and_concave_or_touching_ones_are_not() {
+        let cube = shapes::cuboid(Vec3::ONE);
+        let n = cube.positions.len();
+        let two = joined(&cube, &cube, Vec3::X * 3.0);
+        let s = two.solidity();
+        assert_eq!((s.kind, s.parts), (SolidKind::Convex, 2));
+        assert!(s.vertex_parts[..n].iter().all(|&p| p == 1));
+        assert!(s.vertex_parts[n..].iter().all(|&p| p == 2));
+        // A box beside a torus: the mesh is concave, the box still a part.
+        let torus = shapes::torus(1.0, 0.3, 16, 8);
+        let mixed = joined(&cube, &torus, Vec3::X * 4.0);
+        let s = mixed.solidity();
+        assert_eq!((s.kind, s.parts), (SolidKind::Concave, 1));
+        assert!(s.vertex_parts[..n].iter().all(|&p| p == 1));
+        assert!(s.vertex_parts[n..].iter().all(|&p| p == 0));
+        // Two boxes meeting at a corner share a welded vertex: no parts.
+        let touching = joined(&cube, &cube, Vec3::ONE);
+        let s = touching.solidity();
+        assert_eq!(s.parts, 0);
+        assert!(s.vertex_parts.iter().all(|&p| p == 0));
+        // An open box has none either.
+        let mut open = cube.clone();
+        open.indices.truncate(open.indices.len() - 6);
+        assert_eq!(open.solidity().parts, 0);
     }
 }

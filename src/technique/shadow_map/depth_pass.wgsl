@@ -17,7 +17,14 @@ fn vs_depth(v: VertexIn) -> DepthOut {
         o.clip = sm.faces[sm.face.x] * world;
     }
     o.linear = select(linear01(o.clip), dot(sm.warp_depth, world), is_warped());
+    o.part = part_id(v.object, v.part);
     return o;
+}
+
+// `part_ids`: the depth, and the convex part it came from.
+@fragment
+fn fs_depth_part(i: DepthOut) -> @location(0) u32 {
+    return i.part;
 }
 
 // Warped faces: the linear depth with the depth pass's bias applied here,

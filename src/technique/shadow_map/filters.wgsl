@@ -46,15 +46,32 @@ fn tap_z(z: f32, uv: vec2f) -> f32 {
     return z + dot(uv - rp_origin, rp_gradient);
 }
 
-// 1 where the receiver depth z is not behind the stored depth.
+// `part_ids`: the receiver's convex part where it faces the light, else
+// 0 (its own part's texels cannot shadow it; `receiver_part_of`).
+var<private> receiver_part: u32;
+
+// Whether the texel's depth came from the receiver's own convex part.
+fn own_part(texel: vec2i, face: u32) -> bool {
+    if !PART_IDS || receiver_part == 0u {
+        return false;
+    }
+    let t = clamp(texel, vec2i(0), vec2i(i32(sm.map.x) - 1));
+    return textureLoad(part_map, t, i32(face), 0).r == receiver_part;
+}
+
+// 1 where the receiver depth z is not behind the stored depth, or the
+// texel is the receiver's own part's.
 fn lit_at(texel: vec2i, face: u32, z: f32) -> f32 {
-    return select(0.0, 1.0, z <= stored(texel, face));
+    return select(0.0, 1.0, z <= stored(texel, face) || own_part(texel, face));
 }
 
 // Bilinear (hardware-style 2×2) comparison at uv.
 fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
     if RECEIVER_PLANE && !VIRTUAL && any(rp_gradient != vec2f(0.0)) {
         return bilinear_compare(uv, face, z);
+    }
+    if PART_IDS && receiver_part != 0u {
+        return pcf2x2_parts(uv, face, z);
     }
     if !BYTE_MAP && !VIRTUAL {
         return textureSampleCompareLevel(depth_map, compare_sampler, uv, i32(face), z);
@@ -63,6 +80,17 @@ fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
         return virtual_pcf2x2(uv, z);
     }
     return bilinear_compare(uv, face, z);
+}
+
+// `pcf2x2` ignoring the receiver's own part: the four comparisons and
+// parts gathered, weighted as the bilinear filter weighs them.
+fn pcf2x2_parts(uv: vec2f, face: u32, z: f32) -> f32 {
+    let lit = textureGatherCompare(depth_map, compare_sampler, uv, i32(face), z);
+    let parts = textureGather(0, part_map, part_sampler, uv, i32(face));
+    let v = max(lit, select(vec4f(0.0), vec4f(1.0), parts == vec4u(receiver_part)));
+    // Gathered in the order (0, 1), (1, 1), (1, 0), (0, 0) of the 2×2.
+    let f = fract(uv * sm.map.x - 0.5);
+    return mix(mix(v.w, v.z, f.x), mix(v.x, v.y, f.x), f.y);
 }
 
 // A 2×2 comparison filtered by hand from four texel loads; with the
@@ -222,8 +250,9 @@ fn blockers(uv: vec2f, face: u32, z: f32, radius_texels: f32, n: u32, phi: f32) 
     var count = 0.0;
     for (var i = 0u; i < n; i++) {
         let tap = uv + vogel(i, n, phi) * radius_texels * sm.map.y;
-        let d = stored(vec2i(floor(tap * sm.map.x)), face);
-        if d < tap_z(z, tap) {
+        let texel = vec2i(floor(tap * sm.map.x));
+        let d = stored(texel, face);
+        if d < tap_z(z, tap) && !own_part(texel, face) {
             sum += linear_depth(d);
             count += 1.0;
         }

@@ -111,6 +111,7 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let g = textureLoad(gbuffer_position, vec2i(frag.xy), 0);
     let normal = normalize(textureLoad(gbuffer_normal, vec2i(frag.xy), 0).xyz);
     let n = offset_direction(g, normal);
+    receiver_part = receiver_part_of(vec2i(frag.xy), g.xyz, normal);
     if VIRTUAL {
         return vec4f(virtual_visibility(frag.xy, g, n));
     }
@@ -160,6 +161,20 @@ fn offset_direction(g: vec4f, n: vec3f) -> vec3f {
         return vec3f(0.0);
     }
     return n;
+}
+
+// `part_ids`: the convex part of the G-buffer's pixel where its geometric
+// normal faces the light (a convex part cannot shadow that side of
+// itself), else 0.
+fn receiver_part_of(pixel: vec2i, g: vec3f, normal: vec3f) -> u32 {
+    if !PART_IDS {
+        return 0u;
+    }
+    let to_light = select(sm.light.xyz - g, -sm.warp.xyz, is_orthographic());
+    if dot(normal, to_light) <= 0.0 {
+        return 0u;
+    }
+    return textureLoad(gbuffer_part, pixel, 0).r;
 }
 
 // G-buffer point g moved along `offset_direction` n by `sm.kernel.y`
@@ -259,7 +274,8 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
     // one-trip loop, unrolled, measured slower on llvmpipe.)
     var count = max(TAPS, 1u);
     var known = -1.0;
-    if EDGE_MASK && (FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK
+    // The bounds know no parts: a receiver with its own part runs the kernel.
+    if EDGE_MASK && receiver_part == 0u && (FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK
         || FILTER_KIND == FILTER_PCSS || FILTER_KIND == FILTER_VARWIDTH) {
         // Taps compare z along the receiver plane (depth per texel).
         known = edge_class(pr.uv, face, pr.z, rp_gradient * sm.map.y, kernel_reach());

@@ -1,10 +1,11 @@
 //! The shadow maps of one light: a depth array (one layer per face or
-//! cascade), the 8-bit copy of `format=r8` and the two moment arrays of the
-//! moment filters (result and blur scratch), with per-layer views to render
-//! into and array views to look up.
+//! cascade), the 8-bit copy of `format=r8`, the two moment arrays of the
+//! moment filters (result and blur scratch) and the convex part IDs of
+//! `part_ids`, with per-layer views to render into and array views to look
+//! up.
 
 use super::config::DepthFormat;
-use super::pipelines::MOMENT_FORMAT;
+use super::pipelines::{MOMENT_FORMAT, PART_FORMAT};
 use crate::gpu::GpuContext;
 use anyhow::Result;
 
@@ -22,12 +23,27 @@ pub struct Maps {
     pub byte: Option<LayeredViews>,
     /// Moment maps A (result) and B (blur scratch).
     pub moment: Option<[LayeredViews; 2]>,
+    /// The convex part each texel's depth came from (0: none).
+    pub part: Option<LayeredViews>,
     pub bytes: u64,
 }
 
 impl Maps {
-    pub fn matches(&self, size: u32, layers: u32, format: DepthFormat, moments: bool) -> bool {
-        (self.size, self.layers, self.format, self.moments) == (size, layers, format, moments)
+    pub fn matches(
+        &self,
+        size: u32,
+        layers: u32,
+        format: DepthFormat,
+        moments: bool,
+        parts: bool,
+    ) -> bool {
+        (
+            self.size,
+            self.layers,
+            self.format,
+            self.moments,
+            self.part.is_some(),
+        ) == (size, layers, format, moments, parts)
     }
 
     /// Allocates `layers` maps of `size`², refused before anything is
@@ -38,9 +54,11 @@ impl Maps {
         layers: u32,
         format: DepthFormat,
         moments: bool,
+        parts: bool,
     ) -> Result<Maps> {
         let texels = size as u64 * size as u64 * layers as u64;
-        let bytes = texels * (format.bytes_per_texel() + if moments { 32 } else { 0 });
+        let bytes = texels
+            * (format.bytes_per_texel() + if moments { 32 } else { 0 } + if parts { 4 } else { 0 });
         gpu.check_allocation(
             &format!(
                 "shadow-map: {layers} map(s) of {size}x{size} (--set size=N; largest texture {})",
@@ -67,6 +85,7 @@ impl Maps {
                 (format == DepthFormat::R8).then(|| views(&make(wgpu::TextureFormat::R8Unorm)));
             let moment =
                 moments.then(|| [views(&make(MOMENT_FORMAT)), views(&make(MOMENT_FORMAT))]);
+            let part = parts.then(|| views(&make(PART_FORMAT)));
             Ok(Maps {
                 size,
                 layers,
@@ -76,6 +95,7 @@ impl Maps {
                 depth_array,
                 byte,
                 moment,
+                part,
                 bytes,
             })
         })

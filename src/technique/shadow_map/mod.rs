@@ -74,7 +74,7 @@ pub static FAMILY: Family = Family {
 };
 
 /// What a shadow-map bind group binds: the uniforms, the depth, 8-bit,
-/// moment and edge-bounds arrays and a virtual map's buffers;
+/// moment, edge-bounds and part arrays and a virtual map's buffers;
 /// [`MapBindings::empty`] binds placeholders for all but the uniforms.
 struct MapBindings<'a> {
     uniforms: &'a wgpu::Buffer,
@@ -82,6 +82,7 @@ struct MapBindings<'a> {
     bytes: &'a wgpu::TextureView,
     moments: &'a wgpu::TextureView,
     bounds: &'a wgpu::TextureView,
+    parts: &'a wgpu::TextureView,
     virtual_buffers: [&'a wgpu::Buffer; 4],
 }
 
@@ -93,6 +94,7 @@ impl<'a> MapBindings<'a> {
             bytes: &shared.placeholder_bytes,
             moments: &shared.placeholder_moments,
             bounds: &shared.placeholder_bounds,
+            parts: &shared.placeholder_parts,
             virtual_buffers: shared.placeholder_virtual.each_ref(),
         }
     }
@@ -176,17 +178,18 @@ impl ShadowMapTechnique {
         layers: u32,
         format: DepthFormat,
         moments: bool,
+        parts: bool,
     ) -> Result<()> {
         if self
             .maps
             .as_ref()
-            .is_some_and(|m| m.matches(size, layers, format, moments))
+            .is_some_and(|m| m.matches(size, layers, format, moments, parts))
         {
             return Ok(());
         }
         // Free the old maps first; keep the new ones only once created.
         self.maps = None;
-        self.maps = Some(Maps::allocate(gpu, size, layers, format, moments)?);
+        self.maps = Some(Maps::allocate(gpu, size, layers, format, moments, parts)?);
         Ok(())
     }
 
@@ -224,6 +227,11 @@ impl ShadowMapTechnique {
                     buffer(9, b.virtual_buffers[1]),
                     buffer(10, b.virtual_buffers[2]),
                     buffer(11, b.virtual_buffers[3]),
+                    view(12, b.parts),
+                    wgpu::BindGroupEntry {
+                        binding: 13,
+                        resource: wgpu::BindingResource::Sampler(&self.shared.part_sampler),
+                    },
                 ],
             })
     }
@@ -275,7 +283,11 @@ impl ShadowTechnique for ShadowMapTechnique {
         };
         let setups = self.light_setups(ctx, encoder, &lights, aspect)?;
         let layers = setups[0].faces.len() as u32;
-        self.ensure_maps(ctx.gpu, size, layers, format, moments)?;
+        // Every sample of an area light has the first one's shape.
+        let shape = MapShape::of(&setups[0]);
+        let cull = c.cull.for_shape(shape);
+        let parts = c.uses_part_ids(cull);
+        self.ensure_maps(ctx.gpu, size, layers, format, moments, parts)?;
         let edge_mask = c.edge_masked() && c.stage == Stage::Full;
         if edge_mask {
             BoundsChain::ensure(&mut self.chain, ctx.gpu, size, layers)?;
@@ -291,9 +303,6 @@ impl ShadowTechnique for ShadowMapTechnique {
             slots * STRIDE,
             "shadow map uniforms",
         );
-        // Every sample of an area light has the first one's shape.
-        let shape = MapShape::of(&setups[0]);
-        let cull = c.cull.for_shape(shape);
         let mut data = vec![0u8; (slots * STRIDE) as usize];
         for (si, (light, setup)) in lights.iter().zip(&setups).enumerate() {
             let mut faces = [Mat4::IDENTITY; MAX_FACES];
@@ -369,6 +378,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                     moments: moments.then_some(c.filter),
                     shape,
                     virtual_map: false,
+                    parts,
                 },
                 c.solid_front_bias,
             )
@@ -383,6 +393,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             virtual_map: false,
             marked_resident: false,
             wide_kernel: false,
+            parts,
             shape,
         };
         let maps = self.maps.as_ref().expect("ensured above");
@@ -420,6 +431,10 @@ impl ShadowTechnique for ShadowMapTechnique {
                     .chain
                     .as_ref()
                     .map_or(&shared.placeholder_bounds, |c| &c.view),
+                parts: maps
+                    .part
+                    .as_ref()
+                    .map_or(&shared.placeholder_parts, |p| &p.1),
                 ..MapBindings::empty(shared, &self.uniforms)
             },
         );
@@ -454,16 +469,19 @@ impl ShadowTechnique for ShadowMapTechnique {
                 .flatten();
             for face in 0..layers {
                 let f = face as usize;
-                let color = match (&maps.moment, &maps.byte, floor) {
-                    (_, _, true) | (None, None, _) => None,
-                    (Some(m), _, _) => Some(&m[0].0[f]),
-                    (None, Some(b), _) => Some(&b.0[f]),
+                // The colour target beside the depth: moments or the 8-bit
+                // depth (cleared to the far plane), or part IDs (to none).
+                let color = match (&maps.moment, &maps.byte, &maps.part, floor) {
+                    (_, _, _, true) | (None, None, None, _) => None,
+                    (Some(m), _, _, _) => Some((&m[0].0[f], wgpu::Color::WHITE)),
+                    (None, Some(b), _, _) => Some((&b.0[f], wgpu::Color::WHITE)),
+                    (None, None, Some(p), _) => Some((&p.0[f], wgpu::Color::TRANSPARENT)),
                 }
-                .map(|view| wgpu::RenderPassColorAttachment {
+                .map(|(view, clear)| wgpu::RenderPassColorAttachment {
                     view,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: clear_op(wgpu::Color::WHITE),
+                    ops: clear_op(clear),
                 });
                 let colors = [color];
                 let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {

@@ -78,6 +78,8 @@ impl MapShape {
 pub const LOOKUP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 /// Format of the moment maps (vsm, esm, evsm, msm).
 pub const MOMENT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// Format of the part maps (`part_ids`): a convex part's scene-wide ID.
+pub const PART_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
 /// What a depth-pass pipeline depends on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -96,6 +98,8 @@ pub struct DepthPassKey {
     pub shape: MapShape,
     /// Pages of a virtual map: positions relative to the camera.
     pub virtual_map: bool,
+    /// Convex part IDs written beside the depth (`fs_depth_part`).
+    pub parts: bool,
 }
 
 impl CullFace {
@@ -217,6 +221,8 @@ pub struct LookupKey {
     /// A virtual map's kernel can read more than 2×2 pages (its marked
     /// reach spans a page): taps beyond them read the page table.
     pub wide_kernel: bool,
+    /// The maps store convex part IDs (`part_ids`).
+    pub parts: bool,
     pub shape: MapShape,
 }
 
@@ -232,6 +238,7 @@ impl LookupKey {
             ("VIRTUAL", self.virtual_map as u32 as f64),
             ("MARKED_RESIDENT", self.marked_resident as u32 as f64),
             ("WIDE_KERNEL", self.wide_kernel as u32 as f64),
+            ("PART_IDS", self.parts as u32 as f64),
         ];
         constants.extend(self.shape.constants());
         constants
@@ -265,6 +272,9 @@ pub struct ShadowMapShared {
     pub placeholder_depth: wgpu::TextureView,
     pub placeholder_moments: wgpu::TextureView,
     pub placeholder_bounds: wgpu::TextureView,
+    pub placeholder_parts: wgpu::TextureView,
+    /// Nearest-texel sampler of the part maps (`textureGather`).
+    pub part_sampler: wgpu::Sampler,
     /// Bound in place of a virtual map's buffers (bindings 8 to 11).
     pub placeholder_virtual: [wgpu::Buffer; 4],
 }
@@ -298,6 +308,13 @@ impl ShadowMapShared {
                 crate::gpu::storage_entry(9, wgpu::ShaderStages::FRAGMENT, true),
                 crate::gpu::storage_entry(10, wgpu::ShaderStages::FRAGMENT, true),
                 crate::gpu::storage_entry(11, wgpu::ShaderStages::FRAGMENT, false),
+                tex(12, wgpu::TextureSampleType::Uint),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 13,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
+                    count: None,
+                },
             ],
         });
         let constants = Filter::wgsl_constants("FILTER")
@@ -331,6 +348,11 @@ impl ShadowMapShared {
             placeholder_depth: placeholder(device, wgpu::TextureFormat::Depth32Float),
             placeholder_moments: placeholder(device, MOMENT_FORMAT),
             placeholder_bounds: placeholder(device, wgpu::TextureFormat::Rgba32Float),
+            placeholder_parts: placeholder(device, PART_FORMAT),
+            part_sampler: device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("shadow map parts"),
+                ..Default::default()
+            }),
             placeholder_virtual: std::array::from_fn(|_| {
                 device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("virtual map placeholder"),
@@ -518,7 +540,9 @@ impl ShadowMapShared {
     /// The depth pass from the light.
     fn depth_pass(&self, gpu: &GpuContext, key: DepthPassKey) -> wgpu::RenderPipeline {
         gpu.cache.render_pipeline("shadow map depth", &key, || {
-            let (entry, color) = if key.moments.is_some() {
+            let (entry, color) = if key.parts {
+                (Some("fs_depth_part"), Some(PART_FORMAT))
+            } else if key.moments.is_some() {
                 (Some("fs_depth_moments"), Some(MOMENT_FORMAT))
             } else if key.format == DepthFormat::R8 {
                 (Some("fs_depth_byte"), Some(wgpu::TextureFormat::R8Unorm))
@@ -645,6 +669,7 @@ mod tests {
                 warped,
             },
             virtual_map: false,
+            parts: false,
         }
     }
 

@@ -32,6 +32,9 @@ override WIDE_KERNEL: bool = false;
 override PROJECTION: u32 = PROJECTION_PERSPECTIVE;
 override CASCADED: bool = false;
 override WARPED: bool = false;
+// `part_ids`: the maps store each texel's convex part (binding 12), and a
+// receiver facing the light ignores its own part's texels.
+override PART_IDS: bool = false;
 
 struct ShadowMap {
     // world → light clip, one per face (1 for spot/directional, 6 for point,
@@ -87,6 +90,10 @@ struct ShadowMap {
 @group(2) @binding(5) var byte_map: texture_2d_array<f32>;
 @group(2) @binding(6) var moment_map: texture_2d_array<f32>;
 @group(2) @binding(7) var edge_bounds: texture_2d_array<f32>;
+// `part_ids`: the convex part each texel's depth came from (0: none), and
+// the nearest-texel sampler that gathers it.
+@group(2) @binding(12) var part_map: texture_2d_array<u32>;
+@group(2) @binding(13) var part_sampler: sampler;
 
 // One level of a virtual map: a window of `pages`² pages over its view's
 // uv square (see virtual_map.wgsl).
@@ -143,6 +150,8 @@ struct DepthOut {
     @location(1) hemisphere: f32,
     // depth linear in distance, 0 at near and 1 at far (moment maps)
     @location(0) linear: f32,
+    // the convex part drawn (`part_id`), 0: none
+    @location(2) @interpolate(flat) part: u32,
 };
 
 // Linear depth in [0, 1] of a light-clip position.

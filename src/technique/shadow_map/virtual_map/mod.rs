@@ -433,6 +433,7 @@ impl ShadowMapTechnique {
             // The marked reach (`marked_reach()` of virtual_map.wgsl: the
             // kernel's and half a texel) spans a page.
             wide_kernel: 2.0 * (c.kernel_reach() + 0.5) >= p.page_size as f32,
+            parts: false,
             shape: layout.shape(),
         };
         // Adaptive maps refine a level per pass; a pass's pages are rendered

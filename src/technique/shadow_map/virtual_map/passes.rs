@@ -165,6 +165,7 @@ impl ShadowMapTechnique {
                             moments: None,
                             shape: lookup_key.shape,
                             virtual_map: true,
+                            parts: false,
                         },
                         c.solid_front_bias,
                     )
