@@ -70,11 +70,15 @@ fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
     if RECEIVER_PLANE && !VIRTUAL && any(rp_gradient != vec2f(0.0)) {
         return bilinear_compare(uv, face, z);
     }
-    if PART_IDS && receiver_part != 0u {
-        return pcf2x2_parts(uv, face, z);
-    }
     if !BYTE_MAP && !VIRTUAL {
-        return textureSampleCompareLevel(depth_map, compare_sampler, uv, i32(face), z);
+        var v = textureSampleCompareLevel(depth_map, compare_sampler, uv, i32(face), z);
+        // Only a tap that finds shadow can have found the receiver's own
+        // part; a loop, not a branch (see `filtered`): where no pixel of a
+        // SIMD group needs them, no gathers run.
+        for (var own = PART_IDS && receiver_part != 0u && v < 1.0; own; own = false) {
+            v = pcf2x2_parts(uv, face, z);
+        }
+        return v;
     }
     if VIRTUAL {
         return virtual_pcf2x2(uv, z);
