@@ -671,15 +671,31 @@ fn map_coverage(scene: &shadowlab::scene::Scene, id: &str, (w, h): (u32, u32)) -
     )
 }
 
+/// The mean texel footprints of `id` and `other` on `scene` ([`map_coverage`]),
+/// once `id` is seen to leave no receiving pixel outside its maps.
+fn footprints(
+    scene: &shadowlab::scene::Scene,
+    id: &str,
+    other: &str,
+    size: (u32, u32),
+) -> (f32, f32) {
+    let (outside, footprint) = map_coverage(scene, id, size);
+    assert_eq!(outside, 0, "{id}: receiving pixels outside its maps");
+    (footprint, map_coverage(scene, other, size).1)
+}
+
 /// SDSM's cascades fitted to the pixels they shade: every receiving pixel
 /// finds its surface inside the map it looks up, the texels are smaller
 /// than the frustum-fitted cascades', and the mask matches the reference.
 #[test]
 fn sdsm_cascades_cover_every_pixel_with_smaller_texels() {
     let scene = squares_along_the_view(0.0, 2.0);
-    let (outside, sdsm) = map_coverage(&scene, "shadow-map:sdsm", (256, 192));
-    assert_eq!(outside, 0, "receiving pixels outside their cascade's map");
-    let (_, frustum) = map_coverage(&scene, "shadow-map:sdsm[fit=frustum]", (256, 192));
+    let (sdsm, frustum) = footprints(
+        &scene,
+        "shadow-map:sdsm",
+        "shadow-map:sdsm[fit=frustum]",
+        (256, 192),
+    );
     assert!(
         sdsm < 0.8 * frustum,
         "sdsm {sdsm} px/texel, frustum-fitted {frustum}"
@@ -700,9 +716,12 @@ fn sdsm_cascades_cover_every_pixel_with_smaller_texels() {
 fn one_map_fitted_to_the_seen_pixels_covers_them_with_smaller_texels() {
     let land = preset("landscape", "ground", "sun-low-front");
     let (w, h) = (256, 144);
-    let (outside, seen) = map_coverage(&land, "shadow-map:pcf", (w, h));
-    assert_eq!(outside, 0, "receiving pixels outside the map");
-    let (_, frustum) = map_coverage(&land, "shadow-map:pcf[fit=frustum]", (w, h));
+    let (seen, frustum) = footprints(
+        &land,
+        "shadow-map:pcf",
+        "shadow-map:pcf[fit=frustum]",
+        (w, h),
+    );
     assert!(
         seen < 0.8 * frustum,
         "fitted to the pixels {seen} px/texel, to the frustum {frustum}"
@@ -741,9 +760,7 @@ fn one_map_turned_to_the_smallest_square_has_smaller_texels() {
         ..shadowlab::scene::Camera::new(Vec3::new(1.0, 8.0, 4.0), Vec3::new(1.0, 0.0, 4.0))
     };
     let (w, h) = (512, 96);
-    let (outside, turned) = map_coverage(&scene, "shadow-map:pcf", (w, h));
-    assert_eq!(outside, 0, "receiving pixels outside the map");
-    let (_, upright) = map_coverage(&scene, "shadow-map:pcf[roll=up]", (w, h));
+    let (turned, upright) = footprints(&scene, "shadow-map:pcf", "shadow-map:pcf[roll=up]", (w, h));
     assert!(
         turned < 0.9 * upright,
         "turned {turned} px/texel, upright {upright}"
@@ -956,9 +973,12 @@ fn a_spot_map_focused_on_what_the_camera_sees_has_smaller_texels() {
     scene.camera =
         shadowlab::scene::Camera::new(Vec3::new(3.0, 4.0, 3.0), Vec3::new(6.0, 0.0, 6.0));
     let (w, h) = (256, 192);
-    let (outside, focused) = map_coverage(&scene, "shadow-map:pcf", (w, h));
-    assert_eq!(outside, 0, "receiving pixels outside the map");
-    let (_, whole) = map_coverage(&scene, "shadow-map:pcf[fit=frustum]", (w, h));
+    let (focused, whole) = footprints(
+        &scene,
+        "shadow-map:pcf",
+        "shadow-map:pcf[fit=frustum]",
+        (w, h),
+    );
     assert!(
         focused < 0.6 * whole,
         "focused {focused} px/texel, the whole cone {whole}"

@@ -43,7 +43,7 @@ pub struct DrawCall {
     pub material: usize,
     pub casts_shadow: bool,
     pub shadow_plane: bool,
-    /// What the mesh encloses ([`crate::scene::Mesh::solid_kind`]).
+    /// What the mesh encloses ([`crate::scene::Mesh::solidity`]).
     pub solid: SolidKind,
     /// World-space bounds of the object (for culling against light views).
     pub bounds: Aabb,
@@ -128,7 +128,6 @@ impl SceneGpu {
         if vertices.is_empty() || indices.is_empty() {
             bail!("scene '{}' has no triangles", scene.name);
         }
-        let solid: Vec<SolidKind> = solidity.iter().map(|s| s.kind).collect();
         // Each object's parts take the next IDs after the previous object's.
         let mut next_part = 0u32;
         let mut part_bases = Vec::with_capacity(scene.objects.len());
@@ -152,7 +151,7 @@ impl SceneGpu {
                     o.material as u32,
                     o.casts_shadow as u32,
                     o.receives_shadow as u32,
-                    (solid[o.mesh] != SolidKind::NotSolid) as u32,
+                    (solidity[o.mesh].kind != SolidKind::NotSolid) as u32,
                 ],
                 parts: [part_base, 0, 0, 0],
             })
@@ -183,7 +182,7 @@ impl SceneGpu {
                     material: o.material,
                     casts_shadow: o.casts_shadow,
                     shadow_plane: o.shadow_plane,
-                    solid: solid[o.mesh],
+                    solid: solidity[o.mesh].kind,
                     bounds: scene.meshes[o.mesh].bounds().transformed(o.transform),
                     first_part,
                     part_count: parts.len() as u32 - first_part,

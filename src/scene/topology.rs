@@ -120,13 +120,15 @@ impl Mesh {
             return none(SolidKind::NotSolid);
         }
         let p = |i: u32| welded.positions[i as usize].as_dvec3();
-        let volume_of = |ts: &mut dyn Iterator<Item = &[u32; 3]>| -> f64 {
-            ts.map(|t| p(t[0]).dot(p(t[1]).cross(p(t[2]))) / 6.0).sum()
-        };
+        // Signed volume under each triangle, Σ a·(b × c)/6 over a closed set.
+        let volumes: Vec<f64> = triangles
+            .iter()
+            .map(|t| p(t[0]).dot(p(t[1]).cross(p(t[2]))) / 6.0)
+            .collect();
         let extent = self.bounds().size().as_dvec3();
         let extent = extent.x.max(extent.y).max(extent.z);
         let least_volume = 1e-9 * extent.powi(3);
-        if volume_of(&mut triangles.iter()) <= least_volume {
+        if volumes.iter().sum::<f64>() <= least_volume {
             return none(SolidKind::NotSolid);
         }
         let mut shape = edge_shape(&triangles, &p, 1e-6 * extent);
@@ -135,43 +137,40 @@ impl Mesh {
         } else {
             SolidKind::Convex
         };
-        // Parts: components of the triangles joined across edges.
+        // Parts: sets of triangles joined across edges (indexed by their
+        // root triangle), usable while convex at every edge and alone at
+        // every welded vertex.
         let component: Vec<usize> = (0..triangles.len()).map(|t| shape.root(t)).collect();
-        let mut usable: HashMap<usize, bool> = HashMap::new();
-        let mut owner: HashMap<u32, usize> = HashMap::new();
+        let mut usable = vec![true; triangles.len()];
+        let mut volume = vec![0.0; triangles.len()];
+        let mut owner = vec![usize::MAX; welded.positions.len()];
         for (t, tri) in triangles.iter().enumerate() {
             let c = component[t];
-            let ok = usable.entry(c).or_insert(true);
-            *ok &= !shape.concave[t];
+            usable[c] &= !shape.concave[t];
+            volume[c] += volumes[t];
             for &v in tri {
-                let first = *owner.entry(v).or_insert(c);
-                if first != c {
-                    usable.insert(c, false);
-                    usable.insert(first, false);
+                let first = &mut owner[v as usize];
+                if *first == usize::MAX {
+                    *first = c;
+                } else if *first != c {
+                    usable[c] = false;
+                    usable[*first] = false;
                 }
             }
         }
-        let mut members: HashMap<usize, Vec<usize>> = HashMap::new();
-        for (t, &c) in component.iter().enumerate() {
-            members.entry(c).or_default().push(t);
-        }
-        let mut id_of: HashMap<usize, u32> = HashMap::new();
+        let mut id_of = vec![0u32; triangles.len()];
         let mut parts = 0;
         let mut vertex_parts = vec![0; self.positions.len()];
         for (t, &c) in component.iter().enumerate() {
-            if !usable[&c] {
+            if !usable[c] || volume[c] <= least_volume {
                 continue;
             }
-            let id = *id_of.entry(c).or_insert_with(|| {
-                let volume = volume_of(&mut members[&c].iter().map(|&m| &triangles[m]));
-                if volume <= least_volume {
-                    return 0;
-                }
+            if id_of[c] == 0 {
                 parts += 1;
-                parts
-            });
+                id_of[c] = parts;
+            }
             for &v in &self.indices[sources[t] * 3..sources[t] * 3 + 3] {
-                vertex_parts[v as usize] = id;
+                vertex_parts[v as usize] = id_of[c];
             }
         }
         Solidity {

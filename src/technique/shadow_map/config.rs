@@ -682,7 +682,8 @@ impl ShadowMapConfig {
 
     /// Whether the maps store convex part IDs: asked for, with `cull`
     /// (as the maps' shape makes it) storing solids' back faces, a filter
-    /// that compares depths, the 32-bit or 16-bit depth map and not paged.
+    /// that compares depths, a depth format (not `r8`), no paging and not the
+    /// `floor` stage.
     pub fn uses_part_ids(&self, cull: CullFace) -> bool {
         self.part_ids
             && cull == CullFace::Solids

@@ -91,8 +91,12 @@ fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
 fn pcf2x2_parts(uv: vec2f, face: u32, z: f32) -> f32 {
     let lit = textureGatherCompare(depth_map, compare_sampler, uv, i32(face), z);
     let parts = textureGather(0, part_map, part_sampler, uv, i32(face));
-    let v = max(lit, select(vec4f(0.0), vec4f(1.0), parts == vec4u(receiver_part)));
-    // Gathered in the order (0, 1), (1, 1), (1, 0), (0, 0) of the 2×2.
+    return bilinear_weighted(max(lit, select(vec4f(0.0), vec4f(1.0), parts == vec4u(receiver_part))), uv);
+}
+
+// The 2×2 texels around uv, in gather order — (0, 1), (1, 1), (1, 0),
+// (0, 0) — weighted as the bilinear filter weighs them.
+fn bilinear_weighted(v: vec4f, uv: vec2f) -> f32 {
     let f = fract(uv * sm.map.x - 0.5);
     return mix(mix(v.w, v.z, f.x), mix(v.x, v.y, f.x), f.y);
 }
@@ -100,12 +104,9 @@ fn pcf2x2_parts(uv: vec2f, face: u32, z: f32) -> f32 {
 // A 2×2 comparison filtered by hand from four texel loads; with the
 // receiver plane each texel is compared against the plane at its centre.
 fn bilinear_compare(uv: vec2f, face: u32, z: f32) -> f32 {
-    let p = uv * sm.map.x - 0.5;
-    let b = vec2i(floor(p));
-    let f = fract(p);
-    let a = mix(lit_at_plane(b, face, z, uv), lit_at_plane(b + vec2i(1, 0), face, z, uv), f.x);
-    let c = mix(lit_at_plane(b + vec2i(0, 1), face, z, uv), lit_at_plane(b + vec2i(1, 1), face, z, uv), f.x);
-    return mix(a, c, f.y);
+    let b = vec2i(floor(uv * sm.map.x - 0.5));
+    return bilinear_weighted(vec4f(lit_at_plane(b + vec2i(0, 1), face, z, uv), lit_at_plane(b + vec2i(1, 1), face, z, uv),
+        lit_at_plane(b + vec2i(1, 0), face, z, uv), lit_at_plane(b, face, z, uv)), uv);
 }
 
 // `lit_at` against the receiver depth z at uv carried along the receiver

@@ -163,15 +163,17 @@ fn offset_direction(g: vec4f, n: vec3f) -> vec3f {
     return n;
 }
 
+// The unit direction from world point p towards the light.
+fn to_light(p: vec3f) -> vec3f {
+    return select(normalize(sm.light.xyz - p), -normalize(sm.warp.xyz), is_orthographic());
+}
+
 // `part_ids`: the convex part of the G-buffer's pixel where its geometric
 // normal faces the light (a convex part cannot shadow that side of
 // itself), else 0.
 fn receiver_part_of(pixel: vec2i, g: vec3f, normal: vec3f) -> u32 {
-    if !PART_IDS {
-        return 0u;
-    }
-    let to_light = select(sm.light.xyz - g, -sm.warp.xyz, is_orthographic());
-    if dot(normal, to_light) <= 0.0 {
+    // Not `<= 0`: at the light's own position the direction is NaN.
+    if !PART_IDS || !(dot(normal, to_light(g)) > 0.0) {
         return 0u;
     }
     return textureLoad(gbuffer_part, pixel, 0).r;
@@ -183,8 +185,7 @@ fn receiver_part_of(pixel: vec2i, g: vec3f, normal: vec3f) -> u32 {
 fn offset_point(g: vec3f, n: vec3f, texel_world: f32) -> vec3f {
     var offset = sm.kernel.y * texel_world;
     if sm.kernel.w > 0.5 {
-        let to_light = select(normalize(sm.light.xyz - g), -normalize(sm.warp.xyz), is_orthographic());
-        let cos_theta = clamp(dot(n, to_light), 0.0, 1.0);
+        let cos_theta = clamp(dot(n, to_light(g)), 0.0, 1.0);
         offset *= (1.0 - cos_theta * cos_theta);
     }
     return g + n * offset;
