@@ -58,6 +58,10 @@ pub fn unbalanced_edges(triangles: &[[u32; 3]]) -> usize {
     balance.values().filter(|&&b| b != 0).count()
 }
 
+/// How far (1 − cos) a triangle's normal may turn from its set's mean for
+/// the set to count as flat: 1e-8, about 0.008°.
+const FLAT_TOLERANCE: f64 = 1e-8;
+
 /// What a mesh encloses, for a depth pass that stores back faces.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SolidKind {
@@ -74,8 +78,8 @@ pub enum SolidKind {
 pub struct Solidity {
     pub kind: SolidKind,
     /// Per vertex of the mesh, its convex part (numbered from 1 within the
-    /// mesh) or 0: not a solid, in a part with a concave edge, or welded
-    /// to a vertex of another part.
+    /// mesh) or 0: in a set that is neither flat nor closed and convex, or
+    /// welded to a vertex of another set.
     pub vertex_parts: Vec<u32>,
     /// The number of convex parts.
     pub parts: u32,
@@ -96,17 +100,14 @@ impl Mesh {
     /// every edge is (a closed surface convex at every edge is convex in
     /// each connected part).
     ///
-    /// Its convex parts are the sets of triangles joined across shared
-    /// edges that are convex at every edge and enclose a volume, and share
-    /// no vertex with another set (two boxes meeting at a corner are one
-    /// surface but not one convex body): such a part never shadows its own
-    /// lit side (Hourcade & Nicolas 1985 give each one an ID in the map).
+    /// Its convex parts, in any mesh, closed or open, are the sets of
+    /// triangles joined across shared edges that share no vertex with
+    /// another set (two boxes meeting at a corner are one surface but not
+    /// one convex body) and are either convex at every edge (so closed)
+    /// around a volume, or flat (a floor): such a part never shadows its
+    /// own lit side (Hourcade & Nicolas 1985 give each one an ID in the
+    /// map).
     pub fn solidity(&self) -> Solidity {
-        let none = |kind| Solidity {
-            kind,
-            vertex_parts: vec![0; self.positions.len()],
-            parts: 0,
-        };
         let welded = Welded::of(self);
         // The welded triangles and the mesh's own triangle each comes from.
         let (triangles, sources): (Vec<[u32; 3]>, Vec<usize>) = self
@@ -116,38 +117,50 @@ impl Mesh {
             .map(|(i, t)| ([t[0], t[1], t[2]].map(|v| welded.remap[v as usize]), i))
             .filter(|(w, _)| w[0] != w[1] && w[1] != w[2] && w[2] != w[0])
             .unzip();
-        if triangles.is_empty() || unbalanced_edges(&triangles) > 0 {
-            return none(SolidKind::NotSolid);
+        if triangles.is_empty() {
+            return Solidity {
+                kind: SolidKind::NotSolid,
+                vertex_parts: vec![0; self.positions.len()],
+                parts: 0,
+            };
         }
         let p = |i: u32| welded.positions[i as usize].as_dvec3();
-        // Signed volume under each triangle, Σ a·(b × c)/6 over a closed set.
+        // Signed volume under each triangle, Σ a·(b × c)/6 over a closed set,
+        // and its area vector (b − a) × (c − a).
         let volumes: Vec<f64> = triangles
             .iter()
             .map(|t| p(t[0]).dot(p(t[1]).cross(p(t[2]))) / 6.0)
             .collect();
+        let areas: Vec<DVec3> = triangles
+            .iter()
+            .map(|t| (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])))
+            .collect();
         let extent = self.bounds().size().as_dvec3();
         let extent = extent.x.max(extent.y).max(extent.z);
         let least_volume = 1e-9 * extent.powi(3);
-        if volumes.iter().sum::<f64>() <= least_volume {
-            return none(SolidKind::NotSolid);
-        }
         let mut shape = edge_shape(&triangles, &p, 1e-6 * extent);
-        let kind = if shape.concave.iter().any(|&c| c) {
-            SolidKind::Concave
-        } else {
-            SolidKind::Convex
-        };
+        let kind =
+            if unbalanced_edges(&triangles) > 0 || volumes.iter().sum::<f64>() <= least_volume {
+                SolidKind::NotSolid
+            } else if shape.concave.iter().any(|&c| c) {
+                SolidKind::Concave
+            } else {
+                SolidKind::Convex
+            };
         // Parts: sets of triangles joined across edges (indexed by their
-        // root triangle), usable while convex at every edge and alone at
-        // every welded vertex.
+        // root triangle), usable while alone at every welded vertex and
+        // either convex at every edge (so closed) around a volume, or flat.
         let component: Vec<usize> = (0..triangles.len()).map(|t| shape.root(t)).collect();
         let mut usable = vec![true; triangles.len()];
+        let mut convex = vec![true; triangles.len()];
         let mut volume = vec![0.0; triangles.len()];
+        let mut area = vec![DVec3::ZERO; triangles.len()];
         let mut owner = vec![usize::MAX; welded.positions.len()];
         for (t, tri) in triangles.iter().enumerate() {
             let c = component[t];
-            usable[c] &= !shape.concave[t];
+            convex[c] &= !shape.concave[t];
             volume[c] += volumes[t];
+            area[c] += areas[t];
             for &v in tri {
                 let first = &mut owner[v as usize];
                 if *first == usize::MAX {
@@ -158,11 +171,20 @@ impl Mesh {
                 }
             }
         }
+        // Flat: every triangle with an area faces the set's mean normal
+        // (edge-joined triangles facing one way lie in one plane).
+        let mut flat = vec![true; triangles.len()];
+        for (t, &c) in component.iter().enumerate() {
+            let own = areas[t].normalize_or_zero();
+            flat[c] &=
+                own == DVec3::ZERO || own.dot(area[c].normalize_or_zero()) >= 1.0 - FLAT_TOLERANCE;
+        }
         let mut id_of = vec![0u32; triangles.len()];
         let mut parts = 0;
         let mut vertex_parts = vec![0; self.positions.len()];
         for (t, &c) in component.iter().enumerate() {
-            if !usable[c] || volume[c] <= least_volume {
+            let closed_convex = convex[c] && volume[c] > least_volume;
+            if !usable[c] || !(closed_convex || flat[c]) {
                 continue;
             }
             if id_of[c] == 0 {
@@ -336,6 +358,38 @@ mod tests {
         assert_eq!(s.parts, 0);
         assert!(s.vertex_parts.iter().all(|&p| p == 0));
         // An open box has none either.
+        let mut open = cube.clone();
+        open.indices.truncate(open.indices.len() - 6);
+        assert_eq!(open.solidity().parts, 0);
+    }
+
+    #[test]
+    fn flat_sets_are_parts_in_open_meshes_too_and_bent_ones_are_not() {
+        // A floor: open, flat, one part.
+        let floor = shapes::plane(4.0, 4.0, 4);
+        let s = floor.solidity();
+        assert_eq!((s.kind, s.parts), (SolidKind::NotSolid, 1));
+        assert!(s.vertex_parts.iter().all(|&p| p == 1));
+        // A box standing off the floor in the same (open) mesh: two parts.
+        let cube = shapes::cuboid(Vec3::ONE);
+        let scene = joined(&floor, &cube, Vec3::Y * 2.0);
+        let s = scene.solidity();
+        assert_eq!((s.kind, s.parts), (SolidKind::NotSolid, 2));
+        let n = floor.positions.len();
+        assert!(s.vertex_parts[..n].iter().all(|&p| p == 1));
+        assert!(s.vertex_parts[n..].iter().all(|&p| p == 2));
+        // The floor with one vertex raised by a millimetre is not flat,
+        // nor is a rolling ground; the open box's sides are not flat.
+        let mut bent = floor.clone();
+        let centre = bent
+            .positions
+            .iter()
+            .position(|p| *p == Vec3::ZERO)
+            .unwrap();
+        bent.positions[centre].y = 1e-3;
+        assert_eq!(bent.solidity().parts, 0);
+        let ground = shapes::heightfield(4.0, 8, |x, z| 0.1 * (x + z).sin());
+        assert_eq!(ground.solidity().parts, 0);
         let mut open = cube.clone();
         open.indices.truncate(open.indices.len() - 6);
         assert_eq!(open.solidity().parts, 0);

@@ -110,8 +110,8 @@ fn linear_depth(z: f32) -> f32 {
 fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let g = textureLoad(gbuffer_position, vec2i(frag.xy), 0);
     let normal = normalize(textureLoad(gbuffer_normal, vec2i(frag.xy), 0).xyz);
-    let n = offset_direction(g, normal);
     receiver_part = receiver_part_of(vec2i(frag.xy), g.xyz, normal);
+    let n = offset_direction(g, normal);
     if VIRTUAL {
         return vec4f(virtual_visibility(frag.xy, g, n));
     }
@@ -155,9 +155,10 @@ fn warped_texel_world(face: u32, p: vec3f) -> f32 {
 
 // The direction the normal offset moves G-buffer point g (w: object index
 // + 1) along: its geometric normal n, or none on a solid when `sm.light.w`
-// is set (`cull=solids`: its own surface is not in the map).
+// is set (`cull=solids`: its own surface is not in the map) and on a
+// receiver with a convex part (it ignores its own texels).
 fn offset_direction(g: vec4f, n: vec3f) -> vec3f {
-    if sm.light.w > 0.5 && g.w >= 0.5 && objects[u32(g.w) - 1u].info.w != 0u {
+    if receiver_part != 0u || sm.light.w > 0.5 && g.w >= 0.5 && objects[u32(g.w) - 1u].info.w != 0u {
         return vec3f(0.0);
     }
     return n;
