@@ -903,7 +903,9 @@ fn the_receiver_plane_from_the_normal_keeps_edges_and_clears_corners() {
 /// meet it at the corner (interior false shadow 0.123 → 0.017 % at
 /// 640×360), while the buildings of one block mesh, separate parts, still
 /// shadow each other and the trunks under the canopies (separate parts of
-/// one tree) stay shadowed — the receiver plane's failure.
+/// one tree) stay shadowed — the receiver plane's failure. A floor is a
+/// flat part: it takes no normal offset, which only moved its shadow edges
+/// (room under the point light: 0.0054 → 0.0036 % total mismatch).
 #[test]
 fn convex_parts_ignore_their_own_texels_and_still_shadow_each_other() {
     let city = preset("city", "street", "sun");
@@ -920,6 +922,14 @@ fn convex_parts_ignore_their_own_texels_and_still_shadow_each_other() {
     let without = compare(&landscape, "shadow-map:pcf[part_ids=false]", (640, 360)).mask;
     assert!(
         parts.interior.false_lit_pct <= without.interior.false_lit_pct + 0.001,
+        "part IDs {parts:?}\nwithout {without:?}"
+    );
+    let room = preset("room", "default", "point");
+    let parts = compare(&room, "shadow-map:pcf", (640, 360)).mask;
+    let without = compare(&room, "shadow-map:pcf[part_ids=false]", (640, 360)).mask;
+    assert!(
+        parts.all.total_pct <= 0.8 * without.all.total_pct
+            && parts.interior.total_pct <= without.interior.total_pct,
         "part IDs {parts:?}\nwithout {without:?}"
     );
 }

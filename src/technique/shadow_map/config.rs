@@ -183,7 +183,7 @@ pub const NORMAL_OFFSET_DIRECTIONAL: ParamSpec = ParamSpec::float(
     0.0,
     10.0,
     0.05,
-    "directional lights: lookup point moved along the geometric normal, in shadow-map texels (¼ with the bias cap of `slope_bias_clamp`: edges stay in place, acne stays away)",
+    "directional lights: lookup point moved along the geometric normal, in shadow-map texels (¼ with the bias cap of `slope_bias_clamp`: edges stay in place, acne stays away); none on solids under cull=solids and on receivers with a part (part_ids)",
 );
 
 pub const NORMAL_OFFSET_SLOPE: ParamSpec = ParamSpec::boolean(
@@ -198,7 +198,7 @@ pub const NORMAL_OFFSET_LOCAL: ParamSpec = ParamSpec::float(
     0.0,
     10.0,
     0.1,
-    "point and spot lights: lookup point moved along the geometric normal, in shadow-map texels at the point's distance",
+    "point and spot lights: lookup point moved along the geometric normal, in shadow-map texels at the point's distance; none on solids under cull=solids and on receivers with a part (part_ids)",
 );
 
 pub const EDGE_MASK: ParamSpec = ParamSpec::boolean(
@@ -231,7 +231,7 @@ pub const SOLID_FRONT_BIAS: ParamSpec = ParamSpec::float(
 pub const PART_IDS: ParamSpec = ParamSpec::boolean(
     "part_ids",
     true,
-    "cull=solids, depth-compared filters (hard, pcf2x2, grid, disk, pcss, varwidth) of unwarped maps and cube faces: every texel also stores the convex part (a closed, outward-wound piece of a solid, convex at every edge) its depth came from, and a receiver facing the light ignores its own part's texels — a convex part never shadows its own lit side, so a lit wall is not compared against the back face that meets it at its corner (priority buffers, Hourcade & Nicolas 1985); 4 more bytes per texel",
+    "cull=solids, depth-compared filters (hard, pcf2x2, grid, disk, pcss, varwidth) of unwarped maps and cube faces: every texel also stores the convex part its depth came from (a closed, outward-wound piece of a mesh convex at every edge, or a flat one such as a floor), and a receiver facing the light ignores its own part's texels and takes no normal offset — a convex part never shadows its own lit side, so a lit wall is not compared against the back face that meets it at its corner (priority buffers, Hourcade & Nicolas 1985); 4 more bytes per texel",
 );
 
 pub const OMNI: ParamSpec = ParamSpec::choice_of::<Omni>(
