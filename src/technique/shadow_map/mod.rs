@@ -8,6 +8,7 @@
 //! outside the map is lit) and filters: nearest, hardware 2×2 PCF, N×N grid,
 //! rotated Vogel disk, PCSS, or the documents' variable-width PCF.
 
+mod bias_cap;
 pub mod cascades;
 mod caster_cull;
 pub mod config;
@@ -19,6 +20,7 @@ pub mod paging_params;
 pub mod partition_params;
 mod perspective;
 mod pipelines;
+mod presets;
 mod projection;
 mod roll;
 mod setup;
@@ -40,16 +42,17 @@ use crate::gpu::{GpuContext, SectionTimer};
 use crate::scene::LightType;
 use crate::scene::area::area_samples;
 use anyhow::Result;
+use bias_cap::bias_clamp;
 use caster_cull::CasterCull;
 use depth_bounds::{DepthReduction, SeenBounds};
 use edge_mask::{BoundsChain, ChainSource};
-use glam::{Mat4, UVec4, Vec4};
+use glam::Mat4;
 use maps::Maps;
 use pipelines::{
     Casters, DepthDraw, DepthPassKey, LookupKey, MapProjection, MapShape, ShadowMapShared,
 };
 use std::sync::Arc;
-use uniform::{MAX_FACES, SLOTS, STRIDE, ShadowMapUniform};
+use uniform::{FrameTerms, MAX_FACES, SLOTS, STRIDE, ShadowMapUniform, slot_data};
 
 pub static FAMILY: Family = Family {
     id: "shadow-map",
@@ -64,7 +67,7 @@ pub static FAMILY: Family = Family {
         curved_receivers: true,
     },
     params: config::PARAMS,
-    presets: config::PRESETS,
+    presets: presets::PRESETS,
     create: |gpu, params| {
         Ok(Box::new(ShadowMapTechnique::new(
             gpu,
@@ -303,60 +306,16 @@ impl ShadowTechnique for ShadowMapTechnique {
             slots * STRIDE,
             "shadow map uniforms",
         );
-        let mut data = vec![0u8; (slots * STRIDE) as usize];
-        for (si, (light, setup)) in lights.iter().zip(&setups).enumerate() {
-            let mut faces = [Mat4::IDENTITY; MAX_FACES];
-            faces[..setup.faces.len()].copy_from_slice(&setup.faces);
-            let mut cascade_far = [0.0f32; MAX_FACES];
-            let mut cascade_texel = [0.0f32; MAX_FACES];
-            if let Some(split) = &setup.cascades {
-                cascade_far[..split.far.len()].copy_from_slice(&split.far);
-                for (t, s) in cascade_texel.iter_mut().zip(&split.texel_scales) {
-                    *t = s / size as f32;
-                }
-            }
-            let pack = |v: [f32; MAX_FACES]| [Vec4::from_slice(&v[..4]), Vec4::from_slice(&v[4..])];
-            let base = ShadowMapUniform {
-                faces,
-                map: Vec4::new(
-                    size as f32,
-                    1.0 / size as f32,
-                    setup.texel_scale / size as f32,
-                    c.kernel_reach(),
-                ),
-                depth: Vec4::new(
-                    setup.near,
-                    setup.far,
-                    area_radius,
-                    c.depth_bias as f32 * format.depth_step(),
-                ),
-                face: UVec4::ZERO,
-                cascade: Vec4::new(
-                    setup.cascades.as_ref().map_or(0, |s| s.far.len()) as f32,
-                    c.cascades.blend,
-                    setup.cascades.as_ref().map_or(0.0, |s| s.near),
-                    (c.cascades.select == Select::Map) as u32 as f32,
-                ),
-                cascade_far: pack(cascade_far),
-                cascade_texel: pack(cascade_texel),
-                cascade_view_z: ctx.fit_camera.view().row(2),
-                warp: light.direction.normalize_or_zero().extend(0.0),
-                warp_depth: setup.warp_depth.unwrap_or(Vec4::ZERO),
-                ..ShadowMapUniform::with_filter(&c, normal_offset, light.position, cull)
-            };
-            for f in 0..MAX_FACES as u32 {
-                for k in 0..3u32 {
-                    let u = ShadowMapUniform {
-                        face: UVec4::new(f, k.saturating_sub(1), blur, 0),
-                        ..base
-                    };
-                    let at =
-                        (((si as u32 * MAX_FACES as u32 + f) * 3 + k) as u64 * STRIDE) as usize;
-                    data[at..at + std::mem::size_of::<ShadowMapUniform>()]
-                        .copy_from_slice(bytemuck::bytes_of(&u));
-                }
-            }
-        }
+        let frame = FrameTerms {
+            size,
+            format,
+            area_radius,
+            normal_offset,
+            cull,
+            blur,
+            fit_view: ctx.fit_camera.view(),
+        };
+        let data = slot_data(&c, &lights, &setups, &frame);
         ctx.gpu.queue.write_buffer(&self.uniforms, 0, &data);
         let floor = c.stage == Stage::Floor;
         let pipelines_for = |setup: &LightSetup, face: usize| {
@@ -714,82 +673,5 @@ impl ShadowTechnique for ShadowMapTechnique {
                 .virtual_state
                 .as_ref()
                 .map_or(0, |v| v.resource_bytes())
-    }
-}
-
-/// The depth bias's cap for `face` of `setup` in the map's depth units
-/// ([`texel_bias_clamp`]); 0 (no cap) for perspective and warped maps.
-fn bias_clamp(setup: &LightSetup, face: usize, size: u32, texels: f32) -> f32 {
-    if !setup.orthographic || setup.warp_depth.is_some() {
-        return 0.0;
-    }
-    let scale = setup
-        .cascades
-        .as_ref()
-        .and_then(|s| s.texel_scales.get(face).copied())
-        .unwrap_or(setup.texel_scale);
-    texel_bias_clamp(scale / size as f32, setup.far - setup.near, texels)
-}
-
-/// The depth bias's cap of an orthographic map whose texels are
-/// `texel_world` wide over a depth range `depth_range`: `texels` texel
-/// widths of depth, rounded to a quarter octave (few pipelines); 0 (no cap)
-/// for `texels` = 0.
-fn texel_bias_clamp(texel_world: f32, depth_range: f32, texels: f32) -> f32 {
-    if texels <= 0.0 {
-        return 0.0;
-    }
-    let clamp = texels * texel_world / depth_range.max(1e-6);
-    2f32.powf((clamp.log2() * 4.0).round() / 4.0)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn ortho(texel_scale: f32, cascades: Option<Vec<f32>>) -> LightSetup {
-        LightSetup {
-            faces: vec![Mat4::IDENTITY; cascades.as_ref().map_or(1, |c| c.len())],
-            near: 0.0,
-            far: 1024.0,
-            orthographic: true,
-            paraboloid: false,
-            texel_scale,
-            cascades: cascades.map(|texel_scales| CascadeSplit {
-                near: 0.1,
-                far: vec![1.0; texel_scales.len()],
-                texel_scales,
-            }),
-            warp_depth: None,
-        }
-    }
-
-    #[test]
-    fn the_bias_cap_is_texel_widths_of_the_depth_range() {
-        // 2048 world units over 2048 texels: 1 per texel; 4 texels of a
-        // 1024-unit depth range = 2^-8.
-        assert_eq!(
-            bias_clamp(&ortho(2048.0, None), 0, 2048, 4.0),
-            2f32.powi(-8)
-        );
-        // 4.5 texels rounds to the nearest quarter octave, 2^(-8 + 1/4)·…
-        let c = bias_clamp(&ortho(2048.0, None), 0, 2048, 4.5);
-        assert!((c.log2() + 7.75).abs() < 1e-5, "{}", c.log2());
-        // Each cascade its own texel.
-        let cascaded = ortho(1024.0, Some(vec![1024.0, 4096.0]));
-        assert_eq!(bias_clamp(&cascaded, 1, 2048, 4.0), 2f32.powi(-7));
-        assert_eq!(bias_clamp(&cascaded, 0, 2048, 4.0), 2f32.powi(-9));
-        // None for perspective or warped maps, or a cap of 0.
-        let spot = LightSetup {
-            orthographic: false,
-            ..ortho(2048.0, None)
-        };
-        assert_eq!(bias_clamp(&spot, 0, 2048, 4.0), 0.0);
-        let warped = LightSetup {
-            warp_depth: Some(Vec4::Z),
-            ..ortho(2048.0, None)
-        };
-        assert_eq!(bias_clamp(&warped, 0, 2048, 4.0), 0.0);
-        assert_eq!(bias_clamp(&ortho(2048.0, None), 0, 2048, 0.0), 0.0);
     }
 }

@@ -1,7 +1,9 @@
 //! The shadow-map family's uniform (`ShadowMap` of shadow_map.wgsl) and
 //! its slots: one per face for the depth pass and lookup, two for the blur.
 
-use super::config::{CullFace, ShadowMapConfig};
+use super::config::{CullFace, DepthFormat, Select, ShadowMapConfig};
+use super::setup::LightSetup;
+use crate::scene::Light;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec3, Vec4};
 
@@ -76,3 +78,78 @@ impl ShadowMapUniform {
 /// Uniform slots: per face, the depth pass (and lookup), blur along x, blur along y.
 pub const STRIDE: u64 = 768;
 pub const SLOTS: u64 = MAX_FACES as u64 * 3;
+
+/// What one frame's uniforms share beyond the parameters: the maps' side
+/// and format, an area light's radius (PCSS), the normal offset of the
+/// light's type, the maps' culling, the moment blur's radius and the view
+/// of the camera the cascades were fitted to.
+pub struct FrameTerms {
+    pub size: u32,
+    pub format: DepthFormat,
+    pub area_radius: f32,
+    pub normal_offset: f32,
+    pub cull: CullFace,
+    pub blur: u32,
+    pub fit_view: Mat4,
+}
+
+/// The uniform buffer's contents for `lights` (one, or an area light's
+/// samples) and their `setups`: slot (s·MAX_FACES + f)·3 + k for sample s,
+/// face f; k = 0 depth pass and lookup, 1 and 2 blur along x and y.
+pub fn slot_data(
+    c: &ShadowMapConfig,
+    lights: &[Light],
+    setups: &[LightSetup],
+    t: &FrameTerms,
+) -> Vec<u8> {
+    let size = t.size as f32;
+    let mut data = vec![0u8; (lights.len() as u64 * SLOTS * STRIDE) as usize];
+    for (si, (light, setup)) in lights.iter().zip(setups).enumerate() {
+        let mut faces = [Mat4::IDENTITY; MAX_FACES];
+        faces[..setup.faces.len()].copy_from_slice(&setup.faces);
+        let mut cascade_far = [0.0f32; MAX_FACES];
+        let mut cascade_texel = [0.0f32; MAX_FACES];
+        if let Some(split) = &setup.cascades {
+            cascade_far[..split.far.len()].copy_from_slice(&split.far);
+            for (texel, scale) in cascade_texel.iter_mut().zip(&split.texel_scales) {
+                *texel = scale / size;
+            }
+        }
+        let pack = |v: [f32; MAX_FACES]| [Vec4::from_slice(&v[..4]), Vec4::from_slice(&v[4..])];
+        let base = ShadowMapUniform {
+            faces,
+            map: Vec4::new(size, 1.0 / size, setup.texel_scale / size, c.kernel_reach()),
+            depth: Vec4::new(
+                setup.near,
+                setup.far,
+                t.area_radius,
+                c.depth_bias as f32 * t.format.depth_step(),
+            ),
+            face: UVec4::ZERO,
+            cascade: Vec4::new(
+                setup.cascades.as_ref().map_or(0, |s| s.far.len()) as f32,
+                c.cascades.blend,
+                setup.cascades.as_ref().map_or(0.0, |s| s.near),
+                (c.cascades.select == Select::Map) as u32 as f32,
+            ),
+            cascade_far: pack(cascade_far),
+            cascade_texel: pack(cascade_texel),
+            cascade_view_z: t.fit_view.row(2),
+            warp: light.direction.normalize_or_zero().extend(0.0),
+            warp_depth: setup.warp_depth.unwrap_or(Vec4::ZERO),
+            ..ShadowMapUniform::with_filter(c, t.normal_offset, light.position, t.cull)
+        };
+        for f in 0..MAX_FACES as u32 {
+            for k in 0..3u32 {
+                let u = ShadowMapUniform {
+                    face: UVec4::new(f, k.saturating_sub(1), t.blur, 0),
+                    ..base
+                };
+                let at = (((si as u32 * MAX_FACES as u32 + f) * 3 + k) as u64 * STRIDE) as usize;
+                data[at..at + std::mem::size_of::<ShadowMapUniform>()]
+                    .copy_from_slice(bytemuck::bytes_of(&u));
+            }
+        }
+    }
+    data
+}

@@ -8,11 +8,10 @@ use crate::gpu::FrameFeedback;
 use crate::scene::Aabb;
 use crate::technique::MaskContext;
 use crate::technique::light_space::outside_clip_volume;
+use crate::technique::shadow_map::bias_cap::texel_bias_clamp;
 use crate::technique::shadow_map::pipelines::{DepthDraw, DepthPassKey, LookupKey};
 use crate::technique::shadow_map::uniform::{MAX_FACES, STRIDE, ShadowMapUniform};
-use crate::technique::shadow_map::{
-    DepthFormat, MapBindings, ShadowMapTechnique, texel_bias_clamp,
-};
+use crate::technique::shadow_map::{DepthFormat, MapBindings, ShadowMapTechnique};
 use anyhow::Result;
 use glam::{Mat4, UVec4};
 
