@@ -158,7 +158,7 @@ fn warped_texel_world(face: u32, p: vec3f) -> f32 {
 // is set (`cull=solids`: its own surface is not in the map) and on a
 // receiver with a convex part (it ignores its own texels).
 fn offset_direction(g: vec4f, n: vec3f) -> vec3f {
-    if receiver_part != 0u || sm.light.w > 0.5 && g.w >= 0.5 && objects[u32(g.w) - 1u].info.w != 0u {
+    if receiver_part != 0u || (sm.light.w > 0.5 && g.w >= 0.5 && objects[u32(g.w) - 1u].info.w != 0u) {
         return vec3f(0.0);
     }
     return n;

@@ -52,7 +52,7 @@ use pipelines::{
     Casters, DepthDraw, DepthPassKey, LookupKey, MapProjection, MapShape, ShadowMapShared,
 };
 use std::sync::Arc;
-use uniform::{FrameTerms, MAX_FACES, SLOTS, STRIDE, ShadowMapUniform, slot_data};
+use uniform::{FrameTerms, SLOTS, STRIDE, ShadowMapUniform, slot_data, slot_offset};
 
 pub static FAMILY: Family = Family {
     id: "shadow-map",
@@ -297,15 +297,6 @@ impl ShadowTechnique for ShadowMapTechnique {
         } else {
             self.chain = None;
         }
-        // Slot (s·MAX_FACES + f)·3 + k: sample s, face f; k = 0 depth pass
-        // and lookup, 1 and 2 blur along x and y.
-        let slots = lights.len() as u64 * SLOTS;
-        crate::gpu::grow_buffer(
-            &ctx.gpu.device,
-            &mut self.uniforms,
-            slots * STRIDE,
-            "shadow map uniforms",
-        );
         let frame = FrameTerms {
             size,
             format,
@@ -316,6 +307,12 @@ impl ShadowTechnique for ShadowMapTechnique {
             fit_view: ctx.fit_camera.view(),
         };
         let data = slot_data(&c, &lights, &setups, &frame);
+        crate::gpu::grow_buffer(
+            &ctx.gpu.device,
+            &mut self.uniforms,
+            data.len() as u64,
+            "shadow map uniforms",
+        );
         ctx.gpu.queue.write_buffer(&self.uniforms, 0, &data);
         let floor = c.stage == Stage::Floor;
         let pipelines_for = |setup: &LightSetup, face: usize| {
@@ -356,9 +353,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             shape,
         };
         let maps = self.maps.as_ref().expect("ensured above");
-        let slot = |s: usize, f: u32, k: u32| {
-            ((((s as u32) * MAX_FACES as u32 + f) * 3 + k) as u64 * STRIDE) as u32
-        };
+        let slot = |s: usize, f: u32, k: u32| slot_offset(s, f, k) as u32;
         // Bind groups: none of the maps while they are rendered; the moment
         // maps as blur sources; everything for the lookup.
         let shared = &self.shared;

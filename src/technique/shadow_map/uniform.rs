@@ -93,9 +93,15 @@ pub struct FrameTerms {
     pub fit_view: Mat4,
 }
 
+/// The byte offset of slot (s·MAX_FACES + f)·3 + k: sample s (one light, or
+/// an area light's samples), face f; k = 0 depth pass and lookup, 1 and 2
+/// blur along x and y.
+pub fn slot_offset(sample: usize, face: u32, k: u32) -> u64 {
+    ((sample as u64 * MAX_FACES as u64 + face as u64) * 3 + k as u64) * STRIDE
+}
+
 /// The uniform buffer's contents for `lights` (one, or an area light's
-/// samples) and their `setups`: slot (s·MAX_FACES + f)·3 + k for sample s,
-/// face f; k = 0 depth pass and lookup, 1 and 2 blur along x and y.
+/// samples) and their `setups`, at [`slot_offset`]s.
 pub fn slot_data(
     c: &ShadowMapConfig,
     lights: &[Light],
@@ -145,7 +151,7 @@ pub fn slot_data(
                     face: UVec4::new(f, k.saturating_sub(1), t.blur, 0),
                     ..base
                 };
-                let at = (((si as u32 * MAX_FACES as u32 + f) * 3 + k) as u64 * STRIDE) as usize;
+                let at = slot_offset(si, f, k) as usize;
                 data[at..at + std::mem::size_of::<ShadowMapUniform>()]
                     .copy_from_slice(bytemuck::bytes_of(&u));
             }
