@@ -8,9 +8,7 @@
 use super::depth_bounds::SeenBounds;
 use super::partition_params::{Cascades, Fit};
 use super::setup::{CascadeSplit, LightSetup, light_view_of_scene, slice_corners, view_reach};
-use super::stable_square::{
-    quantize_down, quantize_up, snap_to_texels, square_around, widen_for_kernels,
-};
+use super::stable_window::{Window, quantize_down, quantize_up, widen_for_kernels};
 use crate::scene::{Aabb, Camera};
 use glam::Vec3;
 
@@ -26,19 +24,23 @@ pub fn split_distances(near: f32, far: f32, count: u32, lambda: f32) -> Vec<f32>
         .collect()
 }
 
-/// A stabilised cascade's square half-extent and centre (light view xy):
-/// the slice's bounding sphere, its radius rounded up to 1/64 of a unit
-/// (float noise must not resize it) and its centre snapped to the texel
-/// grid of a `size`² map. (A single map keeps its fitted square instead,
-/// made stable by `stable_square::stable_fit`.)
-pub fn stable_square(corners_ls: &[Vec3; 8], size: u32) -> (f32, f32, f32) {
+/// A stabilised cascade's square (light view xy): the slice's bounding
+/// sphere, its radius rounded up to 1/64 of a unit (float noise must not
+/// resize it) and its centre snapped to the texel grid of a `size`² map.
+/// (A single map keeps its fitted window instead, made stable by
+/// `stable_window::stabilized`.)
+pub fn stable_square(corners_ls: &[Vec3; 8], size: u32) -> Window {
     let centre = corners_ls.iter().copied().sum::<Vec3>() / 8.0;
     let radius = corners_ls
         .iter()
         .map(|c| c.distance(centre))
         .fold(0.0f32, f32::max);
     let half = ((radius * 64.0).ceil() / 64.0).max(1.0 / 64.0);
-    snap_to_texels(half, centre.x, centre.y, size)
+    Window {
+        half: glam::Vec2::splat(half),
+        centre: centre.truncate(),
+    }
+    .snapped(size)
 }
 
 /// The view depths the cascades partition: the camera's near plane to the
@@ -113,23 +115,27 @@ pub fn cascade_setup(
     let mut texel_scales = vec![];
     for (i, w) in splits.windows(2).enumerate() {
         let corners = slice_corners(camera, aspect, w[0], w[1]).map(|p| view.transform_point3(p));
-        let (half, cx, cy) = if let Some(Some(seen_box)) = samples.get(i) {
+        // Fitted cascades take the box they need (finer texels along its
+        // shorter side); stabilised ones the square of a sphere, which no
+        // turn of the camera changes.
+        let Window { half, centre: c } = if let Some(Some(seen_box)) = samples.get(i) {
             // The box of the pixels this cascade shades, widened for kernels.
-            square_around(widen_for_kernels(*seen_box, size))
+            Window::around(widen_for_kernels(*seen_box, size))
         } else if cascades.stabilize && cascades.fit != Fit::Samples {
             stable_square(&corners, size)
         } else {
             let b = Aabb::from_points(corners);
             let (min_x, max_x) = (b.min.x.max(scene_ls.min.x), b.max.x.min(scene_ls.max.x));
             let (min_y, max_y) = (b.min.y.max(scene_ls.min.y), b.max.y.min(scene_ls.max.y));
-            square_around(if min_x < max_x && min_y < max_y {
+            Window::around(if min_x < max_x && min_y < max_y {
                 [min_x, min_y, max_x, max_y]
             } else {
                 [b.min.x, b.min.y, b.max.x, b.max.y]
             })
         };
-        faces.push(orthographic(cx - half, cx + half, cy - half, cy + half, n, f) * view);
-        texel_scales.push(2.0 * half);
+        let (lo, hi) = (c - half, c + half);
+        faces.push(orthographic(lo.x, hi.x, lo.y, hi.y, n, f) * view);
+        texel_scales.push(2.0 * half.max_element());
     }
     LightSetup {
         texel_scale: texel_scales[0],
@@ -253,20 +259,32 @@ mod tests {
 
     #[test]
     fn stable_sizes_are_eighth_octaves_and_centres_whole_texels() {
-        use crate::technique::shadow_map::stable_square::{quantize_up, stable_fit};
+        use crate::technique::shadow_map::setup::FrustumParams;
+        use crate::technique::shadow_map::stable_window::{Hold, Window, quantize_up, stabilized};
         assert!((quantize_up(1.0) - 1.0).abs() < 1e-6);
         assert!((quantize_up(1.01) - 2f32.powf(0.125)).abs() < 1e-5);
         // log2 100 = 6.644: the next eighth is 54/8.
         assert!((quantize_up(100.0) - 2f32.powf(54.0 / 8.0)).abs() < 1e-3);
         // Small changes of the fitted square leave size and grid in place.
-        let a = stable_fit(10.0, 3.21, -7.72, 512);
-        let b = stable_fit(10.02, 3.2101, -7.721, 512);
+        let fit = |h: f32, x: f32, y: f32| {
+            let need = Window {
+                half: glam::Vec2::splat(h),
+                centre: glam::Vec2::new(x, y),
+            };
+            let fp = FrustumParams {
+                stabilize_size: Some(512),
+                ..Default::default()
+            };
+            stabilized(need, &fp, Hold::VIEW)
+        };
+        let a = fit(10.0, 3.21, -7.72);
+        let b = fit(10.02, 3.2101, -7.721);
         assert_eq!(a, b);
-        let texel = 2.0 * a.0 / 512.0;
-        for v in [a.1, a.2] {
+        let texel = 2.0 * a.half.x / 512.0;
+        for v in a.centre.to_array() {
             assert!(((v / texel) - (v / texel).round()).abs() < 1e-3, "{v}");
         }
-        assert!(a.0 >= 10.0 && a.0 < 10.0 * 1.091);
+        assert!(a.half.x >= 10.0 && a.half.x < 10.0 * 1.091);
     }
 
     #[test]

@@ -25,7 +25,7 @@ mod projection;
 mod roll;
 mod setup;
 mod spot_focus;
-mod stable_square;
+mod stable_window;
 mod trapezoid;
 mod uniform;
 mod virtual_map;
@@ -46,7 +46,7 @@ use bias_cap::bias_clamp;
 use caster_cull::CasterCull;
 use depth_bounds::{DepthReduction, SeenBounds};
 use edge_mask::{BoundsChain, ChainSource};
-use glam::Mat4;
+use glam::{Mat4, Vec2};
 use maps::Maps;
 use pipelines::{
     Casters, DepthDraw, DepthPassKey, LookupKey, MapProjection, MapShape, ShadowMapShared,
@@ -115,9 +115,9 @@ pub struct ShadowMapTechnique {
     /// Frame-sized debug views: the map projected onto the scene, texels per pixel.
     debug_frame: Option<[wgpu::Texture; 3]>,
     last_faces: Vec<Mat4>,
-    /// Per light sample: the half-extent of last frame's stabilised
-    /// directional square (kept while it fits; `stable_square::Hold`).
-    stable_halves: Vec<f32>,
+    /// Per light sample: the half-extents of last frame's stabilised
+    /// single map's window (kept while they fit; `stable_window::Hold`).
+    stable_halves: Vec<Vec2>,
     /// A directional light's single map's turn last frame (`roll`).
     turn: Option<usize>,
     last_paraboloid: bool,

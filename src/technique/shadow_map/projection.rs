@@ -86,7 +86,7 @@ impl ShadowMapTechnique {
                 previous: self.turn,
             },
         };
-        let mut turns = vec![];
+        let mut fits = vec![];
         let setups = lights
             .iter()
             .enumerate()
@@ -105,7 +105,7 @@ impl ShadowMapTechnique {
                         self.last_seen.as_ref(),
                     )
                 } else if single {
-                    let (setup, turn) = setup::directional_setup(
+                    let (setup, fit) = setup::directional_setup(
                         l,
                         &ctx.scene_gpu.bounds,
                         ctx.fit_camera,
@@ -117,10 +117,10 @@ impl ShadowMapTechnique {
                             ..frustum_params
                         },
                     );
-                    turns.push(turn);
+                    fits.push(fit);
                     setup
                 } else if spot.is_some() {
-                    let (setup, turn) = setup::spot_setup(
+                    let (setup, fit) = setup::spot_setup(
                         l,
                         &ctx.scene_gpu.bounds,
                         &FrustumParams {
@@ -130,7 +130,7 @@ impl ShadowMapTechnique {
                             ..frustum_params
                         },
                     );
-                    turns.push(turn);
+                    fits.push(fit);
                     setup
                 } else {
                     light_setup(
@@ -157,11 +157,11 @@ impl ShadowMapTechnique {
                 setup
             })
             .collect::<Vec<LightSetup>>();
-        self.turn = turns.first().copied();
-        // A stabilised single directional or focused spot map's square, kept next frame
-        // while it fits (`FrustumParams::previous_half`).
+        self.turn = fits.first().map(|f: &setup::MapFit| f.turn);
+        // A stabilised single directional or focused spot map's window,
+        // kept next frame while it fits (`FrustumParams::previous_half`).
         self.stable_halves = if stabilize && (spot.is_some() || single) {
-            setups.iter().map(|s| s.texel_scale * 0.5).collect()
+            fits.iter().map(|f| f.half).collect()
         } else {
             vec![]
         };

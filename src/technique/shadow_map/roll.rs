@@ -20,7 +20,8 @@
 //! [`HORIZONTAL_CLEARANCE_DEG`] off the texel axes (where none does, the
 //! one that comes nearest); last frame's turn is kept while its square is at most
 //! [`KEPT_ROLL_RATIO`] larger, so the texel grid does not spin with the
-//! camera. What it must cover is given as its extents along
+//! camera. (The map then covers that turn's box, not its square:
+//! `setup::directional_setup`.) What it must cover is given as its extents along
 //! [`DIRECTIONS`] directions of the light's image ([`Supports`]): from the
 //! pixels the camera saw (SDSM's reduction, `depth_bounds.wgsl`), or from
 //! the corners of the camera's view of the scene.
