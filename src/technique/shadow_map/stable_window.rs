@@ -1,7 +1,7 @@
 //! The stabilised window of a directional map (one map or a cascade) or a
 //! focused spot map: a rectangle of the light's image (a square for
-//! cascades and spot maps) whose half-extents are rounded up to eighths of
-//! an octave and whose centre is snapped to whole texels, so that small
+//! stabilised cascades and spot maps) whose half-extents are rounded up to
+//! eighths of an octave and whose centre is snapped to whole texels, so that small
 //! camera moves leave the texel grid in place, with last frame's kept
 //! while it still holds what is needed ([`Hold`]); and the window around
 //! a fitted box, widened for the kernels that read past it.
