@@ -157,7 +157,7 @@ impl ShadowMapTechnique {
                 setup
             })
             .collect::<Vec<LightSetup>>();
-        self.turn = fits.first().map(|f: &setup::MapFit| f.turn);
+        self.turn = fits.first().map(|f| f.turn);
         // A stabilised single directional or focused spot map's window,
         // kept next frame while it fits (`FrustumParams::previous_half`).
         self.stable_halves = if stabilize && (spot.is_some() || single) {
