@@ -3,14 +3,16 @@
 //! z_i = λ·n·(f/n)^(i/N) + (1−λ)·(n + (f−n)·i/N), one orthographic map per
 //! slice. A stabilised cascade bounds its slice by a sphere, whose radius
 //! does not change when the camera moves or turns, and snaps its centre to
-//! whole texels of the light's view, so that texel edges stay in place.
+//! whole texels of the light's view, so that texel edges stay in place; on
+//! an axis where that square is wider than the scene, it takes the scene's
+//! extent, as fixed as the sphere.
 
 use super::depth_bounds::SeenBounds;
 use super::partition_params::{Cascades, Fit};
 use super::setup::{CascadeSplit, LightSetup, light_view_of_scene, slice_corners, view_reach};
 use super::stable_window::{Window, quantize_down, quantize_up, widen_for_kernels};
 use crate::scene::{Aabb, Camera};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// The `count + 1` split distances from `near` to `far` (view depth).
 pub fn split_distances(near: f32, far: f32, count: u32, lambda: f32) -> Vec<f32> {
@@ -39,6 +41,29 @@ pub fn stable_square(corners_ls: &[Vec3; 8], size: u32) -> Window {
     Window {
         half: glam::Vec2::splat(half),
         centre: centre.truncate(),
+    }
+    .snapped(size)
+}
+
+/// A stabilised cascade's `square`, but on each axis where it is at least
+/// as wide as the scene's light-view box `scene_ls` (widened for kernels),
+/// that box's extent: the scene does not move, so the window is as stable,
+/// and the square's texels past the scene fall on nothing (a far cascade
+/// on a small scene, or a camera that sees the whole scene).
+fn within_scene(square: Window, scene_ls: &Aabb, size: u32) -> Window {
+    let scene = Window::around(widen_for_kernels(
+        [
+            scene_ls.min.x,
+            scene_ls.min.y,
+            scene_ls.max.x,
+            scene_ls.max.y,
+        ],
+        size,
+    ));
+    let wider = square.half.cmpge(scene.half);
+    Window {
+        half: Vec2::select(wider, scene.half, square.half),
+        centre: Vec2::select(wider, scene.centre, square.centre),
     }
     .snapped(size)
 }
@@ -117,12 +142,13 @@ pub fn cascade_setup(
         let corners = slice_corners(camera, aspect, w[0], w[1]).map(|p| view.transform_point3(p));
         // Fitted cascades take the box they need (finer texels along its
         // shorter side); stabilised ones the square of a sphere, which no
-        // turn of the camera changes.
+        // turn of the camera changes, or the scene's side where it is
+        // narrower.
         let Window { half, centre: c } = if let Some(Some(seen_box)) = samples.get(i) {
             // The box of the pixels this cascade shades, widened for kernels.
             Window::around(widen_for_kernels(*seen_box, size))
         } else if cascades.stabilize && cascades.fit != Fit::Samples {
-            stable_square(&corners, size)
+            within_scene(stable_square(&corners, size), &scene_ls, size)
         } else {
             let b = Aabb::from_points(corners);
             let (min_x, max_x) = (b.min.x.max(scene_ls.min.x), b.max.x.min(scene_ls.max.x));
@@ -285,6 +311,53 @@ mod tests {
             assert!(((v / texel) - (v / texel).round()).abs() < 1e-3, "{v}");
         }
         assert!(a.half.x >= 10.0 && a.half.x < 10.0 * 1.091);
+    }
+
+    #[test]
+    fn a_stabilised_cascade_wider_than_the_scene_takes_the_scenes_box_and_keeps_it() {
+        // A 20 × 4 × 8 scene seen from 40 units away down to 100: the last
+        // slice's sphere is far wider than the scene on both axes.
+        let bounds = Aabb {
+            min: Vec3::new(-10.0, 0.0, -4.0),
+            max: Vec3::new(10.0, 4.0, 4.0),
+        };
+        let c = Cascades {
+            count: 4,
+            split_lambda: 0.9,
+            max_distance: 100.0,
+            stabilize: true,
+            blend: 0.05,
+            select: Select::Map,
+            fit: Fit::Frustum,
+        };
+        let dir = Vec3::new(0.3, -1.0, 0.2);
+        let setup = |eye: Vec3| {
+            let cam = Camera::new(eye, Vec3::ZERO);
+            cascade_setup(dir, &bounds, &cam, 1.5, &c, 1024, None)
+        };
+        let a = setup(Vec3::new(0.0, 5.0, 40.0));
+        let (_, scene_ls) = light_view_of_scene(dir, &bounds);
+        let scene_side = (scene_ls.max - scene_ls.min).truncate();
+        let last = *a.cascades.as_ref().unwrap().texel_scales.last().unwrap();
+        // Its longer side is the scene's, widened by the 16 kernel texels on
+        // each side (h·(1 − 32/1024) = the scene's half), not the sphere's.
+        let widened = scene_side.max_element() / (1.0 - 32.0 / 1024.0);
+        assert!((last - widened).abs() < 1e-3, "{last} vs {widened}");
+        // Every corner of the scene lies inside it, off its border.
+        let face = a.faces[3];
+        for i in 0..8 {
+            let p = Vec3::new(
+                [bounds.min.x, bounds.max.x][i & 1],
+                [bounds.min.y, bounds.max.y][(i >> 1) & 1],
+                [bounds.min.z, bounds.max.z][i >> 2],
+            );
+            let q = project(face, p);
+            assert!(q.x.abs() < 0.99 && q.y.abs() < 0.99, "{p} at {q}");
+        }
+        // A camera that moves keeps that cascade's window exactly: the
+        // scene did not move.
+        let b = setup(Vec3::new(0.37, 5.2, 40.6));
+        assert_eq!(a.faces[3], b.faces[3]);
     }
 
     #[test]

@@ -55,7 +55,7 @@ pub const MAX_DISTANCE: ParamSpec = ParamSpec::float(
 pub const STABILIZE: ParamSpec = ParamSpec::boolean(
     "stabilize",
     true,
-    "directional lights: texel edges stay in place when the camera moves or turns — cascades are bounding spheres snapped to whole texels; one map's fitted window (a rectangle) has each side rounded up to eighths of an octave and its centre snapped, and keeps last frame's side while it holds the view and is at most a quarter octave larger",
+    "directional lights: texel edges stay in place when the camera moves or turns — cascades are bounding spheres snapped to whole texels, or on an axis where that square is wider than the scene seen from the light the scene's box, which does not move either (csm on city/default/sun at 640×360: 0.326 → 0.235 % total mismatch); one map's fitted window (a rectangle) has each side rounded up to eighths of an octave and its centre snapped, and keeps last frame's side while it holds the view and is at most a quarter octave larger",
 );
 
 pub const BLEND: ParamSpec = ParamSpec::float(

@@ -1,6 +1,6 @@
 //! The stabilised window of a directional map (one map or a cascade) or a
-//! focused spot map: a rectangle of the light's image (a square for
-//! stabilised cascades and spot maps) whose half-extents are rounded up to
+//! focused spot map: a rectangle of the light's image (a square for spot
+//! maps and for stabilised cascades within the scene) whose half-extents are rounded up to
 //! eighths of an octave and whose centre is snapped to whole texels, so that small
 //! camera moves leave the texel grid in place, with last frame's kept
 //! while it still holds what is needed ([`Hold`]); and the window around
