@@ -1,0 +1,87 @@
+//! The perspective camera and its projections (wgpu's [0, 1] depth).
+
+use anyhow::{Result, bail};
+use glam::{Mat4, Vec3};
+use serde::{Deserialize, Serialize};
+
+/// How far below 1 points at infinity land with
+/// [`Camera::projection_infinite`]: 2^-20, sixteen steps of a 24-bit depth buffer.
+pub const INFINITE_FAR_EPSILON: f32 = 1.0 / (1u32 << 20) as f32;
+
+/// A perspective camera.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Camera {
+    pub eye: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+    /// Vertical field of view, degrees.
+    pub fov_y_deg: f32,
+    pub near: f32,
+    pub far: f32,
+}
+
+impl Camera {
+    pub fn new(eye: Vec3, target: Vec3) -> Camera {
+        Camera {
+            eye,
+            target,
+            up: Vec3::Y,
+            fov_y_deg: 50.0,
+            near: 0.1,
+            far: 200.0,
+        }
+    }
+    /// Right-handed look-at view matrix.
+    pub fn view(&self) -> Mat4 {
+        glam::camera::rh::view::look_at_mat4(self.eye, self.target, self.up)
+    }
+    /// Perspective projection onto wgpu's [0,1] depth range:
+    /// `z_ndc = far/(near−far) · z_view/(−z_view) + near·far/(near−far)/(−z_view)`.
+    pub fn projection(&self, aspect: f32) -> Mat4 {
+        glam::camera::rh::proj::directx::perspective(
+            self.fov_y_deg.to_radians(),
+            aspect,
+            self.near,
+            self.far,
+        )
+    }
+    /// [`Camera::projection`] with the far plane at infinity, re-derived for
+    /// [0,1] depth: with clip z = a·z_e + b and w = −z_e (z_e < 0 in front),
+    /// z_ndc = −a − b/z_e; z_ndc(−near) = 0 gives b = a·near, and z_ndc → −a
+    /// as z_e → −∞. Taking −a = 1 − [`INFINITE_FAR_EPSILON`] keeps points at
+    /// infinity (w = 0 in, e.g. shadow-volume extrusions) inside the clip
+    /// volume and in front of the cleared depth 1 despite rounding.
+    pub fn projection_infinite(&self, aspect: f32) -> Mat4 {
+        let mut m = self.projection(aspect);
+        let a = -(1.0 - INFINITE_FAR_EPSILON);
+        m.z_axis.z = a;
+        m.w_axis.z = a * self.near;
+        m
+    }
+
+    pub fn validate(&self) -> Result<()> {
+        if !(self.eye.is_finite() && self.target.is_finite() && self.up.is_finite()) {
+            bail!("camera has a non-finite vector");
+        }
+        if (self.target - self.eye).length_squared() < 1e-12 {
+            bail!("camera eye and target coincide");
+        }
+        if (self.target - self.eye).cross(self.up).length_squared() < 1e-12 {
+            bail!("camera up vector is parallel to the view direction");
+        }
+        if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {
+            bail!(
+                "camera fov must be in (0, 180) degrees, got {}",
+                self.fov_y_deg
+            );
+        }
+        if !(self.near > 0.0 && self.far > self.near) {
+            bail!(
+                "camera needs 0 < near < far (near {}, far {})",
+                self.near,
+                self.far
+            );
+        }
+        Ok(())
+    }
+}

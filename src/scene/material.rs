@@ -1,0 +1,151 @@
+//! Phong materials, their textures and procedural patterns (SEEDS §1).
+
+use anyhow::{Context, Result, bail};
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// Procedural texture patterns of SEEDS §1 (lecture 004).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ProceduralKind {
+    /// Alternating bands along object-space x.
+    Stripes,
+    /// 3D checkerboard.
+    Checker,
+    /// `sin(x·f + turbulence)`, turbulence = Σ |noise(2^o p)| / 2^o... weighted 1/o.
+    Marble,
+    /// Σ_o |noise(o·p)| / o.
+    Turbulence,
+}
+
+/// A procedural texture evaluated in the fragment shader from the
+/// object-space position.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Procedural {
+    pub kind: ProceduralKind,
+    pub color_a: Vec3,
+    pub color_b: Vec3,
+    /// Pattern frequency (cycles per object-space unit).
+    pub scale: f32,
+    /// Perlin octaves for marble and turbulence.
+    pub octaves: u32,
+}
+
+/// Most Perlin octaves a procedural texture may sum: each costs one noise
+/// evaluation per pixel, and beyond 16 the finest octave is far below a
+/// pixel at any scale the scenes use.
+pub const MAX_OCTAVES: u32 = 16;
+
+impl Procedural {
+    /// Checks colours, scale and octave count.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.color_a.is_finite() && self.color_b.is_finite()) {
+            bail!("procedural texture has a non-finite colour");
+        }
+        if !(self.scale.is_finite() && self.scale > 0.0) {
+            bail!(
+                "procedural texture scale must be a positive finite number, got {}",
+                self.scale
+            );
+        }
+        if !(1..=MAX_OCTAVES).contains(&self.octaves) {
+            bail!(
+                "procedural texture octaves must be in 1..={MAX_OCTAVES}, got {}",
+                self.octaves
+            );
+        }
+        Ok(())
+    }
+}
+
+/// A decoded RGBA8 image used as a diffuse texture or a normal map.
+#[derive(Clone, Debug)]
+pub struct Texture {
+    pub name: String,
+    pub image: image::RgbaImage,
+    /// True for colour textures (sampled as sRGB), false for normal maps.
+    pub srgb: bool,
+    pub source: Option<PathBuf>,
+}
+
+/// Phong material (SEEDS §1): `ka`, `kd`, `ks`, shininess `n`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    pub ka: Vec3,
+    pub kd: Vec3,
+    pub ks: Vec3,
+    pub shininess: f32,
+    /// Opacity (`d` in MTL); kept for export, rendering is opaque.
+    pub alpha: f32,
+    pub diffuse_texture: Option<usize>,
+    pub normal_map: Option<usize>,
+    pub procedural: Option<Procedural>,
+    /// Tiling of texture coordinates.
+    pub uv_scale: f32,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            name: "default".into(),
+            ka: Vec3::splat(0.2),
+            kd: Vec3::splat(0.8),
+            ks: Vec3::splat(0.2),
+            shininess: 32.0,
+            alpha: 1.0,
+            diffuse_texture: None,
+            normal_map: None,
+            procedural: None,
+            uv_scale: 1.0,
+        }
+    }
+}
+
+impl Material {
+    /// Checks coefficients, texture references (against `textures`
+    /// loaded textures) and the procedural texture.
+    pub fn validate(&self, textures: usize) -> Result<()> {
+        self.check(textures)
+            .with_context(|| format!("material '{}'", self.name))
+    }
+
+    fn check(&self, textures: usize) -> Result<()> {
+        for (field, c) in [("ka", self.ka), ("kd", self.kd), ("ks", self.ks)] {
+            if !(c.is_finite() && c.min_element() >= 0.0) {
+                bail!("{field} must be finite and non-negative, got {c}");
+            }
+        }
+        if !(0.0..=1000.0).contains(&self.shininess) {
+            bail!("shininess must be in 0..=1000, got {}", self.shininess);
+        }
+        if !(self.uv_scale.is_finite() && self.uv_scale > 0.0) {
+            bail!(
+                "uv_scale must be a positive finite number, got {}",
+                self.uv_scale
+            );
+        }
+        for (field, t) in [
+            ("diffuse texture", self.diffuse_texture),
+            ("normal map", self.normal_map),
+        ] {
+            if let Some(i) = t.filter(|&i| i >= textures) {
+                bail!("{field} index {i} out of range ({textures} textures)");
+            }
+        }
+        match &self.procedural {
+            Some(p) => p.validate(),
+            None => Ok(()),
+        }
+    }
+
+    pub fn color(name: &str, kd: Vec3) -> Material {
+        Material {
+            name: name.into(),
+            ka: kd,
+            kd,
+            ..Default::default()
+        }
+    }
+}
