@@ -1,0 +1,127 @@
+//! The viewer's window and everything that needs it: surface, device,
+//! renderer, frame targets, blit and egui.
+
+use super::blit::{Blit, EguiLayer};
+use crate::args::ViewArgs;
+use crate::frame::FrameTargets;
+use crate::gpu::GpuContext;
+use crate::renderer::Renderer;
+use anyhow::{Context as _, Result, anyhow};
+use std::sync::Arc;
+use winit::event_loop::ActiveEventLoop;
+use winit::window::Window;
+
+/// Everything that needs the window.
+pub(super) struct Gfx {
+    pub window: Arc<Window>,
+    pub surface: wgpu::Surface<'static>,
+    pub config: wgpu::SurfaceConfiguration,
+    pub gpu: GpuContext,
+    pub renderer: Renderer,
+    pub frame: Option<FrameTargets>,
+    /// The frame's colour format: the window's (sRGB view) where the window
+    /// takes copies, so that the view reaches it by a plain copy.
+    pub frame_color_format: wgpu::TextureFormat,
+    pub blit: Blit,
+    /// egui's panels, drawn when they change and blended over every frame.
+    pub egui_layer: Option<EguiLayer>,
+    pub egui_ctx: egui::Context,
+    pub egui_state: egui_winit::State,
+    pub egui_renderer: egui_wgpu::Renderer,
+}
+
+impl Gfx {
+    /// Opens the window (`view.size`) on `view.backend`'s adapter and sets
+    /// up its surface (plain format with its sRGB twin), renderer and egui.
+    pub fn new(event_loop: &ActiveEventLoop, view: &ViewArgs, vsync: bool) -> Result<Gfx> {
+        let (w, h) = view.size;
+        let window = Arc::new(
+            event_loop
+                .create_window(
+                    Window::default_attributes()
+                        .with_title("shadowlab")
+                        .with_inner_size(winit::dpi::PhysicalSize::new(w, h)),
+                )
+                .context("creating the window")?,
+        );
+        let backends = match view.backend.as_deref() {
+            Some(b) => crate::gpu::parse_backend(b)?,
+            None => wgpu::Backends::from_env().unwrap_or(wgpu::Backends::PRIMARY),
+        };
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends,
+            ..wgpu::InstanceDescriptor::new_without_display_handle().with_env()
+        });
+        let surface = instance
+            .create_surface(window.clone())
+            .context("creating the window surface")?;
+        let mut gpu = GpuContext::with_instance(instance, backends, Some(&surface))?;
+        gpu.memory_budget = view.memory_budget << 20;
+        let size = window.inner_size();
+        let mut config = surface
+            .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
+            .ok_or_else(|| anyhow!("the adapter cannot present to this window"))?;
+        // The plain format with its sRGB twin as a view format.
+        let caps = surface.get_capabilities(&gpu.adapter);
+        if let Some(f) = caps.formats.iter().find(|f| f.is_srgb()) {
+            config.format = f.remove_srgb_suffix();
+        }
+        config.view_formats = vec![config.format.add_srgb_suffix()];
+        config.present_mode = present_mode(vsync);
+        // The view is copied into the window when the window takes copies
+        // in a colour format of frames; otherwise it is drawn (a blit).
+        let frame_color_format = if caps.usages.contains(wgpu::TextureUsages::COPY_DST)
+            && crate::frame::COLOR_FORMATS.contains(&config.format.add_srgb_suffix())
+        {
+            config.usage |= wgpu::TextureUsages::COPY_DST;
+            config.format.add_srgb_suffix()
+        } else {
+            crate::frame::COLOR_FORMAT
+        };
+        surface.configure(&gpu.device, &config);
+        crate::frame::check_formats(&gpu)?;
+        let renderer = Renderer::new(&gpu);
+        let egui_ctx = egui::Context::default();
+        let egui_state = egui_winit::State::new(
+            egui_ctx.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(gpu.max_texture_size() as usize),
+        );
+        let egui_renderer = egui_wgpu::Renderer::new(
+            &gpu.device,
+            config.format,
+            egui_wgpu::RendererOptions {
+                // Dithering adds noise per pixel of every egui triangle:
+                // measurable on CPU adapters, invisible on 8-bit panels.
+                dithering: false,
+                ..Default::default()
+            },
+        );
+        Ok(Gfx {
+            frame_color_format,
+            blit: Blit::new(&gpu.device),
+            egui_layer: None,
+            window,
+            surface,
+            config,
+            gpu,
+            renderer,
+            frame: None,
+            egui_ctx,
+            egui_state,
+            egui_renderer,
+        })
+    }
+}
+
+/// The surface's present mode for the vsync switch.
+pub(super) fn present_mode(vsync: bool) -> wgpu::PresentMode {
+    if vsync {
+        wgpu::PresentMode::AutoVsync
+    } else {
+        wgpu::PresentMode::AutoNoVsync
+    }
+}
