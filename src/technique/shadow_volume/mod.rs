@@ -16,22 +16,28 @@
 //! Geometry: [`adjacency`] welds and builds the edge table once per scene;
 //! [`silhouette`] decides per caster and extrudes on the CPU; the compute
 //! shader in `extrude.wgsl` writes the same index lists on the GPU, drawn
-//! with draw-indexed-indirect.
+//! with draw-indexed-indirect (`extrusion` uploads and runs either);
+//! `scissor` bounds a ranged light's stencil work on screen.
 
 pub mod adjacency;
 pub mod config;
+mod extrusion;
 mod pipelines;
+mod scissor;
 pub mod silhouette;
+
+use scissor::range_scissor;
 
 use super::{DebugLine, Family, MaskContext, ParamValues, ShadowTechnique};
 use crate::frame::Compose;
 use crate::gpu::GpuContext;
-use crate::scene::{Light, LightType, Scene};
+use crate::scene::LightType;
 use adjacency::Adjacency;
-use anyhow::{Result, bail};
+use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use config::{Extrusion, FarPlane, Method, SilhouetteMode, StencilMode, VolumeConfig};
-use glam::{Mat4, Vec3, Vec4};
+use extrusion::Geometry;
+use glam::Vec4;
 use pipelines::{VolumeKey, VolumeShared};
 use silhouette::{CasterPlan, VolumeKind, VolumeMesh};
 use std::sync::Arc;
@@ -74,16 +80,6 @@ struct ExtrudeParams {
     _pad: u32,
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct CasterGpu {
-    light: Vec4,
-    kind: u32,
-    zfail: u32,
-    caps: u32,
-    _pad: u32,
-}
-
 /// `draw_indexed_indirect` arguments.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable, Default)]
@@ -110,18 +106,6 @@ const ZFAIL_ARGS: u64 = std::mem::size_of::<IndirectArgs>() as u64;
 const ARGS_SIZE: u64 = std::mem::size_of::<Args>() as u64;
 /// Readback layout: the arguments, then the pipeline-statistics result.
 const STATS_OFFSET: u64 = 48;
-
-/// Per-scene GPU copies of the welded caster geometry.
-struct Geometry {
-    fingerprint: u64,
-    mesh: VolumeMesh,
-    positions: wgpu::Buffer,
-    faces: wgpu::Buffer,
-    edges: wgpu::Buffer,
-    casters: wgpu::Buffer,
-    /// Casters whose mesh is not closed were reported in the log.
-    reported_open: bool,
-}
 
 /// Statistics of the last frame.
 #[derive(Clone, Copy, Debug, Default)]
@@ -170,63 +154,6 @@ fn buffer(
         usage,
         mapped_at_creation: false,
     })
-}
-
-/// A buffer holding `data`, zero-padded to the 16 bytes a binding needs
-/// (an empty scene has no casters).
-fn buffer_with(
-    gpu: &GpuContext,
-    label: &str,
-    data: &[u8],
-    usage: wgpu::BufferUsages,
-) -> wgpu::Buffer {
-    use wgpu::util::DeviceExt;
-    let mut contents = data.to_vec();
-    contents.resize(data.len().max(16), 0);
-    gpu.device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: &contents,
-            usage,
-        })
-}
-
-/// Screen rectangle (x, y, w, h) in pixels that a light's range sphere can
-/// cover; `None` when it is off screen, the whole frame when unbounded or
-/// when the sphere reaches behind the camera.
-pub fn range_scissor(light: &Light, view_proj: Mat4, width: u32, height: u32) -> Option<[u32; 4]> {
-    let full = Some([0, 0, width, height]);
-    if light.kind == LightType::Directional || light.range <= 0.0 {
-        return full;
-    }
-    let r = Vec3::splat(light.range);
-    let corners =
-        crate::scene::Aabb::from_points([light.position - r, light.position + r]).corners();
-    let mut lo = glam::Vec2::splat(f32::INFINITY);
-    let mut hi = glam::Vec2::splat(f32::NEG_INFINITY);
-    for c in corners {
-        let p = view_proj * c.extend(1.0);
-        if p.w <= 1e-6 {
-            return full;
-        }
-        let ndc = p.truncate().truncate() / p.w;
-        lo = lo.min(ndc);
-        hi = hi.max(ndc);
-    }
-    let to_px = |x: f32, size: u32| ((x.clamp(-1.0, 1.0) * 0.5 + 0.5) * size as f32) as u32;
-    let (x0, x1) = (
-        to_px(lo.x, width),
-        to_px(hi.x, width).saturating_add(1).min(width),
-    );
-    // NDC y up, pixels down.
-    let (y0, y1) = (
-        to_px(-hi.y, height),
-        to_px(-lo.y, height).saturating_add(1).min(height),
-    );
-    if hi.x < -1.0 || lo.x > 1.0 || hi.y < -1.0 || lo.y > 1.0 || x1 <= x0 || y1 <= y0 {
-        return None;
-    }
-    Some([x0, y0, x1 - x0, y1 - y0])
 }
 
 impl ShadowVolumeRenderer {
@@ -286,242 +213,6 @@ impl ShadowVolumeRenderer {
             debug: None,
             silhouette_lines: vec![],
         }
-    }
-
-    /// Welds and uploads the casters of `scene` when it changed.
-    fn ensure_geometry(&mut self, gpu: &GpuContext, scene: &Scene) {
-        let key = crate::scene::scene_fingerprint(scene);
-        if self.geometry.as_ref().is_some_and(|g| g.fingerprint == key) {
-            return;
-        }
-        if self.adjacency.as_ref().is_none_or(|(k, _)| *k != key) {
-            let t = std::time::Instant::now();
-            let used: Vec<bool> = (0..scene.meshes.len())
-                .map(|m| {
-                    scene
-                        .objects
-                        .iter()
-                        .any(|o| o.mesh == m && o.casts_shadow && !o.shadow_plane)
-                })
-                .collect();
-            let adjacency: Vec<Option<Adjacency>> = {
-                use rayon::prelude::*;
-                scene
-                    .meshes
-                    .par_iter()
-                    .zip(&used)
-                    .map(|(m, &u)| u.then(|| Adjacency::of(m)))
-                    .collect()
-            };
-            for (m, a) in scene.meshes.iter().zip(&adjacency) {
-                if let Some(a) = a {
-                    log::info!("shadow-volume: mesh '{}': {}", m.name, a.summary());
-                }
-            }
-            log::info!(
-                "shadow-volume: adjacency of {} meshes in {:.1} ms",
-                adjacency.iter().flatten().count(),
-                t.elapsed().as_secs_f64() * 1e3
-            );
-            self.adjacency = Some((key, adjacency));
-        }
-        let mesh = VolumeMesh::new(scene, &self.adjacency.as_ref().expect("built above").1);
-        let storage = wgpu::BufferUsages::STORAGE;
-        self.geometry = Some(Geometry {
-            fingerprint: key,
-            positions: buffer_with(
-                gpu,
-                "shadow volume positions",
-                bytemuck::cast_slice(&mesh.positions),
-                storage,
-            ),
-            faces: buffer_with(
-                gpu,
-                "shadow volume faces",
-                bytemuck::cast_slice(&mesh.faces),
-                storage,
-            ),
-            edges: buffer_with(
-                gpu,
-                "shadow volume edges",
-                bytemuck::cast_slice(&mesh.edges),
-                storage,
-            ),
-            casters: buffer(
-                &gpu.device,
-                "shadow volume casters",
-                (mesh.casters.len() * std::mem::size_of::<CasterGpu>()) as u64,
-                storage | wgpu::BufferUsages::COPY_DST,
-            ),
-            mesh,
-            reported_open: false,
-        });
-    }
-
-    /// Writes the volumes of `plans` into the index buffer and the
-    /// indirect arguments: on the GPU (records the extrusion compute pass)
-    /// or on the CPU (uploads).
-    fn extrude(
-        &mut self,
-        gpu: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        plans: &[CasterPlan],
-        dark_cap: bool,
-        gpu_extrusion: bool,
-    ) -> Result<()> {
-        let geometry = self.geometry.as_ref().expect("ensured");
-        let vm = &geometry.mesh;
-        // The two lists' regions of the index buffer.
-        let mut bounds = [0usize; 2];
-        for (c, plan) in vm.casters.iter().zip(plans) {
-            bounds[plan.zfail as usize] += plan.index_bound(c, dark_cap);
-        }
-        let needed = ((bounds[0] + bounds[1]) * 4) as u64;
-        let limits = gpu.device.limits();
-        let max = if gpu_extrusion {
-            limits
-                .max_storage_buffer_binding_size
-                .min(limits.max_buffer_size)
-        } else {
-            limits.max_buffer_size
-        };
-        if needed > max {
-            bail!(
-                "shadow-volume: the volumes may need {needed} bytes of indices, more than the device allows ({max}){}",
-                if gpu_extrusion {
-                    "; try --set extrusion=cpu"
-                } else {
-                    ""
-                }
-            );
-        }
-        if self.indices.size() < needed {
-            self.indices = buffer(
-                &gpu.device,
-                "shadow volume indices",
-                needed.next_power_of_two().min(max),
-                index_usage(),
-            );
-        }
-        let mut args = Args::default();
-        for (i, list) in args.lists.iter_mut().enumerate() {
-            list.instance_count = 1;
-            list.first_index = if i == 0 { 0 } else { bounds[0] as u32 };
-        }
-        if gpu_extrusion {
-            let casters: Vec<CasterGpu> = plans
-                .iter()
-                .map(|p| CasterGpu {
-                    light: p.light,
-                    kind: match p.kind {
-                        VolumeKind::Skip => 0,
-                        VolumeKind::Silhouette => 1,
-                        VolumeKind::Triangles => 2,
-                    },
-                    zfail: p.zfail as u32,
-                    caps: p.caps() as u32,
-                    _pad: 0,
-                })
-                .collect();
-            gpu.queue
-                .write_buffer(&geometry.casters, 0, bytemuck::cast_slice(&casters));
-            gpu.queue
-                .write_buffer(&self.args, 0, bytemuck::bytes_of(&args));
-            let params = ExtrudeParams {
-                edge_count: vm.edges.len() as u32,
-                face_count: vm.faces.len() as u32,
-                dark_cap: dark_cap as u32,
-                _pad: 0,
-            };
-            gpu.queue
-                .write_buffer(&self.extrude_params, 0, bytemuck::bytes_of(&params));
-            let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("shadow volume extrusion"),
-                layout: &self.shared.extrude_layout,
-                entries: &[
-                    entry(0, &self.extrude_params),
-                    entry(1, &geometry.faces),
-                    entry(2, &geometry.edges),
-                    entry(3, &geometry.casters),
-                    entry(4, &self.indices),
-                    entry(5, &self.args),
-                ],
-            });
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("shadow volume extrusion"),
-                timestamp_writes: None,
-            });
-            pass.set_bind_group(0, &group, &[]);
-            for (pipeline, n) in [
-                (&self.shared.extrude_edges, vm.edges.len()),
-                (&self.shared.extrude_faces, vm.faces.len()),
-            ] {
-                let groups = n.div_ceil(64) as u32;
-                if groups > 0 {
-                    pass.set_pipeline(pipeline);
-                    pass.dispatch_workgroups(groups.min(65535), groups.div_ceil(65535), 1);
-                }
-            }
-        } else {
-            let (lists, silhouettes) = silhouette::volumes(vm, plans, dark_cap);
-            for (i, list) in lists.iter().enumerate() {
-                args.lists[i].index_count = list.len() as u32;
-                gpu.queue.write_buffer(
-                    &self.indices,
-                    args.lists[i].first_index as u64 * 4,
-                    bytemuck::cast_slice(list),
-                );
-            }
-            args.silhouette_edges = silhouettes as u32;
-            gpu.queue
-                .write_buffer(&self.args, 0, bytemuck::bytes_of(&args));
-        }
-        Ok(())
-    }
-
-    /// The welded casters of `scene` (built on first use).
-    pub fn volume_mesh(&mut self, gpu: &GpuContext, scene: &Scene) -> &VolumeMesh {
-        self.ensure_geometry(gpu, scene);
-        &self.geometry.as_ref().expect("ensured").mesh
-    }
-
-    /// Extrudes the volumes of `plans` like a frame does and reads them back:
-    /// the z-pass and z-fail index lists and the silhouette edge count.
-    pub fn volumes_read_back(
-        &mut self,
-        gpu: &GpuContext,
-        scene: &Scene,
-        plans: &[CasterPlan],
-        dark_cap: bool,
-        gpu_extrusion: bool,
-    ) -> Result<([Vec<u32>; 2], u32)> {
-        self.ensure_geometry(gpu, scene);
-        gpu.checked("shadow volume read-back", || {
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            self.extrude(gpu, &mut encoder, plans, dark_cap, gpu_extrusion)?;
-            let copy = buffer(
-                &gpu.device,
-                "shadow volume index readback",
-                self.indices.size(),
-                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            );
-            encoder.copy_buffer_to_buffer(&self.indices, 0, &copy, 0, self.indices.size());
-            let args_copy = buffer(
-                &gpu.device,
-                "shadow volume args readback",
-                ARGS_SIZE,
-                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            );
-            encoder.copy_buffer_to_buffer(&self.args, 0, &args_copy, 0, ARGS_SIZE);
-            gpu.queue.submit([encoder.finish()]);
-            let indices: Vec<u32> = bytemuck::cast_slice(&gpu.read_buffer(&copy)?).to_vec();
-            let args: Args =
-                bytemuck::pod_read_unaligned(&gpu.read_buffer(&args_copy)?[..ARGS_SIZE as usize]);
-            let lists = args.lists.map(|l| {
-                indices[l.first_index as usize..(l.first_index + l.index_count) as usize].to_vec()
-            });
-            Ok((lists, args.silhouette_edges))
-        })
     }
 
     /// Decides, per caster, whether and how its volume is drawn.
@@ -861,36 +552,4 @@ fn silhouette_lines(vm: &VolumeMesh, plans: &[CasterPlan]) -> Vec<DebugLine> {
         }));
     }
     lines
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn scissor_of_a_light_range_in_front_of_the_camera() {
-        let cam = crate::scene::Camera::new(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO);
-        let vp = cam.projection(1.0) * cam.view();
-        let mut l = Light::point(Vec3::ZERO, 1.0);
-        assert_eq!(
-            range_scissor(&l, vp, 100, 100),
-            Some([0, 0, 100, 100]),
-            "unbounded"
-        );
-        l.range = 1.0;
-        let [x, y, w, h] = range_scissor(&l, vp, 100, 100).unwrap();
-        assert!(
-            x > 20 && y > 20 && w < 60 && h < 60 && w > 5,
-            "{x} {y} {w} {h}"
-        );
-        assert!(x + w / 2 >= 48 && x + w / 2 <= 52, "centred");
-        l.position = Vec3::new(100.0, 0.0, 0.0);
-        assert_eq!(range_scissor(&l, vp, 100, 100), None, "off screen");
-        l.position = Vec3::new(0.0, 0.0, 10.5);
-        assert_eq!(
-            range_scissor(&l, vp, 100, 100),
-            Some([0, 0, 100, 100]),
-            "around the camera"
-        );
-    }
 }
