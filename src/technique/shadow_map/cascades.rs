@@ -49,7 +49,8 @@ pub fn stable_square(corners_ls: &[Vec3; 8], size: u32) -> Window {
 /// as wide as the scene's light-view box `scene_ls` (widened for kernels),
 /// that box's extent: the scene does not move, so the window is as stable,
 /// and the square's texels past the scene fall on nothing (a far cascade
-/// on a small scene, or a camera that sees the whole scene).
+/// on a small scene, or a camera that sees the whole scene). The square
+/// comes snapped; a clipped window is snapped to its own texels.
 fn within_scene(square: Window, scene_ls: &Aabb, size: u32) -> Window {
     let scene = Window::around(widen_for_kernels(
         [
@@ -61,6 +62,9 @@ fn within_scene(square: Window, scene_ls: &Aabb, size: u32) -> Window {
         size,
     ));
     let wider = square.half.cmpge(scene.half);
+    if !wider.any() {
+        return square;
+    }
     Window {
         half: Vec2::select(wider, scene.half, square.half),
         centre: Vec2::select(wider, scene.centre, square.centre),
