@@ -10,7 +10,7 @@
 use super::depth_bounds::SeenBounds;
 use super::partition_params::{Cascades, Fit};
 use super::setup::{CascadeSplit, LightSetup, light_view_of_scene, slice_corners, view_reach};
-use super::stable_window::{Window, quantize_down, quantize_up, widen_for_kernels};
+use super::stable_window::{Window, quantize_down, quantize_up, widen_for_kernels, xy_box};
 use crate::scene::{Aabb, Camera};
 use glam::{Vec2, Vec3};
 
@@ -52,15 +52,7 @@ pub fn stable_square(corners_ls: &[Vec3; 8], size: u32) -> Window {
 /// on a small scene, or a camera that sees the whole scene). The square
 /// comes snapped; a clipped window is snapped to its own texels.
 fn within_scene(square: Window, scene_ls: &Aabb, size: u32) -> Window {
-    let scene = Window::around(widen_for_kernels(
-        [
-            scene_ls.min.x,
-            scene_ls.min.y,
-            scene_ls.max.x,
-            scene_ls.max.y,
-        ],
-        size,
-    ));
+    let scene = Window::around(widen_for_kernels(xy_box(scene_ls), size));
     let wider = square.half.cmpge(scene.half);
     if !wider.any() {
         return square;
@@ -160,7 +152,7 @@ pub fn cascade_setup(
             Window::around(if min_x < max_x && min_y < max_y {
                 [min_x, min_y, max_x, max_y]
             } else {
-                [b.min.x, b.min.y, b.max.x, b.max.y]
+                xy_box(&b)
             })
         };
         let (lo, hi) = (c - half, c + half);

@@ -5,7 +5,7 @@
 
 use super::roll::{self, AxisClearance, Supports};
 use super::spot_focus;
-use super::stable_window::{Hold, Window, stabilized, widen_for_kernels};
+use super::stable_window::{Hold, Window, stabilized, widen_for_kernels, xy_box};
 use crate::scene::{Aabb, Camera, Light, LightType};
 use crate::technique::light_space::up_for;
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -479,12 +479,7 @@ pub fn directional_setup(
     let scene_ls = scene_bounds.transformed(view);
     let fitted = fitted.unwrap_or_else(|| FittedWindow {
         turn,
-        need: Window::around([
-            scene_ls.min.x,
-            scene_ls.min.y,
-            scene_ls.max.x,
-            scene_ls.max.y,
-        ]),
+        need: Window::around(xy_box(&scene_ls)),
         hold: Hold::VIEW,
     });
     let Window { half, centre: c } = stabilized(fitted.need, &kept, fitted.hold);

@@ -7,6 +7,7 @@
 //! a fitted box, widened for the kernels that read past it.
 
 use super::setup::FrustumParams;
+use crate::scene::Aabb;
 use glam::Vec2;
 
 /// Maps fitted to the pixels the camera saw reach this many texels past
@@ -51,6 +52,11 @@ impl Window {
             ..self
         }
     }
+}
+
+/// The x/y extent `[min x, min y, max x, max y]` of a light-view box.
+pub fn xy_box(b: &Aabb) -> [f32; 4] {
+    [b.min.x, b.min.y, b.max.x, b.max.y]
 }
 
 /// A light-view box `[min x, min y, max x, max y]` grown on each side by
