@@ -191,9 +191,12 @@ fn statistics_and_debug_views() {
         let c: std::collections::HashMap<&str, f64> = t.counters().into_iter().collect();
         assert!(c["silhouette_edges"] > 10.0, "{c:?}");
         assert!(c["volume_triangles"] > c["silhouette_edges"], "{c:?}");
-        if gpu.pipeline_statistics {
+        // A GPU that skips the empty fragment stage reports no count
+        // (NVIDIA's driver: 0 was left out); a CPU rasteriser counts them.
+        if gpu.pipeline_statistics && gpu.is_cpu_adapter() {
             assert!(c["volume_fragments"] > 0.0, "{c:?}");
         }
+        assert!(c.get("volume_fragments").is_none_or(|&f| f > 0.0), "{c:?}");
         let views = t.debug_views(gpu).unwrap();
         // One line per silhouette edge (the open floor has per-triangle volumes).
         assert_eq!(views.lines.len() as f64, c["silhouette_edges"]);

@@ -204,7 +204,7 @@ pub const NORMAL_OFFSET_LOCAL: ParamSpec = ParamSpec::float(
 pub const EDGE_MASK: ParamSpec = ParamSpec::boolean(
     "edge_mask",
     false,
-    "grid, disk, pcss, varwidth: a chain of depth bounds of the map (per block, two planes that follow a flat or sloped surface, or its least and greatest depth) classifies each pixel as lit, shadowed or at a shadow edge from 4 texels covering its kernel, compared along the receiver plane with receiver_plane=true, and only edge pixels run the kernel (PCF at shadow silhouettes, 000 §4.3); the mask is the full kernel's",
+    "grid, disk, pcss, varwidth: a chain of depth bounds of the map (per block, two planes that follow a flat or sloped surface, or its least and greatest depth) classifies each pixel as lit, shadowed or at a shadow edge from 4 texels covering its kernel, compared along the receiver plane with receiver_plane=true, with part_ids a cell of the receiver's own convex part counts as lit; where the chain finds an edge and the kernel reaches at most 2.5 texels, the texels it reads are compared one by one; only edge pixels run the kernel (PCF at shadow silhouettes, 000 §4.3); the mask is the full kernel's",
 );
 
 pub const RECEIVER_PLANE: ParamSpec = ParamSpec::boolean(
@@ -473,14 +473,19 @@ pub struct ShadowMapConfig {
 
 impl ShadowMapConfig {
     /// How far in texels from its centre a pixel's kernel reads (the
-    /// lookup's `kernel_reach()`, `sm.map.w`): none (hard), the filter
-    /// radius (grid, disk) or the widest blocker search and penumbra (pcss,
-    /// varwidth, both capped at 64 texels), plus the half texel of a 2×2
-    /// tap (pcf2x2, the filters of taps, and a moment filter's bilinear read).
+    /// lookup's `kernel_reach()`, `sm.map.w`): none (hard), its farthest
+    /// tap (grid: N taps a side at (i + ½)/N·2 − 1 of the radius, so
+    /// radius·(1 − 1/N); disk: the Vogel disk's outermost of N² taps,
+    /// radius·√((N² − ½)/N²)) or the widest blocker search and penumbra
+    /// (pcss, varwidth, both capped at 64 texels), plus the half texel of a
+    /// 2×2 tap (pcf2x2, the filters of taps, and a moment filter's bilinear
+    /// read).
     pub fn kernel_reach(&self) -> f32 {
+        let n = self.samples as f32;
         match self.filter {
             Filter::Hard => 0.0,
-            Filter::Grid | Filter::Disk => self.radius + 0.5,
+            Filter::Grid => self.radius * (1.0 - 1.0 / n) + 0.5,
+            Filter::Disk => self.radius * ((n * n - 0.5) / (n * n)).sqrt() + 0.5,
             Filter::Pcss | Filter::Varwidth => self.blocker_search.max(64.0) + 0.5,
             _ => 0.5,
         }
@@ -570,5 +575,37 @@ impl ShadowMapConfig {
         } else {
             0
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn reach(settings: &[(&str, &str)]) -> f32 {
+        let mut p = ParamValues::defaults(PARAMS);
+        for (k, v) in settings {
+            p.set(k, v).unwrap();
+        }
+        ShadowMapConfig::parse(&p).unwrap().kernel_reach()
+    }
+
+    /// The reach is the farthest tap plus a 2×2 tap's half texel, by hand:
+    /// a 5×5 grid of radius 1.5 has its outer taps at ±0.8 · 1.5 = 1.2; a
+    /// 4² Vogel disk of radius 2.5 its last at √(15.5/16) · 2.5 = 2.46063.
+    #[test]
+    fn the_kernel_reach_is_the_farthest_tap_and_half_a_texel() {
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-4;
+        assert!(close(
+            reach(&[("filter", "grid"), ("samples", "5"), ("radius", "1.5")]),
+            1.7
+        ));
+        assert!(close(reach(&[("filter", "grid"), ("samples", "1")]), 0.5));
+        assert!(close(
+            reach(&[("filter", "disk"), ("samples", "4"), ("radius", "2.5")]),
+            2.96063
+        ));
+        assert!(close(reach(&[("filter", "hard")]), 0.0));
+        assert!(close(reach(&[("filter", "vsm")]), 0.5));
     }
 }

@@ -13,12 +13,19 @@
 // block in one invocation: levels built in 2×2 steps from the map would
 // store (and dispatch) 16× the texels, for levels that a kernel of radius 1
 // or more never reads (edge_mask.rs).
+//
+// The part chain beside it holds, per cell, the one convex part that all
+// its texels came from (`part_ids`; 0: none), or MIXED_PART.
 
 @group(0) @binding(0) var source_depth: texture_depth_2d_array;
 @group(0) @binding(1) var source_values: texture_2d_array<f32>;
 @group(0) @binding(2) var destination: texture_storage_2d_array<rgba32float, write>;
 // Nearest, clamped to the edge (as the lookup's taps are).
 @group(0) @binding(3) var nearest: sampler;
+// The map's parts (level 0; a 1×1 part 0 without part ids) or the level
+// below's, and the level's part cells.
+@group(0) @binding(4) var source_parts: texture_2d_array<u32>;
+@group(0) @binding(5) var destination_parts: texture_storage_2d_array<r32uint, write>;
 
 // Map texels per side of a level-0 texel (CHAIN_BLOCK_LOG2 from edge_mask.rs).
 const BLOCK: u32 = 1u << CHAIN_BLOCK_LOG2;
@@ -44,6 +51,36 @@ fn block_gather(t: vec2u, i: u32, j: u32, layer: u32, from_depth: bool) -> vec4f
         return textureGather(source_depth, nearest, corner / vec2f(textureDimensions(source_depth)), layer);
     }
     return textureGather(0, source_values, nearest, corner / vec2f(textureDimensions(source_values)), layer);
+}
+
+// The one part of four, or MIXED_PART.
+fn common_part(p: vec4u) -> u32 {
+    return select(MIXED_PART, p.x, all(p == vec4u(p.x)));
+}
+
+// Level 0's part: the block's one part, from its first texel and BLOCK²/4
+// gathers (clamped as the depths are).
+fn block_part(t: vec2u, layer: u32) -> u32 {
+    let size = textureDimensions(source_parts);
+    var part = textureLoad(source_parts, min(t * BLOCK, size - 1u), layer, 0).r;
+    for (var j = 0u; j < GATHERS; j++) {
+        for (var i = 0u; i < GATHERS; i++) {
+            let corner = vec2f(t * BLOCK + 2u * vec2u(i, j)) + 1.0;
+            let p = textureGather(0, source_parts, nearest, corner / vec2f(size), layer);
+            part = select(MIXED_PART, part, all(p == vec4u(part)));
+        }
+    }
+    return part;
+}
+
+// A further level's part: its four children's one part.
+fn level_part(t: vec2u, layer: u32) -> u32 {
+    let top = vec2i(textureDimensions(source_parts)) - 1;
+    let at = vec2i(t * 2u);
+    return common_part(vec4u(textureLoad(source_parts, at, layer, 0).r,
+        textureLoad(source_parts, min(at + vec2i(1, 0), top), layer, 0).r,
+        textureLoad(source_parts, min(at + vec2i(0, 1), top), layer, 0).r,
+        textureLoad(source_parts, min(at + vec2i(1, 1), top), layer, 0).r));
 }
 
 // Level 0: the plane through three corner texels of the block (exact
@@ -117,12 +154,16 @@ fn reduce(id: vec3u, kind: u32) {
         return;
     }
     var bounds: vec4f;
+    var part: u32;
     if kind == 2u {
         bounds = level_bounds(id.xy, id.z);
+        part = level_part(id.xy, id.z);
     } else {
         bounds = block_bounds(id.xy, id.z, kind == 0u);
+        part = block_part(id.xy, id.z);
     }
     textureStore(destination, id.xy, id.z, bounds);
+    textureStore(destination_parts, id.xy, id.z, vec4u(part));
 }
 
 @compute @workgroup_size(8, 8, 1)

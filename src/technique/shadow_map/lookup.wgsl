@@ -276,8 +276,7 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
     // one-trip loop, unrolled, measured slower on llvmpipe.)
     var count = max(TAPS, 1u);
     var known = -1.0;
-    // The bounds know no parts: a receiver with its own part runs the kernel.
-    if EDGE_MASK && receiver_part == 0u && (FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK
+    if EDGE_MASK && (FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK
         || FILTER_KIND == FILTER_PCSS || FILTER_KIND == FILTER_VARWIDTH) {
         // Taps compare z along the receiver plane (depth per texel).
         known = edge_class(pr.uv, face, pr.z, rp_gradient * sm.map.y, kernel_reach());

@@ -45,7 +45,7 @@ use anyhow::Result;
 use bias_cap::bias_clamp;
 use caster_cull::CasterCull;
 use depth_bounds::{DepthReduction, SeenBounds};
-use edge_mask::{BoundsChain, ChainSource};
+use edge_mask::{BoundsChain, ChainInput, ChainSource};
 use glam::{Mat4, Vec2};
 use maps::Maps;
 use pipelines::{
@@ -85,6 +85,7 @@ struct MapBindings<'a> {
     bytes: &'a wgpu::TextureView,
     moments: &'a wgpu::TextureView,
     bounds: &'a wgpu::TextureView,
+    bound_parts: &'a wgpu::TextureView,
     parts: &'a wgpu::TextureView,
     virtual_buffers: [&'a wgpu::Buffer; 4],
 }
@@ -97,6 +98,7 @@ impl<'a> MapBindings<'a> {
             bytes: &shared.placeholder_bytes,
             moments: &shared.placeholder_moments,
             bounds: &shared.placeholder_bounds,
+            bound_parts: &shared.placeholder_parts,
             parts: &shared.placeholder_parts,
             virtual_buffers: shared.placeholder_virtual.each_ref(),
         }
@@ -235,6 +237,7 @@ impl ShadowMapTechnique {
                         binding: 13,
                         resource: wgpu::BindingResource::Sampler(&self.shared.part_sampler),
                     },
+                    view(14, b.bound_parts),
                 ],
             })
     }
@@ -385,6 +388,10 @@ impl ShadowTechnique for ShadowMapTechnique {
                     .chain
                     .as_ref()
                     .map_or(&shared.placeholder_bounds, |c| &c.view),
+                bound_parts: self
+                    .chain
+                    .as_ref()
+                    .map_or(&shared.placeholder_parts, |c| &c.part_view),
                 parts: maps
                     .part
                     .as_ref()
@@ -508,9 +515,12 @@ impl ShadowTechnique for ShadowMapTechnique {
                 chain.record(
                     gpu,
                     encoder,
-                    match &maps.byte {
-                        Some(b) => ChainSource::Bytes(&b.1),
-                        None => ChainSource::Depth(&maps.depth_array),
+                    ChainInput {
+                        depths: match &maps.byte {
+                            Some(b) => ChainSource::Bytes(&b.1),
+                            None => ChainSource::Depth(&maps.depth_array),
+                        },
+                        parts: maps.part.as_ref().map(|p| &p.1),
                     },
                 );
                 if let Some(s) = &chain_stamps {

@@ -315,6 +315,7 @@ impl ShadowMapShared {
                     ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
                     count: None,
                 },
+                tex(14, wgpu::TextureSampleType::Uint),
             ],
         });
         let constants = Filter::wgsl_constants("FILTER")

@@ -90,8 +90,10 @@ struct ShadowMap {
 @group(2) @binding(5) var byte_map: texture_2d_array<f32>;
 @group(2) @binding(6) var moment_map: texture_2d_array<f32>;
 @group(2) @binding(7) var edge_bounds: texture_2d_array<f32>;
+// Its part chain: each cell's one part, or MIXED_PART (edge_mask.rs).
+@group(2) @binding(14) var edge_parts: texture_2d_array<u32>;
 // `part_ids`: the convex part each texel's depth came from (0: none), and
-// the nearest-texel sampler that gathers it.
+// the nearest-texel sampler that gathers it (and the edge mask's depths).
 @group(2) @binding(12) var part_map: texture_2d_array<u32>;
 @group(2) @binding(13) var part_sampler: sampler;
 

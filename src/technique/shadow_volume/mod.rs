@@ -112,6 +112,10 @@ const STATS_OFFSET: u64 = 48;
 struct Stats {
     silhouette_edges: u32,
     volume_triangles: u32,
+    /// Fragment-shader invocations of the volume draws. A GPU driver may
+    /// skip their empty, write-nothing fragment stage (NVIDIA's does, and
+    /// reads 0 whatever the volumes cover): a GPU's 0 is left out, not
+    /// reported; a CPU rasteriser (lavapipe) runs every one.
     fragments: Option<u64>,
     skipped: usize,
     zpass: usize,
@@ -480,11 +484,15 @@ impl ShadowTechnique for ShadowVolumeRenderer {
         let args: Args = bytemuck::pod_read_unaligned(&data[..ARGS_SIZE as usize]);
         self.stats.silhouette_edges = args.silhouette_edges;
         self.stats.volume_triangles = (args.lists[0].index_count + args.lists[1].index_count) / 3;
-        self.stats.fragments = self.statistics.as_ref().map(|_| {
-            bytemuck::pod_read_unaligned::<u64>(
-                &data[STATS_OFFSET as usize..STATS_OFFSET as usize + 8],
-            )
-        });
+        self.stats.fragments = self
+            .statistics
+            .as_ref()
+            .map(|_| {
+                bytemuck::pod_read_unaligned::<u64>(
+                    &data[STATS_OFFSET as usize..STATS_OFFSET as usize + 8],
+                )
+            })
+            .filter(|&f| f > 0 || gpu.is_cpu_adapter());
         Ok(())
     }
 
