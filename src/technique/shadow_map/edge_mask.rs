@@ -229,26 +229,22 @@ impl BoundsChain {
             timestamp_writes: None,
         });
         for (level, (side, destination, destination_parts)) in self.levels.iter().enumerate() {
-            let (pipeline, depth, values, parts) = match (level, &input.depths) {
-                (0, source) => {
-                    let parts = input.parts.unwrap_or(&shared.placeholder_parts);
-                    match source {
-                        ChainSource::Depth(d) => {
-                            (&shared.from_depth, *d, &shared.placeholder_values, parts)
-                        }
-                        ChainSource::Bytes(b) => {
-                            (&shared.from_bytes, &shared.placeholder_depth, *b, parts)
-                        }
-                    }
-                }
-                _ => {
-                    let below = &self.levels[level - 1];
-                    (
-                        &shared.from_level,
-                        &shared.placeholder_depth,
-                        &below.1,
-                        &below.2,
-                    )
+            let (pipeline, depth, values, parts) = match (level.checked_sub(1), &input.depths) {
+                (None, ChainSource::Depth(d)) => (
+                    &shared.from_depth,
+                    *d,
+                    &shared.placeholder_values,
+                    input.parts.unwrap_or(&shared.placeholder_parts),
+                ),
+                (None, ChainSource::Bytes(b)) => (
+                    &shared.from_bytes,
+                    &shared.placeholder_depth,
+                    *b,
+                    input.parts.unwrap_or(&shared.placeholder_parts),
+                ),
+                (Some(below), _) => {
+                    let (_, bounds, parts) = &self.levels[below];
+                    (&shared.from_level, &shared.placeholder_depth, bounds, parts)
                 }
             };
             let view = |binding, view| wgpu::BindGroupEntry {
@@ -336,6 +332,35 @@ mod tests {
         })
     }
 
+    /// The chain of a test map, reduced.
+    fn reduced(
+        gpu: &GpuContext,
+        depths: &wgpu::TextureView,
+        parts: Option<&wgpu::TextureView>,
+    ) -> BoundsChain {
+        let mut chain = None;
+        BoundsChain::ensure(&mut chain, gpu, SIDE, 1).unwrap();
+        let chain = chain.unwrap();
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        chain.record(
+            gpu,
+            &mut encoder,
+            ChainInput {
+                depths: ChainSource::Bytes(depths),
+                parts,
+            },
+        );
+        gpu.queue.submit([encoder.finish()]);
+        chain
+    }
+
+    /// Map texels of cell (cx, cy) of a level whose cells cover `cover`
+    /// texels a side, those inside the map.
+    fn cell_texels(cx: u32, cy: u32, cover: u32) -> impl Iterator<Item = (u32, u32)> {
+        (cy * cover..((cy + 1) * cover).min(SIDE))
+            .flat_map(move |ty| (cx * cover..((cx + 1) * cover).min(SIDE)).map(move |tx| (tx, ty)))
+    }
+
     /// The part chain holds a cell's one part where all its texels (those
     /// inside the map) came from it, else MIXED_PART, at every level; a
     /// map without parts is part 0 throughout.
@@ -351,19 +376,7 @@ mod tests {
         let depth_view = map_view(&gpu, wgpu::TextureFormat::R8Unorm, &depths, 1);
         let part_view = map_view(&gpu, PART_FORMAT, &parts, 4);
         for with_parts in [true, false] {
-            let mut chain = None;
-            BoundsChain::ensure(&mut chain, &gpu, SIDE, 1).unwrap();
-            let chain = chain.unwrap();
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            chain.record(
-                &gpu,
-                &mut encoder,
-                ChainInput {
-                    depths: ChainSource::Bytes(&depth_view),
-                    parts: with_parts.then_some(&part_view),
-                },
-            );
-            gpu.queue.submit([encoder.finish()]);
+            let chain = reduced(&gpu, &depth_view, with_parts.then_some(&part_view));
             let mut mixed = 0;
             for (level, &(side, _, _)) in chain.levels.iter().enumerate() {
                 let data = gpu
@@ -373,9 +386,7 @@ mod tests {
                 for (cx, cy) in (0..side).flat_map(|y| (0..side).map(move |x| (x, y))) {
                     let at = ((cy * side + cx) * 4) as usize;
                     let got = u32::from_le_bytes(data[at..at + 4].try_into().unwrap());
-                    let mut seen = (cy * cover..((cy + 1) * cover).min(SIDE)).flat_map(|ty| {
-                        (cx * cover..((cx + 1) * cover).min(SIDE)).map(move |tx| part(tx, ty))
-                    });
+                    let mut seen = cell_texels(cx, cy, cover).map(|(tx, ty)| part(tx, ty));
                     let first = seen.next().unwrap();
                     let want = match (with_parts, seen.all(|p| p == first)) {
                         (false, _) => 0,
@@ -407,19 +418,7 @@ mod tests {
             .map(|i| depth(i % SIDE, i / SIDE))
             .collect();
         let view = map_view(&gpu, wgpu::TextureFormat::R8Unorm, &texels, 1);
-        let mut chain = None;
-        BoundsChain::ensure(&mut chain, &gpu, SIDE, 1).unwrap();
-        let chain = chain.unwrap();
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        chain.record(
-            &gpu,
-            &mut encoder,
-            ChainInput {
-                depths: ChainSource::Bytes(&view),
-                parts: None,
-            },
-        );
-        gpu.queue.submit([encoder.finish()]);
+        let chain = reduced(&gpu, &view, None);
         let mut tight = 0;
         for (level, &(side, _, _)) in chain.levels.iter().enumerate() {
             let data = gpu
@@ -434,18 +433,16 @@ mod tests {
                 let at = ((cy * side + cx) * 4) as usize;
                 let [lo, hi, gx, gy] = [cells[at], cells[at + 1], cells[at + 2], cells[at + 3]];
                 let mut planar = (cx + 1) * cover <= SIDE && (cy + 1) * cover <= SIDE;
-                for ty in cy * cover..((cy + 1) * cover).min(SIDE) {
-                    for tx in cx * cover..((cx + 1) * cover).min(SIDE) {
-                        let d = depth(tx, ty);
-                        planar &= d as u32 == tx + 2 * ty;
-                        let u = |t: u32, c: u32| (t as f32 + 0.5) / cover as f32 - (c as f32 + 0.5);
-                        let plane = gx * u(tx, cx) + gy * u(ty, cy);
-                        let d = d as f32 / 255.0;
-                        assert!(
-                            d >= lo + plane - 1e-6 && d <= hi + plane + 1e-6,
-                            "level {level} cell ({cx}, {cy}): texel ({tx}, {ty}) {d} outside {lo}..{hi} + {plane}"
-                        );
-                    }
+                for (tx, ty) in cell_texels(cx, cy, cover) {
+                    let d = depth(tx, ty);
+                    planar &= d as u32 == tx + 2 * ty;
+                    let u = |t: u32, c: u32| (t as f32 + 0.5) / cover as f32 - (c as f32 + 0.5);
+                    let plane = gx * u(tx, cx) + gy * u(ty, cy);
+                    let d = d as f32 / 255.0;
+                    assert!(
+                        d >= lo + plane - 1e-6 && d <= hi + plane + 1e-6,
+                        "level {level} cell ({cx}, {cy}): texel ({tx}, {ty}) {d} outside {lo}..{hi} + {plane}"
+                    );
                 }
                 if planar {
                     assert!(

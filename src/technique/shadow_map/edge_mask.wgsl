@@ -42,11 +42,16 @@ fn narrower(sloped: vec4f, flat: vec2f) -> vec4f {
     return vec4f(flat, 0.0, 0.0);
 }
 
+// The map texel corner shared by gather (i, j) of block t.
+fn gather_corner(t: vec2u, i: u32, j: u32) -> vec2f {
+    return vec2f(t * BLOCK + 2u * vec2u(i, j)) + 1.0;
+}
+
 // The 2×2 map texels whose shared corner is gather (i, j) of block t:
 // x (2i, 2j+1), y (2i+1, 2j+1), z (2i+1, 2j), w (2i, 2j) of the block (the
 // gather order). The clamp repeats a map's last texels past its side.
 fn block_gather(t: vec2u, i: u32, j: u32, layer: u32, from_depth: bool) -> vec4f {
-    let corner = vec2f(t * BLOCK + 2u * vec2u(i, j)) + 1.0;
+    let corner = gather_corner(t, i, j);
     if from_depth {
         return textureGather(source_depth, nearest, corner / vec2f(textureDimensions(source_depth)), layer);
     }
@@ -65,8 +70,7 @@ fn block_part(t: vec2u, layer: u32) -> u32 {
     var part = textureLoad(source_parts, min(t * BLOCK, size - 1u), layer, 0).r;
     for (var j = 0u; j < GATHERS; j++) {
         for (var i = 0u; i < GATHERS; i++) {
-            let corner = vec2f(t * BLOCK + 2u * vec2u(i, j)) + 1.0;
-            let p = textureGather(0, source_parts, nearest, corner / vec2f(size), layer);
+            let p = textureGather(0, source_parts, nearest, gather_corner(t, i, j) / vec2f(size), layer);
             part = select(MIXED_PART, part, all(p == vec4u(part)));
         }
     }
@@ -75,12 +79,8 @@ fn block_part(t: vec2u, layer: u32) -> u32 {
 
 // A further level's part: its four children's one part.
 fn level_part(t: vec2u, layer: u32) -> u32 {
-    let top = vec2i(textureDimensions(source_parts)) - 1;
-    let at = vec2i(t * 2u);
-    return common_part(vec4u(textureLoad(source_parts, at, layer, 0).r,
-        textureLoad(source_parts, min(at + vec2i(1, 0), top), layer, 0).r,
-        textureLoad(source_parts, min(at + vec2i(0, 1), top), layer, 0).r,
-        textureLoad(source_parts, min(at + vec2i(1, 1), top), layer, 0).r));
+    return common_part(vec4u(child_part(t, vec2u(0u, 0u), layer), child_part(t, vec2u(1u, 0u), layer),
+        child_part(t, vec2u(0u, 1u), layer), child_part(t, vec2u(1u, 1u), layer)));
 }
 
 // Level 0: the plane through three corner texels of the block (exact
@@ -135,6 +135,12 @@ fn level_bounds(t: vec2u, layer: u32) -> vec4f {
 fn child_cell(t: vec2u, k: vec2u, layer: u32) -> vec4f {
     let top = vec2i(textureDimensions(source_values)) - 1;
     return textureLoad(source_values, min(vec2i(t * 2u + k), top), layer, 0);
+}
+
+// Child `k`'s part, clamped as `child_cell`.
+fn child_part(t: vec2u, k: vec2u, layer: u32) -> u32 {
+    let top = vec2i(textureDimensions(source_parts)) - 1;
+    return textureLoad(source_parts, min(vec2i(t * 2u + k), top), layer, 0).r;
 }
 
 // A child cell c centred at o (parent sides) under the parent's slope g:

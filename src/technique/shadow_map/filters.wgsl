@@ -50,9 +50,14 @@ fn tap_z(z: f32, uv: vec2f) -> f32 {
 // 0 (its own part's texels cannot shadow it; `receiver_part_of`).
 var<private> receiver_part: u32;
 
+// Whether the receiver has a part whose texels it ignores.
+fn has_own_part() -> bool {
+    return PART_IDS && receiver_part != 0u;
+}
+
 // Whether the texel's depth came from the receiver's own convex part.
 fn own_part(texel: vec2i, face: u32) -> bool {
-    if !PART_IDS || receiver_part == 0u {
+    if !has_own_part() {
         return false;
     }
     let t = clamp(texel, vec2i(0), vec2i(i32(sm.map.x) - 1));
@@ -76,7 +81,7 @@ fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
         // it finds shadow, ran all three wherever a SIMD group's taps see
         // their own unbiased surface: 2.9× the lookup time of part_ids=false
         // on columns/sun, NVIDIA H100).
-        if PART_IDS && receiver_part != 0u {
+        if has_own_part() {
             return pcf2x2_parts(uv, face, z);
         }
         return textureSampleCompareLevel(depth_map, compare_sampler, uv, i32(face), z);
@@ -323,6 +328,12 @@ fn chain_class(uv: vec2f, face: u32, z: f32, slope: vec2f, reach: f32) -> f32 {
     return -1.0;
 }
 
+// How far the receiver's plane (`slope`, depth per texel) moves between a
+// tap and a texel it reads, at most a texel away on each axis.
+fn plane_sway(slope: vec2f) -> f32 {
+    return abs(slope.x) + abs(slope.y);
+}
+
 // The widest kernel reach (texels) that `edge_class` reads texel by texel
 // where the chain finds an edge: at most 6 texels a side, 3×3 gathers (a
 // grid of radius 1.5 reaches 1.5 to 2). The chain's cells, 8 texels or
@@ -344,8 +355,7 @@ fn footprint_class(uv: vec2f, face: u32, z: f32, slope: vec2f, reach: f32) -> f3
     let a = clamp(floor(p - reach), vec2f(0.0), top);
     let b = clamp(floor(p + reach), vec2f(0.0), top);
     let gathers = vec2u(floor((b - a) * 0.5)) + 1u;
-    let sway = abs(slope.x) + abs(slope.y) + select(0.0, 1e-6, any(slope != vec2f(0.0)));
-    let own_parts = PART_IDS && receiver_part != 0u;
+    let sway = plane_sway(slope) + select(0.0, 1e-6, any(slope != vec2f(0.0)));
     var lo = 3.4e38;
     var hi = -3.4e38;
     for (var j = 0u; j < gathers.y; j++) {
@@ -363,7 +373,7 @@ fn footprint_class(uv: vec2f, face: u32, z: f32, slope: vec2f, reach: f32) -> f3
             // each texel's centre.
             let c = z + dot(slope, t + 0.5 - p);
             var margin = d - (c + vec4f(slope.y, slope.x + slope.y, slope.x, 0.0));
-            if own_parts {
+            if has_own_part() {
                 let parts = textureGather(0, part_map, part_sampler, corner, i32(face));
                 margin = select(margin, vec4f(3.4e38), parts == vec4u(receiver_part));
             }
@@ -405,7 +415,7 @@ fn range_union(a: vec2f, b: vec2f) -> vec2f {
 // receiver's own part is lit, a cell of several parts an edge. Rounding: a plane that is
 // not flat is widened by 1e-6 (depths lie in [0, 1]); a flat one stays exact.
 fn cell_margins(e: EdgeQuery, k: vec2f, at: vec2f, extent: vec2f) -> vec2f {
-    if PART_IDS && receiver_part != 0u {
+    if has_own_part() {
         // A cell of the receiver's own part is lit whatever it stores; one
         // of several parts may hold some of it: an edge.
         let part = textureLoad(edge_parts, vec2i(k), i32(e.face), e.level).r;
@@ -419,7 +429,7 @@ fn cell_margins(e: EdgeQuery, k: vec2f, at: vec2f, extent: vec2f) -> vec2f {
     let cell = textureLoad(edge_bounds, vec2i(k), i32(e.face), e.level);
     let cell_slope = cell.zw / e.cover;
     let offset = dot(cell_slope, at - (k + 0.5) * e.cover) - dot(e.slope, at - e.p) - e.z;
-    let sway = abs(e.slope.x) + abs(e.slope.y);
+    let sway = plane_sway(e.slope);
     let spread = dot(abs(cell_slope - e.slope), extent) + sway
         + select(0.0, 1e-6, any(cell.zw != vec2f(0.0)) || sway > 0.0);
     return vec2f(cell.x + offset - spread, cell.y + offset + spread);
