@@ -14,6 +14,7 @@ mod caster_cull;
 pub mod config;
 mod debug;
 mod depth_bounds;
+mod depth_pass;
 mod edge_mask;
 mod maps;
 pub mod paging_params;
@@ -45,12 +46,11 @@ use anyhow::Result;
 use bias_cap::bias_clamp;
 use caster_cull::CasterCull;
 use depth_bounds::{DepthReduction, SeenBounds};
+use depth_pass::{Casters, DepthDraw, DepthPassKey};
 use edge_mask::{BoundsChain, ChainInput, ChainSource};
 use glam::{Mat4, Vec2};
 use maps::Maps;
-use pipelines::{
-    Casters, DepthDraw, DepthPassKey, LookupKey, MapProjection, MapShape, ShadowMapShared,
-};
+use pipelines::{LookupKey, MapProjection, MapShape, ShadowMapShared};
 use std::sync::Arc;
 use uniform::{FrameTerms, SLOTS, STRIDE, ShadowMapUniform, slot_data, slot_offset};
 
