@@ -1,0 +1,283 @@
+//! A resolved scene written as glTF 2.0: world-space vertices, Phong
+//! parameters and shadow flags in `extras.shadowlab`, KHR_lights_punctual
+//! lights and the camera.
+
+use super::extras::{PhongExtras, ShadowFlags};
+use crate::scene::{Aabb, LightType, Scene};
+use anyhow::{Context, Result, anyhow};
+use glam::{Quat, Vec3};
+use serde_json::{Value, json};
+use std::path::Path;
+
+/// Rotation taking −Z to `dir` (glTF lights and cameras look down −Z).
+fn rotation_towards(dir: Vec3, up: Vec3) -> Quat {
+    let view = glam::camera::rh::view::look_to_mat4(Vec3::ZERO, dir, up);
+    let (_, r, _) = view.inverse().to_scale_rotation_translation();
+    r.normalize()
+}
+
+fn safe_up(dir: Vec3) -> Vec3 {
+    if dir.normalize().dot(Vec3::Y).abs() > 0.99 {
+        Vec3::Z
+    } else {
+        Vec3::Y
+    }
+}
+
+/// Binary buffer under construction; every view is 4-byte aligned.
+struct BinWriter {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl BinWriter {
+    fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        let mut v = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
+        if let Some(t) = target {
+            v["target"] = json!(t);
+        }
+        self.bin.extend_from_slice(bytes);
+        self.views.push(v);
+        self.views.len() - 1
+    }
+    fn accessor(
+        &mut self,
+        bytes: &[u8],
+        count: usize,
+        ty: &str,
+        comp: u32,
+        target: u32,
+        minmax: Option<(Vec3, Vec3)>,
+    ) -> usize {
+        let view = self.view(bytes, Some(target));
+        let mut a = json!({"bufferView": view, "componentType": comp, "count": count, "type": ty});
+        if let Some((mn, mx)) = minmax {
+            a["min"] = json!(mn.to_array());
+            a["max"] = json!(mx.to_array());
+        }
+        self.accessors.push(a);
+        self.accessors.len() - 1
+    }
+}
+
+/// Writes the scene as `.gltf` JSON plus a `.bin` buffer beside it: vertices
+/// in world space (identity node transforms), Phong parameters and shadow
+/// flags in `extras.shadowlab`, lights via KHR_lights_punctual and the
+/// camera as a perspective camera node.
+pub fn export(scene: &Scene, out: &Path) -> Result<()> {
+    let bin_name = format!(
+        "{}.bin",
+        out.file_stem()
+            .and_then(|s| s.to_str())
+            .ok_or_else(|| anyhow!("bad output name"))?
+    );
+    let mut w = BinWriter {
+        bin: vec![],
+        views: vec![],
+        accessors: vec![],
+    };
+    const FLOAT: u32 = 5126;
+    const UINT: u32 = 5125;
+    const ARRAY: u32 = 34962;
+    const ELEMENTS: u32 = 34963;
+    let mut images = vec![];
+    let mut textures = vec![];
+    for t in &scene.textures {
+        let mut png = std::io::Cursor::new(Vec::new());
+        t.image.write_to(&mut png, image::ImageFormat::Png)?;
+        let view = w.view(png.get_ref(), None);
+        images.push(json!({"bufferView": view, "mimeType": "image/png", "name": t.name}));
+        textures.push(json!({"source": images.len() - 1, "sampler": 0}));
+    }
+    let materials: Vec<Value> = scene
+        .materials
+        .iter()
+        .map(|m| {
+            let r = (2.0 / (m.shininess + 2.0)).sqrt();
+            let mut pbr = json!({
+                "baseColorFactor": [m.kd.x.clamp(0.0, 1.0), m.kd.y.clamp(0.0, 1.0), m.kd.z.clamp(0.0, 1.0), m.alpha.clamp(0.0, 1.0)],
+                "metallicFactor": 0.0,
+                "roughnessFactor": r.clamp(0.0, 1.0),
+            });
+            if let Some(t) = m.diffuse_texture {
+                pbr["baseColorTexture"] = json!({"index": t});
+            }
+            let mut v = json!({
+                "name": m.name,
+                "pbrMetallicRoughness": pbr,
+                "extras": {"shadowlab": PhongExtras {
+                    ka: m.ka.into(), kd: m.kd.into(), ks: m.ks.into(),
+                    shininess: m.shininess, uv_scale: m.uv_scale, procedural: m.procedural,
+                }},
+            });
+            if let Some(t) = m.normal_map {
+                v["normalTexture"] = json!({"index": t});
+            }
+            v
+        })
+        .collect();
+    let mut meshes = vec![];
+    let mut nodes = vec![];
+    for o in &scene.objects {
+        let m = &scene.meshes[o.mesh];
+        let nm = o.transform.inverse().transpose();
+        let pos: Vec<Vec3> = m
+            .positions
+            .iter()
+            .map(|&p| o.transform.transform_point3(p))
+            .collect();
+        let nrm: Vec<Vec3> = m
+            .normals
+            .iter()
+            .map(|&n| nm.transform_vector3(n).try_normalize().unwrap_or(Vec3::Y))
+            .collect();
+        let b = Aabb::from_points(pos.iter().copied());
+        let pa = w.accessor(
+            bytemuck::cast_slice(&pos),
+            pos.len(),
+            "VEC3",
+            FLOAT,
+            ARRAY,
+            Some((b.min, b.max)),
+        );
+        let na = w.accessor(
+            bytemuck::cast_slice(&nrm),
+            nrm.len(),
+            "VEC3",
+            FLOAT,
+            ARRAY,
+            None,
+        );
+        let ta = w.accessor(
+            bytemuck::cast_slice(&m.uvs),
+            m.uvs.len(),
+            "VEC2",
+            FLOAT,
+            ARRAY,
+            None,
+        );
+        let ia = w.accessor(
+            bytemuck::cast_slice(&m.indices),
+            m.indices.len(),
+            "SCALAR",
+            UINT,
+            ELEMENTS,
+            None,
+        );
+        let mut attributes = json!({"POSITION": pa, "NORMAL": na, "TEXCOORD_0": ta});
+        // Normal-mapped materials get their tangent space (xyz unit, w ±1).
+        if scene.materials[o.material].normal_map.is_some() && m.tangents.len() == m.positions.len()
+        {
+            let tangents: Vec<glam::Vec4> = m
+                .tangents
+                .iter()
+                .map(|t| {
+                    let v = o
+                        .transform
+                        .transform_vector3(t.truncate())
+                        .try_normalize()
+                        .unwrap_or(Vec3::X);
+                    v.extend(if t.w < 0.0 { -1.0 } else { 1.0 })
+                })
+                .collect();
+            attributes["TANGENT"] = json!(w.accessor(
+                bytemuck::cast_slice(&tangents),
+                tangents.len(),
+                "VEC4",
+                FLOAT,
+                ARRAY,
+                None
+            ));
+        }
+        meshes.push(json!({
+            "name": m.name,
+            "primitives": [{
+                "attributes": attributes,
+                "indices": ia,
+                "material": o.material,
+                "mode": 4,
+            }],
+        }));
+        nodes.push(json!({
+            "name": o.name,
+            "mesh": meshes.len() - 1,
+            "extras": {"shadowlab": ShadowFlags {
+                casts_shadow: Some(o.casts_shadow),
+                receives_shadow: Some(o.receives_shadow),
+                shadow_plane: Some(o.shadow_plane),
+            }},
+        }));
+    }
+    let mut lights = vec![];
+    for (i, l) in scene.lights.iter().enumerate() {
+        let mut lj = json!({
+            "name": format!("light{i}"),
+            "type": match l.kind { LightType::Point => "point", LightType::Spot => "spot", LightType::Directional => "directional" },
+            "color": l.color.to_array(),
+            "intensity": l.intensity,
+        });
+        if l.range > 0.0 && l.kind != LightType::Directional {
+            lj["range"] = json!(l.range);
+        }
+        if l.kind == LightType::Spot {
+            lj["spot"] = json!({
+                "innerConeAngle": l.inner_cone_deg.to_radians(),
+                "outerConeAngle": l.outer_cone_deg.to_radians(),
+            });
+        }
+        if let Some(a) = l.area {
+            lj["extras"] = json!({"shadowlab": a});
+        }
+        lights.push(lj);
+        let rot = rotation_towards(l.direction, safe_up(l.direction));
+        nodes.push(json!({
+            "name": format!("Light{i}"),
+            "translation": l.position.to_array(),
+            "rotation": rot.to_array(),
+            "extensions": {"KHR_lights_punctual": {"light": i}},
+        }));
+    }
+    let c = &scene.camera;
+    let (_, crot, _) = c.view().inverse().to_scale_rotation_translation();
+    nodes.push(json!({
+        "name": "Camera",
+        "translation": c.eye.to_array(),
+        "rotation": crot.normalize().to_array(),
+        "camera": 0,
+    }));
+    let mut doc = json!({
+        "asset": {"version": "2.0", "generator": concat!("shadowlab ", env!("CARGO_PKG_VERSION"))},
+        "scene": 0,
+        "scenes": [{"name": scene.name, "nodes": (0..nodes.len()).collect::<Vec<_>>()}],
+        "nodes": nodes,
+        "meshes": meshes,
+        "materials": materials,
+        "cameras": [{"type": "perspective", "perspective": {
+            "yfov": c.fov_y_deg.to_radians(), "znear": c.near, "zfar": c.far}}],
+        "accessors": w.accessors,
+        "bufferViews": w.views,
+        "buffers": [{"uri": bin_name, "byteLength": w.bin.len()}],
+    });
+    if !images.is_empty() {
+        doc["images"] = json!(images);
+        doc["textures"] = json!(textures);
+        doc["samplers"] =
+            json!([{"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}]);
+    }
+    if !lights.is_empty() {
+        doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+        doc["extensions"] = json!({"KHR_lights_punctual": {"lights": lights}});
+    }
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
+    std::fs::write(out, serde_json::to_string_pretty(&doc)?)
+        .with_context(|| format!("writing {}", out.display()))?;
+    let bin_path = out.with_file_name(&bin_name);
+    std::fs::write(&bin_path, &w.bin).with_context(|| format!("writing {}", bin_path.display()))?;
+    Ok(())
+}

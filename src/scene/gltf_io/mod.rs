@@ -1,0 +1,246 @@
+//! glTF 2.0 import (meshes, base colour, textures, KHR_lights_punctual,
+//! cameras, `extras.shadowlab` flags) and export of a resolved scene in
+//! world space (`export`).
+
+mod checks;
+mod export;
+mod extras;
+
+pub use export::export;
+
+use super::{Camera, Light, Material, Mesh, Object, Scene, Texture, frame_scene_defaults};
+use anyhow::{Context, Result, anyhow, bail};
+use checks::{
+    check_accessors, check_attribute_indices, check_external_files, check_glb_layout,
+    check_node_forest, check_primitive_accessors, without_panics,
+};
+use extras::{PhongExtras, ShadowFlags, extras_field};
+use glam::{Mat4, Vec2, Vec3};
+use std::path::Path;
+
+fn to_rgba(img: &gltf::image::Data) -> Result<image::RgbaImage> {
+    use gltf::image::Format::*;
+    let px = &img.pixels;
+    let rgba: Vec<u8> = match img.format {
+        R8G8B8A8 => px.clone(),
+        R8G8B8 => px
+            .chunks_exact(3)
+            .flat_map(|c| [c[0], c[1], c[2], 255])
+            .collect(),
+        R8G8 => px
+            .chunks_exact(2)
+            .flat_map(|c| [c[0], c[0], c[0], c[1]])
+            .collect(),
+        R8 => px.iter().flat_map(|&c| [c, c, c, 255]).collect(),
+        f => bail!("unsupported texture format {f:?}"),
+    };
+    image::RgbaImage::from_raw(img.width, img.height, rgba).ok_or_else(|| anyhow!("bad image size"))
+}
+
+/// Loads a `.gltf` or `.glb` file. Node transforms are baked into each
+/// object's transform; lights come from KHR_lights_punctual, the camera from
+/// the first camera node.
+pub fn load_scene(path: &Path) -> Result<Scene> {
+    let file = path.display().to_string();
+    without_panics(&file, || load_checked(&file, path))
+}
+
+fn load_checked(file: &str, path: &Path) -> Result<Scene> {
+    let file = file.to_string();
+    let bytes = std::fs::read(path).with_context(|| format!("reading {file}"))?;
+    if bytes.starts_with(b"glTF") {
+        check_glb_layout(&file, &bytes)?;
+    }
+    // One parse without the importer's validation serves both checks that
+    // must come before it.
+    let root = gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| anyhow!("{file}: {e}"))?
+        .document
+        .into_json();
+    check_attribute_indices(&file, &root)?;
+    check_external_files(&file, path.parent().unwrap_or(Path::new(".")), &root)?;
+    let (doc, buffers, images) = gltf::import(path).map_err(|e| anyhow!("{file}: {e}"))?;
+    check_node_forest(&file, &doc)?;
+    check_accessors(&file, &doc, &buffers)?;
+    let mut scene = Scene::new(path.file_stem().and_then(|s| s.to_str()).unwrap_or("gltf"));
+    scene.source = file.clone();
+    let mut tex_map = std::collections::HashMap::new();
+    let mut texture = |scene: &mut Scene, t: gltf::Texture, srgb: bool| -> Option<usize> {
+        let idx = t.source().index();
+        if let Some(&i) = tex_map.get(&(idx, srgb)) {
+            return Some(i);
+        }
+        match images.get(idx).map(to_rgba) {
+            Some(Ok(image)) => {
+                scene.textures.push(Texture {
+                    name: t.source().name().unwrap_or("texture").into(),
+                    image,
+                    srgb,
+                    source: None,
+                });
+                tex_map.insert((idx, srgb), scene.textures.len() - 1);
+                Some(scene.textures.len() - 1)
+            }
+            _ => {
+                log::warn!("{file}: image {idx} unusable; using the flat material colour");
+                None
+            }
+        }
+    };
+    for m in doc.materials() {
+        let pbr = m.pbr_metallic_roughness();
+        let bc = Vec3::from_slice(&pbr.base_color_factor()[..3]);
+        let mut mat = match extras_field::<PhongExtras>(m.extras(), "material")? {
+            Some(p) => Material {
+                ka: p.ka.into(),
+                kd: p.kd.into(),
+                ks: p.ks.into(),
+                shininess: p.shininess,
+                uv_scale: p.uv_scale,
+                procedural: p.procedural,
+                ..Material::default()
+            },
+            None => {
+                // Phong from metallic-roughness: n = 2/r² − 2.
+                let r = pbr.roughness_factor().max(0.05);
+                Material {
+                    ks: Vec3::splat(0.04 + 0.5 * pbr.metallic_factor()),
+                    shininess: (2.0 / (r * r) - 2.0).clamp(1.0, 1000.0),
+                    ..Material::color("", bc)
+                }
+            }
+        };
+        mat.name = m.name().unwrap_or("material").into();
+        mat.alpha = pbr.base_color_factor()[3];
+        mat.diffuse_texture = pbr
+            .base_color_texture()
+            .and_then(|t| texture(&mut scene, t.texture(), true));
+        mat.normal_map = m
+            .normal_texture()
+            .and_then(|t| texture(&mut scene, t.texture(), false));
+        scene.add_material(mat);
+    }
+    let default_mat = scene.add_material(Material::default());
+    let mut mesh_ids = std::collections::HashMap::new();
+    let mut camera = None;
+    let gscene = doc
+        .default_scene()
+        .or_else(|| doc.scenes().next())
+        .ok_or_else(|| anyhow!("{file}: no scene"))?;
+    // Breadth-first in document order, so objects keep the node order.
+    let mut queue: std::collections::VecDeque<(gltf::Node, Mat4)> =
+        gscene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    while let Some((node, parent)) = queue.pop_front() {
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        let name = node.name().unwrap_or("node").to_string();
+        for c in node.children() {
+            queue.push_back((c, world));
+        }
+        let (_, rot, pos) = world.to_scale_rotation_translation();
+        let forward = (rot * Vec3::NEG_Z).normalize();
+        if let Some(l) = node.light() {
+            use gltf::khr_lights_punctual::Kind;
+            let mut light = match l.kind() {
+                Kind::Directional => Light::directional(forward, l.intensity()),
+                Kind::Point => Light::point(pos, l.intensity()),
+                Kind::Spot {
+                    inner_cone_angle,
+                    outer_cone_angle,
+                } => Light::spot(
+                    pos,
+                    pos + forward,
+                    l.intensity(),
+                    inner_cone_angle.to_degrees(),
+                    outer_cone_angle.to_degrees(),
+                ),
+            };
+            light.color = l.color().into();
+            light.range = l.range().unwrap_or(0.0);
+            if let Some(area) = extras_field::<super::LightArea>(l.extras(), "light")? {
+                light.area = Some(area);
+            }
+            scene.lights.push(light);
+        }
+        if let (Some(c), None) = (node.camera(), camera)
+            && let gltf::camera::Projection::Perspective(p) = c.projection()
+        {
+            camera = Some(Camera {
+                eye: pos,
+                target: pos + forward,
+                up: rot * Vec3::Y,
+                fov_y_deg: p.yfov().to_degrees(),
+                near: p.znear(),
+                far: p.zfar().unwrap_or(p.znear() * 1e4),
+            });
+        }
+        let Some(gmesh) = node.mesh() else { continue };
+        let flags: ShadowFlags =
+            extras_field(node.extras(), &format!("{file}: node '{name}'"))?.unwrap_or_default();
+        for (pi, prim) in gmesh.primitives().enumerate() {
+            if prim.mode() != gltf::mesh::Mode::Triangles {
+                log::warn!(
+                    "{file}: mesh '{}' primitive {pi} is not triangles; skipped",
+                    gmesh.name().unwrap_or("")
+                );
+                continue;
+            }
+            let key = (gmesh.index(), pi);
+            let mesh_id = match mesh_ids.get(&key) {
+                Some(&id) => id,
+                None => {
+                    check_primitive_accessors(&file, gmesh.name().unwrap_or(&name), pi, &prim)?;
+                    let reader = prim.reader(|b| Some(&buffers[b.index()]));
+                    let positions: Vec<Vec3> = reader
+                        .read_positions()
+                        .ok_or_else(|| {
+                            anyhow!(
+                                "{file}: mesh '{}' has no POSITION",
+                                gmesh.name().unwrap_or("")
+                            )
+                        })?
+                        .map(Vec3::from)
+                        .collect();
+                    let indices: Vec<u32> = match reader.read_indices() {
+                        Some(i) => i.into_u32().collect(),
+                        None => (0..positions.len() as u32).collect(),
+                    };
+                    let mesh = Mesh {
+                        name: gmesh.name().unwrap_or(&name).to_string(),
+                        normals: reader
+                            .read_normals()
+                            .map(|n| n.map(Vec3::from).collect())
+                            .unwrap_or_default(),
+                        uvs: reader
+                            .read_tex_coords(0)
+                            .map(|t| t.into_f32().map(Vec2::from).collect())
+                            .unwrap_or_default(),
+                        positions,
+                        tangents: vec![],
+                        indices,
+                    };
+                    let id = scene.add_mesh(mesh);
+                    mesh_ids.insert(key, id);
+                    id
+                }
+            };
+            let mat = prim.material().index().unwrap_or(default_mat);
+            let mut obj = Object::from_name(&name, mesh_id, mat, world);
+            obj.casts_shadow = flags.casts_shadow.unwrap_or(obj.casts_shadow);
+            obj.receives_shadow = flags.receives_shadow.unwrap_or(obj.receives_shadow);
+            obj.shadow_plane = flags.shadow_plane.unwrap_or(obj.shadow_plane);
+            scene.objects.push(obj);
+        }
+    }
+    if scene.objects.is_empty() {
+        bail!("{file}: no triangle meshes");
+    }
+    let had_lights = !scene.lights.is_empty();
+    frame_scene_defaults(&mut scene);
+    if let Some(c) = camera {
+        scene.camera = c;
+    }
+    if !had_lights {
+        log::warn!("{file}: no KHR_lights_punctual light; placed a default point light");
+    }
+    Ok(scene)
+}
