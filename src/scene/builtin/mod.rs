@@ -2,10 +2,15 @@
 //! scene has the light presets `point`, `spot` and `sun` (directional) so
 //! that each technique can be measured under all three light types.
 
+#[cfg(test)]
+mod preset_clearance;
+mod textures;
+
 use super::shapes::{self, cuboid, cuboid_subdivided, lathe, plane, sphere, torus};
-use super::{Camera, Light, LightArea, Material, Mesh, Procedural, ProceduralKind, Scene, Texture};
+use super::{Camera, Light, LightArea, Material, Mesh, Procedural, ProceduralKind, Scene};
 use anyhow::Result;
 use glam::{Mat4, Quat, Vec2, Vec3};
+use textures::{add_textures, bricks, tiles};
 
 pub const NAMES: &[&str] = &[
     "room",
@@ -93,102 +98,6 @@ fn standard_lights(
         ),
         ("sun".into(), vec![Light::directional(sun_dir, intensity)]),
     ]
-}
-
-/// A brick pattern (colour) and its height field, `size × size`.
-fn bricks(size: u32) -> (image::RgbaImage, image::GrayImage) {
-    let (bw, bh, mortar) = (size / 4, size / 8, (size / 64).max(1));
-    let colour = image::RgbaImage::from_fn(size, size, |x, y| {
-        let row = y / bh;
-        let xs = x + if row % 2 == 1 { bw / 2 } else { 0 };
-        let (bx, by) = (xs % bw, y % bh);
-        if bx < mortar || by < mortar {
-            image::Rgba([200, 195, 185, 255])
-        } else {
-            let k = ((xs / bw * 37 + row * 17) % 5) as u8 * 8;
-            image::Rgba([150 + k, 70 + k / 2, 50, 255])
-        }
-    });
-    let height = image::GrayImage::from_fn(size, size, |x, y| {
-        let row = y / bh;
-        let xs = x + if row % 2 == 1 { bw / 2 } else { 0 };
-        image::Luma([if xs % bw < mortar || y % bh < mortar {
-            0
-        } else {
-            255
-        }])
-    });
-    (colour, height)
-}
-
-/// Square tiles with bevelled grout (colour and height).
-fn tiles(size: u32) -> (image::RgbaImage, image::GrayImage) {
-    let tile = size / 4;
-    let grout = (size / 48).max(1);
-    let h = |x: u32, y: u32| -> u8 {
-        let (tx, ty) = (x % tile, y % tile);
-        let d = tx.min(ty).min(tile - 1 - tx).min(tile - 1 - ty);
-        if d < grout {
-            0
-        } else {
-            (((d - grout) * 64).min(255)) as u8
-        }
-    };
-    let colour = image::RgbaImage::from_fn(size, size, |x, y| {
-        if h(x, y) == 0 {
-            image::Rgba([90, 90, 95, 255])
-        } else if (x / tile + y / tile).is_multiple_of(2) {
-            image::Rgba([205, 200, 185, 255])
-        } else {
-            image::Rgba([120, 140, 165, 255])
-        }
-    });
-    (
-        colour,
-        image::GrayImage::from_fn(size, size, |x, y| image::Luma([h(x, y)])),
-    )
-}
-
-/// Tangent-space normal map from a height map by central differences
-/// (bump mapping, SEEDS §1): `n = normalize(−s·∂h/∂x, −s·∂h/∂y, 1)`.
-pub fn normal_map_from_height(h: &image::GrayImage, strength: f32) -> image::RgbaImage {
-    let (w, ht) = h.dimensions();
-    let at = |x: i64, y: i64| {
-        h.get_pixel(
-            x.rem_euclid(w as i64) as u32,
-            y.rem_euclid(ht as i64) as u32,
-        )[0] as f32
-            / 255.0
-    };
-    image::RgbaImage::from_fn(w, ht, |x, y| {
-        let (x, y) = (x as i64, y as i64);
-        let dx = (at(x + 1, y) - at(x - 1, y)) * 0.5;
-        // Image rows go down while v goes up in the tangent frame.
-        let dy = (at(x, y - 1) - at(x, y + 1)) * 0.5;
-        let n = Vec3::new(-strength * dx, -strength * dy, 1.0).normalize();
-        let e = |c: f32| ((c * 0.5 + 0.5) * 255.0).round() as u8;
-        image::Rgba([e(n.x), e(n.y), e(n.z), 255])
-    })
-}
-
-fn add_textures(
-    scene: &mut Scene,
-    name: &str,
-    (colour, height): (image::RgbaImage, image::GrayImage),
-) -> (usize, usize) {
-    scene.textures.push(Texture {
-        name: format!("{name}_color"),
-        image: colour,
-        srgb: true,
-        source: None,
-    });
-    scene.textures.push(Texture {
-        name: format!("{name}_normal"),
-        image: normal_map_from_height(&height, 6.0),
-        srgb: false,
-        source: None,
-    });
-    (scene.textures.len() - 2, scene.textures.len() - 1)
 }
 
 /// The room of seed 000: a floor, three walls that cast no shadow
@@ -335,7 +244,7 @@ pub fn bunny() -> Result<Scene> {
     s.add_object("Floor", floor, floor_mat, Mat4::IDENTITY);
     let bunny = s.add_mesh(load_asset_obj(
         "bunny",
-        include_str!("../../assets/bunny.obj"),
+        include_str!("../../../assets/bunny.obj"),
     )?);
     let fur = s.add_material(Material {
         shininess: 24.0,
@@ -468,7 +377,7 @@ pub fn teapot() -> Result<Scene> {
     let fm = checker_floor(&mut s);
     let floor = s.add_mesh(plane(10.0, 10.0, 10));
     s.add_object("Floor", floor, fm, Mat4::IDENTITY);
-    let pot = load_asset_obj("teapot", include_str!("../../assets/teapot.obj"))?;
+    let pot = load_asset_obj("teapot", include_str!("../../../assets/teapot.obj"))?;
     let min_y = pot.bounds().min.y;
     let pot = s.add_mesh(pot);
     let porcelain = s.add_material(Material {
@@ -660,110 +569,6 @@ mod tests {
         assert!(by_name("nope").unwrap().is_none());
     }
 
-    /// Closest distance from `p` to triangle `t` (Ericson, Real-Time
-    /// Collision Detection §5.1.5).
-    fn point_triangle_distance(p: Vec3, [a, b, c]: [Vec3; 3]) -> f32 {
-        let (ab, ac, ap) = (b - a, c - a, p - a);
-        let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-        if d1 <= 0.0 && d2 <= 0.0 {
-            return p.distance(a);
-        }
-        let bp = p - b;
-        let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-        if d3 >= 0.0 && d4 <= d3 {
-            return p.distance(b);
-        }
-        let vc = d1 * d4 - d3 * d2;
-        if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-            return p.distance(a + ab * (d1 / (d1 - d3)));
-        }
-        let cp = p - c;
-        let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-        if d6 >= 0.0 && d5 <= d6 {
-            return p.distance(c);
-        }
-        let vb = d5 * d2 - d1 * d6;
-        if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-            return p.distance(a + ac * (d2 / (d2 - d6)));
-        }
-        let va = d3 * d6 - d5 * d4;
-        if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
-            return p.distance(b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
-        }
-        let denom = 1.0 / (va + vb + vc);
-        p.distance(a + ab * (vb * denom) + ac * (vc * denom))
-    }
-
-    /// Whether the ray `o + t·d`, t > 0, crosses triangle `t` (Möller–Trumbore).
-    fn ray_crosses(o: Vec3, d: Vec3, [a, b, c]: [Vec3; 3]) -> bool {
-        let (e1, e2) = (b - a, c - a);
-        let p = d.cross(e2);
-        let det = e1.dot(p);
-        if det.abs() < 1e-12 {
-            return false;
-        }
-        let s = o - a;
-        let u = s.dot(p) / det;
-        let q = s.cross(e1);
-        let v = d.dot(q) / det;
-        u >= 0.0 && v >= 0.0 && u + v <= 1.0 && e2.dot(q) / det > 0.0
-    }
-
-    #[test]
-    fn point_triangle_distance_and_crossings_match_hand_values() {
-        let t = [Vec3::ZERO, Vec3::X, Vec3::Y];
-        assert!((point_triangle_distance(Vec3::new(0.2, 0.2, 3.0), t) - 3.0).abs() < 1e-6);
-        assert!(
-            (point_triangle_distance(Vec3::new(-1.0, -1.0, 0.0), t) - 2f32.sqrt()).abs() < 1e-6
-        );
-        assert!(
-            (point_triangle_distance(Vec3::new(1.0, 1.0, 0.0), t) - 0.5f32.sqrt()).abs() < 1e-6
-        );
-        assert!(ray_crosses(Vec3::new(0.2, 0.2, 1.0), Vec3::NEG_Z, t));
-        assert!(!ray_crosses(Vec3::new(0.2, 0.2, 1.0), Vec3::Z, t));
-        assert!(!ray_crosses(Vec3::new(0.8, 0.8, 1.0), Vec3::NEG_Z, t));
-    }
-
-    /// No camera preset stands inside a mesh (an odd number of surfaces
-    /// crossed along all six axis directions) or nearer to a surface than
-    /// its near plane (which would clip into view what stands beside it).
-    #[test]
-    fn no_camera_preset_is_inside_or_too_near_a_mesh() {
-        let mut problems = vec![];
-        for name in NAMES {
-            let s = by_name(name).unwrap().unwrap();
-            let tris = s.world_triangles(|_| true);
-            for (preset, cam) in &s.camera_presets {
-                let nearest = tris
-                    .iter()
-                    .map(|t| point_triangle_distance(cam.eye, *t))
-                    .fold(f32::INFINITY, f32::min);
-                let dirs = [
-                    Vec3::X,
-                    Vec3::NEG_X,
-                    Vec3::Y,
-                    Vec3::NEG_Y,
-                    Vec3::Z,
-                    Vec3::NEG_Z,
-                ];
-                let inside = dirs.iter().all(|d| {
-                    tris.iter()
-                        .filter(|t| ray_crosses(cam.eye, *d, **t))
-                        .count()
-                        % 2
-                        == 1
-                });
-                if inside || nearest < cam.near {
-                    problems.push(format!(
-                        "{name}/{preset}: eye {} inside: {inside}, nearest surface {nearest:.3} (near {})",
-                        cam.eye, cam.near
-                    ));
-                }
-            }
-        }
-        assert!(problems.is_empty(), "{problems:#?}");
-    }
-
     #[test]
     fn city_has_over_a_million_triangles() {
         let s = by_name("city").unwrap().unwrap();
@@ -783,15 +588,5 @@ mod tests {
         assert!(sp.shadow_plane && !sp.casts_shadow);
         let chair = s.objects.iter().find(|o| o.name == "Chair").unwrap();
         assert!(chair.casts_shadow);
-    }
-
-    #[test]
-    fn normal_map_of_a_ramp_tilts_against_the_slope() {
-        let h = image::GrayImage::from_fn(8, 8, |x, _| image::Luma([(x * 30) as u8]));
-        let n = normal_map_from_height(&h, 4.0);
-        let p = n.get_pixel(4, 4);
-        // Height rises along +x, so the normal leans towards −x.
-        assert!(p[0] < 128 && p[2] > 128, "{p:?}");
-        assert!((p[1] as i32 - 128).abs() <= 1);
     }
 }
