@@ -109,7 +109,7 @@ fn the_report_covers_every_preset_shows_the_csv_and_resumes() {
     assert!(total > 1.0, "none misses the teapot's shadow: {total}");
     assert!(md.contains(&format!(
         "{} % mismatch on `teapot/default/point`",
-        report::summary::pct(total)
+        report::criteria::pct(total)
     )));
 
     // A second run measures nothing.

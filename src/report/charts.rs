@@ -3,7 +3,8 @@
 //! on log axes), the Pareto front joined and labelled.
 
 use super::cells::Cell;
-use super::summary::{Report, competes};
+use super::pareto::competes;
+use super::summary::Report;
 use anyhow::{Result, anyhow};
 use plotters::prelude::*;
 

@@ -5,7 +5,9 @@
 
 use super::cells::{COLUMNS, Cell, SOURCE_VERSION, csv_row};
 use super::charts;
-use super::summary::{Claim, FAILED_PCT, Report, competes};
+use super::criteria::{Claim, FAILED_PCT};
+use super::pareto::competes;
+use super::summary::Report;
 use anyhow::Result;
 use base64::Engine;
 use std::fmt::Write as _;

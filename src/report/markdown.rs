@@ -2,7 +2,8 @@
 //! view's Pareto front (its chart is `charts/view-N.svg`) and every cell.
 
 use super::cells::{COLUMNS, SOURCE_VERSION, csv_row};
-use super::summary::{Claim, Report};
+use super::criteria::Claim;
+use super::summary::Report;
 use std::fmt::Write as _;
 
 fn cell_text(s: &str) -> String {

@@ -7,9 +7,11 @@
 
 pub mod cells;
 mod charts;
+pub mod criteria;
 mod html;
 mod markdown;
 pub mod matrix;
+pub mod pareto;
 pub mod summary;
 
 use crate::gpu::GpuContext;

@@ -1,48 +1,18 @@
 //! The documents' summary table (SEEDS §7), filled from measurements: per
 //! technique preset its quality, cost, advantages, disadvantages, use,
-//! implementation difficulty, extensibility and ✔/✗ marks, every claim a
-//! measured figure with the cell it comes from; each view's Pareto front
-//! of error against cost; and the computed answer to "is there one
-//! universal technique?".
+//! implementation difficulty, extensibility and ✔/✗ marks
+//! ([`super::criteria`]), every claim a measured figure with the cell it
+//! comes from; each view's Pareto front of error against cost
+//! ([`super::pareto`]); and the computed answer to "is there one universal
+//! technique?".
 
 use super::cells::Cell;
+use super::criteria::{CHEAP_RATIO, Claim, Mark, below_failure, extensibility, marks, pct, total};
 use super::matrix::{Matrix, View};
-use crate::technique::{Capabilities, FAMILIES};
+use super::pareto::{competes, pareto_front};
+use crate::technique::FAMILIES;
 
 include!(concat!(env!("OUT_DIR"), "/family_lines.rs"));
-
-/// A measured statement and the cell that shows it (its anchor).
-#[derive(Clone, Debug)]
-pub struct Claim {
-    pub text: String,
-    pub evidence: Option<String>,
-}
-
-impl Claim {
-    fn of(text: String, cell: &Cell) -> Claim {
-        Claim {
-            text,
-            evidence: Some(cell.anchor()),
-        }
-    }
-
-    fn plain(text: String) -> Claim {
-        Claim {
-            text,
-            evidence: None,
-        }
-    }
-}
-
-/// One ✔/✗ criterion of the summary.
-#[derive(Clone, Debug)]
-pub struct Mark {
-    pub criterion: &'static str,
-    /// None where the matrix has no view that tests it.
-    pub ok: Option<bool>,
-    /// The worst figure over the views that test it.
-    pub claim: Option<Claim>,
-}
 
 /// One row of the summary table: a technique preset.
 #[derive(Clone, Debug)]
@@ -60,151 +30,6 @@ pub struct SummaryRow {
     pub marks: Vec<Mark>,
 }
 
-/// What the criteria test: which views, and what passes.
-struct Criterion {
-    name: &'static str,
-    declared: Option<fn(&Capabilities) -> bool>,
-    applies: fn(&Cell) -> bool,
-    passes: fn(&Cell) -> bool,
-    figure: fn(&Cell) -> f64,
-    unit: Unit,
-}
-
-/// How a criterion's figure is written.
-#[derive(Clone, Copy)]
-enum Unit {
-    /// A percentage, followed by what it is a percentage of.
-    Percent(&'static str),
-    /// A multiple of `none`'s frame time.
-    TimesNone,
-    /// A plain value to 4 decimals, followed by its name.
-    Value(&'static str),
-}
-
-impl Unit {
-    fn format(self, v: f64) -> String {
-        match self {
-            Unit::Percent(of) => format!("{} % {of}", pct(v)),
-            Unit::TimesNone => format!("×{v:.2}"),
-            Unit::Value(name) => format!("{v:.4} {name}"),
-        }
-    }
-}
-
-/// Mismatch (% of considered pixels) above which a view counts as failed.
-pub const FAILED_PCT: f64 = 1.0;
-/// Interior mismatch within which hard shadows count as exact.
-pub const EXACT_INTERIOR_PCT: f64 = 0.1;
-/// Mean absolute visibility error within which soft shadows pass.
-pub const SOFT_MAE: f64 = 0.01;
-/// Frame time (× `none`) within which a technique counts as cheap.
-pub const CHEAP_RATIO: f64 = 2.0;
-
-fn total(c: &Cell) -> f64 {
-    c.quality.total_pct
-}
-
-fn below_failure(c: &Cell) -> bool {
-    total(c) <= FAILED_PCT
-}
-
-/// A view that tests a light type alone: not one of the views kept for
-/// another criterion (open meshes, curved receivers, the camera in a
-/// shadow, soft shadows).
-fn plain_view(c: &Cell, kind: &str) -> bool {
-    c.light_kinds.iter().any(|k| k == kind)
-        && !c.area_light
-        && c.key.camera != "in-shadow"
-        && !["bunny", "teapot", "curved"].contains(&c.key.scene.as_str())
-}
-
-/// Flicker (% of considered pixels per step) within which a technique
-/// counts as stable (issue 15's bar).
-pub const STABLE_FLICKER_PCT: f64 = 0.01;
-
-const CRITERIA: [Criterion; 10] = [
-    Criterion {
-        name: "hard shadows exact",
-        declared: None,
-        applies: |c| !c.area_light,
-        passes: |c| c.quality.interior_pct <= EXACT_INTERIOR_PCT,
-        figure: |c| c.quality.interior_pct,
-        unit: Unit::Percent("interior mismatch"),
-    },
-    Criterion {
-        name: "point lights",
-        declared: Some(|k| k.point_lights),
-        applies: |c| plain_view(c, "point"),
-        passes: below_failure,
-        figure: total,
-        unit: Unit::Percent("mismatch"),
-    },
-    Criterion {
-        name: "spot lights",
-        declared: Some(|k| k.spot_lights),
-        applies: |c| plain_view(c, "spot"),
-        passes: below_failure,
-        figure: total,
-        unit: Unit::Percent("mismatch"),
-    },
-    Criterion {
-        name: "directional lights",
-        declared: Some(|k| k.directional_lights),
-        applies: |c| plain_view(c, "directional"),
-        passes: below_failure,
-        figure: total,
-        unit: Unit::Percent("mismatch"),
-    },
-    Criterion {
-        name: "soft shadows",
-        declared: Some(|k| k.soft_shadows),
-        applies: |c| c.area_light,
-        passes: |c| c.quality.mean_abs_error <= SOFT_MAE,
-        figure: |c| c.quality.mean_abs_error,
-        unit: Unit::Value("mean visibility error"),
-    },
-    Criterion {
-        name: "open meshes",
-        declared: Some(|k| k.open_meshes),
-        applies: |c| c.key.scene == "bunny" || c.key.scene == "teapot",
-        passes: below_failure,
-        figure: total,
-        unit: Unit::Percent("mismatch"),
-    },
-    Criterion {
-        name: "curved receivers",
-        declared: Some(|k| k.curved_receivers),
-        applies: |c| c.key.scene == "curved",
-        passes: below_failure,
-        figure: total,
-        unit: Unit::Percent("mismatch"),
-    },
-    Criterion {
-        name: "camera in a shadow",
-        declared: None,
-        applies: |c| c.key.camera == "in-shadow",
-        passes: below_failure,
-        figure: total,
-        unit: Unit::Percent("mismatch"),
-    },
-    Criterion {
-        name: "stable under motion",
-        declared: None,
-        applies: |c| c.quality.flicker_pct.is_some(),
-        passes: |c| c.quality.flicker_pct.unwrap_or(0.0) <= STABLE_FLICKER_PCT,
-        figure: |c| c.quality.flicker_pct.unwrap_or(0.0),
-        unit: Unit::Percent("flicker per step"),
-    },
-    Criterion {
-        name: "cheap",
-        declared: None,
-        applies: |_| true,
-        passes: |c| c.cost.ratio_to_none <= CHEAP_RATIO,
-        figure: |c| c.cost.ratio_to_none,
-        unit: Unit::TimesNone,
-    },
-];
-
 /// Everything the report pages show.
 pub struct Report<'a> {
     pub matrix: &'a Matrix,
@@ -213,58 +38,6 @@ pub struct Report<'a> {
     pub fronts: Vec<(View, Vec<usize>)>,
     pub rows: Vec<SummaryRow>,
     pub universal: Vec<String>,
-}
-
-/// Whether a cell takes part in the trade-off: not the reference's family
-/// (exact by definition) and not `none` (no shadows at all).
-pub fn competes(c: &Cell) -> bool {
-    c.family != "raytraced" && c.family != "none"
-}
-
-/// Frame times within this fraction of each other count as equal: the
-/// run-to-run spread of `bench` medians on lavapipe.
-pub const COST_NOISE: f64 = 0.10;
-/// Mismatches within this many percentage points count as equal (the
-/// precision of the tables).
-pub const ERROR_NOISE_PCT: f64 = 0.001;
-
-/// Whether `a` dominates `b` in (cost, error): not worse in either beyond
-/// the noise, better in one beyond it.
-fn dominates((ca, ea): (f64, f64), (cb, eb): (f64, f64)) -> bool {
-    let same_cost = (ca - cb).abs() <= COST_NOISE * ca.max(cb);
-    let same_error = (ea - eb).abs() <= ERROR_NOISE_PCT;
-    let cheaper = ca < cb && !same_cost;
-    let better = ea < eb && !same_error;
-    (ca <= cb || same_cost) && (ea <= eb || same_error) && (cheaper || better)
-}
-
-/// Indices of `cells` on the Pareto front of (frame × none, total
-/// mismatch): no other cell dominates them beyond the timing and table
-/// noise, so presets with equal masks and times within 10 % share the
-/// front instead of noise picking one. Sorted by cost.
-pub fn pareto_front(cells: &[&Cell]) -> Vec<usize> {
-    let point = |c: &Cell| (c.cost.ratio_to_none, total(c));
-    let mut front: Vec<usize> = (0..cells.len())
-        .filter(|&i| {
-            !cells
-                .iter()
-                .enumerate()
-                .any(|(j, o)| j != i && dominates(point(o), point(cells[i])))
-        })
-        .collect();
-    front.sort_by(|&a, &b| point(cells[a]).0.total_cmp(&point(cells[b]).0));
-    front
-}
-
-/// A percentage with the precision the report's prose uses.
-pub fn pct(v: f64) -> String {
-    if v >= 10.0 {
-        format!("{v:.1}")
-    } else if v >= 0.1 {
-        format!("{v:.2}")
-    } else {
-        format!("{v:.3}")
-    }
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -446,7 +219,7 @@ impl<'a> Report<'a> {
             .map_or(String::new(), |(_, rs, wgsl)| {
                 format!("{rs} lines of Rust, {wgsl} of WGSL (family `{family_id}`)")
             });
-        let marks: Vec<Mark> = CRITERIA.iter().map(|k| mark(k, &mine)).collect();
+        let marks = marks(&mine);
         let extensibility = family
             .map(|f| extensibility(&f.capabilities, &marks))
             .unwrap_or_default();
@@ -559,128 +332,12 @@ fn labels(cells: &[&Cell]) -> String {
         .join(", ")
 }
 
-pub fn bytes(b: u64) -> String {
+fn bytes(b: u64) -> String {
     if b >= 1 << 20 {
         format!("{:.1} MiB", b as f64 / (1 << 20) as f64)
     } else if b >= 1 << 10 {
         format!("{:.1} KiB", b as f64 / 1024.0)
     } else {
         format!("{b} B")
-    }
-}
-
-fn mark(k: &Criterion, mine: &[&Cell]) -> Mark {
-    let tested: Vec<&Cell> = mine.iter().copied().filter(|c| (k.applies)(c)).collect();
-    let worst = tested
-        .iter()
-        .copied()
-        .max_by(|a, b| (k.figure)(a).total_cmp(&(k.figure)(b)));
-    Mark {
-        criterion: k.name,
-        ok: worst.map(|_| tested.iter().all(|c| (k.passes)(c))),
-        claim: worst.map(|w| {
-            let v = (k.figure)(w);
-            Claim::of(
-                format!("worst {} on `{}`", k.unit.format(v), w.view().label()),
-                w,
-            )
-        }),
-    }
-}
-
-/// The family's declared capabilities, and each one its measurements
-/// contradict (declared but failed, or not declared yet passed).
-fn extensibility(caps: &Capabilities, marks: &[Mark]) -> Vec<Claim> {
-    let declared: Vec<(&Criterion, &Mark, bool)> = CRITERIA
-        .iter()
-        .zip(marks)
-        .filter_map(|(k, m)| Some((k, m, (k.declared?)(caps))))
-        .collect();
-    let names: Vec<&str> = declared
-        .iter()
-        .filter(|(_, _, d)| *d)
-        .map(|(k, _, _)| k.name)
-        .collect();
-    let mut out = vec![Claim::plain(if names.is_empty() {
-        "declares nothing".into()
-    } else {
-        format!("declares {}", names.join(", "))
-    })];
-    for (k, m, d) in declared {
-        if let (Some(ok), Some(c)) = (m.ok, &m.claim)
-            && ok != d
-        {
-            out.push(Claim {
-                text: format!(
-                    "{} {}, yet measured {}: {}",
-                    k.name,
-                    if d { "declared" } else { "not declared" },
-                    if ok { "✔" } else { "✗" },
-                    c.text
-                ),
-                evidence: c.evidence.clone(),
-            });
-        }
-    }
-    out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::report::cells::{CellKey, Cost, Quality};
-
-    fn cell(technique: &str, ratio: f64, total_pct: f64) -> Cell {
-        Cell {
-            key: CellKey {
-                version: String::new(),
-                scene: "s".into(),
-                camera: "c".into(),
-                light: "l".into(),
-                width: 1,
-                height: 1,
-                technique: technique.into(),
-                reference: String::new(),
-                bench_frames: (0, 0),
-                flicker: None,
-            },
-            family: "shadow-map".into(),
-            preset: String::new(),
-            light_kinds: vec![],
-            area_light: false,
-            quality: Quality {
-                total_pct,
-                ..Default::default()
-            },
-            cost: Cost {
-                ratio_to_none: ratio,
-                ..Default::default()
-            },
-            image: String::new(),
-            heatmap: String::new(),
-        }
-    }
-
-    /// The front by hand: (1, 5) and (2, 1) and (4, 0.5) are not
-    /// dominated; (3, 2) is by (2, 1); (2, 3) by (2, 1) (same cost, worse).
-    #[test]
-    fn the_pareto_front_keeps_only_undominated_cells() {
-        let cells = [
-            cell("a", 1.0, 5.0),
-            cell("b", 3.0, 2.0),
-            cell("c", 2.0, 1.0),
-            cell("d", 4.0, 0.5),
-            cell("e", 2.0, 3.0),
-        ];
-        let refs: Vec<&Cell> = cells.iter().collect();
-        assert_eq!(pareto_front(&refs), vec![0, 2, 3]);
-        // Equal masks, times within the noise: both stay; 20 % slower goes.
-        let ties = [
-            cell("a", 2.0, 0.002),
-            cell("b", 2.1, 0.002),
-            cell("c", 2.4, 0.002),
-        ];
-        let refs: Vec<&Cell> = ties.iter().collect();
-        assert_eq!(pareto_front(&refs), vec![0, 1]);
     }
 }
