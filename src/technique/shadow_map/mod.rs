@@ -16,6 +16,7 @@ mod debug;
 mod depth_bounds;
 mod depth_pass;
 mod edge_mask;
+mod map_passes;
 mod maps;
 pub mod paging_params;
 pub mod partition_params;
@@ -37,17 +38,13 @@ pub use config::{
 };
 pub use setup::{CascadeSplit, FrustumParams, LightSetup, cube_views, light_setup};
 
-use super::light_space::outside_clip_volume;
 use super::{Family, MaskContext, ParamValues, ShadowTechnique};
 use crate::gpu::{GpuContext, SectionTimer};
-use crate::scene::LightType;
 use crate::scene::area::area_samples;
 use anyhow::Result;
-use bias_cap::bias_clamp;
-use caster_cull::CasterCull;
 use depth_bounds::{DepthReduction, SeenBounds};
-use depth_pass::{Casters, DepthDraw, DepthPassKey};
-use edge_mask::{BoundsChain, ChainInput, ChainSource};
+use depth_pass::DepthPassKey;
+use edge_mask::BoundsChain;
 use glam::{Mat4, Vec2};
 use maps::Maps;
 use pipelines::{LookupKey, MapProjection, MapShape, ShadowMapShared};
@@ -318,29 +315,16 @@ impl ShadowTechnique for ShadowMapTechnique {
         );
         ctx.gpu.queue.write_buffer(&self.uniforms, 0, &data);
         let floor = c.stage == Stage::Floor;
-        let pipelines_for = |setup: &LightSetup, face: usize| {
-            if floor {
-                return vec![DepthDraw {
-                    pipeline: self.shared.floor(gpu, format.depth_texture(), shape),
-                    casters: Casters::All,
-                }];
-            }
-            let clamp = bias_clamp(setup, face, size, c.slope_bias_clamp);
-            self.shared.depth_passes(
-                gpu,
-                DepthPassKey {
-                    format,
-                    cull,
-                    bias: c.depth_bias,
-                    slope_bits: c.slope_bias.to_bits(),
-                    clamp_bits: clamp.to_bits(),
-                    moments: moments.then_some(c.filter),
-                    shape,
-                    virtual_map: false,
-                    parts,
-                },
-                c.solid_front_bias,
-            )
+        let depth_key = DepthPassKey {
+            format,
+            cull,
+            bias: c.depth_bias,
+            slope_bits: c.slope_bias.to_bits(),
+            clamp_bits: 0,
+            moments: moments.then_some(c.filter),
+            shape,
+            virtual_map: false,
+            parts,
         };
         let lookup_key = LookupKey {
             filter: c.filter,
@@ -356,7 +340,6 @@ impl ShadowTechnique for ShadowMapTechnique {
             shape,
         };
         let maps = self.maps.as_ref().expect("ensured above");
-        let slot = |s: usize, f: u32, k: u32| slot_offset(s, f, k) as u32;
         // Bind groups: none of the maps while they are rendered; the moment
         // maps as blur sources; everything for the lookup.
         let shared = &self.shared;
@@ -414,148 +397,31 @@ impl ShadowTechnique for ShadowMapTechnique {
                 None
             }
         };
+        let passes = map_passes::SamplePasses {
+            maps,
+            render_group,
+            blur_groups,
+            lookup_group: &lookup_group,
+            lookup_key,
+            depth_key,
+            layers,
+            blur,
+            floor,
+            samples: lights.len(),
+            aspect,
+        };
         let mut map_triangles = 0;
-        for (si, setup) in setups.iter().enumerate() {
-            // Directional light: only casters over the camera's view of
-            // the scene, seen from the light, are drawn.
-            let caster_cull = (lights[si].kind == LightType::Directional)
-                .then(|| {
-                    CasterCull::of(
-                        lights[si].direction,
-                        ctx.camera,
-                        aspect,
-                        &ctx.scene_gpu.bounds,
-                    )
-                })
-                .flatten();
-            for face in 0..layers {
-                let f = face as usize;
-                // The colour target beside the depth: moments or the 8-bit
-                // depth (cleared to the far plane), or part IDs (to none).
-                let color = match (&maps.moment, &maps.byte, &maps.part, floor) {
-                    (_, _, _, true) | (None, None, None, _) => None,
-                    (Some(m), _, _, _) => Some((&m[0].0[f], wgpu::Color::WHITE)),
-                    (None, Some(b), _, _) => Some((&b.0[f], wgpu::Color::WHITE)),
-                    (None, None, Some(p), _) => Some((&p.0[f], wgpu::Color::TRANSPARENT)),
-                }
-                .map(|(view, clear)| wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: clear_op(clear),
-                });
-                let colors = [color];
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("shadow map depth"),
-                    color_attachments: if colors[0].is_some() { &colors } else { &[] },
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &maps.depth_layer_views[f],
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(1.0),
-                            store: wgpu::StoreOp::Store,
-                        }),
-                        stencil_ops: None,
-                    }),
-                    ..Default::default()
-                });
-                ctx.bind_frame_groups(&mut pass);
-                pass.set_bind_group(crate::frame::OWN_GROUP, &render_group, &[slot(si, face, 0)]);
-                // Casters outside this face's (or cascade's) view are not
-                // drawn; paraboloid faces are view matrices, not frusta.
-                let view_proj = setup.faces[f];
-                let paraboloid = setup.paraboloid;
-                for draw in pipelines_for(setup, f) {
-                    pass.set_pipeline(&draw.pipeline);
-                    map_triangles += ctx.scene_gpu.draw_visible(
-                        &mut pass,
-                        |d| draw.takes(d),
-                        |b| {
-                            (paraboloid || !outside_clip_volume(b, view_proj))
-                                && caster_cull.as_ref().is_none_or(|c| c.may_shadow(b))
-                        },
-                    );
-                }
-            }
-            if let (Some(m), Some(groups), true) = (&maps.moment, &blur_groups, blur > 0 && !floor)
-            {
-                // A → B along x, B → A along y.
-                for (k, src, dst) in [(1u32, 0usize, 1usize), (2, 1, 0)] {
-                    for face in 0..layers {
-                        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                            label: Some("shadow map blur"),
-                            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                                view: &m[dst].0[face as usize],
-                                depth_slice: None,
-                                resolve_target: None,
-                                ops: clear_op(wgpu::Color::WHITE),
-                            })],
-                            ..Default::default()
-                        });
-                        pass.set_pipeline(&shared.blur(gpu, lookup_key));
-                        ctx.bind_frame_groups(&mut pass);
-                        pass.set_bind_group(
-                            crate::frame::OWN_GROUP,
-                            &groups[src],
-                            &[slot(si, face, k)],
-                        );
-                        pass.draw(0..3, 0..1);
-                    }
-                }
-            }
-            if c.stage != Stage::Full {
-                continue;
-            }
-            if let Some(s) = &stamps {
-                s.stamp(encoder, si as u32, false);
-            }
-            if let Some(chain) = &self.chain {
-                if let Some(s) = &chain_stamps {
-                    s.stamp(encoder, si as u32, false);
-                }
-                chain.record(
-                    gpu,
+        for (si, (setup, light)) in setups.iter().zip(&lights).enumerate() {
+            map_triangles += self.record_maps(ctx, encoder, &passes, si, setup, light);
+            if c.stage == Stage::Full {
+                self.record_lookup(
+                    ctx,
                     encoder,
-                    ChainInput {
-                        depths: match &maps.byte {
-                            Some(b) => ChainSource::Bytes(&b.1),
-                            None => ChainSource::Depth(&maps.depth_array),
-                        },
-                        parts: maps.part.as_ref().map(|p| &p.1),
-                    },
+                    &passes,
+                    si,
+                    stamps.as_ref(),
+                    chain_stamps.as_ref(),
                 );
-                if let Some(s) = &chain_stamps {
-                    s.stamp(encoder, si as u32, true);
-                }
-            }
-            // One sample writes the mask; several add 1/N each onto a cleared mask.
-            let (load, accumulate) = match (lights.len(), si) {
-                (1, _) => (wgpu::LoadOp::Clear(wgpu::Color::WHITE), false),
-                (_, 0) => (wgpu::LoadOp::Clear(wgpu::Color::BLACK), true),
-                _ => (wgpu::LoadOp::Load, true),
-            };
-            let mut pass = super::mask_pass_with(encoder, ctx, "shadow map lookup", load);
-            pass.set_pipeline(&shared.lookup(
-                gpu,
-                LookupKey {
-                    accumulate,
-                    ..lookup_key
-                },
-            ));
-            if accumulate {
-                let w = 1.0 / lights.len() as f64;
-                pass.set_blend_constant(wgpu::Color {
-                    r: w,
-                    g: w,
-                    b: w,
-                    a: w,
-                });
-            }
-            ctx.bind_frame_groups(&mut pass);
-            pass.set_bind_group(crate::frame::OWN_GROUP, &lookup_group, &[slot(si, 0, 0)]);
-            pass.draw(0..3, 0..1);
-            drop(pass);
-            if let Some(s) = &stamps {
-                s.stamp(encoder, si as u32, true);
             }
         }
         if stamps.is_some() {
@@ -573,7 +439,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             encoder,
             &lookup_group,
             lookup_key,
-            slot(lights.len() - 1, 0, 0),
+            slot_offset(lights.len() - 1, 0, 0) as u32,
         );
         self.samples = lights.len();
         self.map_triangles = map_triangles;
