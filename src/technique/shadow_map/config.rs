@@ -8,6 +8,10 @@ use crate::technique::params::choice_enum;
 use crate::technique::{ParamSpec, ParamValues};
 use anyhow::Result;
 
+use super::filter_params::{
+    BLEEDING_REDUCTION, BLOCKER_SEARCH, BLUR, EXPONENT, EXPONENT_NEGATIVE, LIGHT_SIZE, MOMENT_BIAS,
+    VARWIDTH_EXPONENT, VARWIDTH_SCALE,
+};
 use super::paging_params::{CLIPMAP_LEVELS, PAGE_SIZE, PAGING, POOL, REFINE_STEPS, VIRTUAL_SIZE};
 pub use super::paging_params::{Paging, PagingConfig};
 use super::partition_params::{
@@ -267,50 +271,6 @@ pub const FOV: ParamSpec = ParamSpec::float(
     "spot light frustum angle in degrees (0 = the cone plus 4°); precision degrades above 90°",
 );
 
-pub const LIGHT_SIZE: ParamSpec = ParamSpec::float(
-    "light_size",
-    24.0,
-    0.0,
-    400.0,
-    1.0,
-    "pcss: light size, as the penumbra width in texels per unit of (d_receiver − d_blocker)/d_blocker",
-);
-
-pub const BLOCKER_SEARCH: ParamSpec = ParamSpec::float(
-    "blocker_search",
-    12.0,
-    1.0,
-    64.0,
-    1.0,
-    "pcss and varwidth: blocker-search radius in texels",
-);
-
-pub const VARWIDTH_SCALE: ParamSpec = ParamSpec::float(
-    "varwidth_scale",
-    8.0,
-    0.0,
-    200.0,
-    0.5,
-    "varwidth: texels of radius per unit of |d_blocker − d_receiver|^exponent",
-);
-
-pub const VARWIDTH_EXPONENT: ParamSpec = ParamSpec::float(
-    "varwidth_exponent",
-    1.0,
-    0.1,
-    4.0,
-    0.1,
-    "varwidth: the exponent",
-);
-
-pub const BLUR: ParamSpec = ParamSpec::int(
-    "blur",
-    2,
-    0,
-    16,
-    "moment filters: separable box blur radius in texels (0 = none)",
-);
-
 pub const AREA: ParamSpec = ParamSpec::boolean(
     "area",
     false,
@@ -323,42 +283,6 @@ pub const AREA_MAPS: ParamSpec = ParamSpec::int(
     1,
     64,
     "area: number of shadow maps (the documents use the 4 corners)",
-);
-
-pub const BLEEDING_REDUCTION: ParamSpec = ParamSpec::float(
-    "bleeding_reduction",
-    0.2,
-    0.0,
-    0.95,
-    0.01,
-    "vsm and evsm: light-bleeding reduction, the lower cut of the Chebyshev bound",
-);
-
-pub const EXPONENT: ParamSpec = ParamSpec::float(
-    "exponent",
-    40.0,
-    1.0,
-    80.0,
-    1.0,
-    "esm and evsm: exponent c of the positive warp exp(c(z − 1))",
-);
-
-pub const EXPONENT_NEGATIVE: ParamSpec = ParamSpec::float(
-    "exponent_negative",
-    5.0,
-    1.0,
-    40.0,
-    1.0,
-    "evsm4: exponent of the negative warp −exp(−c z)",
-);
-
-pub const MOMENT_BIAS: ParamSpec = ParamSpec::float(
-    "moment_bias",
-    3e-5,
-    0.0,
-    0.01,
-    1e-5,
-    "msm: moment bias α towards (0.5, 0.5, 0.5, 0.5)",
 );
 
 pub const STAGE: ParamSpec = ParamSpec::choice_of::<Stage>(

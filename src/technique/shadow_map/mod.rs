@@ -16,6 +16,7 @@ mod debug;
 mod depth_bounds;
 mod depth_pass;
 mod edge_mask;
+mod filter_params;
 mod map_passes;
 mod maps;
 pub mod paging_params;

@@ -1,0 +1,85 @@
+//! The parameters of the soft and moment filters: PCSS's light size and
+//! blocker search, variable-width PCF's scale and exponent, and the moment
+//! maps' blur, light-bleeding reduction, exponents and bias.
+
+use crate::technique::ParamSpec;
+
+pub const LIGHT_SIZE: ParamSpec = ParamSpec::float(
+    "light_size",
+    24.0,
+    0.0,
+    400.0,
+    1.0,
+    "pcss: light size, as the penumbra width in texels per unit of (d_receiver − d_blocker)/d_blocker",
+);
+
+pub const BLOCKER_SEARCH: ParamSpec = ParamSpec::float(
+    "blocker_search",
+    12.0,
+    1.0,
+    64.0,
+    1.0,
+    "pcss and varwidth: blocker-search radius in texels",
+);
+
+pub const VARWIDTH_SCALE: ParamSpec = ParamSpec::float(
+    "varwidth_scale",
+    8.0,
+    0.0,
+    200.0,
+    0.5,
+    "varwidth: texels of radius per unit of |d_blocker − d_receiver|^exponent",
+);
+
+pub const VARWIDTH_EXPONENT: ParamSpec = ParamSpec::float(
+    "varwidth_exponent",
+    1.0,
+    0.1,
+    4.0,
+    0.1,
+    "varwidth: the exponent",
+);
+
+pub const BLUR: ParamSpec = ParamSpec::int(
+    "blur",
+    2,
+    0,
+    16,
+    "moment filters: separable box blur radius in texels (0 = none)",
+);
+
+pub const BLEEDING_REDUCTION: ParamSpec = ParamSpec::float(
+    "bleeding_reduction",
+    0.2,
+    0.0,
+    0.95,
+    0.01,
+    "vsm and evsm: light-bleeding reduction, the lower cut of the Chebyshev bound",
+);
+
+pub const EXPONENT: ParamSpec = ParamSpec::float(
+    "exponent",
+    40.0,
+    1.0,
+    80.0,
+    1.0,
+    "esm and evsm: exponent c of the positive warp exp(c(z − 1))",
+);
+
+pub const EXPONENT_NEGATIVE: ParamSpec = ParamSpec::float(
+    "exponent_negative",
+    5.0,
+    1.0,
+    40.0,
+    1.0,
+    "evsm4: exponent of the negative warp −exp(−c z)",
+);
+
+pub const MOMENT_BIAS: ParamSpec = ParamSpec::float(
+    "moment_bias",
+    3e-5,
+    0.0,
+    0.01,
+    1e-5,
+    "msm: moment bias α towards (0.5, 0.5, 0.5, 0.5)",
+);
