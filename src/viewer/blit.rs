@@ -287,15 +287,47 @@ impl EguiLayer {
 
     /// Whether the layer must be drawn again for `primitives` (a texture
     /// upload also counts as a change); remembers them as drawn.
-    pub fn needs_drawing(
-        &mut self,
-        primitives: &[ClippedPrimitive],
-        textures_changed: bool,
-    ) -> bool {
+    fn needs_drawing(&mut self, primitives: &[ClippedPrimitive], textures_changed: bool) -> bool {
         let hash = primitives_hash(primitives);
         let stale = textures_changed || self.drawn != Some(hash);
         self.drawn = Some(hash);
         stale
+    }
+
+    /// Draws egui's `primitives` into the layer when they changed
+    /// ([`Self::needs_drawing`]); returns the command buffers egui's
+    /// callbacks need submitted first (none when nothing was drawn).
+    pub fn draw(
+        &mut self,
+        gpu: &GpuContext,
+        renderer: &mut egui_wgpu::Renderer,
+        encoder: &mut wgpu::CommandEncoder,
+        primitives: &[ClippedPrimitive],
+        screen: &egui_wgpu::ScreenDescriptor,
+        textures_changed: bool,
+    ) -> Vec<wgpu::CommandBuffer> {
+        if !self.needs_drawing(primitives, textures_changed) {
+            return vec![];
+        }
+        let commands =
+            renderer.update_buffers(&gpu.device, &gpu.queue, encoder, primitives, screen);
+        let mut pass = encoder
+            .begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("egui"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &self.view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                ..Default::default()
+            })
+            .forget_lifetime();
+        renderer.render(&mut pass, primitives, screen);
+        commands
     }
 }
 

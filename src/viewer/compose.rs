@@ -6,6 +6,8 @@
 use super::blit::{self, Blit, LayerBlend};
 use crate::frame::FrameTargets;
 use crate::gpu::GpuContext;
+use anyhow::{Context as _, Result};
+use std::path::Path;
 
 /// A window image holds sRGB-encoded bytes: the 3D view is written
 /// through an sRGB view of it, egui (which blends in gamma space) through a
@@ -65,6 +67,25 @@ impl Composite {
             srgb: &self.srgb,
             plain: &self.plain,
         }
+    }
+
+    /// Reads the composed image back and writes it to `path` as an RGBA
+    /// PNG (a BGRA window format swizzled).
+    pub fn save_png(&self, gpu: &GpuContext, path: &Path) -> Result<()> {
+        let mut rgba = gpu.read_texture(&self.texture, 0, 4)?;
+        if self.texture.format() == wgpu::TextureFormat::Bgra8Unorm {
+            for p in rgba.chunks_exact_mut(4) {
+                p.swap(0, 2);
+            }
+        }
+        image::save_buffer(
+            path,
+            &rgba,
+            self.texture.width(),
+            self.texture.height(),
+            image::ExtendedColorType::Rgba8,
+        )
+        .with_context(|| format!("writing {}", path.display()))
     }
 }
 

@@ -8,6 +8,7 @@ use crate::gpu::GpuContext;
 use crate::renderer::Renderer;
 use anyhow::{Context as _, Result, anyhow};
 use std::sync::Arc;
+use winit::dpi::PhysicalSize;
 use winit::event_loop::ActiveEventLoop;
 use winit::window::Window;
 
@@ -31,6 +32,43 @@ pub(super) struct Gfx {
 }
 
 impl Gfx {
+    /// Fits the surface to the window's `size` and the present mode to
+    /// `vsync`, and the frame targets to `width`×`height` (the 3D view,
+    /// supersampled), each only where it changed.
+    pub fn fit(
+        &mut self,
+        size: PhysicalSize<u32>,
+        vsync: bool,
+        width: u32,
+        height: u32,
+    ) -> Result<()> {
+        let mode = present_mode(vsync);
+        if (
+            self.config.width,
+            self.config.height,
+            self.config.present_mode,
+        ) != (size.width, size.height, mode)
+        {
+            self.config.width = size.width;
+            self.config.height = size.height;
+            self.config.present_mode = mode;
+            self.surface.configure(&self.gpu.device, &self.config);
+        }
+        if self
+            .frame
+            .as_ref()
+            .is_none_or(|f| (f.width(), f.height()) != (width, height))
+        {
+            self.frame = Some(FrameTargets::with_color_format(
+                &self.gpu,
+                width,
+                height,
+                self.frame_color_format,
+            )?);
+        }
+        Ok(())
+    }
+
     /// Opens the window (`view.size`) on `view.backend`'s adapter and sets
     /// up its surface (plain format with its sRGB twin), renderer and egui.
     pub fn new(event_loop: &ActiveEventLoop, view: &ViewArgs, vsync: bool) -> Result<Gfx> {
@@ -118,7 +156,7 @@ impl Gfx {
 }
 
 /// The surface's present mode for the vsync switch.
-pub(super) fn present_mode(vsync: bool) -> wgpu::PresentMode {
+fn present_mode(vsync: bool) -> wgpu::PresentMode {
     if vsync {
         wgpu::PresentMode::AutoVsync
     } else {

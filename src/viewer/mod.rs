@@ -11,17 +11,17 @@ mod orbit;
 mod ui;
 
 use crate::args::ViewArgs;
-use crate::frame::{FrameTargets, SceneGpu};
+use crate::frame::SceneGpu;
 use crate::gpu::GpuContext;
 use crate::headless;
 use crate::measure::flicker::CameraPath;
 use crate::renderer::{FrameTimings, MipFilter, RenderSettings};
 use crate::scene::{self, Camera, Light, Scene};
 use crate::technique::{self, TechniqueChoice, TechniqueInstance};
-use anyhow::{Context as _, Result, anyhow};
+use anyhow::{Result, anyhow};
 use blit::EguiLayer;
 use compose::{Composer, Composite, WindowTarget};
-use gfx::{Gfx, present_mode};
+use gfx::Gfx;
 use glam::Vec2;
 pub use heatmap::Heatmap;
 use std::path::PathBuf;
@@ -285,32 +285,14 @@ impl App {
         if size.width == 0 || size.height == 0 {
             return Ok(()); // minimised
         }
-        if (gfx.config.width, gfx.config.height) != (size.width, size.height) {
-            gfx.config.width = size.width;
-            gfx.config.height = size.height;
-            gfx.surface.configure(&gfx.gpu.device, &gfx.config);
-        }
-        let wanted = gfx.config.present_mode;
-        if wanted != present_mode(self.state.vsync) {
-            gfx.config.present_mode = present_mode(self.state.vsync);
-            gfx.surface.configure(&gfx.gpu.device, &gfx.config);
-        }
         let ss = self.state.supersampling.max(1);
         let left = self.state.view_left.min(size.width - 1);
-        let view_w = size.width - left;
-        let (fw, fh) = (view_w * ss, size.height * ss);
-        if gfx
-            .frame
-            .as_ref()
-            .is_none_or(|f| (f.width(), f.height()) != (fw, fh))
-        {
-            gfx.frame = Some(FrameTargets::with_color_format(
-                &gfx.gpu,
-                fw,
-                fh,
-                gfx.frame_color_format,
-            )?);
-        }
+        gfx.fit(
+            size,
+            self.state.vsync,
+            (size.width - left) * ss,
+            size.height * ss,
+        )?;
         if self.state.show_debug != self.state.debug_enabled {
             for t in &mut scene.techniques {
                 t.technique.enable_debug(self.state.show_debug);
@@ -345,24 +327,8 @@ impl App {
                     match scene.techniques[li].technique.debug_views(&gfx.gpu) {
                         Ok(views) => {
                             gfx.renderer.draw_lines(&gfx.gpu, frame, &views.lines);
-                            self.state.debug_images = views
-                                .images
-                                .into_iter()
-                                .map(|im| {
-                                    let img = egui::ColorImage::from_rgba_unmultiplied(
-                                        [im.width as usize, im.height as usize],
-                                        &im.rgba,
-                                    );
-                                    (
-                                        im.label,
-                                        gfx.egui_ctx.load_texture(
-                                            "technique debug",
-                                            img,
-                                            egui::TextureOptions::LINEAR,
-                                        ),
-                                    )
-                                })
-                                .collect();
+                            self.state.debug_images =
+                                ui::debug_textures(&gfx.egui_ctx, views.images);
                         }
                         Err(e) => self.state.error = Some(format!("{e:#}")),
                     }
@@ -419,33 +385,14 @@ impl App {
                 size.height,
             ));
         }
-        let layer = gfx.egui_layer.as_mut().expect("created above");
-        let mut cmd = vec![];
-        if layer.needs_drawing(&jobs, textures_changed) {
-            cmd = gfx.egui_renderer.update_buffers(
-                &gfx.gpu.device,
-                &gfx.gpu.queue,
-                &mut enc,
-                &jobs,
-                &screen,
-            );
-            let mut pass = enc
-                .begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("egui"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: layer.view(),
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    ..Default::default()
-                })
-                .forget_lifetime();
-            gfx.egui_renderer.render(&mut pass, &jobs, &screen);
-        }
+        let cmd = gfx.egui_layer.as_mut().expect("created above").draw(
+            &gfx.gpu,
+            &mut gfx.egui_renderer,
+            &mut enc,
+            &jobs,
+            &screen,
+            textures_changed,
+        );
         let layer = gfx.egui_layer.as_ref().expect("created above");
         let mut composer = Composer {
             gpu: &gfx.gpu,
@@ -527,20 +474,7 @@ impl App {
             self.state.screenshot_requested = false;
             let path = auto_path
                 .unwrap_or_else(|| PathBuf::from(format!("shadowlab-{}.png", chrono_stamp())));
-            let mut rgba = gfx.gpu.read_texture(&composite.texture, 0, 4)?;
-            if matches!(plain, wgpu::TextureFormat::Bgra8Unorm) {
-                for p in rgba.chunks_exact_mut(4) {
-                    p.swap(0, 2);
-                }
-            }
-            image::save_buffer(
-                &path,
-                &rgba,
-                size.width,
-                size.height,
-                image::ExtendedColorType::Rgba8,
-            )
-            .with_context(|| format!("writing {}", path.display()))?;
+            composite.save_png(&gfx.gpu, &path)?;
             let timings = self.state.last_timings.clone().unwrap_or_default();
             let record = headless::FrameRecord {
                 scene: &scene.scene,

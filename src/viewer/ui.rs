@@ -525,6 +525,24 @@ pub fn build(
     }
 }
 
+/// A technique's debug images as egui textures, with their labels.
+pub fn debug_textures(
+    ctx: &egui::Context,
+    images: Vec<technique::DebugImage>,
+) -> Vec<(String, egui::TextureHandle)> {
+    images
+        .into_iter()
+        .map(|im| {
+            let img = egui::ColorImage::from_rgba_unmultiplied(
+                [im.width as usize, im.height as usize],
+                &im.rgba,
+            );
+            let texture = ctx.load_texture("technique debug", img, egui::TextureOptions::LINEAR);
+            (im.label, texture)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
