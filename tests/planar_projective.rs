@@ -67,12 +67,7 @@ fn anti_shadows_and_false_shadows_are_not_drawn() {
 
 #[test]
 fn planar_matches_ray_tracing_on_the_plane_for_every_light_type() {
-    let lights = [
-        Light::point(Vec3::new(0.4, 5.0, -0.3), 1.0),
-        Light::spot(Vec3::new(1.0, 5.0, 1.0), Vec3::ZERO, 1.0, 30.0, 40.0),
-        Light::directional(Vec3::new(0.3, -1.0, 0.2), 1.0),
-    ];
-    for light in lights {
+    for light in lights_over_squares() {
         // No ShadowPlane object: the floor is found as the largest planar receiver.
         let scene = squares_over_floor(
             &[

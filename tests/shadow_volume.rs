@@ -79,11 +79,7 @@ fn cpu_and_gpu_extrusion_give_the_same_volumes() {
 
 #[test]
 fn every_preset_and_variant_matches_the_reference_on_squares_over_a_plane() {
-    for light in [
-        Light::point(Vec3::new(0.4, 5.0, -0.3), 1.0),
-        Light::spot(Vec3::new(1.0, 5.0, 1.0), Vec3::ZERO, 1.0, 30.0, 40.0),
-        Light::directional(Vec3::new(0.3, -1.0, 0.2), 1.0),
-    ] {
+    for light in lights_over_squares() {
         let scene = squares_over_floor(
             &[
                 (Vec3::new(0.0, 1.0, 0.0), 0.7),

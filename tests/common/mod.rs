@@ -99,6 +99,17 @@ pub fn tmpdir(name: &str) -> std::path::PathBuf {
 use glam::{Mat4, Vec3};
 use shadowlab::scene::{Light, Material, shapes};
 
+/// One light of each type above [`squares_over_floor`]'s squares: a point
+/// light, a spot aimed at the origin and a sun, each slightly off the
+/// vertical so that shadows fall beside their casters.
+pub fn lights_over_squares() -> [Light; 3] {
+    [
+        Light::point(Vec3::new(0.4, 5.0, -0.3), 1.0),
+        Light::spot(Vec3::new(1.0, 5.0, 1.0), Vec3::ZERO, 1.0, 30.0, 40.0),
+        Light::directional(Vec3::new(0.3, -1.0, 0.2), 1.0),
+    ]
+}
+
 /// A 20×20 floor at y = 0 (also a `ShadowPlane` when `plane_object`) and
 /// axis-aligned square casters `(centre, half size)` facing down, so a camera
 /// above sees the floor through them with back-face culling while shadow

@@ -6,6 +6,16 @@ use super::common::*;
 use glam::{Mat4, Vec3, Vec4};
 use shadowlab::scene::{Camera, Light, Material, Scene, builtin, shapes};
 use shadowlab::technique::light_space::bias_matrix;
+
+/// The six directions along the world's axes: one per cube face.
+const AXES: [Vec3; 6] = [
+    Vec3::X,
+    Vec3::NEG_X,
+    Vec3::Y,
+    Vec3::NEG_Y,
+    Vec3::Z,
+    Vec3::NEG_Z,
+];
 use shadowlab::technique::shadow_map::light_setup;
 
 #[test]
@@ -63,17 +73,7 @@ fn light_in_a_box() -> Scene {
     let mut quad = shapes::plane(1.2, 1.2, 1);
     quad.make_double_sided();
     let quad = s.add_mesh(quad);
-    for (i, d) in [
-        Vec3::X,
-        Vec3::NEG_X,
-        Vec3::Y,
-        Vec3::NEG_Y,
-        Vec3::Z,
-        Vec3::NEG_Z,
-    ]
-    .into_iter()
-    .enumerate()
-    {
+    for (i, d) in AXES.into_iter().enumerate() {
         // Each square faces the light, 2 units out, slightly off-axis so its
         // shadow crosses into a neighbouring cube face.
         let rot = glam::Quat::from_rotation_arc(Vec3::Y, -d);
@@ -95,14 +95,7 @@ fn light_in_a_box() -> Scene {
 fn cube_faces_cover_every_direction() {
     let scene = light_in_a_box();
     // Look at each wall from inside, near the light, with a wide lens.
-    for d in [
-        Vec3::X,
-        Vec3::NEG_X,
-        Vec3::Y,
-        Vec3::NEG_Y,
-        Vec3::Z,
-        Vec3::NEG_Z,
-    ] {
+    for d in AXES {
         let eye = Vec3::new(0.05, 0.07, 0.03) - d * 0.5;
         let up = if d.y.abs() > 0.5 { Vec3::Z } else { Vec3::Y };
         let cam = Camera {
@@ -122,11 +115,7 @@ fn cube_faces_cover_every_direction() {
 
 #[test]
 fn filters_match_the_reference_on_a_square_over_a_plane() {
-    for light in [
-        Light::point(Vec3::new(0.4, 5.0, -0.3), 1.0),
-        Light::spot(Vec3::new(1.0, 5.0, 1.0), Vec3::ZERO, 1.0, 30.0, 40.0),
-        Light::directional(Vec3::new(0.3, -1.0, 0.2), 1.0),
-    ] {
+    for light in lights_over_squares() {
         let scene = squares_over_floor(&[(Vec3::new(0.0, 1.0, 0.0), 0.7)], light, false);
         for (id, interior_tol) in [
             ("shadow-map:hard", 0.0),
