@@ -300,6 +300,10 @@ fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
             "seam_mismatch_pct",
             "elsewhere_mismatch_pct",
             "seam_same_partitions_pct",
+            "seam_at_edges_pct",
+            "elsewhere_at_edges_pct",
+            "seam_interior_pct",
+            "elsewhere_interior_pct",
             "frame_ms",
         ],
         rows.iter().map(|r| {
@@ -330,6 +334,12 @@ fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
                     .map_or(String::new(), |s| pct(s.elsewhere_mismatch_pct)),
                 r.seams
                     .map_or(String::new(), |s| pct(s.same_partitions_pct)),
+                r.seams.map_or(String::new(), |s| pct(s.seam_at_edges_pct)),
+                r.seams
+                    .map_or(String::new(), |s| pct(s.elsewhere_at_edges_pct)),
+                r.seams.map_or(String::new(), |s| pct(s.seam_interior_pct)),
+                r.seams
+                    .map_or(String::new(), |s| pct(s.elsewhere_interior_pct)),
                 format!("{:.2}", r.frame_ms),
             ]
         }),
@@ -376,30 +386,36 @@ fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[QualityRow]) -> Str
     }
     if rows.iter().any(|r| r.seams.is_some()) {
         s += &format!(
-            "\nSeams: mismatch within {} px of a border between the map's cascades or faces, against elsewhere (% of each region's considered pixels), and against what the band's pixels would show at their own partition's rate outside the band (same partitions).\n\n",
-            quality::SEAM_RADIUS
+            "\nSeams: mismatch within {} px of a border between the map's cascades or faces, against elsewhere (% of each region's considered pixels); against what the band's pixels would show at their own partition's rate outside the band (same partitions); and both regions split at {} px from the reference's shadow edges (cascade borders lie far off, where shadow edges crowd: at edges compares like with like, interior shows bands of acne or light).\n\n",
+            quality::SEAM_RADIUS,
+            quality::EDGE_RADIUS
         );
-        s += "| technique | light | seam pixels | seam mismatch % | elsewhere % | ratio | same partitions % | ratio |\n|---|---:|---:|---:|---:|---:|---:|---:|\n";
+        s += "| technique | light | seam pixels | seam mismatch % | elsewhere % | ratio | same partitions % | ratio | seam at edges % | elsewhere at edges % | ratio | seam interior % | elsewhere interior % |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+        let ratio = |of: f64, to: f64| {
+            if to > 0.0 {
+                format!("{:.2}", of / to)
+            } else {
+                "–".into()
+            }
+        };
         for r in rows {
             if let Some(seam) = r.seams {
-                let ratio = |of: f64| {
-                    if of > 0.0 {
-                        format!("{:.2}", seam.seam_mismatch_pct / of)
-                    } else {
-                        "–".into()
-                    }
-                };
                 let _ = writeln!(
                     s,
-                    "| `{}` | {} | {} | {:.3} | {:.3} | {} | {:.3} | {} |",
+                    "| `{}` | {} | {} | {:.3} | {:.3} | {} | {:.3} | {} | {:.3} | {:.3} | {} | {:.3} | {:.3} |",
                     r.technique,
                     r.light,
                     seam.seam_pixels,
                     seam.seam_mismatch_pct,
                     seam.elsewhere_mismatch_pct,
-                    ratio(seam.elsewhere_mismatch_pct),
+                    ratio(seam.seam_mismatch_pct, seam.elsewhere_mismatch_pct),
                     seam.same_partitions_pct,
-                    ratio(seam.same_partitions_pct)
+                    ratio(seam.seam_mismatch_pct, seam.same_partitions_pct),
+                    seam.seam_at_edges_pct,
+                    seam.elsewhere_at_edges_pct,
+                    ratio(seam.seam_at_edges_pct, seam.elsewhere_at_edges_pct),
+                    seam.seam_interior_pct,
+                    seam.elsewhere_interior_pct
                 );
             }
         }

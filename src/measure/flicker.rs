@@ -14,7 +14,7 @@
 //! over the reference's shadow edges (2 px band) alone.
 
 use super::compare::{considered_at, gbuffer_positions};
-use super::quality::edge_band;
+use super::quality::{EDGE_RADIUS, edge_band};
 use super::{choice_label, percent, write_csv};
 use crate::gpu::GpuContext;
 use crate::headless::{self, HeadlessFrame};
@@ -221,7 +221,7 @@ pub fn run(
         edges.push(
             cons.iter()
                 .zip(&images.masks)
-                .map(|(c, m)| edge_band(w, h, c, m, 2))
+                .map(|(c, m)| edge_band(w, h, c, m, EDGE_RADIUS))
                 .collect::<Vec<_>>(),
         );
         considered.push(cons);

@@ -19,7 +19,7 @@ pub struct MaskMetrics {
     pub considered_pixels: usize,
     /// Of those, pixels the reference puts in shadow (visibility < 0.5).
     pub reference_shadowed_pct: f64,
-    /// Pixels within 2 px of a reference shadow boundary.
+    /// Pixels within [`EDGE_RADIUS`] px of a reference shadow boundary.
     pub edge_pixels: usize,
     pub all: Mismatch,
     /// Mismatches inside the edge band (percent of all considered pixels).
@@ -110,10 +110,24 @@ pub struct SeamStats {
     /// effect without the partitions' different resolutions (a far cascade
     /// is coarser everywhere, not only at its border).
     pub same_partitions_pct: f64,
+    /// The same two regions split by distance to the reference's shadow
+    /// edges: mismatch in % of each region's pixels within [`EDGE_RADIUS`]
+    /// px of one (where a map's texels show: the seam's effect without how
+    /// many edges each region holds — cascade borders lie far off, where
+    /// shadow edges crowd), and of its pixels farther off (the dark or
+    /// light bands users report at cascade borders).
+    pub seam_at_edges_pct: f64,
+    pub elsewhere_at_edges_pct: f64,
+    pub seam_interior_pct: f64,
+    pub elsewhere_interior_pct: f64,
 }
 
 /// The seam band's half-width in pixels.
 pub const SEAM_RADIUS: usize = 4;
+
+/// The half-width in pixels of the band around the reference's shadow
+/// edges that [`MaskMetrics`] counts as edge, not interior.
+pub const EDGE_RADIUS: usize = 2;
 
 /// [`SeamStats`] of `test` against `reference`, where `partition` is the
 /// map partition each pixel looked up (0: none); `None` when no considered
@@ -128,12 +142,14 @@ pub fn seam_stats(
 ) -> Option<SeamStats> {
     let class = |i: usize| (partition[i] > 0).then_some(partition[i]);
     let band = band_where_class_changes(width, height, SEAM_RADIUS, class);
-    let mut counts = [[0usize; 2]; 2]; // [in band?][pixels, mismatched]
+    let edges = edge_band(width, height, considered, reference, EDGE_RADIUS);
+    // [in seam band?][near an edge?]: [pixels, mismatched].
+    let mut counts = [[[0usize; 2]; 2]; 2];
     // Outside the band, per partition: [pixels, mismatched].
     let mut per_partition = std::collections::HashMap::<u32, [usize; 2]>::new();
     for i in (0..width * height).filter(|&i| considered[i]) {
         let wrong = ((reference[i] < 0.5) != (test[i] < 0.5)) as usize;
-        let region = &mut counts[band[i] as usize];
+        let region = &mut counts[band[i] as usize][edges[i] as usize];
         region[0] += 1;
         region[1] += wrong;
         if !band[i] {
@@ -142,7 +158,6 @@ pub fn seam_stats(
             p[1] += wrong;
         }
     }
-    let [elsewhere, seam] = counts;
     let rate = |p: u32| {
         per_partition
             .get(&p)
@@ -152,11 +167,19 @@ pub fn seam_stats(
         .filter(|&i| considered[i] && band[i])
         .map(|i| rate(partition[i]))
         .sum();
-    (seam[0] > 0).then(|| SeamStats {
-        seam_pixels: seam[0],
-        seam_mismatch_pct: super::percent(seam[1], seam[0]),
-        elsewhere_mismatch_pct: super::percent(elsewhere[1], elsewhere[0]),
-        same_partitions_pct: 100.0 * expected / seam[0] as f64,
+    let pct = |c: [usize; 2]| super::percent(c[1], c[0]);
+    let both = |r: [[usize; 2]; 2]| [r[0][0] + r[1][0], r[0][1] + r[1][1]];
+    let [elsewhere, seam] = counts;
+    let seam_pixels = both(seam)[0];
+    (seam_pixels > 0).then(|| SeamStats {
+        seam_pixels,
+        seam_mismatch_pct: pct(both(seam)),
+        elsewhere_mismatch_pct: pct(both(elsewhere)),
+        same_partitions_pct: 100.0 * expected / seam_pixels as f64,
+        seam_at_edges_pct: pct(seam[1]),
+        elsewhere_at_edges_pct: pct(elsewhere[1]),
+        seam_interior_pct: pct(seam[0]),
+        elsewhere_interior_pct: pct(elsewhere[0]),
     })
 }
 
@@ -168,7 +191,7 @@ pub fn mask_metrics(
     reference: &[f32],
     test: &[f32],
 ) -> MaskMetrics {
-    let band = edge_band(width, height, considered, reference, 2);
+    let band = edge_band(width, height, considered, reference, EDGE_RADIUS);
     let (mut n, mut ref_shadow, mut edge_n) = (0usize, 0usize, 0usize);
     let mut counts = [[0usize; 2]; 2]; // [edge?][false_shadow, false_lit]
     let (mut abs, mut sq) = (0.0f64, 0.0f64);
@@ -285,6 +308,32 @@ mod tests {
         assert_eq!(
             seam_stats(10, 10, &[true; 100], &one, &reference, &test),
             None
+        );
+    }
+
+    /// The same two partitions over a reference shadowed on its top five
+    /// rows: rows 3 to 6 lie within 2 px of its edge, so the band (columns
+    /// 1 to 8) holds 32 edge pixels and 48 interior ones, elsewhere 8 and
+    /// 12.
+    #[test]
+    fn seam_stats_split_each_region_at_the_references_shadow_edges() {
+        let partition: Vec<u32> = (0..100).map(|i| if i % 10 < 5 { 1 } else { 2 }).collect();
+        let reference: Vec<f32> = (0..100).map(|i| if i < 50 { 0.0 } else { 1.0 }).collect();
+        let mut test = reference.clone();
+        test[4 * 10 + 3] = 1.0; // band, at the edge
+        test[4] = 1.0; // band, interior
+        test[5 * 10] = 0.0; // elsewhere, at the edge
+        let s = seam_stats(10, 10, &[true; 100], &partition, &reference, &test).unwrap();
+        assert!((s.seam_at_edges_pct - 100.0 / 32.0).abs() < 1e-9, "{s:?}");
+        assert!(
+            (s.elsewhere_at_edges_pct - 100.0 / 8.0).abs() < 1e-9,
+            "{s:?}"
+        );
+        assert!((s.seam_interior_pct - 100.0 / 48.0).abs() < 1e-9, "{s:?}");
+        assert_eq!(s.elsewhere_interior_pct, 0.0);
+        assert!(
+            (s.seam_mismatch_pct - 100.0 * 2.0 / 80.0).abs() < 1e-9,
+            "{s:?}"
         );
     }
 
