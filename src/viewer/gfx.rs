@@ -1,7 +1,8 @@
 //! The viewer's window and everything that needs it: surface, device,
 //! renderer, frame targets, blit and egui.
 
-use super::blit::{Blit, EguiLayer};
+use super::blit::{self, Blit, EguiLayer};
+use super::compose::{Composer, Composite, WindowTarget};
 use crate::args::ViewArgs;
 use crate::frame::FrameTargets;
 use crate::gpu::GpuContext;
@@ -11,6 +12,13 @@ use std::sync::Arc;
 use winit::dpi::PhysicalSize;
 use winit::event_loop::ActiveEventLoop;
 use winit::window::Window;
+
+/// egui's output for one frame, tessellated and ready to draw.
+pub(super) struct UiFrame {
+    pub jobs: Vec<egui::ClippedPrimitive>,
+    pub pixels_per_point: f32,
+    pub textures: egui::TexturesDelta,
+}
 
 /// Everything that needs the window.
 pub(super) struct Gfx {
@@ -67,6 +75,114 @@ impl Gfx {
             )?);
         }
         Ok(())
+    }
+
+    /// Runs egui's pass over `build` (given the device, which the panels
+    /// query) and hands the platform its output (cursor, clipboard).
+    pub fn run_ui(&mut self, mut build: impl FnMut(&mut egui::Ui, &GpuContext)) -> UiFrame {
+        let raw_input = self.egui_state.take_egui_input(&self.window);
+        let gpu = &self.gpu;
+        let output = self.egui_ctx.run_ui(raw_input, |ui| build(ui, gpu));
+        self.egui_state
+            .handle_platform_output(&self.window, output.platform_output);
+        let pixels_per_point = output.pixels_per_point;
+        UiFrame {
+            jobs: self.egui_ctx.tessellate(output.shapes, pixels_per_point),
+            pixels_per_point,
+            textures: output.textures_delta,
+        }
+    }
+
+    /// Draws the frame: egui's texture changes and its panel layer (redrawn
+    /// only when they changed), then the 3D view right of `left` in the
+    /// blit's `mode` (`blit::BLIT_*`, light, 0, 0) with the panels over it,
+    /// into `screenshot` where given and into the window; submits and
+    /// presents (a lost or outdated surface is reconfigured and this frame
+    /// skipped).
+    pub fn present(
+        &mut self,
+        mut ui: UiFrame,
+        mode: [u32; 4],
+        left: u32,
+        screenshot: Option<&Composite>,
+    ) {
+        let size = (self.config.width, self.config.height);
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [size.0, size.1],
+            pixels_per_point: ui.pixels_per_point,
+        };
+        let textures_changed = !ui.textures.set.is_empty();
+        for (id, deltas) in ui.textures.set.drain() {
+            for delta in &deltas {
+                self.egui_renderer
+                    .update_texture(&self.gpu.device, &self.gpu.queue, id, delta);
+            }
+        }
+        let plain = self.config.format;
+        if self.egui_layer.as_ref().is_none_or(|l| l.size() != size) {
+            self.egui_layer = Some(EguiLayer::new(&self.gpu.device, plain, size.0, size.1));
+        }
+        let mut enc = self.gpu.device.create_command_encoder(&Default::default());
+        let layer = self.egui_layer.as_mut().expect("created above");
+        let cmd = layer.draw(
+            &self.gpu,
+            &mut self.egui_renderer,
+            &mut enc,
+            &ui.jobs,
+            &screen,
+            textures_changed,
+        );
+        let frame = self.frame.as_ref().expect("fitted before the frame");
+        let mut composer = Composer {
+            gpu: &self.gpu,
+            blit: &mut self.blit,
+            frame,
+            layer: layer.view(),
+            masks: frame.masks().create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            }),
+            mode,
+            left,
+            size,
+            panels: blit::primitives_bounds(&ui.jobs, ui.pixels_per_point, size.0, size.1),
+            plain,
+        };
+        if let Some(c) = screenshot {
+            composer.compose(&mut enc, c.target());
+        }
+        let surface_texture = match self.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => Some(t),
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                self.surface.configure(&self.gpu.device, &self.config);
+                None
+            }
+            _ => None,
+        };
+        if let Some(st) = &surface_texture {
+            let srgb = st.texture.create_view(&wgpu::TextureViewDescriptor {
+                format: Some(plain.add_srgb_suffix()),
+                ..Default::default()
+            });
+            let plain = st.texture.create_view(&Default::default());
+            composer.compose(
+                &mut enc,
+                WindowTarget {
+                    texture: &st.texture,
+                    srgb: &srgb,
+                    plain: &plain,
+                },
+            );
+        }
+        self.gpu.queue.submit(cmd.into_iter().chain([enc.finish()]));
+        if let Some(st) = surface_texture {
+            self.window.pre_present_notify();
+            self.gpu.queue.present(st);
+        }
+        for id in ui.textures.free.drain() {
+            self.egui_renderer.free_texture(&id);
+        }
     }
 
     /// Opens the window (`view.size`) on `view.backend`'s adapter and sets

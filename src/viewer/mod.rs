@@ -19,8 +19,7 @@ use crate::renderer::{FrameTimings, MipFilter, RenderSettings};
 use crate::scene::{self, Camera, Light, Scene};
 use crate::technique::{self, TechniqueChoice, TechniqueInstance};
 use anyhow::{Result, anyhow};
-use blit::EguiLayer;
-use compose::{Composer, Composite, WindowTarget};
+use compose::Composite;
 use gfx::Gfx;
 use glam::Vec2;
 pub use heatmap::Heatmap;
@@ -293,120 +292,19 @@ impl App {
             (size.width - left) * ss,
             size.height * ss,
         )?;
-        if self.state.show_debug != self.state.debug_enabled {
-            for t in &mut scene.techniques {
-                t.technique.enable_debug(self.state.show_debug);
-            }
-            self.state.debug_enabled = self.state.show_debug;
-            self.state.debug_images.clear();
-        }
-        let frame = gfx.frame.as_mut().expect("created above");
-        let nl = scene.lights.len();
-        let result = gfx.gpu.checked("rendering", || {
-            gfx.renderer.render(
-                &gfx.gpu,
-                &scene.scene,
-                &scene.scene_gpu,
-                frame,
-                &scene.camera,
-                &scene.lights,
-                &mut scene.techniques[..nl.max(1)],
-                &self.state.settings,
-            )
-        });
-        match result {
-            Ok(t) => {
-                self.state.frame_times.push_back(t.total_ms);
-                if self.state.frame_times.len() > 60 {
-                    self.state.frame_times.pop_front();
-                }
-                self.state.last_timings = Some(t);
-                self.state.error = None;
-                if self.state.show_debug {
-                    let li = self.state.selected_light.min(nl.max(1) - 1);
-                    match scene.techniques[li].technique.debug_views(&gfx.gpu) {
-                        Ok(views) => {
-                            gfx.renderer.draw_lines(&gfx.gpu, frame, &views.lines);
-                            self.state.debug_images =
-                                ui::debug_textures(&gfx.egui_ctx, views.images);
-                        }
-                        Err(e) => self.state.error = Some(format!("{e:#}")),
-                    }
-                }
-            }
-            Err(e) => self.state.error = Some(format!("{e:#}")),
-        }
-
-        // egui
-        let raw_input = gfx.egui_state.take_egui_input(&gfx.window);
+        scene.render(gfx, &mut self.state);
         let mut actions = ui::Actions::default();
-        let mut full_output = gfx.egui_ctx.run_ui(raw_input, |ui_root| {
-            ui::build(ui_root, &mut self.state, scene, &gfx.gpu, &mut actions);
+        let ui_frame = gfx.run_ui(|ui_root, gpu| {
+            ui::build(ui_root, &mut self.state, scene, gpu, &mut actions);
         });
-        gfx.egui_state
-            .handle_platform_output(&gfx.window, full_output.platform_output);
-        let ppp = full_output.pixels_per_point;
-        let jobs = gfx.egui_ctx.tessellate(full_output.shapes, ppp);
-        let screen = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [size.width, size.height],
-            pixels_per_point: ppp,
-        };
-        let mut textures_delta = std::mem::take(&mut full_output.textures_delta);
-        let textures_changed = !textures_delta.set.is_empty();
-        for (id, deltas) in textures_delta.set.drain() {
-            for delta in &deltas {
-                gfx.egui_renderer
-                    .update_texture(&gfx.gpu.device, &gfx.gpu.queue, id, delta);
-            }
-        }
-        let frame = gfx.frame.as_ref().expect("created above");
-        let mask_view = frame.masks().create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
-        let mut enc = gfx.gpu.device.create_command_encoder(&Default::default());
+        let nl = scene.lights.len();
         let mode = match self.state.overlay {
             Overlay::Mask(l) if l < nl => [blit::BLIT_MASK, l as u32, 0, 0],
             _ if ss == 1 => [blit::BLIT_COPY, 0, 0, 0],
             _ => [blit::BLIT_FILTERED, 0, 0, 0],
         };
-        let plain = gfx.config.format;
-        let srgb = plain.add_srgb_suffix();
-        // egui's panels, drawn into their layer only when they changed.
-        if gfx
-            .egui_layer
-            .as_ref()
-            .is_none_or(|l| l.size() != (size.width, size.height))
-        {
-            gfx.egui_layer = Some(EguiLayer::new(
-                &gfx.gpu.device,
-                plain,
-                size.width,
-                size.height,
-            ));
-        }
-        let cmd = gfx.egui_layer.as_mut().expect("created above").draw(
-            &gfx.gpu,
-            &mut gfx.egui_renderer,
-            &mut enc,
-            &jobs,
-            &screen,
-            textures_changed,
-        );
-        let layer = gfx.egui_layer.as_ref().expect("created above");
-        let mut composer = Composer {
-            gpu: &gfx.gpu,
-            blit: &mut gfx.blit,
-            frame,
-            layer: layer.view(),
-            masks: mask_view,
-            mode,
-            left,
-            size: (size.width, size.height),
-            panels: blit::primitives_bounds(&jobs, ppp, size.width, size.height),
-            plain,
-        };
-        // The screenshot of this frame, when one is due.
+        // The last frame of --frames (after the start-up heatmap when one
+        // was asked for) takes --screenshot's picture; the key, any frame's.
         let heatmap_pending = self.options.heatmap && !self.heatmap_reported;
         let done = self
             .options
@@ -414,106 +312,38 @@ impl App {
             .is_some_and(|n| self.frames_rendered + 1 >= n)
             && !heatmap_pending;
         let auto_path = self.options.screenshot.clone().filter(|_| done);
-        let screenshot = (self.state.screenshot_requested || auto_path.is_some())
-            .then(|| Composite::new(&gfx.gpu.device, (size.width, size.height), plain));
-        if let Some(c) = &screenshot {
-            composer.compose(&mut enc, c.target());
-        }
-        let surface_texture = match gfx.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => Some(t),
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                gfx.surface.configure(&gfx.gpu.device, &gfx.config);
-                None
-            }
-            _ => None,
-        };
-        if let Some(st) = &surface_texture {
-            let view_srgb = st.texture.create_view(&wgpu::TextureViewDescriptor {
-                format: Some(srgb),
-                ..Default::default()
-            });
-            let view_plain = st.texture.create_view(&Default::default());
-            composer.compose(
-                &mut enc,
-                WindowTarget {
-                    texture: &st.texture,
-                    srgb: &view_srgb,
-                    plain: &view_plain,
-                },
-            );
-        }
-        gfx.gpu.queue.submit(cmd.into_iter().chain([enc.finish()]));
-        if let Some(st) = surface_texture {
-            gfx.window.pre_present_notify();
-            gfx.gpu.queue.present(st);
-        }
-        for id in textures_delta.free.drain() {
-            gfx.egui_renderer.free_texture(&id);
-        }
+        let screenshot = (self.state.screenshot_requested || auto_path.is_some()).then(|| {
+            Composite::new(
+                &gfx.gpu.device,
+                (size.width, size.height),
+                gfx.config.format,
+            )
+        });
+        gfx.present(ui_frame, mode, left, screenshot.as_ref());
         self.frames_rendered += 1;
         if !self.first_frame_logged {
             self.first_frame_logged = true;
-            log::info!(
-                "viewer start-up: first frame after {:.0} ms",
-                self.started.elapsed().as_secs_f64() * 1e3
-            );
-            println!(
-                "start-up: first frame after {:.0} ms",
-                self.started.elapsed().as_secs_f64() * 1e3
-            );
+            let ms = self.started.elapsed().as_secs_f64() * 1e3;
+            log::info!("viewer start-up: first frame after {ms:.0} ms");
+            println!("start-up: first frame after {ms:.0} ms");
         }
-
         if self.options.heatmap && self.frames_rendered == 1 {
             self.heatmap_started_at = Some(self.frames_rendered);
             actions.heatmap = true;
         }
-        // Screenshots: the key, or --screenshot after --frames (and after
-        // the start-up heatmap when one was asked for).
         if let Some(composite) = &screenshot {
             self.state.screenshot_requested = false;
             let path = auto_path
                 .unwrap_or_else(|| PathBuf::from(format!("shadowlab-{}.png", chrono_stamp())));
-            composite.save_png(&gfx.gpu, &path)?;
-            let timings = self.state.last_timings.clone().unwrap_or_default();
-            let record = headless::FrameRecord {
-                scene: &scene.scene,
-                scene_gpu: &scene.scene_gpu,
-                camera: &scene.camera,
-                lights: &scene.lights,
-                techniques: scene.techniques.iter().take(nl).collect(),
-                settings: &self.state.settings,
-                frame,
-                timings: &timings,
-                adapter: gfx.gpu.adapter_summary(),
-                anisotropy: self.state.settings.texture_anisotropy(&gfx.gpu),
-                mip_filter: self.state.settings.texture_mip_filter(&gfx.gpu),
-                extra_timings: serde_json::json!({"supersampling": ss}),
-            };
-            std::fs::write(
-                path.with_extension("json"),
-                serde_json::to_string_pretty(&headless::frame_json(&record))?,
-            )?;
+            save_screenshot(gfx, scene, &self.state, composite, &path)?;
             self.state.message = Some(format!("saved {}", path.display()));
             println!("screenshot: {}", path.display());
         }
         if self.frames_rendered > 3 {
             self.intervals.push(interval);
         }
-        if done && self.state.show_debug {
-            println!("debug views: {} image(s)", self.state.debug_images.len());
-        }
         if done {
-            if !self.intervals.is_empty() {
-                let mean = self.intervals.iter().sum::<f64>() / self.intervals.len() as f64;
-                println!(
-                    "viewer: {:.1} FPS ({:.1} ms per frame, window to window, over {} frames after the first 3)",
-                    1.0 / mean,
-                    mean * 1e3,
-                    self.intervals.len()
-                );
-            }
-            event_loop.exit();
+            self.finish(event_loop);
         }
         if actions.heatmap {
             self.start_heatmap();
@@ -523,6 +353,108 @@ impl App {
         }
         Ok(())
     }
+
+    /// The end of a `--frames` run: what it showed and how fast, then exit.
+    fn finish(&self, event_loop: &ActiveEventLoop) {
+        if self.state.show_debug {
+            println!("debug views: {} image(s)", self.state.debug_images.len());
+        }
+        if !self.intervals.is_empty() {
+            let mean = self.intervals.iter().sum::<f64>() / self.intervals.len() as f64;
+            println!(
+                "viewer: {:.1} FPS ({:.1} ms per frame, window to window, over {} frames after the first 3)",
+                1.0 / mean,
+                mean * 1e3,
+                self.intervals.len()
+            );
+        }
+        event_loop.exit();
+    }
+}
+
+impl SceneState {
+    /// Renders the frame into `gfx`'s targets with `state`'s settings, and
+    /// the selected light's debug views when they are on; the timings or the
+    /// error go to `state`.
+    fn render(&mut self, gfx: &mut Gfx, state: &mut ViewerState) {
+        if state.show_debug != state.debug_enabled {
+            for t in &mut self.techniques {
+                t.technique.enable_debug(state.show_debug);
+            }
+            state.debug_enabled = state.show_debug;
+            state.debug_images.clear();
+        }
+        let frame = gfx.frame.as_mut().expect("fitted before the frame");
+        let nl = self.lights.len();
+        let result = gfx.gpu.checked("rendering", || {
+            gfx.renderer.render(
+                &gfx.gpu,
+                &self.scene,
+                &self.scene_gpu,
+                frame,
+                &self.camera,
+                &self.lights,
+                &mut self.techniques[..nl.max(1)],
+                &state.settings,
+            )
+        });
+        let timings = match result {
+            Ok(t) => t,
+            Err(e) => {
+                state.error = Some(format!("{e:#}"));
+                return;
+            }
+        };
+        state.frame_times.push_back(timings.total_ms);
+        if state.frame_times.len() > 60 {
+            state.frame_times.pop_front();
+        }
+        state.last_timings = Some(timings);
+        state.error = None;
+        if state.show_debug {
+            let li = state.selected_light.min(nl.max(1) - 1);
+            match self.techniques[li].technique.debug_views(&gfx.gpu) {
+                Ok(views) => {
+                    gfx.renderer.draw_lines(&gfx.gpu, frame, &views.lines);
+                    state.debug_images = ui::debug_textures(&gfx.egui_ctx, views.images);
+                }
+                Err(e) => state.error = Some(format!("{e:#}")),
+            }
+        }
+    }
+}
+
+/// Writes `composite` to `path` as a PNG and the frame's record beside it
+/// (`path` with a .json extension: scene, camera, lights, techniques,
+/// timings, as `render` writes).
+fn save_screenshot(
+    gfx: &Gfx,
+    scene: &SceneState,
+    state: &ViewerState,
+    composite: &Composite,
+    path: &std::path::Path,
+) -> Result<()> {
+    composite.save_png(&gfx.gpu, path)?;
+    let timings = state.last_timings.clone().unwrap_or_default();
+    let record = headless::FrameRecord {
+        scene: &scene.scene,
+        scene_gpu: &scene.scene_gpu,
+        camera: &scene.camera,
+        lights: &scene.lights,
+        techniques: scene.techniques.iter().take(scene.lights.len()).collect(),
+        settings: &state.settings,
+        frame: gfx.frame.as_ref().expect("fitted before the frame"),
+        timings: &timings,
+        adapter: gfx.gpu.adapter_summary(),
+        anisotropy: state.settings.texture_anisotropy(&gfx.gpu),
+        mip_filter: state.settings.texture_mip_filter(&gfx.gpu),
+        extra_timings: serde_json::json!({"supersampling": state.supersampling.max(1)}),
+    };
+    std::fs::write(
+        path.with_extension("json"),
+        serde_json::to_string_pretty(&headless::frame_json(&record))?,
+    )?;
+    Ok(())
 }
 
 /// Seconds since the Unix epoch, for screenshot names.
