@@ -472,3 +472,42 @@ fn a_spot_map_focused_on_what_the_camera_sees_has_smaller_texels() {
         "focused {f:?}\nwhole cone {c:?}"
     );
 }
+
+/// The projection debug view tints each pixel by the cascade it looks up
+/// (red, green, blue, yellow for cascades 1 to 4: `debug.wgsl`'s
+/// `cascade_tint`), the same cascade `compare` reads as its partition.
+#[test]
+fn the_cascade_debug_view_tints_each_pixel_by_its_cascade() {
+    let scene = squares_along_the_view(0.0, 2.0);
+    let (w, h) = (128, 96);
+    let hf = frame_with_debug_views(&scene, "shadow-map:csm", w, h);
+    let gpu = gpu();
+    let views = hf.techniques[0].technique.debug_views(gpu).unwrap();
+    let projection = &views.images[1];
+    let lookup = hf.techniques[0].technique.map_lookup(gpu).unwrap().unwrap();
+    // Cascades 1 to 4 by their tints' strongest channels.
+    let strongest = |p: &[u8]| -> Option<usize> {
+        let above = |a: u8, b: u8| a > b.saturating_add(8);
+        match (above(p[0], p[2]), above(p[1], p[2]), above(p[2], p[0])) {
+            (true, true, _) if p[0].abs_diff(p[1]) <= 8 => Some(3),
+            (true, false, _) => Some(0),
+            (false, true, _) => Some(1),
+            (false, false, true) => Some(2),
+            _ => None,
+        }
+    };
+    let mut seen = [0usize; 4];
+    for (p, &part) in projection.rgba.chunks_exact(4).zip(&lookup.partition) {
+        if part == 0 {
+            continue;
+        }
+        let tint = strongest(p);
+        assert_eq!(
+            tint,
+            Some(part as usize - 1),
+            "pixel {p:?} of cascade {part}"
+        );
+        seen[part as usize - 1] += 1;
+    }
+    assert!(seen.iter().filter(|&&n| n > 0).count() >= 2, "{seen:?}");
+}
