@@ -174,14 +174,7 @@ fn statistics_and_debug_views() {
                 break;
             }
             std::thread::sleep(std::time::Duration::from_millis(20));
-            hf.render(
-                gpu,
-                &scene,
-                &scene.camera,
-                &scene.lights,
-                &Default::default(),
-            )
-            .unwrap();
+            render_again(&mut hf, &scene);
         }
         let t = &hf.techniques[0].technique;
         let c: std::collections::HashMap<&str, f64> = t.counters().into_iter().collect();

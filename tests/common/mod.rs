@@ -59,14 +59,7 @@ pub fn frame_with_debug_views(scene: &Scene, technique: &str, w: u32, h: u32) ->
         .remove(0);
     let mut hf = HeadlessFrame::new(gpu, scene, &[choice], w, h).unwrap();
     hf.techniques[0].technique.enable_debug(true);
-    hf.render(
-        gpu,
-        scene,
-        &scene.camera,
-        &scene.lights,
-        &Default::default(),
-    )
-    .unwrap();
+    render_again(&mut hf, scene);
     hf
 }
 
