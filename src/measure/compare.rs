@@ -172,6 +172,14 @@ pub fn run(
     )?;
     headless::write_images(&out.join("reference"), &ref_img)?;
     let considered = considered_pixels(gpu, &hf, lights)?;
+    // Each light's reference edge band, shared by every technique's seams.
+    let edges: Vec<Vec<bool>> = considered
+        .iter()
+        .zip(&ref_img.masks)
+        .map(|(cons, mask)| {
+            quality::edge_band(w as usize, h as usize, cons, mask, quality::EDGE_RADIUS)
+        })
+        .collect();
     let on_plane = plane_pixels(gpu, &hf, scene)?;
     let split = |cons: &[bool], want: bool| -> Vec<bool> {
         cons.iter()
@@ -232,6 +240,7 @@ pub fn run(
                     cons,
                     &l.partition,
                     &ref_img.masks[li],
+                    &edges[li],
                     &img.masks[li],
                 )
             });
@@ -258,7 +267,7 @@ pub fn run(
         "reference": choice_label(reference),
         "reference_frame_ms": ref_ms,
         "adapter": gpu.adapter_summary(),
-        "pixels": "considered = geometry that receives shadows with its geometric normal facing the light (N·L > 0); percentages are of considered pixels; edge = within 2 px of a reference shadow boundary",
+        "pixels": format!("considered = geometry that receives shadows with its geometric normal facing the light (N·L > 0); percentages are of considered pixels; edge = within {} px of a reference shadow boundary", quality::EDGE_RADIUS),
     });
     std::fs::write(
         out.join("quality.json"),

@@ -130,19 +130,21 @@ pub const SEAM_RADIUS: usize = 4;
 pub const EDGE_RADIUS: usize = 2;
 
 /// [`SeamStats`] of `test` against `reference`, where `partition` is the
-/// map partition each pixel looked up (0: none); `None` when no considered
-/// pixel lies near a partition border.
+/// map partition each pixel looked up (0: none) and `edges` the
+/// reference's [`edge_band`] over `considered` at [`EDGE_RADIUS`] (the
+/// same for every technique); `None` when no considered pixel lies near a
+/// partition border.
 pub fn seam_stats(
     width: usize,
     height: usize,
     considered: &[bool],
     partition: &[u32],
     reference: &[f32],
+    edges: &[bool],
     test: &[f32],
 ) -> Option<SeamStats> {
     let class = |i: usize| (partition[i] > 0).then_some(partition[i]);
     let band = band_where_class_changes(width, height, SEAM_RADIUS, class);
-    let edges = edge_band(width, height, considered, reference, EDGE_RADIUS);
     // [in seam band?][near an edge?]: [pixels, mismatched].
     let mut counts = [[[0usize; 2]; 2]; 2];
     // Outside the band, per partition: [pixels, mismatched].
@@ -286,6 +288,11 @@ pub fn heatmap(
 mod tests {
     use super::*;
 
+    /// The edge band of a 10×10 reference, every pixel considered.
+    fn edges_of(reference: &[f32]) -> Vec<bool> {
+        edge_band(10, 10, &[true; 100], reference, EDGE_RADIUS)
+    }
+
     /// Two partitions split at column 5: the band holds columns 1 to 8
     /// (within 4 px of the other side), elsewhere columns 0 and 9.
     #[test]
@@ -297,7 +304,16 @@ mod tests {
             test[row * 10 + 5] = 0.0; // on the border: 10 of 80 band pixels
         }
         test[0] = 0.0; // column 0: 1 of 20 pixels elsewhere
-        let s = seam_stats(10, 10, &[true; 100], &partition, &reference, &test).unwrap();
+        let s = seam_stats(
+            10,
+            10,
+            &[true; 100],
+            &partition,
+            &reference,
+            &edges_of(&reference),
+            &test,
+        )
+        .unwrap();
         assert_eq!(s.seam_pixels, 80);
         assert!((s.seam_mismatch_pct - 12.5).abs() < 1e-9, "{s:?}");
         assert!((s.elsewhere_mismatch_pct - 5.0).abs() < 1e-9, "{s:?}");
@@ -306,7 +322,15 @@ mod tests {
         assert!((s.same_partitions_pct - 5.0).abs() < 1e-9, "{s:?}");
         let one = vec![1u32; 100];
         assert_eq!(
-            seam_stats(10, 10, &[true; 100], &one, &reference, &test),
+            seam_stats(
+                10,
+                10,
+                &[true; 100],
+                &one,
+                &reference,
+                &edges_of(&reference),
+                &test
+            ),
             None
         );
     }
@@ -323,7 +347,16 @@ mod tests {
         test[4 * 10 + 3] = 1.0; // band, at the edge
         test[4] = 1.0; // band, interior
         test[5 * 10] = 0.0; // elsewhere, at the edge
-        let s = seam_stats(10, 10, &[true; 100], &partition, &reference, &test).unwrap();
+        let s = seam_stats(
+            10,
+            10,
+            &[true; 100],
+            &partition,
+            &reference,
+            &edges_of(&reference),
+            &test,
+        )
+        .unwrap();
         assert!((s.seam_at_edges_pct - 100.0 / 32.0).abs() < 1e-9, "{s:?}");
         assert!(
             (s.elsewhere_at_edges_pct - 100.0 / 8.0).abs() < 1e-9,
