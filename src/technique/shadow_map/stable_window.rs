@@ -237,7 +237,7 @@ mod tests {
         // It shrinks: kept while the map is at most 2^(5/8) times what it
         // needs — through a shrink by a quarter octave, as far as it grew.
         let smallest_kept = 2.0 * fresh / Hold::SAMPLES.kept_ratio * (1.0 - 32.0 / 2048.0);
-        assert!(fit_to_samples(10.0 / QUARTER_OCTAVE, Some(fresh)) == fresh);
+        assert_eq!(fit_to_samples(10.0 / QUARTER_OCTAVE, Some(fresh)), fresh);
         assert_eq!(fit_to_samples(smallest_kept * 1.01, Some(fresh)), fresh);
         assert!(fit_to_samples(smallest_kept * 0.9, Some(fresh)) < fresh);
         // Past what it holds: a fresh fit, with room again.
