@@ -293,6 +293,19 @@ mod tests {
         edge_band(10, 10, &[true; 100], reference, EDGE_RADIUS)
     }
 
+    /// `seam_stats` of a 10×10 frame, every pixel considered.
+    fn seams_of(partition: &[u32], reference: &[f32], test: &[f32]) -> Option<SeamStats> {
+        seam_stats(
+            10,
+            10,
+            &[true; 100],
+            partition,
+            reference,
+            &edges_of(reference),
+            test,
+        )
+    }
+
     /// Two partitions split at column 5: the band holds columns 1 to 8
     /// (within 4 px of the other side), elsewhere columns 0 and 9.
     #[test]
@@ -304,16 +317,7 @@ mod tests {
             test[row * 10 + 5] = 0.0; // on the border: 10 of 80 band pixels
         }
         test[0] = 0.0; // column 0: 1 of 20 pixels elsewhere
-        let s = seam_stats(
-            10,
-            10,
-            &[true; 100],
-            &partition,
-            &reference,
-            &edges_of(&reference),
-            &test,
-        )
-        .unwrap();
+        let s = seams_of(&partition, &reference, &test).unwrap();
         assert_eq!(s.seam_pixels, 80);
         assert!((s.seam_mismatch_pct - 12.5).abs() < 1e-9, "{s:?}");
         assert!((s.elsewhere_mismatch_pct - 5.0).abs() < 1e-9, "{s:?}");
@@ -321,18 +325,7 @@ mod tests {
         // none of its 10: 40 band pixels at 10 %, 40 at 0 %.
         assert!((s.same_partitions_pct - 5.0).abs() < 1e-9, "{s:?}");
         let one = vec![1u32; 100];
-        assert_eq!(
-            seam_stats(
-                10,
-                10,
-                &[true; 100],
-                &one,
-                &reference,
-                &edges_of(&reference),
-                &test
-            ),
-            None
-        );
+        assert_eq!(seams_of(&one, &reference, &test), None);
     }
 
     /// The same two partitions over a reference shadowed on its top five
@@ -347,16 +340,7 @@ mod tests {
         test[4 * 10 + 3] = 1.0; // band, at the edge
         test[4] = 1.0; // band, interior
         test[5 * 10] = 0.0; // elsewhere, at the edge
-        let s = seam_stats(
-            10,
-            10,
-            &[true; 100],
-            &partition,
-            &reference,
-            &edges_of(&reference),
-            &test,
-        )
-        .unwrap();
+        let s = seams_of(&partition, &reference, &test).unwrap();
         assert!((s.seam_at_edges_pct - 100.0 / 32.0).abs() < 1e-9, "{s:?}");
         assert!(
             (s.elsewhere_at_edges_pct - 100.0 / 8.0).abs() < 1e-9,
