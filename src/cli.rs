@@ -431,6 +431,10 @@ fn report(a: ReportArgs) -> Result<()> {
     Ok(())
 }
 
+/// The frame after which `render` records the live GPU objects, to
+/// compare with those after its last frame (frame.json).
+const LIVE_EARLY_FRAME: u32 = 10;
+
 fn render(a: RenderArgs) -> Result<()> {
     let t0 = Instant::now();
     let (scene, camera, lights) = a.view.resolve()?;
@@ -445,9 +449,14 @@ fn render(a: RenderArgs) -> Result<()> {
     let t_setup = setup.elapsed();
     let settings = a.view.settings();
     let mut all = vec![];
-    for _ in 0..a.frames {
+    let mut live_early = None;
+    for i in 0..a.frames {
         all.push(hf.render(&gpu, &scene, &camera, &lights, &settings)?);
+        if i + 1 == LIVE_EARLY_FRAME {
+            live_early = Some(crate::gpu::LiveResources::of(&gpu.device));
+        }
     }
+    let live_last = crate::gpu::LiveResources::of(&gpu.device);
     let first_ms = all[0].total_ms;
     all.sort_by(|x, y| x.total_ms.total_cmp(&y.total_ms));
     let timings = all[all.len() / 2].clone();
@@ -474,6 +483,11 @@ fn render(a: RenderArgs) -> Result<()> {
             "readback_and_write": t_write.as_secs_f64() * 1e3,
             "first_frame": first_ms,
             "frames_rendered": a.frames,
+            "live_resources": {
+                "after_frame_10": live_early,
+                "after_last_frame": live_last,
+                "pipelines_created": gpu.cache.pipelines_created(),
+            },
         }),
     };
     let json = headless::frame_json(&record);

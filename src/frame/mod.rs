@@ -146,7 +146,7 @@ impl FrameLayouts {
             FrameLayouts {
                 frame: layout(
                     "frame",
-                    &[uniform_entry(0, wgpu::ShaderStages::all(), false)],
+                    &[uniform_entry(gpu, 0, wgpu::ShaderStages::all(), false)],
                 ),
                 objects: layout(
                     "objects",
@@ -180,7 +180,7 @@ impl FrameLayouts {
                 material: layout(
                     "material",
                     &[
-                        uniform_entry(0, vf, false),
+                        uniform_entry(gpu, 0, vf, false),
                         texture_entry(1, wgpu::TextureViewDimension::D2, true),
                         texture_entry(2, wgpu::TextureViewDimension::D2, true),
                     ],
@@ -227,18 +227,14 @@ pub fn check_formats(gpu: &GpuContext) -> anyhow::Result<()> {
 }
 
 /// A shader module of the renderer: `common.wgsl` followed by `sources`.
-pub fn shader_module(device: &wgpu::Device, label: &str, sources: &[&str]) -> wgpu::ShaderModule {
-    crate::gpu::compose_shader(device, label, &[&[COMMON_WGSL], sources].concat())
+pub fn shader_module(gpu: &GpuContext, label: &str, sources: &[&str]) -> wgpu::ShaderModule {
+    crate::gpu::compose_shader(gpu, label, &[&[COMMON_WGSL], sources].concat())
 }
 
 /// A shader module of a technique: `common.wgsl`, `gbuffer.wgsl`, `sources`.
-pub fn technique_shader(
-    device: &wgpu::Device,
-    label: &str,
-    sources: &[&str],
-) -> wgpu::ShaderModule {
+pub fn technique_shader(gpu: &GpuContext, label: &str, sources: &[&str]) -> wgpu::ShaderModule {
     crate::gpu::compose_shader(
-        device,
+        gpu,
         label,
         &[&[COMMON_WGSL, GBUFFER_WGSL], sources].concat(),
     )

@@ -247,7 +247,7 @@ impl SceneGpu {
                 let buf = init(
                     "material",
                     bytemuck::bytes_of(&data),
-                    wgpu::BufferUsages::UNIFORM,
+                    gpu.uniform_space.usage(),
                 );
                 let diffuse = m.diffuse_texture.map_or(&white, |t| &gpu_textures[t]);
                 let normal = m.normal_map.map_or(&flat_normal, |t| &gpu_textures[t]);

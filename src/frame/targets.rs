@@ -129,7 +129,7 @@ impl FrameTargets {
         let frame_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame uniform"),
             size: std::mem::size_of::<FrameUniform>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            usage: crate::gpu::uniform_usage(gpu),
             mapped_at_creation: false,
         });
         let frame_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -1,5 +1,7 @@
 //! Texture, bind-layout and shader-composition helpers.
 
+use super::GpuContext;
+
 /// A binding of one `T` at a dynamic offset of `buffer`.
 pub fn dynamic_uniform<T>(buffer: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
     wgpu::BindingResource::Buffer(wgpu::BufferBinding {
@@ -9,8 +11,10 @@ pub fn dynamic_uniform<T>(buffer: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
     })
 }
 
-/// Layout entry of a uniform buffer (optionally with a dynamic offset).
+/// Layout entry of a parameter block (a WGSL `var<uniform>`, optionally at
+/// a dynamic offset), in the device's [`super::UniformSpace`].
 pub fn uniform_entry(
+    gpu: &GpuContext,
     binding: u32,
     visibility: wgpu::ShaderStages,
     dynamic: bool,
@@ -18,13 +22,14 @@ pub fn uniform_entry(
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: dynamic,
-            min_binding_size: None,
-        },
+        ty: gpu.uniform_space.binding_type(dynamic),
         count: None,
     }
+}
+
+/// The usage of a parameter block's buffer that is written after creation.
+pub fn uniform_usage(gpu: &GpuContext) -> wgpu::BufferUsages {
+    gpu.uniform_space.usage() | wgpu::BufferUsages::COPY_DST
 }
 
 /// Layout entry of a storage buffer.
@@ -79,42 +84,46 @@ pub fn sampled_texture_entry(
 }
 
 /// Builds one shader module from WGSL sources joined in order (the shared
-/// declarations first).
-pub fn compose_shader(device: &wgpu::Device, label: &str, sources: &[&str]) -> wgpu::ShaderModule {
-    device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(sources.join("\n").into()),
-    })
+/// declarations first), its parameter blocks in the device's
+/// [`super::UniformSpace`].
+pub fn compose_shader(gpu: &GpuContext, label: &str, sources: &[&str]) -> wgpu::ShaderModule {
+    let source = sources.join("\n");
+    gpu.device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(gpu.uniform_space.wgsl(&source).into_owned().into()),
+        })
 }
 
 /// Compute pipelines for `entries` of the WGSL `source`, all with one bind
 /// group of `layout` (group 0), in the order given.
 pub fn compute_pipelines<const N: usize>(
-    device: &wgpu::Device,
+    gpu: &GpuContext,
     label: &str,
     layout: &wgpu::BindGroupLayout,
     source: &str,
     entries: [&str; N],
 ) -> [wgpu::ComputePipeline; N] {
-    compute_pipelines_with(device, label, layout, source, entries, &[])
+    compute_pipelines_with(gpu, label, layout, source, entries, &[])
 }
 
 /// [`compute_pipelines`] with the shader's pipeline-overridable
 /// `constants` set.
 pub fn compute_pipelines_with<const N: usize>(
-    device: &wgpu::Device,
+    gpu: &GpuContext,
     label: &str,
     layout: &wgpu::BindGroupLayout,
     source: &str,
     entries: [&str; N],
     constants: &[(&str, f64)],
 ) -> [wgpu::ComputePipeline; N] {
+    let device = &gpu.device;
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(label),
         bind_group_layouts: &[Some(layout)],
         immediate_size: 0,
     });
-    let module = compose_shader(device, label, &[source]);
+    let module = compose_shader(gpu, label, &[source]);
     entries.map(|entry| {
         device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(entry),

@@ -6,13 +6,17 @@
 
 pub mod cache;
 pub mod helpers;
+pub mod live;
 pub mod readback;
 pub mod timestamps;
+pub mod uniform_space;
 
 pub use cache::{DeviceCache, PIPELINE_CACHE_BOUND};
 pub use helpers::*;
+pub use live::LiveResources;
 pub use readback::{AsyncReadback, FrameFeedback};
 pub use timestamps::{SectionTimer, Stamps, TimestampPairs};
+pub use uniform_space::UniformSpace;
 
 use anyhow::{Result, bail};
 
@@ -46,6 +50,8 @@ pub struct GpuContext {
     pub pipeline_statistics: bool,
     /// `unclipped_depth` (depth clamp) is available.
     pub depth_clamp: bool,
+    /// Where shaders read their parameter blocks from on this device.
+    pub uniform_space: UniformSpace,
     /// Bytes one frame's targets or one technique instance's resources may
     /// take ([`GpuContext::check_allocation`]); `--memory-budget` sets it.
     pub memory_budget: u64,
@@ -205,6 +211,7 @@ impl GpuContext {
             ),
             pipeline_statistics: features.contains(wgpu::Features::PIPELINE_STATISTICS_QUERY),
             depth_clamp: features.contains(wgpu::Features::DEPTH_CLIP_CONTROL),
+            uniform_space: UniformSpace::for_adapter(&info),
             memory_budget: DEFAULT_MEMORY_BUDGET_MIB << 20,
             cache: DeviceCache::default(),
             waits: Default::default(),

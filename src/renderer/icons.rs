@@ -90,6 +90,7 @@ impl LightIcons {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("icon"),
             entries: &[crate::gpu::uniform_entry(
+                gpu,
                 0,
                 wgpu::ShaderStages::VERTEX_FRAGMENT,
                 true,
@@ -98,7 +99,7 @@ impl LightIcons {
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("icon uniforms"),
             size: (std::mem::size_of::<IconUniform>() * MAX_LIGHTS) as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            usage: crate::gpu::uniform_usage(gpu),
             mapped_at_creation: false,
         });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -110,7 +111,7 @@ impl LightIcons {
             }],
         });
         let device = &gpu.device;
-        let module = crate::frame::shader_module(device, "icons", &[include_str!("icons.wgsl")]);
+        let module = crate::frame::shader_module(gpu, "icons", &[include_str!("icons.wgsl")]);
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("icons"),
             bind_group_layouts: &[Some(frame_layout), None, Some(&layout)],

@@ -137,7 +137,7 @@ pub fn scene_module(gpu: &GpuContext) -> wgpu::ShaderModule {
     gpu.cache
         .shared(|| {
             SceneModule(frame::shader_module(
-                &gpu.device,
+                gpu,
                 "scene",
                 &[include_str!("procedural.wgsl"), include_str!("scene.wgsl")],
             ))

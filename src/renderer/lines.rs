@@ -22,7 +22,7 @@ pub struct LineRenderer {
 impl LineRenderer {
     pub fn new(gpu: &GpuContext, frame_layout: &wgpu::BindGroupLayout) -> LineRenderer {
         let device = &gpu.device;
-        let module = crate::frame::shader_module(device, "lines", &[include_str!("lines.wgsl")]);
+        let module = crate::frame::shader_module(gpu, "lines", &[include_str!("lines.wgsl")]);
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("lines"),
             bind_group_layouts: &[Some(frame_layout)],

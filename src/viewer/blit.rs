@@ -39,21 +39,13 @@ pub struct Blit {
 }
 
 impl Blit {
-    pub fn new(device: &wgpu::Device) -> Blit {
+    pub fn new(gpu: &GpuContext) -> Blit {
+        let device = &gpu.device;
         let tex = |binding, dim| crate::gpu::texture_entry(binding, dim, binding == 1);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("blit"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                crate::gpu::uniform_entry(gpu, 0, wgpu::ShaderStages::FRAGMENT, false),
                 tex(1, wgpu::TextureViewDimension::D2),
                 tex(2, wgpu::TextureViewDimension::D2Array),
                 wgpu::BindGroupLayoutEntry {
@@ -70,10 +62,7 @@ impl Blit {
                 min_filter: wgpu::FilterMode::Linear,
                 ..Default::default()
             }),
-            module: device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("blit"),
-                source: wgpu::ShaderSource::Wgsl(include_str!("blit.wgsl").into()),
-            }),
+            module: crate::gpu::compose_shader(gpu, "blit", &[include_str!("blit.wgsl")]),
             layout,
             pipelines: vec![],
         }
@@ -216,7 +205,7 @@ impl Blit {
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("blit"),
                 contents: bytemuck::bytes_of(&BlitUniform { mode }),
-                usage: wgpu::BufferUsages::UNIFORM,
+                usage: gpu.uniform_space.usage(),
             });
         gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("blit"),

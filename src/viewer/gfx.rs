@@ -256,7 +256,7 @@ impl Gfx {
         );
         Ok(Gfx {
             frame_color_format,
-            blit: Blit::new(&gpu.device),
+            blit: Blit::new(&gpu),
             egui_layer: None,
             window,
             surface,

@@ -128,13 +128,13 @@ impl PlanarShared {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("planar"),
             entries: &[crate::gpu::uniform_entry(
+                gpu,
                 0,
                 wgpu::ShaderStages::VERTEX_FRAGMENT,
                 true,
             )],
         });
-        let module =
-            crate::frame::technique_shader(device, "planar", &[include_str!("planar.wgsl")]);
+        let module = crate::frame::technique_shader(gpu, "planar", &[include_str!("planar.wgsl")]);
         let pl = super::pipeline_layout(gpu, "planar", &layout);
         let stencil_face = |compare, pass_op| wgpu::StencilFaceState {
             compare,
@@ -245,7 +245,7 @@ impl PlanarShadows {
             uniforms: gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("planar uniforms"),
                 size: (std::mem::size_of::<PlanarUniform>() * MAX_PLANES) as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                usage: crate::gpu::uniform_usage(gpu),
                 mapped_at_creation: false,
             }),
             planes: None,

@@ -138,15 +138,12 @@ impl ProjectiveShared {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("projective"),
             entries: &[
-                crate::gpu::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
+                crate::gpu::uniform_entry(gpu, 0, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
                 crate::gpu::texture_entry(1, wgpu::TextureViewDimension::D2, false),
             ],
         });
-        let module = crate::frame::technique_shader(
-            device,
-            "projective",
-            &[include_str!("projective.wgsl")],
-        );
+        let module =
+            crate::frame::technique_shader(gpu, "projective", &[include_str!("projective.wgsl")]);
         let pl = super::pipeline_layout(gpu, "projective", &layout);
         let caster_pipeline = gpu.cache.render_pipeline("projective caster", &(), || {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -270,7 +267,7 @@ impl ProjectiveShadows {
         self.uniforms = Some(device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("projectors"),
             size: (n * std::mem::size_of::<ProjectorUniform>()) as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            usage: crate::gpu::uniform_usage(ctx.gpu),
             mapped_at_creation: false,
         }));
         self.bytes = (self.projectors.len() as u64) * (size as u64 * size as u64) * (1 + 4);

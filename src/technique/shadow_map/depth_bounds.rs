@@ -135,21 +135,21 @@ impl ReduceShared {
             entries: &[
                 texture(0),
                 texture(1),
-                crate::gpu::uniform_entry(2, wgpu::ShaderStages::COMPUTE, false),
+                crate::gpu::uniform_entry(gpu, 2, wgpu::ShaderStages::COMPUTE, false),
                 crate::gpu::storage_entry(3, wgpu::ShaderStages::COMPUTE, false),
                 crate::gpu::storage_entry(4, wgpu::ShaderStages::COMPUTE, false),
             ],
         });
         let source = include_str!("depth_bounds.wgsl");
         let [depth_range, cascade_bounds] = crate::gpu::compute_pipelines(
-            device,
+            gpu,
             "sdsm reduction",
             &layout,
             source,
             ["depth_range", "cascade_bounds"],
         );
         let [depth_range_supports] = crate::gpu::compute_pipelines_with(
-            device,
+            gpu,
             "sdsm reduction with supports",
             &layout,
             source,
@@ -199,7 +199,7 @@ impl DepthReduction {
             params: gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("sdsm reduction parameters"),
                 size: std::mem::size_of::<ReduceParams>() as u64,
-                usage: U::UNIFORM | U::COPY_DST,
+                usage: crate::gpu::uniform_usage(gpu),
                 mapped_at_creation: false,
             }),
             result: buffer("sdsm bounds", U::STORAGE | U::COPY_SRC | U::COPY_DST),

@@ -89,7 +89,7 @@ impl ChainShared {
             ],
         });
         let [from_depth, from_bytes, from_level] = crate::gpu::compute_pipelines(
-            device,
+            gpu,
             "edge mask chain",
             &layout,
             &(wgsl_constants() + include_str!("edge_mask.wgsl")),

@@ -150,7 +150,7 @@ impl ShadowMapTechnique {
             uniforms: gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("shadow map uniforms"),
                 size: STRIDE * SLOTS,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                usage: crate::gpu::uniform_usage(gpu),
                 mapped_at_creation: false,
             }),
             maps: None,

@@ -172,7 +172,7 @@ impl ShadowMapShared {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadow map"),
             entries: &[
-                crate::gpu::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
+                crate::gpu::uniform_entry(gpu, 0, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
                 tex(3, wgpu::TextureSampleType::Depth),
                 wgpu::BindGroupLayoutEntry {
                     binding: 4,
@@ -201,7 +201,7 @@ impl ShadowMapShared {
             + &MapProjection::wgsl_constants("PROJECTION")
             + &super::edge_mask::wgsl_constants();
         let module = crate::frame::technique_shader(
-            device,
+            gpu,
             "shadow map",
             &[
                 &constants,

@@ -89,12 +89,12 @@ impl VolumeShared {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadow volume"),
             entries: &[
-                crate::gpu::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, false),
+                crate::gpu::uniform_entry(gpu, 0, wgpu::ShaderStages::VERTEX_FRAGMENT, false),
                 crate::gpu::storage_entry(1, wgpu::ShaderStages::VERTEX, true),
             ],
         });
         let module =
-            crate::frame::technique_shader(device, "shadow volume", &[include_str!("volume.wgsl")]);
+            crate::frame::technique_shader(gpu, "shadow volume", &[include_str!("volume.wgsl")]);
         let pipeline_layout = crate::technique::pipeline_layout(gpu, "shadow volume", &layout);
         let fullscreen =
             |label: &str, fs: &str, target: wgpu::ColorTargetState, stencil: wgpu::StencilState| {
@@ -132,7 +132,7 @@ impl VolumeShared {
         let extrude_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadow volume extrusion"),
             entries: &[
-                crate::gpu::uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
+                crate::gpu::uniform_entry(gpu, 0, wgpu::ShaderStages::COMPUTE, false),
                 crate::gpu::storage_entry(1, wgpu::ShaderStages::COMPUTE, true),
                 crate::gpu::storage_entry(2, wgpu::ShaderStages::COMPUTE, true),
                 crate::gpu::storage_entry(3, wgpu::ShaderStages::COMPUTE, true),
@@ -140,10 +140,11 @@ impl VolumeShared {
                 crate::gpu::storage_entry(5, wgpu::ShaderStages::COMPUTE, false),
             ],
         });
-        let extrude_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("shadow volume extrusion"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("extrude.wgsl").into()),
-        });
+        let extrude_module = crate::gpu::compose_shader(
+            gpu,
+            "shadow volume extrusion",
+            &[include_str!("extrude.wgsl")],
+        );
         let extrude_pipeline_layout =
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("shadow volume extrusion"),

@@ -150,7 +150,7 @@ impl VirtualState {
                 gpu,
                 "virtual map uniforms",
                 STRIDE,
-                U::UNIFORM | U::COPY_DST,
+                crate::gpu::uniform_usage(gpu),
             ),
             key: None,
             casters: vec![],
