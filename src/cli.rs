@@ -143,9 +143,24 @@ pub struct BenchArgs {
     /// Warm-up frames per technique (not measured).
     #[arg(long, default_value_t = 3)]
     pub warmup: u32,
+    /// Soak instead: render each technique for this many seconds (and at
+    /// least --frames frames) with the camera orbiting, and report resident
+    /// memory, live GPU objects and frame-time drift (DIR/soak.{md,json}).
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    pub soak: Option<f64>,
     /// Output directory.
     #[arg(long, default_value = "out/bench")]
     pub out: PathBuf,
+}
+
+/// A finite, non-negative number of seconds.
+fn parse_seconds(s: &str) -> std::result::Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!(
+            "'{s}' is not a finite, non-negative number of seconds"
+        )),
+    }
 }
 
 #[derive(Args)]
@@ -380,6 +395,10 @@ fn bench(a: BenchArgs) -> Result<()> {
     let (scene, camera, lights) = a.view.resolve()?;
     let techniques = measure::parse_technique_list(&a.techniques)?;
     let gpu = a.view.gpu()?;
+    println!("adapter: {}", gpu.adapter_summary());
+    if let Some(seconds) = a.soak {
+        return soak(&a, &gpu, (&scene, &camera, &lights), &techniques, seconds);
+    }
     let rows = measure::bench::run(
         &gpu,
         &scene,
@@ -412,6 +431,41 @@ fn bench(a: BenchArgs) -> Result<()> {
         );
     }
     println!("wrote {}", a.out.join("bench.md").display());
+    Ok(())
+}
+
+/// `bench --soak`: each technique soaked in turn, its table printed and
+/// written.
+fn soak(
+    a: &BenchArgs,
+    gpu: &crate::gpu::GpuContext,
+    (scene, camera, lights): (
+        &crate::scene::Scene,
+        &crate::scene::Camera,
+        &[crate::scene::Light],
+    ),
+    techniques: &[crate::technique::TechniqueChoice],
+    seconds: f64,
+) -> Result<()> {
+    let length = measure::soak::SoakLength {
+        warmup_frames: a.warmup.max(1),
+        min_frames: a.frames,
+        seconds,
+    };
+    let rows = measure::soak::run(
+        gpu,
+        scene,
+        camera,
+        lights,
+        a.view.size,
+        &a.view.settings(),
+        techniques,
+        length,
+    )?;
+    let adapter = gpu.adapter_summary();
+    print!("{}", measure::soak::markdown(&rows, &adapter));
+    measure::soak::write(&a.out, &rows, &adapter, length)?;
+    println!("wrote {}", a.out.join("soak.md").display());
     Ok(())
 }
 

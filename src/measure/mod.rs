@@ -1,10 +1,12 @@
-//! The instruments: `compare` (quality against the ray-traced reference)
-//! and `bench` (frame and pass timings, ratios to `none`).
+//! The instruments: `compare` (quality against the ray-traced reference),
+//! `bench` (frame and pass timings, ratios to `none`), flicker along camera
+//! paths, and the soak (memory and frame-time drift over many frames).
 
 pub mod bench;
 pub mod compare;
 pub mod flicker;
 pub mod quality;
+pub mod soak;
 
 use crate::technique::{self, TechniqueChoice};
 use anyhow::{Result, bail};
