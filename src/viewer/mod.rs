@@ -30,6 +30,11 @@ use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::KeyCode;
 
 /// Options of `shadowlab view`.
+/// Frame from which a long `--frames` run counts as warmed up.
+const STEADY_FROM: u32 = 100;
+/// Frames compared at the start and the end of a long `--frames` run.
+const STEADY_WINDOW: u32 = 300;
+
 pub struct ViewerOptions {
     pub view: ViewArgs,
     pub technique: String,
@@ -153,8 +158,11 @@ struct App {
     /// Frame at which the start-up heatmap was requested, until it arrives.
     heatmap_started_at: Option<u32>,
     heatmap_reported: bool,
-    /// Seconds between redraws, after the first frames.
+    /// Seconds between redraws after the first frames, of a `--frames` run
+    /// (a bounded one; an open-ended session keeps none).
     intervals: Vec<f64>,
+    /// Resident memory at frame [`STEADY_FROM`] of a `--frames` run.
+    resident_at_steady: Option<u64>,
     exit_error: Option<anyhow::Error>,
     /// The scene, camera, lights and technique, loaded and checked before
     /// a window opens (bad input fails fast, with or without a display).
@@ -225,6 +233,7 @@ pub fn run(options: ViewerOptions) -> Result<()> {
         heatmap_started_at: None,
         heatmap_reported: false,
         intervals: vec![],
+        resident_at_steady: None,
         exit_error: None,
         preloaded,
     };
@@ -339,8 +348,11 @@ impl App {
             self.state.message = Some(format!("saved {}", path.display()));
             println!("screenshot: {}", path.display());
         }
-        if self.frames_rendered > 3 {
+        if self.frames_rendered > 3 && self.options.frames.is_some() {
             self.intervals.push(interval);
+        }
+        if self.frames_rendered == STEADY_FROM && self.options.frames.is_some() {
+            self.resident_at_steady = crate::measure::soak::resident_bytes();
         }
         if done {
             self.finish(event_loop);
@@ -367,8 +379,42 @@ impl App {
                 mean * 1e3,
                 self.intervals.len()
             );
+            self.print_steadiness();
         }
         event_loop.exit();
+    }
+
+    /// For a long `--frames` run: the frame rate of frames
+    /// [`STEADY_FROM`]..+300 against the last 300, and the resident memory
+    /// gained after frame [`STEADY_FROM`].
+    fn print_steadiness(&self) {
+        let window = STEADY_WINDOW as usize;
+        // Intervals start after the first 3 frames.
+        let from = STEADY_FROM as usize - 3;
+        if self.intervals.len() < from + 2 * window {
+            return;
+        }
+        let fps = |v: &[f64]| v.len() as f64 / v.iter().sum::<f64>();
+        let early = fps(&self.intervals[from..from + window]);
+        let late = fps(&self.intervals[self.intervals.len() - window..]);
+        let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+        let memory = match (
+            self.resident_at_steady,
+            crate::measure::soak::resident_bytes(),
+        ) {
+            (Some(a), Some(b)) => format!(
+                "; resident memory {:.1} MiB at frame {STEADY_FROM}, {:.1} MiB at the end ({:+.1})",
+                mib(a),
+                mib(b),
+                mib(b) - mib(a)
+            ),
+            _ => String::new(),
+        };
+        println!(
+            "viewer: steady: {early:.1} FPS over frames {STEADY_FROM}–{}, {late:.1} FPS over the last {window} ({:.2}×){memory}",
+            STEADY_FROM + STEADY_WINDOW,
+            late / early
+        );
     }
 }
 
