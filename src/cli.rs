@@ -372,18 +372,20 @@ fn compare(a: CompareArgs) -> Result<()> {
         &a.out,
     )?;
     println!(
-        "{:<36} {:>5} {:>9} {:>9} {:>9} {:>8} {:>8}",
-        "technique", "light", "false-sh%", "false-lit%", "total%", "MAE", "FLIP"
+        "{:<36} {:>5} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8}",
+        "technique", "light", "false-sh%", "false-lit%", "total%", "MAE", "int.MAE", "graded%", "FLIP"
     );
     for r in &rows {
         println!(
-            "{:<36} {:>5} {:>9.3} {:>9.3} {:>9.3} {:>8.4} {:>8.4}",
+            "{:<36} {:>5} {:>9.3} {:>9.3} {:>9.3} {:>8.4} {:>8.4} {:>8.2} {:>8.4}",
             r.technique,
             r.light,
             r.mask.all.false_shadow_pct,
             r.mask.all.false_lit_pct,
             r.mask.all.total_pct,
             r.mask.mean_abs_error,
+            r.mask.interior_mae,
+            r.mask.graded_interior_pct,
             r.flip.mean
         );
     }

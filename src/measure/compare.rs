@@ -299,6 +299,8 @@ fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
             "interior_false_lit_pct",
             "mean_abs_error",
             "rms_error",
+            "interior_mae",
+            "graded_interior_pct",
             "flip_mean",
             "flip_p95",
             "flip_p99",
@@ -331,6 +333,8 @@ fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
                 pct(m.interior.false_lit_pct),
                 err(m.mean_abs_error),
                 err(m.rms_error),
+                err(m.interior_mae),
+                pct(m.graded_interior_pct),
                 err(r.flip.mean),
                 err(r.flip.p95),
                 err(r.flip.p99),
@@ -357,22 +361,25 @@ fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
 
 fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[QualityRow]) -> String {
     let mut s = format!(
-        "# Quality on `{}` against `{}`\n\n{} × {}, adapter {}. Mismatch at visibility 0.5, in % of considered pixels ({}).\n\n",
+        "# Quality on `{}` against `{}`\n\n{} × {}, adapter {}. Mismatch at visibility 0.5, in % of considered pixels ({}); interior MAE: mean absolute error of the pixels farther than {} px from a reference shadow edge; graded interior: of those where the reference is exactly lit or shadowed, the % with visibility strictly between {} and {}.\n\n",
         scene.name,
         meta["reference"].as_str().unwrap_or(""),
         meta["size"]["width"],
         meta["size"]["height"],
         meta["adapter"].as_str().unwrap_or(""),
-        meta["pixels"].as_str().unwrap_or("")
+        meta["pixels"].as_str().unwrap_or(""),
+        quality::EDGE_RADIUS,
+        quality::GRADED_LOW,
+        quality::GRADED_HIGH
     );
-    s += "| technique | light | ref. shadowed % | false shadow % | false lit % | total % | edge FS % | edge FL % | interior FS % | interior FL % | MAE | RMSE | FLIP mean | FLIP p95 | FLIP p99 | px/texel mean | p95 | max |\n";
-    s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    s += "| technique | light | ref. shadowed % | false shadow % | false lit % | total % | edge FS % | edge FL % | interior FS % | interior FL % | MAE | RMSE | interior MAE | graded interior % | FLIP mean | FLIP p95 | FLIP p99 | px/texel mean | p95 | max |\n";
+    s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     let px = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.2}"));
     for r in rows {
         let m = &r.mask;
         let _ = writeln!(
             s,
-            "| `{}` | {} | {:.2} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {} | {} | {} |",
+            "| `{}` | {} | {:.2} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} | {:.4} | {:.4} | {:.2} | {:.4} | {:.4} | {:.4} | {} | {} | {} |",
             r.technique,
             r.light,
             m.reference_shadowed_pct,
@@ -385,6 +392,8 @@ fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[QualityRow]) -> Str
             m.interior.false_lit_pct,
             m.mean_abs_error,
             m.rms_error,
+            m.interior_mae,
+            m.graded_interior_pct,
             r.flip.mean,
             r.flip.p95,
             r.flip.p99,

@@ -28,6 +28,26 @@ pub struct MaskMetrics {
     pub interior: Mismatch,
     pub mean_abs_error: f64,
     pub rms_error: f64,
+    /// Mean absolute error over the considered pixels outside the edge
+    /// band: graded acne, light bleeding and dimmed floors, which the
+    /// mismatch at ½ cannot see.
+    pub interior_mae: f64,
+    /// Of the interior pixels where the reference is exactly lit or
+    /// shadowed (a hard light's), the % whose visibility lies strictly
+    /// between [`GRADED_LOW`] and [`GRADED_HIGH`].
+    pub graded_interior_pct: f64,
+}
+
+/// Visibility above this and below [`GRADED_HIGH`] is neither shadow nor
+/// light: graded.
+pub const GRADED_LOW: f32 = 0.05;
+/// See [`GRADED_LOW`].
+pub const GRADED_HIGH: f32 = 0.95;
+
+/// Whether a test visibility is graded where the reference's is `reference`
+/// (only counted where the reference is exactly 0 or 1).
+fn graded(reference: f32, test: f32) -> Option<bool> {
+    (reference == 0.0 || reference == 1.0).then_some(test > GRADED_LOW && test < GRADED_HIGH)
 }
 
 /// Screen pixels per shadow-map texel (the aliasing measure) over the
@@ -197,6 +217,9 @@ pub fn mask_metrics(
     let (mut n, mut ref_shadow, mut edge_n) = (0usize, 0usize, 0usize);
     let mut counts = [[0usize; 2]; 2]; // [edge?][false_shadow, false_lit]
     let (mut abs, mut sq) = (0.0f64, 0.0f64);
+    // Interior pixels, their absolute error, hard-reference pixels, graded.
+    let (mut interior_n, mut interior_abs) = (0usize, 0.0f64);
+    let (mut hard_n, mut graded_n) = (0usize, 0usize);
     for i in 0..width * height {
         if !considered[i] {
             continue;
@@ -213,6 +236,14 @@ pub fn mask_metrics(
         let d = (test[i] - reference[i]) as f64;
         abs += d.abs();
         sq += d * d;
+        if !band[i] {
+            interior_n += 1;
+            interior_abs += d.abs();
+            if let Some(g) = graded(reference[i], test[i]) {
+                hard_n += 1;
+                graded_n += g as usize;
+            }
+        }
     }
     let pct = |c: usize| super::percent(c, n);
     let mm = |fs: usize, fl: usize| Mismatch {
@@ -229,6 +260,12 @@ pub fn mask_metrics(
         interior: mm(counts[0][0], counts[0][1]),
         mean_abs_error: if n == 0 { 0.0 } else { abs / n as f64 },
         rms_error: if n == 0 { 0.0 } else { (sq / n as f64).sqrt() },
+        interior_mae: if interior_n == 0 {
+            0.0
+        } else {
+            interior_abs / interior_n as f64
+        },
+        graded_interior_pct: super::percent(graded_n, hard_n),
     }
 }
 
@@ -259,7 +296,14 @@ pub fn flip(reference_rgba: &[u8], test_rgba: &[u8], width: u32, height: u32) ->
     }
 }
 
-/// Heatmap: false shadow red, false lit blue, agreeing pixels the grey
+/// The heatmap's colour of a pixel flipped to shadow.
+const FALSE_SHADOW: [u8; 4] = [230, 30, 30, 255];
+/// The heatmap's colour of a pixel flipped to light.
+const FALSE_LIT: [u8; 4] = [40, 80, 240, 255];
+
+/// Heatmap: false shadow red, false lit blue; a visibility off by more
+/// than [`GRADED_LOW`] without flipping, the grey tinted toward red (too
+/// dark) or blue (too bright) by its error; agreeing pixels the grey
 /// luminance of the reference image.
 pub fn heatmap(
     reference_rgba: &[u8],
@@ -272,13 +316,21 @@ pub fn heatmap(
         .enumerate()
         .flat_map(|(i, p)| {
             let (r, t) = (reference[i] < 0.5, test[i] < 0.5);
+            let l = 0.2126 * p[0] as f32 + 0.7152 * p[1] as f32 + 0.0722 * p[2] as f32;
+            let d = test[i] - reference[i];
             if considered[i] && t && !r {
-                [230, 30, 30, 255]
+                FALSE_SHADOW
             } else if considered[i] && r && !t {
-                [40, 80, 240, 255]
+                FALSE_LIT
+            } else if considered[i] && d.abs() > GRADED_LOW {
+                // Graded error: the grey tinted toward the flipped colour of
+                // its sign, fully at a visibility error of ½.
+                let towards = if d < 0.0 { FALSE_SHADOW } else { FALSE_LIT };
+                let a = (2.0 * d.abs()).min(1.0);
+                let mix = |c: u8| (l + (c as f32 - l) * a) as u8;
+                [mix(towards[0]), mix(towards[1]), mix(towards[2]), 255]
             } else {
-                let l = (0.2126 * p[0] as f32 + 0.7152 * p[1] as f32 + 0.0722 * p[2] as f32) as u8;
-                [l, l, l, 255]
+                [l as u8, l as u8, l as u8, 255]
             }
         })
         .collect()
@@ -412,6 +464,47 @@ mod tests {
             m.mean_abs_error
         );
         assert_eq!(m.all.false_shadow_pct, 50.0);
+    }
+
+    #[test]
+    fn the_heatmap_tints_graded_error_and_colours_flips() {
+        let grey = [100u8, 100, 100, 255].repeat(4);
+        let reference = [1.0, 1.0, 0.0, 0.0];
+        let test = [0.7, 0.2, 0.0, 0.03];
+        let h = heatmap(&grey, &[true; 4], &reference, &test);
+        // Dimmed by 0.3: 60 % of the way from the grey to red.
+        let near = |a: &[u8], b: [u8; 4]| a.iter().zip(b).all(|(x, y)| x.abs_diff(y) <= 1);
+        assert!(near(&h[0..4], [178, 58, 58, 255]), "{:?}", &h[0..4]);
+        assert_eq!(h[4..8], FALSE_SHADOW);
+        // Exact, and off by less than GRADED_LOW: the grey.
+        assert_eq!(h[8..16], [100, 100, 100, 255, 100, 100, 100, 255]);
+    }
+
+    #[test]
+    fn graded_error_away_from_edges_is_measured_where_the_mismatch_sees_none() {
+        let (c, r) = half_shadow();
+        // The lit half dimmed to 0.7 (acne a viewer sees as grey bands):
+        // no pixel flips at ½, yet every lit interior pixel is graded.
+        let dimmed: Vec<f32> = r.iter().map(|&v| if v == 1.0 { 0.7 } else { 0.0 }).collect();
+        let m = mask_metrics(10, 10, &c, &r, &dimmed);
+        assert_eq!(m.all.total_pct, 0.0);
+        // Interior: columns 0..=2 (shadow, exact) and 7..=9 (lit, 0.3 off).
+        assert!((m.interior_mae - 0.15).abs() < 1e-6, "{}", m.interior_mae);
+        assert!((m.graded_interior_pct - 50.0).abs() < 1e-9);
+        // The edge band's own error counts in the MAE, not the interior's.
+        let mut edge_only = r.clone();
+        for y in 0..10 {
+            edge_only[y * 10 + 4] = 0.5;
+        }
+        let m = mask_metrics(10, 10, &c, &r, &edge_only);
+        assert_eq!(m.interior_mae, 0.0);
+        assert_eq!(m.graded_interior_pct, 0.0);
+        assert!(m.mean_abs_error > 0.0);
+        // A soft reference (an area light's 0.4) is not counted as hard.
+        let soft_ref = vec![0.4; 100];
+        let m = mask_metrics(10, 10, &c, &soft_ref, &vec![0.5; 100]);
+        assert_eq!(m.graded_interior_pct, 0.0);
+        assert!((m.interior_mae - 0.1).abs() < 1e-6);
     }
 
     #[test]

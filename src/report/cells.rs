@@ -51,6 +51,12 @@ pub struct Quality {
     pub interior_false_shadow_pct: f64,
     pub interior_false_lit_pct: f64,
     pub mean_abs_error: f64,
+    /// Mean absolute error away from the reference's shadow edges.
+    #[serde(default)]
+    pub interior_mae: f64,
+    /// % of the hard-reference interior pixels whose visibility is graded.
+    #[serde(default)]
+    pub graded_interior_pct: f64,
     pub flip_p99: f64,
     /// Screen pixels per map texel, 95th percentile (techniques with a map).
     pub footprint_p95: Option<f64>,
@@ -190,6 +196,8 @@ pub fn from_rows(
         interior_false_shadow_pct: mean(&|r| r.mask.interior.false_shadow_pct),
         interior_false_lit_pct: mean(&|r| r.mask.interior.false_lit_pct),
         mean_abs_error: mean(&|r| r.mask.mean_abs_error),
+        interior_mae: mean(&|r| r.mask.interior_mae),
+        graded_interior_pct: mean(&|r| r.mask.graded_interior_pct),
         flip_p99: quality.first().map_or(0.0, |r| r.flip.p99),
         footprint_p95: footprints.into_iter().reduce(f64::max),
         flicker_pct: (!flicker.is_empty())
@@ -227,7 +235,7 @@ pub fn from_rows(
 
 /// The columns of `results.csv` and of the HTML results table, formatted
 /// once so that both show the same figures.
-pub const COLUMNS: [&str; 23] = [
+pub const COLUMNS: [&str; 25] = [
     "scene",
     "camera",
     "light",
@@ -241,6 +249,8 @@ pub const COLUMNS: [&str; 23] = [
     "interior_false_shadow_pct",
     "interior_false_lit_pct",
     "mean_abs_error",
+    "interior_mae",
+    "graded_interior_pct",
     "flip_p99",
     "footprint_p95_px",
     "flicker_pct",
@@ -271,6 +281,8 @@ pub fn csv_row(c: &Cell) -> Vec<String> {
         pct(q.interior_false_shadow_pct),
         pct(q.interior_false_lit_pct),
         format!("{:.4}", q.mean_abs_error),
+        format!("{:.4}", q.interior_mae),
+        pct(q.graded_interior_pct),
         format!("{:.4}", q.flip_p99),
         q.footprint_p95.map_or(String::new(), |v| format!("{v:.2}")),
         q.flicker_pct.map_or(String::new(), |v| format!("{v:.4}")),

@@ -73,6 +73,15 @@ impl Unit {
 pub const FAILED_PCT: f64 = 1.0;
 /// Interior mismatch within which hard shadows count as exact.
 pub const EXACT_INTERIOR_PCT: f64 = 0.1;
+/// Interior mean absolute error within which hard shadows count as
+/// ungraded (no acne or light bleeding a viewer sees as grey).
+pub const EXACT_INTERIOR_MAE: f64 = 0.002;
+
+/// Whether a cell's interior error is low enough, graded as well as
+/// thresholded, to call its shadows exact.
+pub fn interior_exact(c: &Cell) -> bool {
+    c.quality.interior_pct <= EXACT_INTERIOR_PCT && c.quality.interior_mae <= EXACT_INTERIOR_MAE
+}
 /// Mean absolute visibility error within which soft shadows pass.
 pub const SOFT_MAE: f64 = 0.01;
 /// Frame time (× `none`) within which a technique counts as cheap.
@@ -100,7 +109,7 @@ fn plain_view(c: &Cell, kind: &str) -> bool {
 /// counts as stable (issue 15's bar).
 pub const STABLE_FLICKER_PCT: f64 = 0.01;
 
-const CRITERIA: [Criterion; 10] = [
+const CRITERIA: [Criterion; 11] = [
     Criterion {
         name: "hard shadows exact",
         declared: None,
@@ -108,6 +117,14 @@ const CRITERIA: [Criterion; 10] = [
         passes: |c| c.quality.interior_pct <= EXACT_INTERIOR_PCT,
         figure: |c| c.quality.interior_pct,
         unit: Unit::Percent("interior mismatch"),
+    },
+    Criterion {
+        name: "hard shadows ungraded",
+        declared: None,
+        applies: |c| !c.area_light,
+        passes: |c| c.quality.interior_mae <= EXACT_INTERIOR_MAE,
+        figure: |c| c.quality.interior_mae,
+        unit: Unit::Value("interior MAE"),
     },
     Criterion {
         name: "point lights",

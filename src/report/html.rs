@@ -5,7 +5,7 @@
 
 use super::cells::{COLUMNS, Cell, SOURCE_VERSION, csv_row};
 use super::charts;
-use super::criteria::{Claim, FAILED_PCT};
+use super::criteria::{Claim, EXACT_INTERIOR_MAE, FAILED_PCT};
 use super::pareto::competes;
 use super::summary::Report;
 use anyhow::Result;
@@ -179,14 +179,21 @@ pub fn write(report: &Report, root: &Path) -> Result<String> {
 /// Per view: the lowest mismatch, the cheapest preset under the failure
 /// threshold, and the Pareto front.
 fn best_per_view(h: &mut String, report: &Report) {
-    *h += "<h2 id=\"best\">Best per view</h2><table><thead><tr><th>view</th><th>lowest mismatch</th><th>cheapest under 1 % mismatch</th><th>Pareto front (cheap → exact)</th></tr></thead><tbody>";
+    *h += &format!("<h2 id=\"best\">Best per view</h2><table><thead><tr><th>view</th><th>lowest mismatch (among interior MAE ≤ {EXACT_INTERIOR_MAE} where any)</th><th>cheapest under 1 % mismatch</th><th>Pareto front (cheap → exact)</th></tr></thead><tbody>");
     for (view, front) in &report.fronts {
         let competing: Vec<&Cell> = report
             .cells
             .iter()
             .filter(|c| c.view() == *view && competes(c))
             .collect();
-        let best = competing
+        // The best is the lowest mismatch among the ungraded, when any is.
+        let ungraded: Vec<&Cell> = competing
+            .iter()
+            .copied()
+            .filter(|c| c.quality.interior_mae <= EXACT_INTERIOR_MAE)
+            .collect();
+        let pool = if ungraded.is_empty() { &competing } else { &ungraded };
+        let best = pool
             .iter()
             .min_by(|a, b| a.quality.total_pct.total_cmp(&b.quality.total_pct));
         let cheapest = competing

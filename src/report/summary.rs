@@ -7,7 +7,10 @@
 //! technique?".
 
 use super::cells::Cell;
-use super::criteria::{CHEAP_RATIO, Claim, Mark, below_failure, extensibility, marks, pct, total};
+use super::criteria::{
+    CHEAP_RATIO, Claim, EXACT_INTERIOR_MAE, Mark, below_failure, extensibility, interior_exact,
+    marks, pct, total,
+};
 use super::matrix::{Matrix, View};
 use super::pareto::{competes, pareto_front};
 use crate::technique::FAMILIES;
@@ -158,10 +161,17 @@ impl<'a> Report<'a> {
                 on_front[0],
             ));
         }
-        let exact: Vec<&Cell> = mine.iter().copied().filter(|c| total(c) <= 0.01).collect();
+        let exact: Vec<&Cell> = mine
+            .iter()
+            .copied()
+            .filter(|c| total(c) <= 0.01 && interior_exact(c))
+            .collect();
         if !exact.is_empty() {
             advantages.push(Claim::of(
-                format!("exact (≤ 0.01 % mismatch) on {}", labels(&exact)),
+                format!(
+                    "exact (≤ 0.01 % mismatch, interior MAE ≤ {EXACT_INTERIOR_MAE}) on {}",
+                    labels(&exact)
+                ),
                 exact[0],
             ));
         }

@@ -136,12 +136,14 @@ fn heatmap_job(
     let m = crate::measure::quality::mask_metrics(w, h, &considered, &reference, &test);
     let rgba = crate::measure::quality::heatmap(color, &considered, &reference, &test);
     let summary = format!(
-        "false shadow {:.3} %, false lit {:.3} % (edge {:.3} %, interior {:.3} %), MAE {:.4}",
+        "false shadow {:.3} %, false lit {:.3} % (edge {:.3} %, interior {:.3} %), MAE {:.4}, interior MAE {:.4}, graded interior {:.2} %",
         m.all.false_shadow_pct,
         m.all.false_lit_pct,
         m.edge.total_pct,
         m.interior.total_pct,
-        m.mean_abs_error
+        m.mean_abs_error,
+        m.interior_mae,
+        m.graded_interior_pct
     );
     Ok((
         egui::ColorImage::from_rgba_unmultiplied([w, h], &rgba),
