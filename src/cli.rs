@@ -373,7 +373,15 @@ fn compare(a: CompareArgs) -> Result<()> {
     )?;
     println!(
         "{:<36} {:>5} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8}",
-        "technique", "light", "false-sh%", "false-lit%", "total%", "MAE", "int.MAE", "graded%", "FLIP"
+        "technique",
+        "light",
+        "false-sh%",
+        "false-lit%",
+        "total%",
+        "MAE",
+        "int.MAE",
+        "graded%",
+        "FLIP"
     );
     for r in &rows {
         println!(
@@ -418,18 +426,19 @@ fn bench(a: BenchArgs) -> Result<()> {
         &a.out,
     )?;
     println!(
-        "{:<36} {:>10} {:>10} {:>10} {:>8}",
-        "technique", "frame ms", "GPU ms", "masks ms", "x none"
+        "{:<36} {:>10} {:>10} {:>10} {:>8} {:>12}",
+        "technique", "frame ms", "GPU ms", "masks ms", "x none", "p5-p95"
     );
     for r in &rows {
         println!(
-            "{:<36} {:>10.2} {:>10} {:>10.2} {:>8.2}",
+            "{:<36} {:>10.2} {:>10} {:>10.2} {:>8.2} {:>12}",
             r.technique,
             r.frame_ms.median,
             r.gpu_frame_ms
                 .map_or("-".into(), |s| format!("{:.2}", s.median)),
             r.masks_ms.median,
-            r.ratio_to_none
+            r.ratio_to_none,
+            format!("{:.2}-{:.2}", r.ratio_spread.0, r.ratio_spread.1)
         );
     }
     println!("wrote {}", a.out.join("bench.md").display());

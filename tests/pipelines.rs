@@ -9,9 +9,14 @@ use shadowlab::renderer::RenderSettings;
 use shadowlab::scene::{Scene, builtin};
 use shadowlab::technique::{self, TechniqueInstance};
 
-/// A device of its own, so that other tests' pipelines do not count.
-fn own_gpu() -> GpuContext {
-    GpuContext::new(None).expect("a Vulkan adapter (install mesa-vulkan-drivers)")
+/// A device of its own, so that other tests' pipelines do not count; the
+/// tests of this file take turns (`bench`'s timings are compared, and a
+/// test rendering beside them would skew them).
+fn own_gpu() -> (GpuContext, std::sync::MutexGuard<'static, ()>) {
+    static TURN: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
+    let gpu = GpuContext::new(None).expect("a Vulkan adapter (install mesa-vulkan-drivers)");
+    (gpu, turn)
 }
 
 fn room_with_spot() -> Scene {
@@ -31,7 +36,7 @@ fn use_technique(gpu: &GpuContext, hf: &mut HeadlessFrame, id: &str) {
 
 #[test]
 fn switching_back_to_a_technique_compiles_nothing() {
-    let gpu = own_gpu();
+    let (gpu, _turn) = own_gpu();
     let scene = room_with_spot();
     let settings = RenderSettings::default();
     let choice = technique::resolve("shadow-map:pcf").unwrap();
@@ -68,7 +73,7 @@ fn switching_back_to_a_technique_compiles_nothing() {
 
 #[test]
 fn a_depth_bias_sweep_keeps_the_cache_at_its_bound() {
-    let gpu = own_gpu();
+    let (gpu, _turn) = own_gpu();
     let scene = room_with_spot();
     let settings = RenderSettings::default();
     let choice = technique::resolve("shadow-map:hard").unwrap();
@@ -99,7 +104,7 @@ fn a_depth_bias_sweep_keeps_the_cache_at_its_bound() {
 
 #[test]
 fn a_frame_waits_once_and_its_gpu_times_still_arrive() {
-    let gpu = own_gpu();
+    let (gpu, _turn) = own_gpu();
     if !gpu.timestamps {
         eprintln!("adapter without timestamp queries: nothing to check");
         return;
@@ -157,4 +162,59 @@ fn a_frame_waits_once_and_its_gpu_times_still_arrive() {
     let counters: std::collections::HashMap<_, _> =
         hf.techniques[0].technique.counters().into_iter().collect();
     assert!(counters["silhouette_edges"] > 0.0, "{counters:?}");
+}
+
+/// `bench` measures its frames round-robin: the same techniques in two
+/// orders give ratios to `none` whose spreads (the 5th–95th percentile of
+/// the per-round ratios) overlap, each median inside its own spread.
+#[test]
+fn bench_ratios_do_not_depend_on_the_order() {
+    use shadowlab::measure::bench::{self, BenchFrames};
+    let (gpu, _turn) = own_gpu();
+    let scene = room_with_spot();
+    let run = |spec: &str| {
+        let list = shadowlab::measure::parse_technique_list(spec).unwrap();
+        let frames = BenchFrames {
+            warmup: 2,
+            measured: 20,
+            progress: false,
+            max_seconds: None,
+        };
+        let out = std::env::temp_dir().join(format!("shadowlab-bench-order-{}", spec.len()));
+        bench::run(
+            &gpu,
+            &scene,
+            &scene.camera,
+            &scene.lights,
+            (320, 180),
+            &RenderSettings::default(),
+            &list,
+            frames,
+            &out,
+        )
+        .unwrap()
+    };
+    let forward = run("none,shadow-map:pcf[size=512],shadow-volume:zfail");
+    let backward = run("shadow-volume:zfail,shadow-map:pcf[size=512],none");
+    for a in &forward {
+        let b = backward
+            .iter()
+            .find(|b| b.technique == a.technique)
+            .unwrap();
+        assert_eq!(a.measured_frames, 20);
+        let inside = |r: &bench::BenchRow| {
+            r.ratio_spread.0 <= r.ratio_to_none && r.ratio_to_none <= r.ratio_spread.1
+        };
+        let overlap =
+            a.ratio_spread.0.max(b.ratio_spread.0) <= a.ratio_spread.1.min(b.ratio_spread.1);
+        assert!(
+            inside(a) && inside(b) && overlap,
+            "{}: ×{:.2} (spread {:?}) forward, ×{:.2} (spread {:?}) backward",
+            a.technique,
+            a.ratio_to_none,
+            a.ratio_spread,
+            b.ratio_to_none,
+            b.ratio_spread
+        );
+    }
 }

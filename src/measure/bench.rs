@@ -2,7 +2,9 @@
 //! warm-up frames, then N measured frames; median, p5, p95; GPU timestamps
 //! per pass where the adapter has them, CPU wall time always (each stage
 //! waits for the GPU, so CPU-side technique work is included); each
-//! technique's frame time as a ratio to `none` measured in the same run.
+//! technique's frame time as a ratio to `none` measured in the same run,
+//! the measured frames taken round-robin so that no technique pays for its
+//! place in the order.
 
 use super::choice_label;
 use crate::gpu::GpuContext;
@@ -50,6 +52,10 @@ pub struct BenchRow {
     pub gpu_lighting_ms: Option<Stat>,
     /// Median frame time divided by `none`'s median frame time.
     pub ratio_to_none: f64,
+    /// The 5th and 95th percentiles of the ratio of each round's frame to
+    /// `none`'s frame of the same round (the frames are measured
+    /// round-robin): how far one ratio can be trusted.
+    pub ratio_spread: (f64, f64),
     pub triangles_drawn: usize,
     pub caster_triangles: usize,
     pub shadow_resource_bytes: u64,
@@ -111,9 +117,8 @@ pub fn run(
         total,
         "{msg:>28} [{bar:30}] {pos}/{len} frames, {elapsed}",
     );
-    let mut rows = vec![];
-    // One frame (scene upload, targets) for every technique; each gets
-    // fresh instances.
+    // One frame (scene upload, targets) for every technique; each has its
+    // own instances, swapped in for its frames.
     let mut hf = HeadlessFrame::new(gpu, scene, &list[..1], size.0, size.1)?;
     // The shared frame's own first frames (its passes' pipelines, llvmpipe's
     // shader compiles) are nobody's cost: run them before anything is timed,
@@ -121,76 +126,64 @@ pub fn run(
     for _ in 0..warmup.max(1) {
         hf.render(gpu, scene, camera, lights, &settings)?;
     }
-    for choice in &list {
-        let label = choice_label(choice);
-        bar.set_message(label.clone());
-        hf.techniques = (0..lights.len().max(1))
-            .map(|_| crate::technique::TechniqueInstance::new(gpu, choice.clone()))
-            .collect::<Result<_>>()?;
-        let mut timings: Vec<FrameTimings> = vec![];
-        // Per measured frame, the techniques' counters.
-        let mut frame_counters: Vec<Vec<(&'static str, f64)>> = vec![];
-        let started = std::time::Instant::now();
-        let mut i = 0;
-        while i < warmup + frames {
-            let out_of_time = counts
-                .max_seconds
-                .is_some_and(|s| started.elapsed().as_secs_f64() > s);
-            if out_of_time && !timings.is_empty() {
-                break;
-            }
-            if out_of_time && i < warmup {
-                // Skip the rest of the warm-up: measure one frame.
-                bar.inc((warmup - i) as u64);
-                i = warmup;
-            }
-            let t = hf.render(gpu, scene, camera, lights, &settings)?;
-            if i >= warmup {
-                timings.push(t);
-                frame_counters.push(
-                    hf.techniques
-                        .iter()
-                        .flat_map(|t| t.technique.counters())
-                        .collect(),
-                );
+    let mut series = list
+        .iter()
+        .map(|choice| Series::new(gpu, choice, lights.len().max(1)))
+        .collect::<Result<Vec<_>>>()?;
+    // Every technique's warm-up first, then the measured frames round-robin
+    // (frame k of each technique in turn, the order turned by one each
+    // round): a drift of the machine's speed over the run (caches, clocks,
+    // the allocator) falls on every technique alike, whatever its place.
+    for s in &mut series {
+        bar.set_message(s.label.clone());
+        s.render_frames(
+            &mut hf,
+            (gpu, scene, camera, lights, &settings),
+            warmup,
+            &counts,
+            None,
+        )?;
+        bar.inc(warmup as u64);
+    }
+    let n = series.len();
+    for round in 0..frames as usize {
+        for k in 0..n {
+            let s = &mut series[(k + round) % n];
+            if !s.done {
+                bar.set_message(s.label.clone());
+                s.render_frames(
+                    &mut hf,
+                    (gpu, scene, camera, lights, &settings),
+                    1,
+                    &counts,
+                    Some(()),
+                )?;
             }
             bar.inc(1);
-            i += 1;
         }
-        bar.inc((warmup + frames - i) as u64);
-        let gpu_stat = |f: fn(&crate::renderer::GpuPassTimes) -> f64| {
-            let v: Option<Vec<f64>> = timings.iter().map(|t| t.gpu.as_ref().map(f)).collect();
-            v.map(Stat::of)
-        };
-        let counters = counter_summary(&frame_counters);
-        rows.push(BenchRow {
-            technique: label,
-            frame_ms: Stat::of(timings.iter().map(|t| t.total_ms).collect()),
-            masks_ms: Stat::of(timings.iter().map(|t| t.masks_ms).collect()),
-            gpu_frame_ms: gpu_stat(|g| g.total_ms),
-            gpu_prepass_ms: gpu_stat(|g| g.prepass_ms),
-            gpu_masks_ms: gpu_stat(|g| g.masks_ms),
-            gpu_lighting_ms: gpu_stat(|g| g.lighting_ms),
-            ratio_to_none: 0.0,
-            triangles_drawn: hf.scene_gpu.triangle_count,
-            caster_triangles: hf.scene_gpu.caster_triangle_count,
-            shadow_resource_bytes: hf
-                .techniques
-                .iter()
-                .map(|t| t.technique.resource_bytes())
-                .sum(),
-            counters,
-            measured_frames: timings.len(),
-        });
     }
-    bar.finish_and_clear();
-    let none_ms = rows
+    let per_round: Vec<Vec<f64>> = series
         .iter()
-        .find(|r| r.technique.starts_with("none:"))
-        .map(|r| r.frame_ms.median)
-        .unwrap_or(f64::NAN);
-    for r in &mut rows {
+        .map(|s| s.timings.iter().map(|t| t.total_ms).collect())
+        .collect();
+    bar.finish_and_clear();
+    // `none`'s frame of each round, for the per-round ratios.
+    let none_frames: Vec<f64> = series
+        .iter()
+        .find(|s| s.label.starts_with("none:"))
+        .map(|s| s.timings.iter().map(|t| t.total_ms).collect())
+        .unwrap_or_default();
+    let mut rows: Vec<BenchRow> = series.into_iter().map(|s| s.row(&hf)).collect();
+    let none_ms = Stat::of(none_frames.clone()).median;
+    for (r, frames) in rows.iter_mut().zip(&per_round) {
         r.ratio_to_none = r.frame_ms.median / none_ms;
+        let ratios: Vec<f64> = frames
+            .iter()
+            .zip(&none_frames)
+            .map(|(t, n)| t / n)
+            .collect();
+        let spread = Stat::of(ratios);
+        r.ratio_spread = (spread.p5, spread.p95);
     }
     let meta = serde_json::json!({
         "scene": scene.name,
@@ -209,6 +202,115 @@ pub fn run(
     write_csv(&out.join("bench.csv"), &rows)?;
     std::fs::write(out.join("bench.md"), markdown(scene, &meta, &rows))?;
     Ok(rows)
+}
+
+/// One technique's instances and measured frames in a round-robin run.
+struct Series {
+    label: String,
+    instances: Vec<crate::technique::TechniqueInstance>,
+    timings: Vec<FrameTimings>,
+    /// Per measured frame, the techniques' counters.
+    frame_counters: Vec<Vec<(&'static str, f64)>>,
+    /// Wall time spent in this technique's frames so far.
+    spent: std::time::Duration,
+    /// Out of time ([`BenchFrames::max_seconds`]): no more frames.
+    done: bool,
+    shadow_resource_bytes: u64,
+}
+
+/// What every frame of a bench renders with.
+type FrameInputs<'a> = (
+    &'a GpuContext,
+    &'a Scene,
+    &'a Camera,
+    &'a [Light],
+    &'a RenderSettings,
+);
+
+impl Series {
+    fn new(gpu: &GpuContext, choice: &TechniqueChoice, lights: usize) -> Result<Series> {
+        Ok(Series {
+            label: choice_label(choice),
+            instances: (0..lights)
+                .map(|_| crate::technique::TechniqueInstance::new(gpu, choice.clone()))
+                .collect::<Result<_>>()?,
+            timings: vec![],
+            frame_counters: vec![],
+            spent: Default::default(),
+            done: false,
+            shadow_resource_bytes: 0,
+        })
+    }
+
+    /// Renders `n` frames of this technique in `hf` (its instances swapped
+    /// in), kept when `measured` is `Some`. Past `max_seconds` of its own
+    /// frames it stops: a warm-up is cut short, and measuring ends after at
+    /// least one measured frame.
+    fn render_frames(
+        &mut self,
+        hf: &mut HeadlessFrame,
+        (gpu, scene, camera, lights, settings): FrameInputs,
+        n: u32,
+        counts: &BenchFrames,
+        measured: Option<()>,
+    ) -> Result<()> {
+        std::mem::swap(&mut hf.techniques, &mut self.instances);
+        let result = (|| {
+            for _ in 0..n {
+                let out_of_time = counts
+                    .max_seconds
+                    .is_some_and(|s| self.spent.as_secs_f64() > s);
+                if out_of_time && (measured.is_none() || !self.timings.is_empty()) {
+                    self.done = measured.is_some();
+                    break;
+                }
+                let started = std::time::Instant::now();
+                let t = hf.render(gpu, scene, camera, lights, settings)?;
+                self.spent += started.elapsed();
+                if measured.is_some() {
+                    self.timings.push(t);
+                    self.frame_counters.push(
+                        hf.techniques
+                            .iter()
+                            .flat_map(|t| t.technique.counters())
+                            .collect(),
+                    );
+                }
+            }
+            self.shadow_resource_bytes = hf
+                .techniques
+                .iter()
+                .map(|t| t.technique.resource_bytes())
+                .sum();
+            Ok(())
+        })();
+        std::mem::swap(&mut hf.techniques, &mut self.instances);
+        result
+    }
+
+    fn row(self, hf: &HeadlessFrame) -> BenchRow {
+        let timings = &self.timings;
+        let gpu_stat = |f: fn(&crate::renderer::GpuPassTimes) -> f64| {
+            let v: Option<Vec<f64>> = timings.iter().map(|t| t.gpu.as_ref().map(f)).collect();
+            v.map(Stat::of)
+        };
+        BenchRow {
+            technique: self.label,
+            frame_ms: Stat::of(timings.iter().map(|t| t.total_ms).collect()),
+            masks_ms: Stat::of(timings.iter().map(|t| t.masks_ms).collect()),
+            gpu_frame_ms: gpu_stat(|g| g.total_ms),
+            gpu_prepass_ms: gpu_stat(|g| g.prepass_ms),
+            gpu_masks_ms: gpu_stat(|g| g.masks_ms),
+            gpu_lighting_ms: gpu_stat(|g| g.lighting_ms),
+            ratio_to_none: 0.0,
+            ratio_spread: (0.0, 0.0),
+            triangles_drawn: hf.scene_gpu.triangle_count,
+            caster_triangles: hf.scene_gpu.caster_triangle_count,
+            shadow_resource_bytes: self.shadow_resource_bytes,
+            counters: counter_summary(&self.frame_counters),
+            measured_frames: timings.len(),
+        }
+    }
 }
 
 fn opt(s: &Option<Stat>) -> String {
@@ -231,6 +333,8 @@ fn write_csv(path: &Path, rows: &[BenchRow]) -> Result<()> {
             "gpu_masks_ms_median",
             "gpu_lighting_ms_median",
             "ratio_to_none",
+            "ratio_p5",
+            "ratio_p95",
             "triangles_drawn",
             "caster_triangles",
             "shadow_resource_bytes",
@@ -247,6 +351,8 @@ fn write_csv(path: &Path, rows: &[BenchRow]) -> Result<()> {
                 gpu(&r.gpu_masks_ms),
                 gpu(&r.gpu_lighting_ms),
                 format!("{:.4}", r.ratio_to_none),
+                format!("{:.4}", r.ratio_spread.0),
+                format!("{:.4}", r.ratio_spread.1),
                 r.triangles_drawn.to_string(),
                 r.caster_triangles.to_string(),
                 r.shadow_resource_bytes.to_string(),
@@ -257,7 +363,7 @@ fn write_csv(path: &Path, rows: &[BenchRow]) -> Result<()> {
 
 fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[BenchRow]) -> String {
     let mut s = format!(
-        "# Timings on `{}`\n\n{} × {}, adapter {}, {} warm-up + {} measured frames. Frame = wall time (ms) of prepass + masks + lighting, each waited for; GPU = timestamp queries.\n\n",
+        "# Timings on `{}`\n\n{} × {}, adapter {}, {} warm-up + {} measured frames, the measured ones round-robin across the techniques. Frame = wall time (ms) of prepass + masks + lighting, each waited for; GPU = timestamp queries; × none: median frame over `none`'s, and the 5th–95th percentile of the ratio of each round's frames.\n\n",
         scene.name,
         meta["size"]["width"],
         meta["size"]["height"],
@@ -265,12 +371,12 @@ fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[BenchRow]) -> Strin
         meta["warmup_frames"],
         meta["measured_frames"]
     );
-    s += "| technique | frame median | p5 | p95 | masks (wall) | GPU frame | GPU prepass | GPU masks | GPU lighting | × none | triangles | casters | shadow bytes |\n";
-    s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    s += "| technique | frame median | p5 | p95 | masks (wall) | GPU frame | GPU prepass | GPU masks | GPU lighting | × none | × none p5–p95 | triangles | casters | shadow bytes |\n";
+    s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for r in rows {
         let _ = writeln!(
             s,
-            "| `{}` | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | {} | {} | {:.2} | {} | {} | {} |",
+            "| `{}` | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | {} | {} | {:.2} | {:.2}–{:.2} | {} | {} | {} |",
             r.technique,
             r.frame_ms.median,
             r.frame_ms.p5,
@@ -281,6 +387,8 @@ fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[BenchRow]) -> Strin
             opt(&r.gpu_masks_ms),
             opt(&r.gpu_lighting_ms),
             r.ratio_to_none,
+            r.ratio_spread.0,
+            r.ratio_spread.1,
             r.triangles_drawn,
             r.caster_triangles,
             r.shadow_resource_bytes

@@ -485,7 +485,10 @@ mod tests {
         let (c, r) = half_shadow();
         // The lit half dimmed to 0.7 (acne a viewer sees as grey bands):
         // no pixel flips at ½, yet every lit interior pixel is graded.
-        let dimmed: Vec<f32> = r.iter().map(|&v| if v == 1.0 { 0.7 } else { 0.0 }).collect();
+        let dimmed: Vec<f32> = r
+            .iter()
+            .map(|&v| if v == 1.0 { 0.7 } else { 0.0 })
+            .collect();
         let m = mask_metrics(10, 10, &c, &r, &dimmed);
         assert_eq!(m.all.total_pct, 0.0);
         // Interior: columns 0..=2 (shadow, exact) and 7..=9 (lit, 0.3 off).

@@ -179,7 +179,9 @@ pub fn write(report: &Report, root: &Path) -> Result<String> {
 /// Per view: the lowest mismatch, the cheapest preset under the failure
 /// threshold, and the Pareto front.
 fn best_per_view(h: &mut String, report: &Report) {
-    *h += &format!("<h2 id=\"best\">Best per view</h2><table><thead><tr><th>view</th><th>lowest mismatch (among interior MAE ≤ {EXACT_INTERIOR_MAE} where any)</th><th>cheapest under 1 % mismatch</th><th>Pareto front (cheap → exact)</th></tr></thead><tbody>");
+    *h += &format!(
+        "<h2 id=\"best\">Best per view</h2><table><thead><tr><th>view</th><th>lowest mismatch (among interior MAE ≤ {EXACT_INTERIOR_MAE} where any)</th><th>cheapest under 1 % mismatch</th><th>Pareto front (cheap → exact)</th></tr></thead><tbody>"
+    );
     for (view, front) in &report.fronts {
         let competing: Vec<&Cell> = report
             .cells
@@ -192,7 +194,11 @@ fn best_per_view(h: &mut String, report: &Report) {
             .copied()
             .filter(|c| c.quality.interior_mae <= EXACT_INTERIOR_MAE)
             .collect();
-        let pool = if ungraded.is_empty() { &competing } else { &ungraded };
+        let pool = if ungraded.is_empty() {
+            &competing
+        } else {
+            &ungraded
+        };
         let best = pool
             .iter()
             .min_by(|a, b| a.quality.total_pct.total_cmp(&b.quality.total_pct));

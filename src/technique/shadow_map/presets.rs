@@ -118,13 +118,13 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "virtual",
-        summary: "virtual shadow map: 16384² per clipmap level (directional) or view, 128² pages from a pool of 4096, cached across frames, 3×3 PCF grid; slope bias 1 (2 leaks light at grazing creases under point and spot lights, whose perspective views have no bias cap: interior false lit on curved/pipe 0.075 % point, 0.085 % spot at 640×360; 1: 0.006 and 0.021 %)",
-        values: &[("paging", "virtual"), ("slope_bias", "1")],
+        summary: "virtual shadow map: 16384² per clipmap level (directional) or view, 128² pages from a pool of 4096, cached across frames, 3×3 PCF grid, the family's slope bias (a smaller one leaves the outer taps of the kernel comparing a lit surface against its own depth: graded acne across lit floors)",
+        values: &[("paging", "virtual")],
     },
     Preset {
         name: "adaptive",
-        summary: "adaptive shadow map (Fernando et al. 2001) on the virtual map's pages: each pixel starts at its view's coarsest level and is refined a level at a time, up to the level where a texel covers at most a pixel, only where its kernel sees a shadow edge; 3×3 PCF grid, slope bias 1",
-        values: &[("paging", "adaptive"), ("slope_bias", "1")],
+        summary: "adaptive shadow map (Fernando et al. 2001) on the virtual map's pages: each pixel starts at its view's coarsest level and is refined a level at a time, up to the level where a texel covers at most a pixel, only where its kernel sees a shadow edge; 3×3 PCF grid, the family's slope bias",
+        values: &[("paging", "adaptive")],
     },
     Preset {
         name: "8bit",
