@@ -56,6 +56,12 @@ fn virtual_lookups_across_page_borders_match_one_full_map() {
                 "filter=disk",
                 radius,
                 "samples=5",
+                // The slope bias this test was measured with: the kernels
+                // reach 6 and 20 texels, past what any slope bias holds off
+                // the floor, so a few floor pixels compare their own depth
+                // at the threshold, where the last bits of two renders
+                // differ (with the family's 2: 8 such pixels at radius 20).
+                "slope_bias=1",
             ],
             256,
             256,
