@@ -63,24 +63,42 @@ fn texel_footprint(dx: vec2f, dy: vec2f) -> f32 {
     return span / abs(det);
 }
 
+// World point p in clip space of map face `face` (a paraboloid's
+// hemisphere, or the face's matrix).
+fn face_clip(p: vec3f, face: u32) -> vec4f {
+    if is_paraboloid() {
+        return paraboloid(vec4f(p, 1.0), face);
+    }
+    return sm.faces[face] * vec4f(p, 1.0);
+}
+
+// The map coordinates [0, 1]² of clip-space point c.
+fn clip_uv(c: vec4f) -> vec2f {
+    let w = select(c.w, 1e-6, abs(c.w) < 1e-6);
+    let ndc = c.xy / w;
+    return vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+}
+
 @fragment
 fn fs_debug_frame(@builtin(position) frag: vec4f) -> DebugFrame {
     if VIRTUAL {
         return virtual_debug_frame(frag);
     }
     let g = textureLoad(gbuffer_position, vec2i(frag.xy), 0);
+    // Derivatives first, in uniform control flow: of the surface point
+    // (a texture load), mapped through the face's projection by finite
+    // difference. Derivatives of values read from the parameter block
+    // itself come out wrong on lavapipe when it is a storage buffer.
+    let gx = dpdx(g.xyz);
+    let gy = dpdy(g.xyz);
     let face = face_of(g.xyz);
-    var c = sm.faces[face] * vec4f(g.xyz, 1.0);
-    if is_paraboloid() {
-        c = paraboloid(vec4f(g.xyz, 1.0), face);
-    }
-    let w = select(c.w, 1e-6, abs(c.w) < 1e-6);
-    let ndc = c.xyz / w;
-    let uv = vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-    // Derivatives first, in uniform control flow.
+    let c = face_clip(g.xyz, face);
+    let uv = clip_uv(c);
     let texel = uv * sm.map.x;
-    let footprint = max(length(dpdx(texel)), length(dpdy(texel)));
-    let pixels_per_texel = texel_footprint(dpdx(texel), dpdy(texel));
+    let dx = (clip_uv(face_clip(g.xyz + gx, face)) - uv) * sm.map.x;
+    let dy = (clip_uv(face_clip(g.xyz + gy, face)) - uv) * sm.map.x;
+    let footprint = max(length(dx), length(dy));
+    let pixels_per_texel = texel_footprint(dx, dy);
     var o: DebugFrame;
     let inside = g.w > 0.5 && c.w > 0.0 && all(uv >= vec2f(0.0)) && all(uv <= vec2f(1.0));
     var d = stored(vec2i(floor(texel)), face);

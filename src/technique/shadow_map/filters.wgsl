@@ -33,11 +33,18 @@ fn solve_plane(dx: vec3f, dy: vec3f, limit: f32) -> vec2f {
     return clamp(g, vec2f(-limit), vec2f(limit));
 }
 
-// The virtual map's receiver plane, from the screen derivatives of
-// (u, v, depth); 0 when off. Must run in uniform control flow. (The other
-// maps take it from the surface's normal: `receiver_plane_at`.)
-fn receiver_plane(t: vec3f) -> vec2f {
-    let g = solve_plane(dpdx(t), dpdy(t), 4.0);
+// The virtual map's receiver plane at lookup point `q` of world point p in
+// level `l`, from the screen derivatives of (u, v, depth): those of p (a
+// G-buffer load) mapped into the level by finite difference — screen
+// derivatives of values read from a parameter block come out wrong on
+// lavapipe when it is a storage buffer. 0 when off. Must run in uniform
+// control flow. (The other maps take it from the surface's normal:
+// `receiver_plane_at`.)
+fn receiver_plane(l: VirtualLevel, q: VirtualPoint, p: vec3f, n: vec3f) -> vec2f {
+    let t = vec3f(q.uv, q.z);
+    let qx = virtual_point(l, p + dpdx(p), n);
+    let qy = virtual_point(l, p + dpdy(p), n);
+    let g = solve_plane(vec3f(qx.uv, qx.z) - t, vec3f(qy.uv, qy.z) - t, 4.0);
     return select(vec2f(0.0), g, RECEIVER_PLANE);
 }
 

@@ -519,8 +519,9 @@ fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f) -> f32 {
     let first = select(marked, 0u, marked == NO_LEVEL);
     var found = FoundLevel(first, level_at(first), VirtualPoint());
     found.point = virtual_point(found.level, g.xyz, n);
-    // Derivatives first, in uniform control flow.
-    let gradient = receiver_plane(vec3f(found.point.uv, found.point.z));
+    // Derivatives first, in uniform control flow: of the surface point
+    // (a texture load), mapped into the level by finite difference.
+    let gradient = receiver_plane(found.level, found.point, g.xyz, n);
     if marked == NO_LEVEL || g.w < 0.5 {
         return 1.0;
     }
@@ -543,15 +544,20 @@ fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f) -> f32 {
 fn virtual_debug_frame(frag: vec4f) -> DebugFrame {
     let pixel = vec2i(frag.xy);
     let g = textureLoad(gbuffer_position, pixel, 0);
+    let gx = dpdx(g.xyz);
+    let gy = dpdy(g.xyz);
     let n = offset_direction(g, normalize(textureLoad(gbuffer_normal, pixel, 0).xyz));
     let marked = vsm_pixel_level[pixel_index(pixel)];
     let first = select(marked, 0u, marked == NO_LEVEL);
     let found = resident_level(first, g.xyz, n).index;
     let level = select(found, first, found == NO_LEVEL);
-    let vp = virtual_point(level_at(level), g.xyz, n);
+    let l = level_at(level);
+    let vp = virtual_point(l, g.xyz, n);
     let texel = vp.uv * sm.map.x;
-    let pixels_per_texel = texel_footprint(dpdx(texel), dpdy(texel));
-    let texels_per_pixel = max(length(dpdx(texel)), length(dpdy(texel)));
+    let dx = (virtual_point(l, g.xyz + gx, n).uv - vp.uv) * sm.map.x;
+    let dy = (virtual_point(l, g.xyz + gy, n).uv - vp.uv) * sm.map.x;
+    let pixels_per_texel = texel_footprint(dx, dy);
+    let texels_per_pixel = max(length(dx), length(dy));
     var o: DebugFrame;
     let inside = g.w > 0.5 && marked != NO_LEVEL && vp.inside;
     let resident = found != NO_LEVEL;
