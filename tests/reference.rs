@@ -252,7 +252,13 @@ fn compare_none_reports_the_reference_shadow_as_false_lit() {
     // The reference against itself (hard light: samples do not matter, a
     // larger offset moves few pixels): almost no mismatch.
     let r = &rows[1].mask;
-    assert!(r.all.total_pct < 0.05 * m.all.total_pct, "{r:?}");
+    assert!(
+        r.all.total_pct <= 0.05 && r.interior.total_pct == 0.0 && r.interior_mae < 1e-3,
+        "{r:?}"
+    );
+    // `none` is lit where the reference is shadowed: fully wrong there, in
+    // the interior too, and never graded (it is exactly 1).
+    assert!(m.interior_mae > 0.0 && m.graded_interior_pct == 0.0, "{m:?}");
     for f in [
         "quality.md",
         "heatmap-none_default.png",
@@ -277,6 +283,8 @@ fn compare_none_reports_the_reference_shadow_as_false_lit() {
         assert!((num(c, "false_lit_pct") - row.mask.all.false_lit_pct).abs() < 1e-4);
         assert!((num(c, "total_pct") - row.mask.all.total_pct).abs() < 1e-4);
         assert!((num(c, "mean_abs_error") - row.mask.mean_abs_error).abs() < 1e-5);
+        assert!((num(c, "interior_mae") - row.mask.interior_mae).abs() < 1e-5);
+        assert!((num(c, "graded_interior_pct") - row.mask.graded_interior_pct).abs() < 1e-4);
     }
     let j: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("quality.json")).unwrap()).unwrap();
@@ -355,13 +363,9 @@ fn bench_writes_ratios_to_none() {
         .unwrap();
     assert!(rays > 0.3 * 96.0 * 54.0 && rays <= 96.0 * 54.0, "{rays}");
     assert!(rows[1].shadow_resource_bytes > 0);
-    // One 256² d24 map per face of the point light's cube (or one map).
-    assert!(
-        rows[2].shadow_resource_bytes.is_multiple_of(256 * 256 * 4)
-            && rows[2].shadow_resource_bytes > 0,
-        "{}",
-        rows[2].shadow_resource_bytes
-    );
+    // The point light's cube: six 256² faces, each texel a d24 depth (4
+    // bytes) and its convex part's ID (4 bytes, part_ids).
+    assert_eq!(rows[2].shadow_resource_bytes, 6 * 256 * 256 * (4 + 4));
     assert!(out.join("bench.md").exists());
     let csv = read_csv(&out.join("bench.csv"));
     assert_eq!(csv.len(), 3);

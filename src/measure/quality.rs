@@ -406,6 +406,38 @@ mod tests {
         );
     }
 
+    /// Pixels that looked up no map (partition 0) border nothing and lie in
+    /// no band; pixels not considered count nowhere.
+    #[test]
+    fn seam_stats_leave_out_unmapped_and_unconsidered_pixels() {
+        let reference = vec![1.0; 100];
+        let mut test = reference.clone();
+        // One partition beside unmapped pixels: no seam at all.
+        let half: Vec<u32> = (0..100).map(|i| if i % 10 < 5 { 1 } else { 0 }).collect();
+        assert_eq!(seams_of(&half, &reference, &test), None);
+        // Partitions 1 and 2 with two unmapped columns (4, 5) between:
+        // the band is columns 2, 3 (within 4 px of column 6) and 6, 7.
+        let split: Vec<u32> = (0..100)
+            .map(|i| match i % 10 {
+                0..=3 => 1,
+                4 | 5 => 0,
+                _ => 2,
+            })
+            .collect();
+        test[4] = 0.0; // an unmapped pixel: elsewhere, not in the band
+        let s = seams_of(&split, &reference, &test).unwrap();
+        assert_eq!(s.seam_pixels, 40);
+        assert_eq!(s.seam_mismatch_pct, 0.0);
+        assert!((s.elsewhere_mismatch_pct - 100.0 / 60.0).abs() < 1e-9, "{s:?}");
+        // The top row not considered: its band pixels and its mismatch go.
+        let mut considered = [true; 100];
+        considered[..10].fill(false);
+        let edges = edge_band(10, 10, &considered, &reference, EDGE_RADIUS);
+        let s = seam_stats(10, 10, &considered, &split, &reference, &edges, &test).unwrap();
+        assert_eq!(s.seam_pixels, 36);
+        assert_eq!(s.elsewhere_mismatch_pct, 0.0);
+    }
+
     /// A 10×10 frame whose left half is in shadow in the reference.
     fn half_shadow() -> (Vec<bool>, Vec<f32>) {
         let reference: Vec<f32> = (0..100)
