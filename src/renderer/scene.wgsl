@@ -198,7 +198,10 @@ fn vs_lit(v: VertexIn) -> LitOut {
     o.clip = clip_position(v.object, v.position);
     o.world_pos = (obj.model * vec4f(v.position, 1.0)).xyz;
     o.normal = world_normal(obj, v.normal);
-    o.uv = v.uv;
+    // Scaled here, so that the texture's LOD comes from the derivatives of
+    // a varying: lavapipe 22 gets those of values read from a parameter
+    // block wrong when the block is a storage buffer.
+    o.uv = v.uv * material.ka.w;
     // A mirroring model matrix flips cross(n, t): flip the handedness with it.
     let mirror = sign(determinant(mat3x3f(obj.model[0].xyz, obj.model[1].xyz, obj.model[2].xyz)));
     o.tangent = vec4f(normalize((obj.model * vec4f(v.tangent.xyz, 0.0)).xyz), v.tangent.w * mirror);
@@ -213,7 +216,7 @@ fn vs_lit_gouraud(v: VertexIn) -> GouraudOut {
     let obj = objects[v.object];
     o.clip = clip_position(v.object, v.position);
     o.world_pos = (obj.model * vec4f(v.position, 1.0)).xyz;
-    o.uv = v.uv;
+    o.uv = v.uv * material.ka.w;
     o.local_pos = v.position;
     o.receives = obj.info.z;
     // Intensities per vertex, interpolated (SEEDS §1).
@@ -294,7 +297,7 @@ fn visibility(px: vec2i, l: u32, receives: bool) -> f32 {
 fn fs_lit(i: LitOut) -> @location(0) vec4f {
     let receives = i.receives != 0u;
     let view = normalize(frame.camera_pos.xyz - i.world_pos);
-    let uv = i.uv * material.ka.w;
+    let uv = i.uv;
     let surface = surface_colors(uv, i.local_pos);
     // Normal: face normal (flat) or interpolated, normal-mapped (per-pixel).
     let geo = face_normal(i.world_pos);
@@ -323,7 +326,7 @@ fn fs_lit(i: LitOut) -> @location(0) vec4f {
 @fragment
 fn fs_lit_gouraud(i: GouraudOut) -> @location(0) vec4f {
     let receives = i.receives != 0u;
-    let surface = surface_colors(i.uv * material.ka.w, i.local_pos);
+    let surface = surface_colors(i.uv, i.local_pos);
     let px = vec2i(i.clip.xy);
     var acc = Composed(frame.ambient.rgb * surface.ka, 1.0);
     if LIGHT_COUNT > 0u {
