@@ -258,7 +258,10 @@ fn compare_none_reports_the_reference_shadow_as_false_lit() {
     );
     // `none` is lit where the reference is shadowed: fully wrong there, in
     // the interior too, and never graded (it is exactly 1).
-    assert!(m.interior_mae > 0.0 && m.graded_interior_pct == 0.0, "{m:?}");
+    assert!(
+        m.interior_mae > 0.0 && m.graded_interior_pct == 0.0,
+        "{m:?}"
+    );
     for f in [
         "quality.md",
         "heatmap-none_default.png",

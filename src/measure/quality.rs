@@ -428,7 +428,10 @@ mod tests {
         let s = seams_of(&split, &reference, &test).unwrap();
         assert_eq!(s.seam_pixels, 40);
         assert_eq!(s.seam_mismatch_pct, 0.0);
-        assert!((s.elsewhere_mismatch_pct - 100.0 / 60.0).abs() < 1e-9, "{s:?}");
+        assert!(
+            (s.elsewhere_mismatch_pct - 100.0 / 60.0).abs() < 1e-9,
+            "{s:?}"
+        );
         // The top row not considered: its band pixels and its mismatch go.
         let mut considered = [true; 100];
         considered[..10].fill(false);
