@@ -4,6 +4,9 @@ use std::io::Write;
 use std::process::ExitCode;
 use std::sync::Mutex;
 
+/// The variable that turns off Mesa's device-select layer.
+const NO_DEVICE_SELECT: &str = "NODEVICE_SELECT";
+
 /// Writes log records to stderr and, when given, to a log file.
 struct Tee(Option<Mutex<std::fs::File>>);
 
@@ -22,6 +25,16 @@ impl Write for Tee {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if !matches!(cli.command, shadowlab::cli::Command::View(_))
+        && std::env::var_os(NO_DEVICE_SELECT).is_none()
+    {
+        // Mesa's device-select Vulkan layer probes the window system (and
+        // prints an `error:` line when there is none) to rank the GPUs;
+        // a command without a window has no use for it: shadowlab ranks
+        // the adapters itself.
+        // SAFETY: no other thread exists yet.
+        unsafe { std::env::set_var(NO_DEVICE_SELECT, "1") };
+    }
     let level = match cli.verbose {
         0 => "warn",
         1 => "info",

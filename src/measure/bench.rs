@@ -141,7 +141,7 @@ pub fn run(
             (gpu, scene, camera, lights, &settings),
             warmup,
             &counts,
-            None,
+            FrameUse::Warmup,
         )?;
         bar.inc(warmup as u64);
     }
@@ -156,7 +156,7 @@ pub fn run(
                     (gpu, scene, camera, lights, &settings),
                     1,
                     &counts,
-                    Some(()),
+                    FrameUse::Measured,
                 )?;
             }
             bar.inc(1);
@@ -218,6 +218,13 @@ struct Series {
     shadow_resource_bytes: u64,
 }
 
+/// Whether a bench frame is a warm-up (not kept) or measured.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum FrameUse {
+    Warmup,
+    Measured,
+}
+
 /// What every frame of a bench renders with.
 type FrameInputs<'a> = (
     &'a GpuContext,
@@ -243,7 +250,7 @@ impl Series {
     }
 
     /// Renders `n` frames of this technique in `hf` (its instances swapped
-    /// in), kept when `measured` is `Some`. Past `max_seconds` of its own
+    /// in), their timings kept when they are measured. Past `max_seconds` of its own
     /// frames it stops: a warm-up is cut short, and measuring ends after at
     /// least one measured frame.
     fn render_frames(
@@ -252,7 +259,7 @@ impl Series {
         (gpu, scene, camera, lights, settings): FrameInputs,
         n: u32,
         counts: &BenchFrames,
-        measured: Option<()>,
+        kind: FrameUse,
     ) -> Result<()> {
         std::mem::swap(&mut hf.techniques, &mut self.instances);
         let result = (|| {
@@ -260,14 +267,14 @@ impl Series {
                 let out_of_time = counts
                     .max_seconds
                     .is_some_and(|s| self.spent.as_secs_f64() > s);
-                if out_of_time && (measured.is_none() || !self.timings.is_empty()) {
-                    self.done = measured.is_some();
+                if out_of_time && (kind == FrameUse::Warmup || !self.timings.is_empty()) {
+                    self.done = kind == FrameUse::Measured;
                     break;
                 }
                 let started = std::time::Instant::now();
                 let t = hf.render(gpu, scene, camera, lights, settings)?;
                 self.spent += started.elapsed();
-                if measured.is_some() {
+                if kind == FrameUse::Measured {
                     self.timings.push(t);
                     self.frame_counters.push(
                         hf.techniques
