@@ -105,10 +105,6 @@ fn a_depth_bias_sweep_keeps_the_cache_at_its_bound() {
 #[test]
 fn a_frame_waits_once_and_its_gpu_times_still_arrive() {
     let (gpu, _turn) = own_gpu();
-    if !gpu.timestamps {
-        eprintln!("adapter without timestamp queries: nothing to check");
-        return;
-    }
     let scene = room_with_spot();
     // The whole cone: a map focused on the pixels seen (`fit=samples`)
     // waits for its reduction too in measurements.
@@ -130,9 +126,20 @@ fn a_frame_waits_once_and_its_gpu_times_still_arrive() {
         assert_eq!(gpu.waits(), waits + 1, "one wait per frame");
         seen = seen.or(t.gpu);
     }
+    if !gpu.timestamps {
+        eprintln!(
+            "skipped: {} has no timestamp queries; the GPU times were not checked",
+            gpu.adapter_summary()
+        );
+        assert!(seen.is_none());
+        return;
+    }
+    // The times arrive a frame late, one per stage (their size is the
+    // benchmarks' business, not a test's).
     let t = seen.expect("GPU times of an earlier frame");
+    let stages = [t.prepass_ms, t.masks_ms, t.lighting_ms];
     assert!(
-        t.prepass_ms > 0.0 && t.masks_ms > 0.0 && t.lighting_ms > 0.0,
+        stages.iter().all(|ms| ms.is_finite() && *ms >= 0.0),
         "{t:?}"
     );
     // With stage waits, each frame reports its own times.
