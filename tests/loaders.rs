@@ -271,6 +271,120 @@ fn bad_cli_values_list_the_valid_ones() {
     }
 }
 
+/// The binary's listing and measuring commands succeed and say what they
+/// wrote: every built-in scene and every preset listed, `compare` (a frame
+/// and a path) and `bench` write their tables, and `bench` names its adapter
+/// first.
+#[test]
+fn listing_and_measuring_commands_succeed_and_write_their_tables() {
+    let o = shadowlab(&["scenes"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let listed = String::from_utf8_lossy(&o.stdout).to_string();
+    for name in shadowlab::scene::builtin::NAMES {
+        assert!(
+            listed.lines().any(|l| l.starts_with(name)),
+            "{name} not in scenes"
+        );
+    }
+    let o = shadowlab(&["techniques"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let listed = String::from_utf8_lossy(&o.stdout).to_string();
+    for id in shadowlab::technique::preset_ids() {
+        assert!(listed.contains(&id), "{id} not in techniques");
+    }
+    let dir = tmpdir("measuring-commands");
+    let run = |args: &[&str], wrote: &str| {
+        let out = dir.join(args[0]);
+        let mut all = args.to_vec();
+        all.extend([
+            "--scene",
+            "floating",
+            "--size",
+            "32x24",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let o = shadowlab(&all);
+        assert!(o.status.success(), "{all:?}: {}", stderr(&o));
+        assert!(out.join(wrote).is_file(), "{all:?}: no {wrote}");
+        String::from_utf8_lossy(&o.stdout).to_string()
+    };
+    let table = run(
+        &["compare", "--techniques", "none,shadow-volume"],
+        "quality.md",
+    );
+    assert!(
+        table.contains("int.MAE") && table.contains("shadow-volume:auto"),
+        "{table}"
+    );
+    run(
+        &[
+            "compare",
+            "--techniques",
+            "shadow-map",
+            "--path",
+            "strafe",
+            "--frames",
+            "2",
+        ],
+        "flicker.md",
+    );
+    let bench = run(
+        &["bench", "--techniques", "shadow-map", "--frames", "2"],
+        "bench.md",
+    );
+    assert!(bench.starts_with("adapter: "), "{bench}");
+    assert!(bench.contains("shadow-map:pcf"), "{bench}");
+}
+
+/// Bad arguments and places the run cannot write: exit code 2 and an error
+/// that names what was wrong, before any frame is rendered.
+#[test]
+fn bad_arguments_and_unwritable_places_exit_2_naming_them() {
+    let dir = tmpdir("bad-arguments");
+    let out = dir.join("out");
+    let out = out.to_str().unwrap();
+    let checks: [(&[&str], &str); 5] = [
+        (
+            &["render", "--eye", "1,2", "--out", out],
+            "expected three finite numbers",
+        ),
+        (
+            &["render", "--eye", "1,2,nan", "--out", out],
+            "expected three finite numbers",
+        ),
+        (
+            &["render", "--size", "16x16", "--out", "/proc/none/x"],
+            "creating /proc/none/x",
+        ),
+        (
+            &[
+                "render",
+                "--log-file",
+                "/nonexistent/dir/x.log",
+                "--out",
+                out,
+            ],
+            "cannot open log file /nonexistent/dir/x.log",
+        ),
+        (
+            &[
+                "compare", "--size", "16x16", "--path", "strafe", "--frames", "1", "--out", out,
+            ],
+            "--frames 1: a path needs 2",
+        ),
+    ];
+    for (args, expect) in checks {
+        let o = shadowlab(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains(expect),
+            "{args:?}: expected '{expect}' in {}",
+            stderr(&o)
+        );
+    }
+}
+
 /// Triangles of the drawn objects in world space, each as sorted vertex
 /// tuples rounded to 1e-4 (order-independent comparison).
 fn triangle_set(s: &scene::Scene) -> Vec<[[i64; 3]; 3]> {
