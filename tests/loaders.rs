@@ -92,6 +92,74 @@ fn missing_texture_warns_and_renders() {
     assert!(out.join("image.png").exists());
 }
 
+/// A glTF whose images are missing loads with a warning naming each and
+/// renders its material's flat colour; a missing buffer stays an error.
+#[test]
+fn missing_gltf_images_warn_and_render() {
+    let dir = tmpdir("missing-gltf-image");
+    let floats: Vec<f32> = vec![0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 1., 0., 0., 1.];
+    let bytes: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
+    let buffer = |uri: String| serde_json::json!([{ "byteLength": bytes.len(), "uri": uri }]);
+    use base64::Engine as _;
+    let data_uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bytes)
+    );
+    let gltf = |buffers: serde_json::Value| {
+        serde_json::json!({
+            "asset": { "version": "2.0" },
+            "scene": 0,
+            "scenes": [{ "nodes": [0] }],
+            "nodes": [{ "mesh": 0 }],
+            "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0, "TEXCOORD_0": 1 }, "material": 0 }] }],
+            "materials": [{
+                "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } },
+                "normalTexture": { "index": 1 }
+            }],
+            "textures": [{ "source": 0 }, { "source": 1 }],
+            "images": [{ "uri": "textures/base.png" }, { "uri": "textures/normal_1.png" }],
+            "buffers": buffers,
+            "bufferViews": [
+                { "buffer": 0, "byteOffset": 0, "byteLength": 36 },
+                { "buffer": 0, "byteOffset": 36, "byteLength": 24 }
+            ],
+            "accessors": [
+                { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                  "min": [0, 0, 0], "max": [1, 0, 1] },
+                { "bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2" }
+            ]
+        })
+        .to_string()
+    };
+    let path = write(&dir, "tri.gltf", &gltf(buffer(data_uri)));
+    let s = scene::load(path.to_str().unwrap()).unwrap();
+    assert!(s.textures.is_empty());
+    let m = &s.materials[s.objects[0].material];
+    assert!(m.diffuse_texture.is_none() && m.normal_map.is_none());
+    let out = dir.join("out");
+    let o = shadowlab(&[
+        "render",
+        "--scene",
+        path.to_str().unwrap(),
+        "--size",
+        "32x32",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for name in ["textures/base.png", "textures/normal_1.png"] {
+        assert!(
+            stderr(&o).contains(name),
+            "{name} not named: {}",
+            stderr(&o)
+        );
+    }
+    assert!(out.join("image.png").exists());
+    let gone = write(&dir, "gone.gltf", &gltf(buffer("gone.bin".into())));
+    let err = scene::load(gone.to_str().unwrap()).unwrap_err().to_string();
+    assert!(err.contains("'gone.bin' not found"), "{err}");
+}
+
 #[test]
 fn toml_scene_places_models_and_flags() {
     let dir = tmpdir("toml");

@@ -160,10 +160,11 @@ pub(super) fn check_attribute_indices(file: &str, root: &gltf::json::Root) -> Re
     Ok(())
 }
 
-/// Checks, before the importer reads them, that every buffer and image a
-/// glTF file names by URI (other than `data:` URIs) is a regular file: the
-/// importer reads whatever a URI names, and `/dev/zero` or a FIFO would never
-/// end.
+/// Checks, before the importer reads them, that every buffer a glTF file
+/// names by URI (other than `data:` URIs) exists, and that every buffer and
+/// image that exists is a regular file: the importer reads whatever a URI
+/// names, and `/dev/zero` or a FIFO would never end. A missing image is the
+/// loader's warning, not an error.
 pub(super) fn check_external_files(file: &str, dir: &Path, root: &gltf::json::Root) -> Result<()> {
     let buffers = root
         .buffers
@@ -180,6 +181,9 @@ pub(super) fn check_external_files(file: &str, dir: &Path, root: &gltf::json::Ro
             continue;
         };
         let target = dir.join(uri);
+        if !target.exists() && what == "image" {
+            continue;
+        }
         if !target.exists() {
             bail!("{file}: {what} {index}: '{uri}' not found");
         }

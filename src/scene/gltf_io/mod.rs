@@ -59,7 +59,32 @@ fn load_checked(file: &str, path: &Path) -> Result<Scene> {
         .into_json();
     check_attribute_indices(&file, &root)?;
     check_external_files(&file, path.parent().unwrap_or(Path::new(".")), &root)?;
-    let (doc, buffers, images) = gltf::import(path).map_err(|e| anyhow!("{file}: {e}"))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let gltf::Gltf {
+        document: doc,
+        blob,
+    } = gltf::Gltf::from_slice(&bytes).map_err(|e| anyhow!("{file}: {e}"))?;
+    let buffers =
+        gltf::import_buffers(&doc, Some(base), blob).map_err(|e| anyhow!("{file}: {e}"))?;
+    // An image that is missing or cannot be decoded leaves its materials
+    // their flat colour, with a warning (as the OBJ loader does).
+    let images: Vec<Option<gltf::image::Data>> = doc
+        .images()
+        .map(|im| {
+            gltf::image::Data::from_source(im.source(), Some(base), &buffers)
+                .map_err(|e| {
+                    let name = match im.source() {
+                        gltf::image::Source::Uri { uri, .. } => format!(" '{uri}'"),
+                        gltf::image::Source::View { .. } => String::new(),
+                    };
+                    log::warn!(
+                        "{file}: image {}{name}: {e}; using the flat material colour",
+                        im.index()
+                    )
+                })
+                .ok()
+        })
+        .collect();
     check_node_forest(&file, &doc)?;
     check_accessors(&file, &doc, &buffers)?;
     let mut scene = Scene::new(path.file_stem().and_then(|s| s.to_str()).unwrap_or("gltf"));
@@ -70,8 +95,10 @@ fn load_checked(file: &str, path: &Path) -> Result<Scene> {
         if let Some(&i) = tex_map.get(&(idx, srgb)) {
             return Some(i);
         }
-        match images.get(idx).map(to_rgba) {
-            Some(Ok(image)) => {
+        // A missing image was reported when it was read.
+        let image = images.get(idx)?.as_ref()?;
+        match to_rgba(image) {
+            Ok(image) => {
                 scene.textures.push(Texture {
                     name: t.source().name().unwrap_or("texture").into(),
                     image,
@@ -81,8 +108,8 @@ fn load_checked(file: &str, path: &Path) -> Result<Scene> {
                 tex_map.insert((idx, srgb), scene.textures.len() - 1);
                 Some(scene.textures.len() - 1)
             }
-            _ => {
-                log::warn!("{file}: image {idx} unusable; using the flat material colour");
+            Err(e) => {
+                log::warn!("{file}: image {idx} unusable ({e}); using the flat material colour");
                 None
             }
         }
