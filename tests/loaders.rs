@@ -92,6 +92,40 @@ fn missing_texture_warns_and_renders() {
     assert!(out.join("image.png").exists());
 }
 
+/// Textures that cannot be decoded (`tests/bad_textures/`: a corrupt PNG,
+/// one past the decoder's memory limit, a truncated JPEG) leave their
+/// material its flat colour with a warning naming the file; the scene
+/// renders.
+#[test]
+fn undecodable_textures_warn_and_render() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad_textures");
+    let out = tmpdir("bad-textures");
+    for (obj, texture) in [
+        ("texture-corrupt-png.obj", "texture-corrupt.png"),
+        ("texture-huge-png.obj", "texture-huge.png"),
+        ("texture-truncated-jpeg.obj", "texture-truncated.jpg"),
+    ] {
+        let path = dir.join(obj);
+        let s = scene::load(path.to_str().unwrap()).unwrap();
+        assert!(s.textures.is_empty(), "{obj}");
+        let o = shadowlab(&[
+            "render",
+            "--scene",
+            path.to_str().unwrap(),
+            "--size",
+            "16x16",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{obj}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains(&format!("{texture}: cannot decode")),
+            "{obj}: {}",
+            stderr(&o)
+        );
+    }
+}
+
 /// A glTF whose images are missing loads with a warning naming each and
 /// renders its material's flat colour; a missing buffer stays an error.
 #[test]

@@ -194,10 +194,9 @@ pub fn parse_single_mesh(name: &str, text: &str) -> Result<Mesh> {
     Ok(out)
 }
 
-/// Loads a texture named by an MTL file. A missing file falls back to the
-/// flat material colour with a warning; a file that is there but cannot be
-/// decoded (corrupt, truncated, larger than the image decoder's 512 MiB
-/// limit) is an error naming it.
+/// Loads a texture named by an MTL file. A file that is missing or cannot
+/// be decoded (corrupt, truncated, larger than the image decoder's 512 MiB
+/// limit) falls back to the flat material colour with a warning naming it.
 fn load_texture(dir: &Path, file: &str, srgb: bool, scene: &mut Scene) -> Result<Option<usize>> {
     let path = dir.join(file.replace('\\', "/"));
     if !path.is_file() {
@@ -207,11 +206,20 @@ fn load_texture(dir: &Path, file: &str, srgb: bool, scene: &mut Scene) -> Result
         );
         return Ok(None);
     }
-    let img = image::ImageReader::open(&path)
+    let decoded = image::ImageReader::open(&path)
         .and_then(|r| r.with_guessed_format())
         .map_err(anyhow::Error::from)
-        .and_then(|r| r.decode().map_err(anyhow::Error::from))
-        .with_context(|| format!("texture {}: cannot decode", path.display()))?;
+        .and_then(|r| r.decode().map_err(anyhow::Error::from));
+    let img = match decoded {
+        Ok(img) => img,
+        Err(e) => {
+            log::warn!(
+                "texture {}: cannot decode ({e}); using the flat material colour",
+                path.display()
+            );
+            return Ok(None);
+        }
+    };
     scene.textures.push(Texture {
         name: file.to_string(),
         image: img.to_rgba8(),
