@@ -125,6 +125,9 @@ impl ViewArgs {
         camera.near = self.near.unwrap_or(camera.near);
         camera.far = self.far.unwrap_or(camera.far);
         camera.validate()?;
+        if self.light.is_none() && self.light_type.is_none() {
+            scene.warn_default_light();
+        }
         let mut lights = match &self.light {
             Some(p) => scene.light_preset(p)?,
             None => scene.lights.clone(),

@@ -209,6 +209,7 @@ pub fn run(cli: Cli) -> Result<()> {
         }
         Command::Export(a) => {
             let s = scene::load(&a.scene)?;
+            s.warn_default_light();
             scene::gltf_io::export(&s, &a.out)?;
             println!(
                 "wrote {} ({} objects, {} triangles, {} lights)",

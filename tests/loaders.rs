@@ -189,6 +189,32 @@ fn missing_gltf_images_warn_and_render() {
         );
     }
     assert!(out.join("image.png").exists());
+    // The file has no light: said when its default light is used, not when
+    // --light-type replaces it.
+    assert!(
+        stderr(&o).contains("placed a default point light"),
+        "{}",
+        stderr(&o)
+    );
+    let o = shadowlab(&[
+        "render",
+        "--scene",
+        path.to_str().unwrap(),
+        "--light-type",
+        "point",
+        "--light-pos",
+        "0,3,0",
+        "--size",
+        "32x32",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        !stderr(&o).contains("default point light"),
+        "{}",
+        stderr(&o)
+    );
     let gone = write(&dir, "gone.gltf", &gltf(buffer("gone.bin".into())));
     let err = scene::load(gone.to_str().unwrap()).unwrap_err().to_string();
     assert!(err.contains("'gone.bin' not found"), "{err}");

@@ -86,9 +86,23 @@ pub struct Scene {
     /// Hash of every mesh's positions and indices, taken by
     /// [`Scene::finalize`] (call it again after changing meshes).
     pub geometry_hash: u64,
+    /// The file had no light and the loader placed a default one: said
+    /// ([`Scene::warn_default_light`]) only where the run uses the scene's
+    /// lights, not where they are replaced.
+    pub default_light: bool,
 }
 
 impl Scene {
+    /// Warns that the scene's light is the loader's default, when it is.
+    pub fn warn_default_light(&self) {
+        if self.default_light {
+            log::warn!(
+                "{}: the file has no light; placed a default point light",
+                self.source
+            );
+        }
+    }
+
     pub fn new(name: &str) -> Scene {
         Scene {
             name: name.into(),
@@ -104,6 +118,7 @@ impl Scene {
             ambient: Vec3::splat(0.15),
             source: name.into(),
             geometry_hash: 0,
+            default_light: false,
         }
     }
 

@@ -265,6 +265,7 @@ impl App {
             return Ok(());
         };
         let scene = scene::load(name)?;
+        scene.warn_default_light();
         let choice = old.techniques[0].choice.clone();
         let (camera, lights) = (scene.camera, scene.lights.clone());
         self.scene = Some(SceneState::load(&gfx.gpu, scene, camera, lights, &choice)?);

@@ -266,8 +266,6 @@ fn load_checked(file: &str, path: &Path) -> Result<Scene> {
     if let Some(c) = camera {
         scene.camera = c;
     }
-    if !had_lights {
-        log::warn!("{file}: no KHR_lights_punctual light; placed a default point light");
-    }
+    scene.default_light = !had_lights;
     Ok(scene)
 }
