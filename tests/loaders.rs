@@ -72,21 +72,21 @@ fn obj_naming_conventions_and_materials() {
     assert_eq!(s.triangle_count(), 2 + 2 + 4);
 }
 
+/// `shadowlab render` of the scene file `scene` at `size` into `out`, with
+/// `extra` arguments.
+fn render_file(scene: &str, size: &str, out: &str, extra: &[&str]) -> std::process::Output {
+    let mut args = vec!["render", "--scene", scene, "--size", size, "--out", out];
+    args.extend_from_slice(extra);
+    shadowlab(&args)
+}
+
 #[test]
 fn missing_texture_warns_and_renders() {
     let dir = tmpdir("missing-tex");
     let obj = write(&dir, "room.obj", ROOM_OBJ);
     write(&dir, "room.mtl", ROOM_MTL);
     let out = dir.join("out");
-    let o = shadowlab(&[
-        "render",
-        "--scene",
-        obj.to_str().unwrap(),
-        "--size",
-        "64x36",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = render_file(obj.to_str().unwrap(), "64x36", out.to_str().unwrap(), &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("missing.png"), "{}", stderr(&o));
     assert!(out.join("image.png").exists());
@@ -108,15 +108,7 @@ fn undecodable_textures_warn_and_render() {
         let path = dir.join(obj);
         let s = scene::load(path.to_str().unwrap()).unwrap();
         assert!(s.textures.is_empty(), "{obj}");
-        let o = shadowlab(&[
-            "render",
-            "--scene",
-            path.to_str().unwrap(),
-            "--size",
-            "16x16",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = render_file(path.to_str().unwrap(), "16x16", out.to_str().unwrap(), &[]);
         assert!(o.status.success(), "{obj}: {}", stderr(&o));
         assert!(
             stderr(&o).contains(&format!("{texture}: cannot decode")),
@@ -171,15 +163,7 @@ fn missing_gltf_images_warn_and_render() {
     let m = &s.materials[s.objects[0].material];
     assert!(m.diffuse_texture.is_none() && m.normal_map.is_none());
     let out = dir.join("out");
-    let o = shadowlab(&[
-        "render",
-        "--scene",
-        path.to_str().unwrap(),
-        "--size",
-        "32x32",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = render_file(path.to_str().unwrap(), "32x32", out.to_str().unwrap(), &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     for name in ["textures/base.png", "textures/normal_1.png"] {
         assert!(
@@ -196,19 +180,12 @@ fn missing_gltf_images_warn_and_render() {
         "{}",
         stderr(&o)
     );
-    let o = shadowlab(&[
-        "render",
-        "--scene",
+    let o = render_file(
         path.to_str().unwrap(),
-        "--light-type",
-        "point",
-        "--light-pos",
-        "0,3,0",
-        "--size",
         "32x32",
-        "--out",
         out.to_str().unwrap(),
-    ]);
+        &["--light-type", "point", "--light-pos", "0,3,0"],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         !stderr(&o).contains("default point light"),
@@ -294,15 +271,12 @@ fn malformed_files_fail_with_file_line_and_exit_2() {
     ];
     for (name, text, expect) in cases {
         let p = write(&dir, name, text);
-        let o = shadowlab(&[
-            "render",
-            "--scene",
+        let o = render_file(
             p.to_str().unwrap(),
-            "--size",
             "32x32",
-            "--out",
             dir.join("o").to_str().unwrap(),
-        ]);
+            &[],
+        );
         assert_eq!(o.status.code(), Some(2), "{name}: {}", stderr(&o));
         assert!(
             stderr(&o).contains(expect),
@@ -357,15 +331,12 @@ fn degenerate_triangles_are_skipped_and_counted() {
     );
     let s = scene::load(p.to_str().unwrap()).unwrap();
     assert_eq!(s.triangle_count(), 1);
-    let o = shadowlab(&[
-        "render",
-        "--scene",
+    let o = render_file(
         p.to_str().unwrap(),
-        "--size",
         "32x32",
-        "--out",
         dir.join("o").to_str().unwrap(),
-    ]);
+        &[],
+    );
     assert!(o.status.success());
     assert!(
         stderr(&o).contains("skipped 1 degenerate triangle"),
