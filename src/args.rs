@@ -159,7 +159,8 @@ impl ViewArgs {
         }
         if lights.len() > crate::frame::MAX_LIGHTS {
             bail!(
-                "{} lights; at most {} are supported",
+                "{}: {} lights; at most {} are supported",
+                scene.source,
                 lights.len(),
                 crate::frame::MAX_LIGHTS
             );

@@ -443,7 +443,15 @@ fn bad_arguments_and_unwritable_places_exit_2_naming_them() {
     let dir = tmpdir("bad-arguments");
     let out = dir.join("out");
     let out = out.to_str().unwrap();
-    let checks: [(&[&str], &str); 5] = [
+    let lights = "[[model]]\nshape = \"sphere\"\nsize = [0.5]\n".to_string()
+        + &"[[light]]\ntype = \"point\"\nposition = [0.0, 3.0, 0.0]\n".repeat(5);
+    let five = write(&dir, "five-lights.toml", &lights);
+    let five_lights = format!("{}: 5 lights; at most 4 are supported", five.display());
+    let checks: [(&[&str], &str); 6] = [
+        (
+            &["render", "--scene", five.to_str().unwrap(), "--out", out],
+            &five_lights,
+        ),
         (
             &["render", "--eye", "1,2", "--out", out],
             "expected three finite numbers",
