@@ -128,7 +128,7 @@ pub fn run(
     }
     let mut series = list
         .iter()
-        .map(|choice| Series::new(gpu, choice, lights.len().max(1)))
+        .map(|choice| Series::new(gpu, choice, lights.len()))
         .collect::<Result<Vec<_>>>()?;
     // Every technique's warm-up first, then the measured frames round-robin
     // (frame k of each technique in turn, the order turned by one each
@@ -170,8 +170,8 @@ pub fn run(
     // `none`'s frame of each round, for the per-round ratios.
     let none_frames: Vec<f64> = series
         .iter()
-        .find(|s| s.label.starts_with("none:"))
-        .map(|s| s.timings.iter().map(|t| t.total_ms).collect())
+        .position(|s| s.label.starts_with("none:"))
+        .map(|i| per_round[i].clone())
         .unwrap_or_default();
     let mut rows: Vec<BenchRow> = series.into_iter().map(|s| s.row(&hf)).collect();
     let none_ms = Stat::of(none_frames.clone()).median;
@@ -215,7 +215,6 @@ struct Series {
     spent: std::time::Duration,
     /// Out of time ([`BenchFrames::max_seconds`]): no more frames.
     done: bool,
-    shadow_resource_bytes: u64,
 }
 
 /// Whether a bench frame is a warm-up (not kept) or measured.
@@ -238,14 +237,11 @@ impl Series {
     fn new(gpu: &GpuContext, choice: &TechniqueChoice, lights: usize) -> Result<Series> {
         Ok(Series {
             label: choice_label(choice),
-            instances: (0..lights)
-                .map(|_| crate::technique::TechniqueInstance::new(gpu, choice.clone()))
-                .collect::<Result<_>>()?,
+            instances: crate::technique::TechniqueInstance::per_light(gpu, choice, lights)?,
             timings: vec![],
             frame_counters: vec![],
             spent: Default::default(),
             done: false,
-            shadow_resource_bytes: 0,
         })
     }
 
@@ -284,11 +280,6 @@ impl Series {
                     );
                 }
             }
-            self.shadow_resource_bytes = hf
-                .techniques
-                .iter()
-                .map(|t| t.technique.resource_bytes())
-                .sum();
             Ok(())
         })();
         std::mem::swap(&mut hf.techniques, &mut self.instances);
@@ -313,7 +304,11 @@ impl Series {
             ratio_spread: (0.0, 0.0),
             triangles_drawn: hf.scene_gpu.triangle_count,
             caster_triangles: hf.scene_gpu.caster_triangle_count,
-            shadow_resource_bytes: self.shadow_resource_bytes,
+            shadow_resource_bytes: self
+                .instances
+                .iter()
+                .map(|t| t.technique.resource_bytes())
+                .sum(),
             counters: counter_summary(&self.frame_counters),
             measured_frames: timings.len(),
         }

@@ -122,9 +122,7 @@ fn render_with(
     choice: &TechniqueChoice,
     debug: bool,
 ) -> Result<Rendered> {
-    hf.techniques = (0..lights.len().max(1))
-        .map(|_| TechniqueInstance::new(gpu, choice.clone()))
-        .collect::<Result<_>>()?;
+    hf.techniques = TechniqueInstance::per_light(gpu, choice, lights.len())?;
     for t in &mut hf.techniques {
         t.technique.enable_debug(debug);
     }

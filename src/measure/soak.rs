@@ -5,6 +5,7 @@
 //! the last. Something kept per frame shows as memory that grows with the
 //! frame count; a cache that grows without bound, as frames that slow.
 
+use super::bench::Stat;
 use super::choice_label;
 use super::flicker::{CameraPath, path_camera};
 use crate::gpu::{GpuContext, LiveResources, PIPELINE_CACHE_BOUND};
@@ -105,9 +106,7 @@ pub fn run(
     let mut hf = HeadlessFrame::new(gpu, scene, &techniques[..1], size.0, size.1)?;
     let mut rows = vec![];
     for choice in techniques {
-        hf.techniques = (0..lights.len().max(1))
-            .map(|_| TechniqueInstance::new(gpu, choice.clone()))
-            .collect::<Result<_>>()?;
+        hf.techniques = TechniqueInstance::per_light(gpu, choice, lights.len())?;
         let mut frame = 0;
         let mut render = |hf: &mut HeadlessFrame| -> Result<f64> {
             let view = path_camera(camera, CameraPath::Orbit, frame * ORBIT_STEPS_PER_FRAME);
@@ -127,11 +126,7 @@ pub fn run(
             times.push(render(&mut hf)?);
         }
         let quarter = (times.len() / 4).max(1);
-        let median = |v: &[f64]| {
-            let mut v = v.to_vec();
-            v.sort_by(f64::total_cmp);
-            super::percentile(&v, 0.5)
-        };
+        let median = |v: &[f64]| Stat::of(v.to_vec()).median;
         let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
         rows.push(SoakRow {
             technique: choice_label(choice),

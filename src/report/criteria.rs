@@ -77,10 +77,15 @@ pub const EXACT_INTERIOR_PCT: f64 = 0.1;
 /// ungraded (no acne or light bleeding a viewer sees as grey).
 pub const EXACT_INTERIOR_MAE: f64 = 0.002;
 
+/// Whether a cell's interior shows no graded error (acne, bleeding).
+pub fn ungraded(c: &Cell) -> bool {
+    c.quality.interior_mae <= EXACT_INTERIOR_MAE
+}
+
 /// Whether a cell's interior error is low enough, graded as well as
 /// thresholded, to call its shadows exact.
 pub fn interior_exact(c: &Cell) -> bool {
-    c.quality.interior_pct <= EXACT_INTERIOR_PCT && c.quality.interior_mae <= EXACT_INTERIOR_MAE
+    c.quality.interior_pct <= EXACT_INTERIOR_PCT && ungraded(c)
 }
 /// Mean absolute visibility error within which soft shadows pass.
 pub const SOFT_MAE: f64 = 0.01;
@@ -122,7 +127,7 @@ const CRITERIA: [Criterion; 11] = [
         name: "hard shadows ungraded",
         declared: None,
         applies: |c| !c.area_light,
-        passes: |c| c.quality.interior_mae <= EXACT_INTERIOR_MAE,
+        passes: ungraded,
         figure: |c| c.quality.interior_mae,
         unit: Unit::Value("interior MAE"),
     },

@@ -5,7 +5,7 @@
 
 use super::cells::{COLUMNS, Cell, SOURCE_VERSION, csv_row};
 use super::charts;
-use super::criteria::{Claim, EXACT_INTERIOR_MAE, FAILED_PCT};
+use super::criteria::{Claim, EXACT_INTERIOR_MAE, FAILED_PCT, ungraded};
 use super::pareto::competes;
 use super::summary::Report;
 use anyhow::Result;
@@ -189,11 +189,7 @@ fn best_per_view(h: &mut String, report: &Report) {
             .filter(|c| c.view() == *view && competes(c))
             .collect();
         // The best is the lowest mismatch among the ungraded, when any is.
-        let ungraded: Vec<&Cell> = competing
-            .iter()
-            .copied()
-            .filter(|c| c.quality.interior_mae <= EXACT_INTERIOR_MAE)
-            .collect();
+        let ungraded: Vec<&Cell> = competing.iter().copied().filter(|c| ungraded(c)).collect();
         let pool = if ungraded.is_empty() {
             &competing
         } else {

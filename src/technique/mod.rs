@@ -381,6 +381,18 @@ impl TechniqueInstance {
         Ok(TechniqueInstance { choice, technique })
     }
 
+    /// One instance of `choice` for each of `lights` lights (at least one,
+    /// for a frame without lights).
+    pub fn per_light(
+        gpu: &GpuContext,
+        choice: &TechniqueChoice,
+        lights: usize,
+    ) -> Result<Vec<TechniqueInstance>> {
+        (0..lights.max(1))
+            .map(|_| TechniqueInstance::new(gpu, choice.clone()))
+            .collect()
+    }
+
     /// Changes the parameter values (the viewer's sliders); on an error
     /// the previous values stay.
     pub fn set_params(&mut self, params: ParamValues) -> Result<()> {

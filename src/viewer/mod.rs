@@ -88,9 +88,7 @@ impl SceneState {
         choice: &TechniqueChoice,
     ) -> Result<SceneState> {
         let scene_gpu = SceneGpu::upload(gpu, &scene)?;
-        let techniques = (0..crate::frame::MAX_LIGHTS)
-            .map(|_| TechniqueInstance::new(gpu, choice.clone()))
-            .collect::<Result<_>>()?;
+        let techniques = TechniqueInstance::per_light(gpu, choice, crate::frame::MAX_LIGHTS)?;
         Ok(SceneState {
             scene: Arc::new(scene),
             scene_gpu,

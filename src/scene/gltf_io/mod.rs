@@ -58,8 +58,8 @@ fn load_checked(file: &str, path: &Path) -> Result<Scene> {
         .document
         .into_json();
     check_attribute_indices(&file, &root)?;
-    check_external_files(&file, path.parent().unwrap_or(Path::new(".")), &root)?;
     let base = path.parent().unwrap_or(Path::new("."));
+    check_external_files(&file, base, &root)?;
     let gltf::Gltf {
         document: doc,
         blob,

@@ -63,22 +63,6 @@ fn texel_footprint(dx: vec2f, dy: vec2f) -> f32 {
     return span / abs(det);
 }
 
-// World point p in clip space of map face `face` (a paraboloid's
-// hemisphere, or the face's matrix).
-fn face_clip(p: vec3f, face: u32) -> vec4f {
-    if is_paraboloid() {
-        return paraboloid(vec4f(p, 1.0), face);
-    }
-    return sm.faces[face] * vec4f(p, 1.0);
-}
-
-// The map coordinates [0, 1]² of clip-space point c.
-fn clip_uv(c: vec4f) -> vec2f {
-    let w = select(c.w, 1e-6, abs(c.w) < 1e-6);
-    let ndc = c.xy / w;
-    return vec2f(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-}
-
 @fragment
 fn fs_debug_frame(@builtin(position) frag: vec4f) -> DebugFrame {
     if VIRTUAL {
@@ -92,11 +76,11 @@ fn fs_debug_frame(@builtin(position) frag: vec4f) -> DebugFrame {
     let gx = dpdx(g.xyz);
     let gy = dpdy(g.xyz);
     let face = face_of(g.xyz);
-    let c = face_clip(g.xyz, face);
-    let uv = clip_uv(c);
+    let c = clip_of(face, g.xyz);
+    let uv = map_point(face, g.xyz).xy;
     let texel = uv * sm.map.x;
-    let dx = (clip_uv(face_clip(g.xyz + gx, face)) - uv) * sm.map.x;
-    let dy = (clip_uv(face_clip(g.xyz + gy, face)) - uv) * sm.map.x;
+    let dx = (map_point(face, g.xyz + gx).xy - uv) * sm.map.x;
+    let dy = (map_point(face, g.xyz + gy).xy - uv) * sm.map.x;
     let footprint = max(length(dx), length(dy));
     let pixels_per_texel = texel_footprint(dx, dy);
     var o: DebugFrame;
