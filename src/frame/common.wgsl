@@ -37,7 +37,16 @@ struct ObjectGpu {
     // x the global ID of the object's convex parts less one (IDs are unique
     // in the scene; 0 is no part), yzw unused
     parts: vec4u,
+    // x alpha mode (ALPHA_*), y cutoff, z opacity factor, w uv scale (f32 bits)
+    alpha: vec4u,
+    // x first byte of the opacity map in `opacity_texels` (its mip levels
+    // follow, each half the last), y width, z height, w levels (0: no map)
+    opacity_map: vec4u,
 };
+
+const ALPHA_OPAQUE: u32 = 0u;
+const ALPHA_MASK: u32 = 1u;
+const ALPHA_BLEND: u32 = 2u;
 
 // The scene-wide ID of `object`'s convex part `part` (0: none).
 fn part_id(object: u32, part: u32) -> u32 {
@@ -46,6 +55,63 @@ fn part_id(object: u32, part: u32) -> u32 {
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(1) @binding(0) var<storage, read> objects: array<ObjectGpu>;
+// Every opacity map's mip chain, four one-byte texels per word.
+@group(1) @binding(1) var<storage, read> opacity_texels: array<u32>;
+
+// One texel of an opacity level (`base` its first byte, `size` its extent),
+// repeating.
+fn opacity_texel(base: u32, size: vec2i, t: vec2i) -> f32 {
+    let w = ((t % size) + size) % size;
+    let i = base + u32(w.y * size.x + w.x);
+    return f32((opacity_texels[i >> 2u] >> (8u * (i & 3u))) & 255u) / 255.0;
+}
+
+// The mip level of `object`'s opacity map whose texels are the size of the
+// pixel footprint `duv_dx`, `duv_dy` (the derivatives of the unscaled uv).
+fn opacity_lod(object: u32, duv_dx: vec2f, duv_dy: vec2f) -> f32 {
+    let m = objects[object].opacity_map;
+    let texels = vec2f(f32(m.y), f32(m.z)) * bitcast<f32>(objects[object].alpha.w);
+    let footprint = max(length(duv_dx * texels), length(duv_dy * texels));
+    return max(log2(max(footprint, 1e-8)), 0.0);
+}
+
+// The opacity of `object` at `uv` (unscaled): the material's factor times
+// its map's bilinear value at mip level `lod`.
+fn opacity_at(object: u32, uv: vec2f, lod: f32) -> f32 {
+    let a = objects[object].alpha;
+    let m = objects[object].opacity_map;
+    let factor = bitcast<f32>(a.z);
+    if m.w == 0u {
+        return factor;
+    }
+    let level = u32(min(round(lod), f32(m.w - 1u)));
+    var base = m.x;
+    var size = vec2u(m.y, m.z);
+    for (var l = 0u; l < level; l++) {
+        base += size.x * size.y;
+        size = max(size / 2u, vec2u(1u));
+    }
+    let s = vec2i(size);
+    let p = uv * bitcast<f32>(a.w) * vec2f(size) - 0.5;
+    let p0 = floor(p);
+    let f = p - p0;
+    let t = vec2i(p0);
+    let top = mix(opacity_texel(base, s, t), opacity_texel(base, s, t + vec2i(1, 0)), f.x);
+    let bottom = mix(opacity_texel(base, s, t + vec2i(0, 1)), opacity_texel(base, s, t + vec2i(1, 1)), f.x);
+    return factor * mix(top, bottom, f.y);
+}
+
+// Whether `object` is solid at `uv` for a pass that draws it as a cut-out:
+// a mask material where its opacity reaches the cutoff, a blended one
+// where it reaches ½, an opaque one everywhere.
+fn is_solid_at(object: u32, uv: vec2f, lod: f32) -> bool {
+    let a = objects[object].alpha;
+    if a.x == ALPHA_OPAQUE {
+        return true;
+    }
+    let cutoff = select(0.5, bitcast<f32>(a.y), a.x == ALPHA_MASK);
+    return opacity_at(object, uv, lod) >= cutoff;
+}
 
 struct VertexIn {
     @location(0) position: vec3f,
@@ -61,6 +127,17 @@ struct VertexIn {
 // this one function with an @invariant output so depths match exactly.
 fn clip_position(object: u32, p: vec3f) -> vec4f {
     return frame.view_proj * (objects[object].model * vec4f(p, 1.0));
+}
+
+// Whether a caster's fragment at `uv` is solid, for caster passes that draw
+// every caster with one pipeline: `see_through` (a flat varying: the
+// object's alpha mode is not opaque) spares opaque casters the object read;
+// the derivatives are the caller's, taken in uniform control flow.
+fn caster_is_solid(object: u32, see_through: bool, uv: vec2f, duv_dx: vec2f, duv_dy: vec2f) -> bool {
+    if !see_through {
+        return true;
+    }
+    return is_solid_at(object, uv, opacity_lod(object, duv_dx, duv_dy));
 }
 
 // A triangle covering the whole target (for screen-space passes).

@@ -150,7 +150,10 @@ impl FrameLayouts {
                 ),
                 objects: layout(
                     "objects",
-                    &[storage_entry(0, vf | wgpu::ShaderStages::COMPUTE, true)],
+                    &[
+                        storage_entry(0, vf | wgpu::ShaderStages::COMPUTE, true),
+                        storage_entry(1, wgpu::ShaderStages::FRAGMENT, true),
+                    ],
                 ),
                 gbuffer: layout(
                     "gbuffer",

@@ -4,8 +4,9 @@
 use super::{FrameLayouts, Vertex, textures};
 use crate::gpu::GpuContext;
 use crate::scene::clusters::{CLUSTER_TRIANGLES, Cluster, clustered};
+use crate::scene::opacity::OpacityMaps;
 use crate::scene::topology::{SolidKind, Solidity};
-use crate::scene::{Aabb, Material, Scene};
+use crate::scene::{Aabb, AlphaMode, Material, Scene};
 use anyhow::{Context, Result, bail};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
@@ -20,6 +21,32 @@ struct ObjectGpu {
     info: [u32; 4],
     /// x: the global ID of the object's convex parts less one.
     parts: [u32; 4],
+    /// x [`AlphaMode`] as index, y cutoff, z opacity factor, w uv scale
+    /// (`f32` bits).
+    alpha: [u32; 4],
+    /// x first byte of its opacity map in the texel buffer, y width, z
+    /// height, w levels (0: no map).
+    opacity_map: [u32; 4],
+}
+
+/// Every opacity map's mip chain, one byte per texel, in one buffer; where
+/// each map starts.
+fn opacity_texels(maps: &OpacityMaps) -> (Vec<u32>, Vec<u32>) {
+    let mut bytes: Vec<u8> = vec![];
+    let mut starts = vec![];
+    for m in &maps.maps {
+        starts.push(bytes.len() as u32);
+        for level in &m.levels {
+            bytes.extend_from_slice(level);
+        }
+    }
+    // A storage binding cannot be empty.
+    bytes.resize(bytes.len().next_multiple_of(4).max(4), 0);
+    let words = bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    (words, starts)
 }
 
 #[repr(C)]
@@ -43,6 +70,8 @@ pub struct DrawCall {
     pub material: usize,
     pub casts_shadow: bool,
     pub shadow_plane: bool,
+    /// How its material's opacity is used.
+    pub alpha_mode: AlphaMode,
     /// What the mesh encloses ([`crate::scene::Mesh::solidity`]).
     pub solid: SolidKind,
     /// World-space bounds of the object (for culling against light views).
@@ -86,6 +115,9 @@ pub struct MaterialVariant {
     pub normal_map: bool,
     /// 0 none, else [`crate::scene::ProceduralKind`] as index + 1.
     pub procedural: u32,
+    /// A translucent ([`AlphaMode::Blend`]) surface, blended over the
+    /// opaque image.
+    pub translucent: bool,
 }
 
 impl MaterialVariant {
@@ -94,6 +126,7 @@ impl MaterialVariant {
             diffuse_texture: m.diffuse_texture.is_some(),
             normal_map: m.normal_map.is_some(),
             procedural: m.procedural.map_or(0, |p| p.kind as u32 + 1),
+            translucent: m.alpha_mode == AlphaMode::Blend,
         }
     }
 }
@@ -140,6 +173,8 @@ impl SceneGpu {
                     format!("scene '{}' has more than 2^32 convex parts", scene.name)
                 })?;
         }
+        let opacity_maps = OpacityMaps::of(scene);
+        let (texels, map_starts) = opacity_texels(&opacity_maps);
         let objects: Vec<ObjectGpu> = scene
             .objects
             .iter()
@@ -154,6 +189,32 @@ impl SceneGpu {
                     (solidity[o.mesh].kind != SolidKind::NotSolid) as u32,
                 ],
                 parts: [part_base, 0, 0, 0],
+                alpha: {
+                    let m = &scene.materials[o.material];
+                    let mode = if m.is_see_through() {
+                        m.alpha_mode
+                    } else {
+                        AlphaMode::Opaque
+                    };
+                    [
+                        mode as u32,
+                        m.alpha_cutoff.to_bits(),
+                        m.alpha.to_bits(),
+                        m.uv_scale.to_bits(),
+                    ]
+                },
+                opacity_map: {
+                    let m = &scene.materials[o.material];
+                    match (m.alpha_texture, opacity_maps.for_material(m)) {
+                        (Some(t), Some(map)) => [
+                            map_starts[opacity_maps.of_texture[&t]],
+                            map.width,
+                            map.height,
+                            map.levels.len() as u32,
+                        ],
+                        _ => [0; 4],
+                    }
+                },
             })
             .collect();
         let mut parts = vec![];
@@ -182,6 +243,7 @@ impl SceneGpu {
                     material: o.material,
                     casts_shadow: o.casts_shadow,
                     shadow_plane: o.shadow_plane,
+                    alpha_mode: scene.materials[o.material].alpha_mode,
                     solid: solidity[o.mesh].kind,
                     bounds: scene.meshes[o.mesh].bounds().transformed(o.transform),
                     first_part,
@@ -208,13 +270,20 @@ impl SceneGpu {
             wgpu::BufferUsages::INDEX | storage_ro,
         );
         let object_buffer = init("objects", bytemuck::cast_slice(&objects), storage_ro);
+        let opacity_buffer = init("opacity maps", bytemuck::cast_slice(&texels), storage_ro);
         let object_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("objects"),
             layout: &layouts.objects,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: object_buffer.as_entire_binding(),
-            }],
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: object_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: opacity_buffer.as_entire_binding(),
+                },
+            ],
         });
         let gpu_textures: Vec<wgpu::TextureView> = scene
             .textures
@@ -240,7 +309,7 @@ impl SceneGpu {
                     flags: Vec4::new(
                         m.normal_map.is_some() as u32 as f32,
                         p.map_or(0.0, |p| p.octaves as f32),
-                        0.0,
+                        m.alpha,
                         0.0,
                     ),
                 };

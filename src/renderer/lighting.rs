@@ -8,7 +8,7 @@
 
 use super::{LightingModel, MipFilter, RenderSettings, Shading};
 use crate::frame::{
-    self, Compose, FrameLayouts, FrameTargets, MAX_LIGHTS, MaterialVariant, SceneGpu,
+    self, Compose, DrawCall, FrameLayouts, FrameTargets, MAX_LIGHTS, MaterialVariant, SceneGpu,
 };
 use crate::gpu::GpuContext;
 use crate::scene::{Light, LightType};
@@ -96,7 +96,7 @@ pub struct LitKey {
 
 impl LitKey {
     /// The values of `scene.wgsl`'s pipeline-overridable constants.
-    fn constants(&self) -> [(&'static str, f64); 7] {
+    fn constants(&self) -> [(&'static str, f64); 8] {
         let b = |v: bool| v as u32 as f64;
         [
             ("LIGHT_COUNT", self.lights.count() as f64),
@@ -119,6 +119,7 @@ impl LitKey {
             ("DIFFUSE_TEXTURE", b(self.material.diffuse_texture)),
             ("NORMAL_MAP", b(self.material.normal_map)),
             ("PROCEDURAL", self.material.procedural as f64),
+            ("TRANSLUCENT", b(self.material.translucent)),
         ]
     }
 
@@ -243,10 +244,16 @@ impl Lighting {
                             cull_mode: key.cull_back_faces.then_some(wgpu::Face::Back),
                             ..Default::default()
                         },
+                        // Opaque surfaces shade the prepass's depth; translucent
+                        // ones (not in it) are blended over what lies behind.
                         depth_stencil: Some(wgpu::DepthStencilState {
                             format: frame::DEPTH_FORMAT,
                             depth_write_enabled: Some(false),
-                            depth_compare: Some(wgpu::CompareFunction::Equal),
+                            depth_compare: Some(if key.material.translucent {
+                                wgpu::CompareFunction::Less
+                            } else {
+                                wgpu::CompareFunction::Equal
+                            }),
                             stencil: Default::default(),
                             bias: Default::default(),
                         }),
@@ -255,7 +262,14 @@ impl Lighting {
                             module: &self.module,
                             entry_point: Some(fs),
                             compilation_options: options,
-                            targets: &[Some(color_format.into())],
+                            targets: &[Some(wgpu::ColorTargetState {
+                                format: color_format,
+                                blend: key
+                                    .material
+                                    .translucent
+                                    .then_some(wgpu::BlendState::ALPHA_BLENDING),
+                                write_mask: wgpu::ColorWrites::ALL,
+                            })],
                         }),
                         multiview_mask: None,
                         cache: None,
@@ -263,7 +277,8 @@ impl Lighting {
             })
     }
 
-    /// Draws every object with its material's variant.
+    /// Draws every object with its material's variant: opaque ones first,
+    /// then translucent ones back to front.
     pub fn draw(
         &self,
         gpu: &GpuContext,
@@ -289,7 +304,15 @@ impl Lighting {
         pass.set_index_buffer(scene_gpu.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
         let mut bound_material = usize::MAX;
         let mut bound_key = None;
-        for d in scene_gpu.draws.iter().filter(|d| !d.shadow_plane) {
+        let eye = frame.uniform().camera_pos.truncate();
+        let translucent = |d: &&DrawCall| scene_gpu.material_variants[d.material].translucent;
+        let mut behind_first: Vec<&DrawCall> = scene_gpu.draws.iter().filter(translucent).collect();
+        behind_first.sort_by(|a, b| {
+            let distance = |d: &DrawCall| d.bounds.center().distance_squared(eye);
+            distance(b).total_cmp(&distance(a))
+        });
+        let opaque = scene_gpu.draws.iter().filter(|d| !translucent(d));
+        for d in opaque.chain(behind_first).filter(|d| !d.shadow_plane) {
             if d.material != bound_material {
                 let key = LitKey {
                     cull_back_faces: settings.cull_back_faces,

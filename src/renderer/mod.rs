@@ -18,7 +18,7 @@ pub use timing::{FrameTimings, GpuPassTimes};
 
 use crate::frame::{self, FrameLayouts, FrameTargets, MAX_LIGHTS, SceneGpu};
 use crate::gpu::GpuContext;
-use crate::scene::{Camera, Light, Scene};
+use crate::scene::{AlphaMode, Camera, Light, Scene};
 use crate::technique::{Feedback, MaskContext, TechniqueInstance, TechniqueNeeds};
 use anyhow::{Result, bail};
 use glam::Vec3;
@@ -182,45 +182,56 @@ impl Renderer {
         }
     }
 
-    /// The prepass pipeline (back faces culled or not).
-    fn gbuffer_pipeline(&self, gpu: &GpuContext, cull_back_faces: bool) -> wgpu::RenderPipeline {
-        gpu.cache.render_pipeline("prepass", &cull_back_faces, || {
-            gpu.device
-                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("gbuffer"),
-                    layout: Some(&self.gbuffer_layout),
-                    vertex: wgpu::VertexState {
-                        module: &self.module,
-                        entry_point: Some("vs_gbuffer"),
-                        compilation_options: Default::default(),
-                        buffers: &[Some(frame::VERTEX_LAYOUT)],
-                    },
-                    primitive: wgpu::PrimitiveState {
-                        cull_mode: cull_back_faces.then_some(wgpu::Face::Back),
-                        ..Default::default()
-                    },
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: frame::DEPTH_FORMAT,
-                        depth_write_enabled: Some(true),
-                        depth_compare: Some(wgpu::CompareFunction::Less),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &self.module,
-                        entry_point: Some("fs_gbuffer"),
-                        compilation_options: Default::default(),
-                        targets: &[
-                            Some(frame::GBUFFER_POSITION_FORMAT.into()),
-                            Some(frame::GBUFFER_NORMAL_FORMAT.into()),
-                            Some(frame::GBUFFER_PART_FORMAT.into()),
-                        ],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
-        })
+    /// The prepass pipeline (back faces culled or not; `cutout`: the
+    /// fragment stage drops the holes of cut-out surfaces).
+    fn gbuffer_pipeline(
+        &self,
+        gpu: &GpuContext,
+        cull_back_faces: bool,
+        cutout: bool,
+    ) -> wgpu::RenderPipeline {
+        gpu.cache
+            .render_pipeline("prepass", &(cull_back_faces, cutout), || {
+                gpu.device
+                    .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                        label: Some("gbuffer"),
+                        layout: Some(&self.gbuffer_layout),
+                        vertex: wgpu::VertexState {
+                            module: &self.module,
+                            entry_point: Some("vs_gbuffer"),
+                            compilation_options: Default::default(),
+                            buffers: &[Some(frame::VERTEX_LAYOUT)],
+                        },
+                        primitive: wgpu::PrimitiveState {
+                            cull_mode: cull_back_faces.then_some(wgpu::Face::Back),
+                            ..Default::default()
+                        },
+                        depth_stencil: Some(wgpu::DepthStencilState {
+                            format: frame::DEPTH_FORMAT,
+                            depth_write_enabled: Some(true),
+                            depth_compare: Some(wgpu::CompareFunction::Less),
+                            stencil: Default::default(),
+                            bias: Default::default(),
+                        }),
+                        multisample: Default::default(),
+                        fragment: Some(wgpu::FragmentState {
+                            module: &self.module,
+                            entry_point: Some(if cutout {
+                                "fs_gbuffer_cutout"
+                            } else {
+                                "fs_gbuffer"
+                            }),
+                            compilation_options: Default::default(),
+                            targets: &[
+                                Some(frame::GBUFFER_POSITION_FORMAT.into()),
+                                Some(frame::GBUFFER_NORMAL_FORMAT.into()),
+                                Some(frame::GBUFFER_PART_FORMAT.into()),
+                            ],
+                        }),
+                        multiview_mask: None,
+                        cache: None,
+                    })
+            })
     }
 
     pub fn draw_lines(
@@ -454,10 +465,15 @@ impl Renderer {
             }),
             ..Default::default()
         });
-        pass.set_pipeline(&self.gbuffer_pipeline(gpu, settings.cull_back_faces));
         pass.set_bind_group(frame::FRAME_GROUP, frame.frame_bind_group(), &[]);
         pass.set_bind_group(frame::OBJECTS_GROUP, &scene_gpu.object_bind_group, &[]);
-        scene_gpu.draw_objects(&mut pass, |_| true);
+        // Translucent surfaces are not in the G-buffer: what lies behind
+        // them receives the shadows (the lighting pass blends them over).
+        for alpha in [AlphaMode::Opaque, AlphaMode::Mask] {
+            let cutout = alpha == AlphaMode::Mask;
+            pass.set_pipeline(&self.gbuffer_pipeline(gpu, settings.cull_back_faces, cutout));
+            scene_gpu.draw_objects(&mut pass, |d| d.alpha_mode == alpha);
+        }
     }
 
     /// The lighting pass over the prepass's depth, then the light icons.

@@ -13,7 +13,7 @@ struct MaterialGpu {
     proc_a: vec4f,
     // rgb procedural colour b, w procedural scale
     proc_b: vec4f,
-    // x 1 if a normal map is bound, y procedural octaves
+    // x 1 if a normal map is bound, y procedural octaves, z opacity factor
     flags: vec4f,
 };
 
@@ -32,11 +32,13 @@ struct GOut {
     @location(1) @interpolate(flat) object: u32,
     @location(2) @interpolate(flat) receives: u32,
     @location(3) @interpolate(flat) part: u32,
+    @location(4) uv: vec2f,
 };
 
 @vertex
 fn vs_gbuffer(v: VertexIn) -> GOut {
     var o: GOut;
+    o.uv = v.uv;
     o.clip = clip_position(v.object, v.position);
     o.world_pos = (objects[v.object].model * vec4f(v.position, 1.0)).xyz;
     o.object = v.object;
@@ -63,12 +65,28 @@ struct GBuffer {
     @location(2) part: u32,
 };
 
-@fragment
-fn fs_gbuffer(i: GOut) -> GBuffer {
+fn gbuffer_of(i: GOut) -> GBuffer {
     var g: GBuffer;
     g.position = vec4f(i.world_pos, f32(i.object + 1u));
     g.normal = vec4f(face_normal(i.world_pos), f32(i.receives));
     g.part = i.part;
+    return g;
+}
+
+@fragment
+fn fs_gbuffer(i: GOut) -> GBuffer {
+    return gbuffer_of(i);
+}
+
+// Cut-out surfaces: no G-buffer sample where the opacity map has a hole, at
+// the mip level of the pixel's footprint.
+@fragment
+fn fs_gbuffer_cutout(i: GOut) -> GBuffer {
+    let g = gbuffer_of(i);
+    let lod = opacity_lod(i.object, dpdx(i.uv), dpdy(i.uv));
+    if !is_solid_at(i.object, i.uv, lod) {
+        discard;
+    }
     return g;
 }
 
@@ -89,6 +107,9 @@ override DIFFUSE_TEXTURE: bool = false;
 override NORMAL_MAP: bool = false;
 // 0 none, else the kind of `procedural_factor`.
 override PROCEDURAL: u32 = 0u;
+// A translucent surface, blended over the opaque image: not in the G-buffer,
+// so the masks (which belong to what lies behind it) do not apply to it.
+override TRANSLUCENT: bool = false;
 
 const SHADING_FLAT: u32 = 0u;
 const SHADING_PIXEL: u32 = 2u;
@@ -245,18 +266,21 @@ fn vs_lit_gouraud(v: VertexIn) -> GouraudOut {
     return o;
 }
 
-// Surface colours: texture or procedural pattern modulate kd and ka.
+// Surface colours: texture or procedural pattern modulate kd and ka; the
+// opacity is the factor times the texture's alpha.
 struct SurfaceColors {
     ka: vec3f,
     kd: vec3f,
+    opacity: f32,
 };
 
 fn surface_colors(uv: vec2f, local_pos: vec3f) -> SurfaceColors {
-    var c = SurfaceColors(material.ka.rgb, material.kd.rgb);
+    var c = SurfaceColors(material.ka.rgb, material.kd.rgb, material.flags.z);
     if DIFFUSE_TEXTURE {
-        let t = textureSample(diffuse_tex, tex_sampler, uv).rgb;
-        c.kd *= t;
-        c.ka *= t;
+        let t = textureSample(diffuse_tex, tex_sampler, uv);
+        c.kd *= t.rgb;
+        c.ka *= t.rgb;
+        c.opacity *= t.a;
     }
     if PROCEDURAL > 0u {
         let f = procedural_factor(PROCEDURAL, local_pos, material.proc_b.w, u32(material.flags.y));
@@ -285,9 +309,10 @@ fn compose_light(acc: Composed, l: u32, vis: f32, terms: LightTerms, kd: vec3f) 
     return out;
 }
 
-// The light's mask value at pixel `px` (1 where the object receives no shadow).
+// The light's mask value at pixel `px` (1 where the object receives no
+// shadow, and on translucent surfaces).
 fn visibility(px: vec2i, l: u32, receives: bool) -> f32 {
-    if receives {
+    if receives && !TRANSLUCENT {
         return textureLoad(masks, px, l, 0).r;
     }
     return 1.0;
@@ -320,7 +345,7 @@ fn fs_lit(i: LitOut) -> @location(0) vec4f {
         let terms = light_terms(l, i.world_pos, n, view, material.ks.w);
         acc = compose_light(acc, l, visibility(px, l, receives), terms, surface.kd);
     }
-    return vec4f(acc.color * acc.darken, 1.0);
+    return vec4f(acc.color * acc.darken, select(1.0, surface.opacity, TRANSLUCENT));
 }
 
 @fragment
@@ -341,5 +366,5 @@ fn fs_lit_gouraud(i: GouraudOut) -> @location(0) vec4f {
     if LIGHT_COUNT > 3u {
         acc = compose_light(acc, 3u, visibility(px, 3u, receives), LightTerms(i.diffuse3, i.specular3), surface.kd);
     }
-    return vec4f(acc.color * acc.darken, 1.0);
+    return vec4f(acc.color * acc.darken, select(1.0, surface.opacity, TRANSLUCENT));
 }

@@ -3,6 +3,7 @@
 //! and the viewer's heatmap. Two kernels: obvhs' compressed wide BVH (pure
 //! Rust, always there) and Embree 3 (loaded at run time when installed).
 
+use super::opacity::{CasterOpacity, Transmittance};
 use super::{Scene, scene_fingerprint};
 use glam::Vec3;
 use obvhs::cwbvh::CwBvh;
@@ -24,6 +25,7 @@ enum Tracer {
     Obvhs {
         bvh: Option<CwBvh>,
         triangles: Vec<Triangle>,
+        opacity: Option<CasterOpacity>,
     },
     Embree(super::embree::EmbreeScene),
 }
@@ -42,9 +44,13 @@ impl CasterBvh {
     pub fn build(scene: &Scene, kernel: TraceKernel) -> Result<CasterBvh, String> {
         let t = Instant::now();
         let key = (scene_fingerprint(scene), kernel);
-        let world = scene.world_triangles(|o| o.casts_shadow && !o.shadow_plane);
+        let casters = |o: &super::Object| o.casts_shadow && !o.shadow_plane;
+        let world = scene.world_triangles(casters);
+        let opacity = CasterOpacity::of(scene, casters);
         let tracer = match kernel {
-            TraceKernel::Embree => Tracer::Embree(super::embree::EmbreeScene::build(&world)?),
+            TraceKernel::Embree => {
+                Tracer::Embree(super::embree::EmbreeScene::build(&world, opacity)?)
+            }
             TraceKernel::Obvhs => {
                 let triangles: Vec<Triangle> = world
                     .into_iter()
@@ -61,7 +67,11 @@ impl CasterBvh {
                         &mut std::time::Duration::default(),
                     )
                 });
-                Tracer::Obvhs { bvh, triangles }
+                Tracer::Obvhs {
+                    bvh,
+                    triangles,
+                    opacity,
+                }
             }
         };
         Ok(CasterBvh {
@@ -102,23 +112,41 @@ impl CasterBvh {
         self.key.1
     }
 
-    /// True when nothing blocks the segment from `origin` along `dir` (unit)
-    /// up to distance `tmax`.
-    pub fn unoccluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
+    /// The light that reaches `origin` along `dir` (unit) from distance
+    /// `tmax`: 1 when nothing blocks the segment, 0 when an opaque surface
+    /// (or a cut-out where it is solid) does, the product of the
+    /// translucent surfaces' transmittances otherwise.
+    pub fn transmittance(&self, origin: Vec3, dir: Vec3, tmax: f32) -> f32 {
         match &self.tracer {
-            Tracer::Embree(e) => e.unoccluded(origin, dir, tmax),
-            Tracer::Obvhs { bvh: None, .. } => true,
+            Tracer::Embree(e) => e.transmittance(origin, dir, tmax),
+            Tracer::Obvhs { bvh: None, .. } => 1.0,
             Tracer::Obvhs {
                 bvh: Some(bvh),
                 triangles,
+                opacity,
             } => {
                 // obvhs' traversal misses hits when a direction component is
                 // −0.0 (a sun along (0, −1, 0) gives the ray (−0, 1, −0)): use +0.0.
                 let dir = Vec3::select(dir.cmpeq(Vec3::ZERO), Vec3::ZERO, dir);
                 let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
-                bvh.ray_traverse_miss(ray, |r, id| {
-                    triangles[bvh.primitive_indices[id] as usize].intersect(r)
-                })
+                let mut light = Transmittance::default();
+                let missed = bvh.ray_traverse_miss(ray, |r, id| {
+                    let prim = bvh.primitive_indices[id] as usize;
+                    let tri = &triangles[prim];
+                    let t = tri.intersect(r);
+                    match opacity {
+                        Some(o) if t < r.tmax && o.is_see_through(prim) => {
+                            let (u, v) = barycentric(tri, origin, dir);
+                            if light.cross(o.crossing(prim, u, v)) {
+                                t
+                            } else {
+                                f32::INFINITY
+                            }
+                        }
+                        _ => t,
+                    }
+                });
+                if missed { light.value } else { 0.0 }
             }
         }
     }
@@ -128,7 +156,7 @@ impl CasterBvh {
     pub fn bytes(&self) -> u64 {
         match &self.tracer {
             Tracer::Embree(e) => e.bytes(),
-            Tracer::Obvhs { bvh, triangles } => {
+            Tracer::Obvhs { bvh, triangles, .. } => {
                 let nodes = bvh.as_ref().map_or(0, |b| {
                     b.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>()
                         + b.primitive_indices.len() * 4
@@ -137,4 +165,17 @@ impl CasterBvh {
             }
         }
     }
+}
+
+/// The barycentric coordinates `(u, v)` of where the ray from `o` along `d`
+/// meets the plane of `tri`: the point `(1 − u − v)·v0 + u·v1 + v·v2`
+/// (Möller & Trumbore 1997).
+fn barycentric(tri: &Triangle, o: Vec3, d: Vec3) -> (f32, f32) {
+    let (v0, v1, v2) = (Vec3::from(tri.v0), Vec3::from(tri.v1), Vec3::from(tri.v2));
+    let (e1, e2) = (v1 - v0, v2 - v0);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    let s = o - v0;
+    let q = s.cross(e1);
+    (s.dot(p) / det, d.dot(q) / det)
 }

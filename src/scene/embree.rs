@@ -1,10 +1,13 @@
 //! Embree 3 (Intel's ray-tracing kernels, Debian package `libembree3-3`),
 //! loaded at run time by `libloading` so that shadowlab builds and runs
 //! without it: a triangle scene of the shadow casters and occlusion
-//! queries for shadow rays (`rtcOccluded1`). Declarations follow Embree
+//! queries for shadow rays (`rtcOccluded1`), with a context filter that
+//! asks [`CasterOpacity`] about every candidate hit on a see-through
+//! triangle (cut-out holes pass, translucent surfaces attenuate). Declarations follow Embree
 //! 3.13's `rtcore.h` (RTCIntersectContext with one instance level and no
 //! curve min-width, as Debian builds it).
 
+use super::opacity::{CasterOpacity, Transmittance};
 use glam::Vec3;
 use std::ffi::{c_char, c_int, c_uint, c_void};
 use std::sync::OnceLock;
@@ -20,6 +23,7 @@ const FORMAT_UINT3: c_int = 0x5003;
 const FORMAT_FLOAT3: c_int = 0x9003;
 const BUILD_QUALITY_HIGH: c_int = 2;
 const SCENE_FLAG_ROBUST: c_int = 1 << 2;
+const SCENE_FLAG_CONTEXT_FILTER_FUNCTION: c_int = 1 << 3;
 const INVALID_GEOMETRY_ID: c_uint = u32::MAX;
 
 /// `struct RTCIntersectContext` (RTC_MAX_INSTANCE_LEVEL_COUNT 1, RTC_MIN_WIDTH 0).
@@ -28,6 +32,50 @@ struct IntersectContext {
     flags: c_int,
     filter: *const c_void,
     inst_id: [c_uint; 1],
+}
+
+/// `struct RTCFilterFunctionNArguments`.
+#[repr(C)]
+struct FilterArguments {
+    valid: *mut c_int,
+    geometry_user_ptr: *mut c_void,
+    context: *const IntersectContext,
+    ray: *mut c_void,
+    hit: *mut c_void,
+    n: c_uint,
+}
+
+/// An intersect context followed by what the filter needs: Embree hands
+/// the filter the context pointer it was given.
+#[repr(C)]
+struct FilterContext<'a> {
+    base: IntersectContext,
+    opacity: &'a CasterOpacity,
+    transmittance: Transmittance,
+}
+
+/// The context filter of see-through casters (N = 1: `rtcOccluded1`):
+/// rejects the candidate hit unless the ray is now blocked.
+unsafe extern "C" fn see_through_filter(args: *const FilterArguments) {
+    // SAFETY: Embree passes valid arguments for one ray; the context is the
+    // `FilterContext` `transmittance` built; `RTCHit` (N = 1) holds Ng,
+    // then u and v as floats, then primID.
+    unsafe {
+        let args = &*args;
+        if *args.valid == 0 {
+            return;
+        }
+        let context = &mut *(args.context as *mut FilterContext);
+        let hit = args.hit as *const f32;
+        let (u, v) = (*hit.add(3), *hit.add(4));
+        let prim = *(hit.add(5) as *const c_uint) as usize;
+        if !context
+            .transmittance
+            .cross(context.opacity.crossing(prim, u, v))
+        {
+            *args.valid = 0;
+        }
+    }
 }
 
 /// `struct RTCRay`.
@@ -130,6 +178,7 @@ pub struct EmbreeScene {
     device: Device,
     scene: Scene,
     triangles: usize,
+    opacity: Option<CasterOpacity>,
 }
 
 // SAFETY: a committed Embree scene may be queried from any number of
@@ -139,8 +188,11 @@ unsafe impl Sync for EmbreeScene {}
 
 impl EmbreeScene {
     /// The scene of `triangles` (world space), robust arithmetic, high
-    /// build quality.
-    pub fn build(triangles: &[[Vec3; 3]]) -> Result<EmbreeScene, String> {
+    /// build quality; `opacity` says which of them are see-through.
+    pub fn build(
+        triangles: &[[Vec3; 3]],
+        opacity: Option<CasterOpacity>,
+    ) -> Result<EmbreeScene, String> {
         let api = api()?;
         let count = triangles.len();
         // SAFETY: every call follows rtcore.h; the buffers Embree returns
@@ -151,13 +203,19 @@ impl EmbreeScene {
                 return Err("Embree 3: rtcNewDevice failed".into());
             }
             let scene = (api.new_scene)(device);
-            (api.set_scene_flags)(scene, SCENE_FLAG_ROBUST);
+            let filter = if opacity.is_some() {
+                SCENE_FLAG_CONTEXT_FILTER_FUNCTION
+            } else {
+                0
+            };
+            (api.set_scene_flags)(scene, SCENE_FLAG_ROBUST | filter);
             (api.set_scene_build_quality)(scene, BUILD_QUALITY_HIGH);
             let out = EmbreeScene {
                 api,
                 device,
                 scene,
                 triangles: count,
+                opacity,
             };
             if count == 0 {
                 (api.commit_scene)(scene);
@@ -207,14 +265,10 @@ impl EmbreeScene {
         (self.triangles * (9 + 3) * 4) as u64
     }
 
-    /// True when nothing blocks the segment from `origin` along `dir` up
-    /// to distance `tmax` (infinite for directional lights).
-    pub fn unoccluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
-        let mut context = IntersectContext {
-            flags: 0,
-            filter: std::ptr::null(),
-            inst_id: [INVALID_GEOMETRY_ID],
-        };
+    /// The light that reaches `origin` along `dir` (unit) from distance
+    /// `tmax` (infinite for directional lights): 1 unblocked, 0 blocked,
+    /// between for translucent casters.
+    pub fn transmittance(&self, origin: Vec3, dir: Vec3, tmax: f32) -> f32 {
         let mut ray = Ray {
             org: origin.to_array(),
             tnear: 0.0,
@@ -225,10 +279,37 @@ impl EmbreeScene {
             id: 0,
             flags: 0,
         };
-        // SAFETY: a committed scene, a context and a ray laid out as rtcore.h's.
-        unsafe { (self.api.occluded1)(self.scene, &mut context, &mut ray) };
-        // Embree sets tfar to −∞ on a hit.
-        ray.tfar >= 0.0
+        let base = |filter: *const c_void| IntersectContext {
+            flags: 0,
+            filter,
+            inst_id: [INVALID_GEOMETRY_ID],
+        };
+        let Some(opacity) = &self.opacity else {
+            let mut context = base(std::ptr::null());
+            // SAFETY: a committed scene, a context and a ray laid out as rtcore.h's.
+            unsafe { (self.api.occluded1)(self.scene, &mut context, &mut ray) };
+            // Embree sets tfar to −∞ on a hit.
+            return (ray.tfar >= 0.0) as u32 as f32;
+        };
+        let mut context = FilterContext {
+            base: base(see_through_filter as *const c_void),
+            opacity,
+            transmittance: Transmittance::default(),
+        };
+        // SAFETY: as above; the context starts with an RTCIntersectContext
+        // and outlives the call, as the filter requires.
+        unsafe {
+            (self.api.occluded1)(
+                self.scene,
+                &mut context as *mut FilterContext as *mut IntersectContext,
+                &mut ray,
+            )
+        };
+        if ray.tfar >= 0.0 {
+            context.transmittance.value
+        } else {
+            0.0
+        }
     }
 }
 

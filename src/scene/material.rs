@@ -69,7 +69,45 @@ pub struct Texture {
     pub source: Option<PathBuf>,
 }
 
-/// Phong material (SEEDS §1): `ka`, `kd`, `ks`, shininess `n`.
+/// How a material's opacity is used (glTF 2.0 `alphaMode`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AlphaMode {
+    /// Opacity ignored: the surface is solid.
+    #[default]
+    Opaque,
+    /// A cut-out: the surface exists where opacity ≥ `alpha_cutoff`.
+    Mask,
+    /// Translucent: the surface lets `1 − opacity` of the light through.
+    Blend,
+}
+
+impl AlphaMode {
+    /// The glTF spelling (`OPAQUE`, `MASK`, `BLEND`).
+    pub fn gltf_name(self) -> &'static str {
+        match self {
+            AlphaMode::Opaque => "OPAQUE",
+            AlphaMode::Mask => "MASK",
+            AlphaMode::Blend => "BLEND",
+        }
+    }
+}
+
+impl Texture {
+    /// Makes the image's alpha channel hold its opacity, for a map that
+    /// gives opacity as grey levels (MTL `map_d`): an image whose alpha is
+    /// all opaque takes its red channel as alpha.
+    pub fn opacity_in_alpha(&mut self) {
+        if self.image.pixels().all(|p| p[3] == 255) {
+            for p in self.image.pixels_mut() {
+                p[3] = p[0];
+            }
+        }
+    }
+}
+
+/// Phong material (SEEDS §1): `ka`, `kd`, `ks`, shininess `n`, with the
+/// opacity and sidedness of glTF 2.0 materials.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
@@ -77,8 +115,19 @@ pub struct Material {
     pub kd: Vec3,
     pub ks: Vec3,
     pub shininess: f32,
-    /// Opacity (`d` in MTL); kept for export, rendering is opaque.
+    /// Opacity factor in 0..=1 (glTF `baseColorFactor` alpha, MTL `d`),
+    /// multiplied by the alpha texture's value.
     pub alpha: f32,
+    pub alpha_mode: AlphaMode,
+    /// Opacity below which a [`AlphaMode::Mask`] surface is a hole (glTF
+    /// default ½).
+    pub alpha_cutoff: f32,
+    /// The texture whose alpha channel is the opacity (glTF: the base
+    /// colour texture; MTL: `map_d`).
+    pub alpha_texture: Option<usize>,
+    /// Seen and lit from both sides (glTF `doubleSided`): never culled, its
+    /// normal faces the viewer.
+    pub double_sided: bool,
     pub diffuse_texture: Option<usize>,
     pub normal_map: Option<usize>,
     pub procedural: Option<Procedural>,
@@ -95,6 +144,10 @@ impl Default for Material {
             ks: Vec3::splat(0.2),
             shininess: 32.0,
             alpha: 1.0,
+            alpha_mode: AlphaMode::Opaque,
+            alpha_cutoff: 0.5,
+            alpha_texture: None,
+            double_sided: false,
             diffuse_texture: None,
             normal_map: None,
             procedural: None,
@@ -126,9 +179,15 @@ impl Material {
                 self.uv_scale
             );
         }
+        for (field, v) in [("alpha", self.alpha), ("alpha_cutoff", self.alpha_cutoff)] {
+            if !(0.0..=1.0).contains(&v) {
+                bail!("{field} must be in 0..=1, got {v}");
+            }
+        }
         for (field, t) in [
             ("diffuse texture", self.diffuse_texture),
             ("normal map", self.normal_map),
+            ("alpha texture", self.alpha_texture),
         ] {
             if let Some(i) = t.filter(|&i| i >= textures) {
                 bail!("{field} index {i} out of range ({textures} textures)");
@@ -138,6 +197,12 @@ impl Material {
             Some(p) => p.validate(),
             None => Ok(()),
         }
+    }
+
+    /// Whether the surface can have holes or let light through: opacity
+    /// matters to it.
+    pub fn is_see_through(&self) -> bool {
+        self.alpha_mode != AlphaMode::Opaque
     }
 
     pub fn color(name: &str, kd: Vec3) -> Material {

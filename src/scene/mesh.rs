@@ -15,6 +15,9 @@ pub struct Mesh {
     /// xyz tangent, w handedness (±1), derived from the uvs.
     pub tangents: Vec<Vec4>,
     pub indices: Vec<u32>,
+    /// [`Mesh::make_double_sided`] added the back faces: the second half of
+    /// the vertices and triangles mirrors the first.
+    pub sides_doubled: bool,
 }
 
 impl Mesh {
@@ -124,6 +127,7 @@ impl Mesh {
     /// Adds a copy of every triangle with the opposite winding and normal,
     /// so that a thin open surface is visible and lit from both sides.
     pub fn make_double_sided(&mut self) {
+        self.sides_doubled = true;
         let n = self.positions.len() as u32;
         self.positions.extend_from_within(..);
         let flipped: Vec<Vec3> = self.normals.iter().map(|&v| -v).collect();
@@ -157,6 +161,24 @@ impl Mesh {
         }
         m.name = format!("{} (mirrored)", self.name);
         m
+    }
+
+    /// The mesh as authored: without the back faces
+    /// [`Mesh::make_double_sided`] added.
+    pub fn single_sided(&self) -> Mesh {
+        if !self.sides_doubled {
+            return self.clone();
+        }
+        let (nv, nt) = (self.positions.len() / 2, self.indices.len() / 2);
+        Mesh {
+            name: self.name.clone(),
+            positions: self.positions[..nv].to_vec(),
+            normals: self.normals[..nv].to_vec(),
+            uvs: self.uvs[..nv].to_vec(),
+            tangents: self.tangents[..nv.min(self.tangents.len())].to_vec(),
+            indices: self.indices[..nt].to_vec(),
+            sides_doubled: false,
+        }
     }
 
     pub fn bounds(&self) -> Aabb {

@@ -15,6 +15,7 @@ pub mod light;
 pub mod material;
 pub mod mesh;
 pub mod obj;
+pub mod opacity;
 pub mod planes;
 pub mod shapes;
 pub mod toml_scene;
@@ -23,7 +24,7 @@ pub mod topology;
 pub use aabb::Aabb;
 pub use camera::{Camera, INFINITE_FAR_EPSILON};
 pub use light::{Light, LightArea, LightType};
-pub use material::{MAX_OCTAVES, Material, Procedural, ProceduralKind, Texture};
+pub use material::{AlphaMode, MAX_OCTAVES, Material, Procedural, ProceduralKind, Texture};
 pub use mesh::{Mesh, compute_tangents, smooth_normals};
 
 use anyhow::{Context, Result, bail};
@@ -45,6 +46,14 @@ pub struct Object {
     /// True once [`Scene::finalize`] has pointed a mirroring object (negative
     /// determinant) at a winding-reversed copy of its mesh.
     pub winding_reversed: bool,
+}
+
+impl Object {
+    /// Whether the object's mesh must carry back faces: its material is
+    /// double-sided and its mesh does not have them yet.
+    fn needs_back_faces(&self, scene: &Scene) -> bool {
+        scene.materials[self.material].double_sided && !scene.meshes[self.mesh].sides_doubled
+    }
 }
 
 impl Object {
@@ -153,6 +162,7 @@ impl Scene {
             m.validate(self.textures.len())?;
         }
         let mut reversed: std::collections::HashMap<usize, usize> = Default::default();
+        let mut doubled: std::collections::HashMap<usize, usize> = Default::default();
         for i in 0..self.objects.len() {
             let o = &self.objects[i];
             if !o.transform.is_finite() {
@@ -168,6 +178,21 @@ impl Scene {
                     o.name
                 );
             }
+            // A double-sided material draws a copy of its mesh with back
+            // faces (reversed winding, flipped normals): every pass then
+            // sees both sides whatever its culling, and the normal faces the
+            // viewer on each side.
+            if o.needs_back_faces(self) {
+                let mesh = o.mesh;
+                let copy = *doubled.entry(mesh).or_insert_with(|| {
+                    let mut m = self.meshes[mesh].clone();
+                    m.make_double_sided();
+                    self.meshes.push(m);
+                    self.meshes.len() - 1
+                });
+                self.objects[i].mesh = copy;
+            }
+            let o = &self.objects[i];
             // A mirroring transform turns counter-clockwise triangles
             // clockwise: draw a winding-reversed copy instead (once).
             if (det < 0.0) != o.winding_reversed {
@@ -381,6 +406,10 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
         for f in o.transform.to_cols_array() {
             f.to_bits().hash(&mut h);
         }
+        // What a shadow ray sees of the surface.
+        let m = &scene.materials[o.material];
+        (m.alpha_mode, m.alpha.to_bits(), m.alpha_cutoff.to_bits()).hash(&mut h);
+        (m.alpha_texture, m.uv_scale.to_bits()).hash(&mut h);
     }
     h.finish()
 }

@@ -3,7 +3,7 @@
 //! the SEEDS §1 conventions: `…NS` objects cast no shadow, `ShadowPlane…`
 //! objects are shadow planes, `s off` objects are flat-shaded.
 
-use super::{Material, Mesh, Object, Scene, Texture, frame_scene_defaults};
+use super::{AlphaMode, Material, Mesh, Object, Scene, Texture, frame_scene_defaults};
 use anyhow::{Context, Result, anyhow, bail};
 use glam::{Mat4, Vec2, Vec3};
 use std::collections::HashMap;
@@ -171,8 +171,8 @@ fn to_mesh(name: &str, m: &tobj::Mesh) -> Mesh {
             .chunks_exact(2)
             .map(|c| Vec2::new(c[0], c[1]))
             .collect(),
-        tangents: vec![],
         indices: m.indices.clone(),
+        ..Default::default()
     }
 }
 
@@ -237,17 +237,30 @@ fn to_material(dir: &Path, m: &tobj::Material, scene: &mut Scene) -> Result<Mate
         Some(f) => load_texture(dir, f, srgb, scene),
         None => Ok(None),
     };
+    let alpha = m.dissolve.unwrap_or(1.0).clamp(0.0, 1.0);
+    let alpha_texture = texture(&m.dissolve_texture, false, scene)?;
+    if let Some(t) = alpha_texture {
+        scene.textures[t].opacity_in_alpha();
+    }
+    // MTL has no alpha mode: a `map_d` is a cut-out (foliage, fences), a
+    // bare `d` below 1 a translucent surface.
+    let alpha_mode = match (alpha_texture, alpha < 1.0) {
+        (Some(_), _) => AlphaMode::Mask,
+        (None, true) => AlphaMode::Blend,
+        (None, false) => AlphaMode::Opaque,
+    };
     Ok(Material {
         name: m.name.clone(),
         ka: v(m.ambient, kd),
         kd,
         ks: v(m.specular, base.ks),
         shininess: m.shininess.unwrap_or(base.shininess).clamp(0.0, 1000.0),
-        alpha: m.dissolve.unwrap_or(1.0),
+        alpha,
+        alpha_mode,
+        alpha_texture,
         diffuse_texture: texture(&m.diffuse_texture, true, scene)?,
         normal_map: texture(&m.normal_texture, false, scene)?,
-        procedural: None,
-        uv_scale: 1.0,
+        ..base
     })
 }
 

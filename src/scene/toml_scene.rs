@@ -9,6 +9,11 @@
 //! size = [10.0, 10.0]
 //! receives_shadow = true
 //! [[model]]
+//! shape = "plane"
+//! alpha_mode = "blend"     # opaque | mask | blend (glTF alphaMode)
+//! alpha = 0.3              # opacity factor; alpha_cutoff for mask
+//! double_sided = true
+//! [[model]]
 //! path = "chair.obj"
 //! translate = [0.0, 0.0, -1.0]
 //! rotate_deg = [0.0, 30.0, 0.0]
@@ -22,7 +27,7 @@
 //! target = [0.0, 1.0, 0.0]
 //! ```
 
-use super::{Camera, Light, LightArea, LightType, Material, Mesh, Scene, shapes};
+use super::{AlphaMode, Camera, Light, LightArea, LightType, Material, Mesh, Scene, shapes};
 use anyhow::{Context, Result, anyhow, bail};
 use glam::{EulerRot, Mat4, Quat, Vec3};
 use serde::Deserialize;
@@ -64,6 +69,21 @@ struct ModelEntry {
     casts_shadow: Option<bool>,
     receives_shadow: Option<bool>,
     shadow_plane: Option<bool>,
+    /// Material overrides for every material of the model.
+    alpha: Option<f32>,
+    alpha_mode: Option<AlphaMode>,
+    alpha_cutoff: Option<f32>,
+    double_sided: Option<bool>,
+}
+
+impl ModelEntry {
+    /// Applies the entry's material overrides to `m`.
+    fn override_material(&self, m: &mut Material) {
+        m.alpha = self.alpha.unwrap_or(m.alpha);
+        m.alpha_mode = self.alpha_mode.unwrap_or(m.alpha_mode);
+        m.alpha_cutoff = self.alpha_cutoff.unwrap_or(m.alpha_cutoff);
+        m.double_sided = self.double_sided.unwrap_or(m.double_sided);
+    }
 }
 
 #[derive(Deserialize)]
@@ -173,6 +193,8 @@ pub fn load(path: &Path, includes: &[PathBuf]) -> Result<Scene> {
                 for mut mat in sub.materials {
                     mat.diffuse_texture = mat.diffuse_texture.map(|t| t + tex_off);
                     mat.normal_map = mat.normal_map.map(|t| t + tex_off);
+                    mat.alpha_texture = mat.alpha_texture.map(|t| t + tex_off);
+                    m.override_material(&mut mat);
                     scene.materials.push(mat);
                 }
                 for mut o in sub.objects {
@@ -187,7 +209,9 @@ pub fn load(path: &Path, includes: &[PathBuf]) -> Result<Scene> {
                     .with_context(|| ctx("shape"))?;
                 let mesh = scene.add_mesh(mesh);
                 let colour = m.color.map(Vec3::from).unwrap_or(Vec3::splat(0.8));
-                let mat = scene.add_material(Material::color(shape, colour));
+                let mut mat = Material::color(shape, colour);
+                m.override_material(&mut mat);
+                let mat = scene.add_material(mat);
                 scene.add_object(m.name.as_deref().unwrap_or(shape), mesh, mat, placement);
             }
             _ => bail!("{}", ctx("needs exactly one of `path` or `shape`")),

@@ -2,6 +2,7 @@
 //! technique family drives the CLI (`--set key=value`), `shadowlab
 //! techniques` and the viewer's panels.
 
+use crate::scene::AlphaMode;
 use anyhow::{Result, bail};
 use serde::Serialize;
 
@@ -60,6 +61,26 @@ impl Choice for crate::frame::Compose {
     const ALL: &'static [Self] = &[Self::Relight, Self::Darken];
     fn index(self) -> usize {
         self as usize
+    }
+}
+
+choice_enum! {
+    /// How a technique's caster passes draw translucent (glTF `BLEND`)
+    /// casters, which the reference traces as fractional transmittance.
+    pub enum BlendedCasters { Cutout = "cutout", Opaque = "opaque", Ignore = "ignore" }
+}
+
+impl BlendedCasters {
+    /// How a caster pass draws a caster of `mode`: opaque, as a cut-out
+    /// ([`AlphaMode::Mask`]; blended ones solid where opacity ≥ ½), or not
+    /// at all (`None`).
+    pub fn draws_as(self, mode: AlphaMode) -> Option<AlphaMode> {
+        match (mode, self) {
+            (AlphaMode::Blend, BlendedCasters::Cutout) => Some(AlphaMode::Mask),
+            (AlphaMode::Blend, BlendedCasters::Opaque) => Some(AlphaMode::Opaque),
+            (AlphaMode::Blend, BlendedCasters::Ignore) => None,
+            (m, _) => Some(m),
+        }
     }
 }
 
@@ -176,6 +197,13 @@ impl ParamSpec {
         "compose",
         crate::frame::Compose::Relight as usize,
         "relight: ambient + masked direct light (an ambient pass, lit where the shadow test passes); darken: the lit image times the mask (one lit pass and a darkening pass, the documents' way)",
+    );
+
+    /// How caster passes draw translucent casters ([`BlendedCasters`]).
+    pub const BLENDED_CASTERS: ParamSpec = ParamSpec::choice_of::<BlendedCasters>(
+        "blended_casters",
+        BlendedCasters::Cutout as usize,
+        "translucent (glTF BLEND) casters: cutout — solid where opacity ≥ ½; opaque — solid everywhere; ignore — cast no shadow (the reference lets 1 − opacity of the light through)",
     );
 
     /// Parses a textual value (`1.5`, `true`, a choice name) for this

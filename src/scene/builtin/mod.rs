@@ -2,6 +2,7 @@
 //! scene has the light presets `point`, `spot` and `sun` (directional) so
 //! that each technique can be measured under all three light types.
 
+mod foliage;
 #[cfg(test)]
 mod preset_clearance;
 mod textures;
@@ -21,6 +22,7 @@ pub const NAMES: &[&str] = &[
     "columns",
     "city",
     "landscape",
+    "foliage",
 ];
 
 /// One-line descriptions, in the order of [`NAMES`].
@@ -33,6 +35,7 @@ pub const DESCRIPTIONS: &[&str] = &[
     "a colonnade under a roof; preset camera `in-shadow` stands inside the roof's shadow",
     "procedural city of >1,000,000 triangles under a directional sun",
     "2 km x 2 km of rolling hills with trees and rocks; a ground camera sees shadows from 1 m to the horizon",
+    "see-through casters: trees of alpha-tested leaf cards, a chain-link fence, a double-sided cloth awning, a glass pane (translucent)",
 ];
 
 /// Builds a built-in scene, or `Ok(None)` when `name` is not one.
@@ -46,6 +49,7 @@ pub fn by_name(name: &str) -> Result<Option<Scene>> {
         "columns" => columns(),
         "city" => city(),
         "landscape" => super::landscape::landscape(),
+        "foliage" => foliage::foliage(),
         _ => return Ok(None),
     };
     s.source = format!("builtin:{name}");

@@ -3,7 +3,7 @@
 //! lights and the camera.
 
 use super::extras::{PhongExtras, ShadowFlags};
-use crate::scene::{Aabb, LightType, Scene};
+use crate::scene::{Aabb, AlphaMode, LightType, Scene};
 use anyhow::{Context, Result, anyhow};
 use glam::{Quat, Vec3};
 use serde_json::{Value, json};
@@ -117,13 +117,37 @@ pub fn export(scene: &Scene, out: &Path) -> Result<()> {
             if let Some(t) = m.normal_map {
                 v["normalTexture"] = json!({"index": t});
             }
+            if m.alpha_mode != AlphaMode::Opaque {
+                v["alphaMode"] = json!(m.alpha_mode.gltf_name());
+            }
+            if m.alpha_mode == AlphaMode::Mask {
+                v["alphaCutoff"] = json!(m.alpha_cutoff);
+            }
+            if m.double_sided {
+                v["doubleSided"] = json!(true);
+            }
+            if m.alpha_texture.is_some() && m.alpha_texture != m.diffuse_texture {
+                log::warn!(
+                    "material '{}': glTF keeps opacity in the base colour texture's alpha; its separate opacity map is not written",
+                    m.name
+                );
+            }
             v
         })
         .collect();
     let mut meshes = vec![];
     let mut nodes = vec![];
     for o in &scene.objects {
+        // A double-sided material's back faces are the loader's: glTF says
+        // `doubleSided` instead.
         let m = &scene.meshes[o.mesh];
+        let single;
+        let m = if scene.materials[o.material].double_sided && m.sides_doubled {
+            single = m.single_sided();
+            &single
+        } else {
+            m
+        };
         let nm = o.transform.inverse().transpose();
         let pos: Vec<Vec3> = m
             .positions

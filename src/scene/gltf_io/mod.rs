@@ -8,7 +8,9 @@ mod extras;
 
 pub use export::export;
 
-use super::{Camera, Light, Material, Mesh, Object, Scene, Texture, frame_scene_defaults};
+use super::{
+    AlphaMode, Camera, Light, Material, Mesh, Object, Scene, Texture, frame_scene_defaults,
+};
 use anyhow::{Context, Result, anyhow, bail};
 use checks::{
     check_accessors, check_attribute_indices, check_external_files, check_glb_layout,
@@ -138,10 +140,18 @@ fn load_checked(file: &str, path: &Path) -> Result<Scene> {
             }
         };
         mat.name = m.name().unwrap_or("material").into();
-        mat.alpha = pbr.base_color_factor()[3];
+        mat.alpha = pbr.base_color_factor()[3].clamp(0.0, 1.0);
+        mat.alpha_mode = match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+            gltf::material::AlphaMode::Mask => AlphaMode::Mask,
+            gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+        };
+        mat.alpha_cutoff = m.alpha_cutoff().unwrap_or(0.5).clamp(0.0, 1.0);
+        mat.double_sided = m.double_sided();
         mat.diffuse_texture = pbr
             .base_color_texture()
             .and_then(|t| texture(&mut scene, t.texture(), true));
+        mat.alpha_texture = mat.diffuse_texture.filter(|_| mat.is_see_through());
         mat.normal_map = m
             .normal_texture()
             .and_then(|t| texture(&mut scene, t.texture(), false));
@@ -242,8 +252,8 @@ fn load_checked(file: &str, path: &Path) -> Result<Scene> {
                             .map(|t| t.into_f32().map(Vec2::from).collect())
                             .unwrap_or_default(),
                         positions,
-                        tangents: vec![],
                         indices,
+                        ..Default::default()
                     };
                     let id = scene.add_mesh(mesh);
                     mesh_ids.insert(key, id);

@@ -28,6 +28,9 @@ struct FlatOut {
     @builtin(position) clip: vec4f,
     // signed distance of the original caster point above the plane
     @location(0) height: f32,
+    @location(1) uv: vec2f,
+    @location(2) @interpolate(flat) object: u32,
+    @location(3) @interpolate(flat) see_through: u32,
 };
 
 // Casters flattened onto the plane through M. Parts beyond the light
@@ -39,6 +42,9 @@ fn vs_flatten(v: VertexIn) -> FlatOut {
     o.clip = frame.view_proj * (planar.shadow * world);
     o.clip.z -= planar.params.y * o.clip.w;
     o.height = dot(planar.plane, world);
+    o.uv = v.uv;
+    o.object = v.object;
+    o.see_through = objects[v.object].alpha.x;
     return o;
 }
 
@@ -46,8 +52,10 @@ fn vs_flatten(v: VertexIn) -> FlatOut {
 fn fs_flatten(i: FlatOut) -> @location(0) vec4f {
     // False shadows: caster parts behind (or on) the receiver plane. The
     // perspective-correct interpolation of `height` is exact in the caster's
-    // own plane, so this clips each triangle at the receiver plane.
-    if i.height <= planar.params.z {
+    // own plane, so this clips each triangle at the receiver plane. Cut-out
+// casters drop their holes.
+    let solid = caster_is_solid(i.object, i.see_through != 0u, i.uv, dpdx(i.uv), dpdy(i.uv));
+    if i.height <= planar.params.z || !solid {
         discard;
     }
     return vec4f(planar.params.x);

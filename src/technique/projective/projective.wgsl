@@ -25,6 +25,9 @@ fn linear_depth(world: vec3f) -> f32 {
 struct CasterOut {
     @builtin(position) clip: vec4f,
     @location(0) world: vec3f,
+    @location(1) uv: vec2f,
+    @location(2) @interpolate(flat) object: u32,
+    @location(3) @interpolate(flat) see_through: u32,
 };
 
 @vertex
@@ -33,12 +36,19 @@ fn vs_caster(v: VertexIn) -> CasterOut {
     let world = objects[v.object].model * vec4f(v.position, 1.0);
     o.clip = projector.view_proj * world;
     o.world = world.xyz;
+    o.uv = v.uv;
+    o.object = v.object;
+    o.see_through = objects[v.object].alpha.x;
     return o;
 }
 
-// Black caster on white, or (003 §4) its linear depth stored in 8 bits.
+// Black caster on white, or (003 §4) its linear depth stored in 8 bits; a
+// cut-out caster's holes stay white.
 @fragment
 fn fs_caster(i: CasterOut) -> @location(0) vec4f {
+    if !caster_is_solid(i.object, i.see_through != 0u, i.uv, dpdx(i.uv), dpdy(i.uv)) {
+        discard;
+    }
     if projector.params.w > 0.5 {
         return vec4f(clamp(linear_depth(i.world), 0.0, 1.0));
     }

@@ -173,7 +173,8 @@ fn pcg(mut v: u32) -> u32 {
 }
 
 /// Visibility of `light` from the surface point `p` with geometric normal
-/// `n`: 0 or 1 for hard lights, the unoccluded fraction of `samples` rays
+/// `n`: the light a shadow ray carries past the casters (0 or 1 unless it
+/// crosses translucent ones) for hard lights, its mean over `samples` rays
 /// for area lights.
 pub fn visibility(
     bvh: &CasterBvh,
@@ -188,13 +189,17 @@ pub fn visibility(
     let to_point = |target: Vec3| {
         let d = target - origin;
         let len = d.length();
-        len <= 0.0 || bvh.unoccluded(origin, d / len, len)
+        if len <= 0.0 {
+            1.0
+        } else {
+            bvh.transmittance(origin, d / len, len)
+        }
     };
-    let to_dir = |dir: Vec3| bvh.unoccluded(origin, dir.normalize(), f32::INFINITY);
+    let to_dir = |dir: Vec3| bvh.transmittance(origin, dir.normalize(), f32::INFINITY);
     let Some(area) = light.area.filter(|_| samples > 1) else {
         return match light.kind {
-            LightType::Directional => to_dir(-light.direction) as u32 as f32,
-            _ => to_point(light.position) as u32 as f32,
+            LightType::Directional => to_dir(-light.direction),
+            _ => to_point(light.position),
         };
     };
     let mut state = pcg(seed);
@@ -203,9 +208,9 @@ pub fn visibility(
         (state >> 8) as f32 / (1u32 << 24) as f32
     };
     let points = stratified_square(samples, || (rnd(), rnd()));
-    let hits = points
+    let light_through: f32 = points
         .iter()
-        .filter(|&&(a, b)| {
+        .map(|&(a, b)| {
             // Offsets in the light's plane: a disk for spheres, the rectangle's half extents.
             let ((u, v), (hu, hv)) = match area {
                 LightArea::Sphere { radius } => (concentric_disk(a, b), (radius, radius)),
@@ -228,8 +233,8 @@ pub fn visibility(
                 }
             }
         })
-        .count();
-    hits as f32 / samples as f32
+        .sum();
+    light_through / samples as f32
 }
 
 /// Computes a whole visibility mask on the CPU from G-buffer data
@@ -370,7 +375,11 @@ mod tests {
         let origin = Vec3::new(0.5, 0.0, 0.0);
         for z in [0.0f32, -0.0] {
             let dir = Vec3::new(-0.9986295, 0.05233596, z);
-            assert!(!bvh.unoccluded(origin, dir, f32::INFINITY), "z = {z:?}");
+            assert_eq!(
+                bvh.transmittance(origin, dir, f32::INFINITY),
+                0.0,
+                "z = {z:?}"
+            );
         }
         // A sun straight down: the ray towards it is (−0, 1, −0).
         let above = Vec3::new(0.0, -1.0, 0.0);

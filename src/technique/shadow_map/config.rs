@@ -4,7 +4,7 @@
 //! WGSL constants and pipeline-overridable constants, into the shaders.
 
 use crate::scene::LightType;
-use crate::technique::params::choice_enum;
+use crate::technique::params::{BlendedCasters, choice_enum};
 use crate::technique::{ParamSpec, ParamValues};
 use anyhow::Result;
 
@@ -309,6 +309,7 @@ pub const PARAMS: &[ParamSpec] = &[
     CULL,
     SOLID_FRONT_BIAS,
     PART_IDS,
+    ParamSpec::BLENDED_CASTERS,
     OMNI,
     NEAR,
     FAR,
@@ -371,6 +372,7 @@ pub struct ShadowMapConfig {
     pub solid_front_bias: f32,
     /// Convex part IDs beside the depth (see [`ShadowMapConfig::uses_part_ids`]).
     pub part_ids: bool,
+    pub blended_casters: BlendedCasters,
     pub omni: Omni,
     pub near: f32,
     pub far: f32,
@@ -433,6 +435,7 @@ impl ShadowMapConfig {
             cull: p.choice(&CULL)?,
             solid_front_bias: p.float(&SOLID_FRONT_BIAS)?,
             part_ids: p.flag(&PART_IDS)?,
+            blended_casters: p.choice(&ParamSpec::BLENDED_CASTERS)?,
             omni: p.choice(&OMNI)?,
             near: p.float(&NEAR)?,
             far: p.float(&FAR)?,

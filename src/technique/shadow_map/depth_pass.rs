@@ -8,8 +8,9 @@ use super::config::{CullFace, DepthFormat, Filter};
 use super::pipelines::{MOMENT_FORMAT, MapProjection, MapShape, PART_FORMAT, ShadowMapShared};
 use crate::frame::{DrawCall, VERTEX_LAYOUT};
 use crate::gpu::GpuContext;
+use crate::scene::AlphaMode;
 use crate::scene::topology::SolidKind;
-use crate::technique::params::Choice;
+use crate::technique::params::{BlendedCasters, Choice};
 
 /// What a depth-pass pipeline depends on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -30,6 +31,9 @@ pub struct DepthPassKey {
     pub virtual_map: bool,
     /// Convex part IDs written beside the depth (`fs_depth_part`).
     pub parts: bool,
+    /// Cut-out casters: the fragment stage drops their holes
+    /// (`CUTOUT` in depth_pass.wgsl).
+    pub cutout: bool,
 }
 
 impl CullFace {
@@ -70,18 +74,47 @@ impl Casters {
     }
 }
 
+/// Which casters a depth-pass pipeline draws by their opacity.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Surfaces {
+    /// Every caster, solid (the bare floor pass).
+    AllSolid,
+    /// Those `blended` leaves opaque.
+    Opaque(BlendedCasters),
+    /// Those `blended` makes cut-outs ([`AlphaMode::Mask`]).
+    Cutout(BlendedCasters),
+}
+
+impl Surfaces {
+    fn holds(self, d: &DrawCall) -> bool {
+        match self {
+            Surfaces::AllSolid => true,
+            Surfaces::Opaque(b) => b.draws_as(d.alpha_mode) == Some(AlphaMode::Opaque),
+            Surfaces::Cutout(b) => b.draws_as(d.alpha_mode) == Some(AlphaMode::Mask),
+        }
+    }
+}
+
 /// One pipeline of a depth pass and the casters it draws.
 #[derive(Clone)]
 pub struct DepthDraw {
     pub pipeline: wgpu::RenderPipeline,
     pub casters: Casters,
+    pub surfaces: Surfaces,
 }
 
 impl DepthDraw {
-    /// Whether this draw takes `d`: a shadow caster of its set.
+    /// Whether this draw takes `d`: a shadow caster of its sets.
     pub fn takes(&self, d: &DrawCall) -> bool {
-        d.casts_shadow && self.casters.holds(d)
+        d.casts_shadow && self.casters.holds(d) && self.surfaces.holds(d)
     }
+}
+
+/// Whether `blended` makes any of `draws`' casters a cut-out.
+pub fn has_cutout_casters(draws: &[DrawCall], blended: BlendedCasters) -> bool {
+    draws
+        .iter()
+        .any(|d| d.casts_shadow && blended.draws_as(d.alpha_mode) == Some(AlphaMode::Mask))
 }
 
 impl DepthPassKey {
@@ -133,18 +166,37 @@ impl DepthPassKey {
 
 impl ShadowMapShared {
     /// The depth passes from the light and the casters each draws (see
-    /// [`DepthPassKey::draws`]).
+    /// [`DepthPassKey::draws`]): each set once drawn opaque and, where
+    /// `blended` makes some of `scene_draws` cut-outs, once alpha-tested.
     pub fn depth_passes(
         &self,
         gpu: &GpuContext,
         key: DepthPassKey,
         solid_front_bias: f32,
+        blended: BlendedCasters,
+        scene_draws: &[DrawCall],
     ) -> Vec<DepthDraw> {
+        let cutouts = has_cutout_casters(scene_draws, blended);
         key.draws(solid_front_bias)
             .into_iter()
-            .map(|(key, casters)| DepthDraw {
-                pipeline: self.depth_pass(gpu, key),
-                casters,
+            .flat_map(|(key, casters)| {
+                let opaque = DepthDraw {
+                    pipeline: self.depth_pass(gpu, key),
+                    casters,
+                    surfaces: Surfaces::Opaque(blended),
+                };
+                let cutout = cutouts.then(|| DepthDraw {
+                    pipeline: self.depth_pass(
+                        gpu,
+                        DepthPassKey {
+                            cutout: true,
+                            ..key
+                        },
+                    ),
+                    casters,
+                    surfaces: Surfaces::Cutout(blended),
+                });
+                std::iter::once(opaque).chain(cutout)
             })
             .collect()
     }
@@ -162,6 +214,8 @@ impl ShadowMapShared {
                 (Some("fs_depth_paraboloid"), None)
             } else if key.shape.warped {
                 (Some("fs_depth_linear"), None)
+            } else if key.cutout {
+                (Some("fs_depth_cutout"), None)
             } else {
                 (None, None)
             };
@@ -171,6 +225,7 @@ impl ShadowMapShared {
                     key.moments.map_or(Filter::Grid, |f| f).index() as f64,
                 ),
                 ("VIRTUAL", key.virtual_map as u32 as f64),
+                ("CUTOUT", key.cutout as u32 as f64),
             ];
             constants.extend(key.shape.constants());
             let options = wgpu::PipelineCompilationOptions {
@@ -282,6 +337,7 @@ mod tests {
             },
             virtual_map: false,
             parts: false,
+            cutout: false,
         }
     }
 

@@ -1,6 +1,20 @@
 // The depth pass from the light: depth (linear for warped faces), the
 // moments of the moment filters and their blur, the 8-bit map.
 
+// Cut-out casters: every fragment entry first drops the caster's holes.
+override CUTOUT: bool = false;
+
+// Drops the fragment where a cut-out caster has a hole, its opacity map read
+// at the mip level of the light's texel footprint on it.
+fn cut_out(i: DepthOut) {
+    if CUTOUT {
+        let lod = opacity_lod(i.object, dpdx(i.uv), dpdy(i.uv));
+        if !is_solid_at(i.object, i.uv, lod) {
+            discard;
+        }
+    }
+}
+
 @vertex
 fn vs_depth(v: VertexIn) -> DepthOut {
     var o: DepthOut;
@@ -18,12 +32,15 @@ fn vs_depth(v: VertexIn) -> DepthOut {
     }
     o.linear = select(linear01(o.clip), dot(sm.warp_depth, world), is_warped());
     o.part = part_id(v.object, v.part);
+    o.uv = v.uv;
+    o.object = v.object;
     return o;
 }
 
 // `part_ids`: the depth, and the convex part it came from.
 @fragment
 fn fs_depth_part(i: DepthOut) -> @location(0) u32 {
+    cut_out(i);
     return i.part;
 }
 
@@ -32,8 +49,15 @@ fn fs_depth_part(i: DepthOut) -> @location(0) u32 {
 // slope of the depth).
 @fragment
 fn fs_depth_linear(i: DepthOut) -> @builtin(frag_depth) f32 {
+    cut_out(i);
     let slope = max(abs(dpdx(i.linear)), abs(dpdy(i.linear)));
     return clamp(i.linear + sm.depth.w + sm.kernel.z * slope, 0.0, 1.0);
+}
+
+// A plain depth pass of cut-out casters.
+@fragment
+fn fs_depth_cutout(i: DepthOut) {
+    cut_out(i);
 }
 
 // The floor: a bare depth-only transform (no varyings, no fragment stage).
@@ -49,6 +73,7 @@ fn vs_floor(v: VertexIn) -> @builtin(position) vec4f {
 // Depth-only pass of a dual paraboloid: drop what lies behind the hemisphere.
 @fragment
 fn fs_depth_paraboloid(i: DepthOut) {
+    cut_out(i);
     if i.hemisphere < 0.0 {
         discard;
     }
@@ -80,6 +105,7 @@ fn moments_of(z: f32) -> vec4f {
 
 @fragment
 fn fs_depth_moments(i: DepthOut) -> @location(0) vec4f {
+    cut_out(i);
     if i.hemisphere < 0.0 {
         discard;
     }
@@ -103,6 +129,7 @@ fn fs_blur(@builtin(position) frag: vec4f) -> @location(0) vec4f {
 // The 8-bit preset stores the depth in an R8 colour target.
 @fragment
 fn fs_depth_byte(i: DepthOut) -> @location(0) vec4f {
+    cut_out(i);
     if i.hemisphere < 0.0 {
         discard;
     }

@@ -5,7 +5,7 @@
 
 use super::bias_cap::bias_clamp;
 use super::caster_cull::CasterCull;
-use super::depth_pass::{Casters, DepthDraw, DepthPassKey};
+use super::depth_pass::{Casters, DepthDraw, DepthPassKey, Surfaces};
 use super::edge_mask::{ChainInput, ChainSource};
 use super::maps::Maps;
 use super::pipelines::LookupKey;
@@ -60,6 +60,7 @@ impl ShadowMapTechnique {
                     .shared
                     .floor(ctx.gpu, p.depth_key.format.depth_texture(), shape),
                 casters: Casters::All,
+                surfaces: Surfaces::AllSolid,
             }];
         }
         let c = &self.config;
@@ -68,7 +69,13 @@ impl ShadowMapTechnique {
             clamp_bits: clamp.to_bits(),
             ..p.depth_key
         };
-        self.shared.depth_passes(ctx.gpu, key, c.solid_front_bias)
+        self.shared.depth_passes(
+            ctx.gpu,
+            key,
+            c.solid_front_bias,
+            c.blended_casters,
+            &ctx.scene_gpu.draws,
+        )
     }
 
     /// Light sample `si`'s maps: each face's depth pass, then the moment

@@ -326,6 +326,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             shape,
             virtual_map: false,
             parts,
+            cutout: false,
         };
         let lookup_key = LookupKey {
             filter: c.filter,

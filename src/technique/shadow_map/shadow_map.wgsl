@@ -154,6 +154,8 @@ struct DepthOut {
     @location(0) linear: f32,
     // the convex part drawn (`part_id`), 0: none
     @location(2) @interpolate(flat) part: u32,
+    @location(3) uv: vec2f,
+    @location(4) @interpolate(flat) object: u32,
 };
 
 // Linear depth in [0, 1] of a light-clip position.

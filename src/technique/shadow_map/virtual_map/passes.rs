@@ -166,8 +166,11 @@ impl ShadowMapTechnique {
                             shape: lookup_key.shape,
                             virtual_map: true,
                             parts: false,
+                            cutout: false,
                         },
                         c.solid_front_bias,
+                        c.blended_casters,
+                        &ctx.scene_gpu.draws,
                     )
                 })
                 .clone()
