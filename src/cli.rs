@@ -373,7 +373,7 @@ fn compare(a: CompareArgs) -> Result<()> {
         &a.out,
     )?;
     println!(
-        "{:<36} {:>5} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8}",
+        "{:<36} {:>5} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8}",
         "technique",
         "light",
         "false-sh%",
@@ -382,11 +382,12 @@ fn compare(a: CompareArgs) -> Result<()> {
         "MAE",
         "int.MAE",
         "graded%",
+        "frac.MAE",
         "FLIP"
     );
     for r in &rows {
         println!(
-            "{:<36} {:>5} {:>9.3} {:>9.3} {:>9.3} {:>8.4} {:>8.4} {:>8.2} {:>8.4}",
+            "{:<36} {:>5} {:>9.3} {:>9.3} {:>9.3} {:>8.4} {:>8.4} {:>8.2} {:>8} {:>8.4}",
             r.technique,
             r.light,
             r.mask.all.false_shadow_pct,
@@ -395,6 +396,9 @@ fn compare(a: CompareArgs) -> Result<()> {
             r.mask.mean_abs_error,
             r.mask.interior_mae,
             r.mask.graded_interior_pct,
+            r.mask
+                .fractional_mae
+                .map_or("–".to_string(), |e| format!("{e:.4}")),
             r.flip.mean
         );
     }

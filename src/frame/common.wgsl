@@ -103,13 +103,13 @@ fn opacity_at(object: u32, uv: vec2f, lod: f32) -> f32 {
 
 // Whether `object` is solid at `uv` for a pass that draws it as a cut-out:
 // a mask material where its opacity reaches the cutoff, a blended one
-// where it reaches ½, an opaque one everywhere.
-fn is_solid_at(object: u32, uv: vec2f, lod: f32) -> bool {
+// where it reaches `blend_cutoff`, an opaque one everywhere.
+fn is_solid_at(object: u32, uv: vec2f, lod: f32, blend_cutoff: f32) -> bool {
     let a = objects[object].alpha;
     if a.x == ALPHA_OPAQUE {
         return true;
     }
-    let cutoff = select(0.5, bitcast<f32>(a.y), a.x == ALPHA_MASK);
+    let cutoff = select(blend_cutoff, bitcast<f32>(a.y), a.x == ALPHA_MASK);
     return opacity_at(object, uv, lod) >= cutoff;
 }
 
@@ -137,7 +137,7 @@ fn caster_is_solid(object: u32, see_through: bool, uv: vec2f, duv_dx: vec2f, duv
     if !see_through {
         return true;
     }
-    return is_solid_at(object, uv, opacity_lod(object, duv_dx, duv_dy));
+    return is_solid_at(object, uv, opacity_lod(object, duv_dx, duv_dy), 0.5);
 }
 
 // A triangle covering the whole target (for screen-space passes).

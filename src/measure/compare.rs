@@ -299,6 +299,7 @@ fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
             "rms_error",
             "interior_mae",
             "graded_interior_pct",
+            "fractional_mae",
             "flip_mean",
             "flip_p95",
             "flip_p99",
@@ -333,6 +334,7 @@ fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
                 err(m.rms_error),
                 err(m.interior_mae),
                 pct(m.graded_interior_pct),
+                m.fractional_mae.map_or(String::new(), err),
                 err(r.flip.mean),
                 err(r.flip.p95),
                 err(r.flip.p99),
@@ -359,7 +361,7 @@ fn write_csv(path: &Path, rows: &[QualityRow]) -> Result<()> {
 
 fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[QualityRow]) -> String {
     let mut s = format!(
-        "# Quality on `{}` against `{}`\n\n{} × {}, adapter {}. Mismatch at visibility 0.5, in % of considered pixels ({}); interior MAE: mean absolute error of the pixels farther than {} px from a reference shadow edge; graded interior: of those where the reference is exactly lit or shadowed, the % with visibility strictly between {} and {}.\n\n",
+        "# Quality on `{}` against `{}`\n\n{} × {}, adapter {}. Mismatch at visibility 0.5, in % of considered pixels ({}); interior MAE: mean absolute error of the pixels farther than {} px from a reference shadow edge; graded interior: of those where the reference is exactly lit or shadowed, the % with visibility strictly between {} and {}; fractional MAE: the interior MAE where the reference itself lies strictly between them (light through translucent casters, penumbrae).\n\n",
         scene.name,
         meta["reference"].as_str().unwrap_or(""),
         meta["size"]["width"],
@@ -370,14 +372,14 @@ fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[QualityRow]) -> Str
         quality::GRADED_LOW,
         quality::GRADED_HIGH
     );
-    s += "| technique | light | ref. shadowed % | false shadow % | false lit % | total % | edge FS % | edge FL % | interior FS % | interior FL % | MAE | RMSE | interior MAE | graded interior % | FLIP mean | FLIP p95 | FLIP p99 | px/texel mean | p95 | max |\n";
-    s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    s += "| technique | light | ref. shadowed % | false shadow % | false lit % | total % | edge FS % | edge FL % | interior FS % | interior FL % | MAE | RMSE | interior MAE | graded interior % | fractional MAE | FLIP mean | FLIP p95 | FLIP p99 | px/texel mean | p95 | max |\n";
+    s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     let px = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.2}"));
     for r in rows {
         let m = &r.mask;
         let _ = writeln!(
             s,
-            "| `{}` | {} | {:.2} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} | {:.4} | {:.4} | {:.2} | {:.4} | {:.4} | {:.4} | {} | {} | {} |",
+            "| `{}` | {} | {:.2} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} | {:.4} | {:.4} | {:.2} | {} | {:.4} | {:.4} | {:.4} | {} | {} | {} |",
             r.technique,
             r.light,
             m.reference_shadowed_pct,
@@ -392,6 +394,8 @@ fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[QualityRow]) -> Str
             m.rms_error,
             m.interior_mae,
             m.graded_interior_pct,
+            m.fractional_mae
+                .map_or("–".to_string(), |e| format!("{e:.4}")),
             r.flip.mean,
             r.flip.p95,
             r.flip.p99,

@@ -36,6 +36,11 @@ pub struct MaskMetrics {
     /// shadowed (a hard light's), the % whose visibility lies strictly
     /// between [`GRADED_LOW`] and [`GRADED_HIGH`].
     pub graded_interior_pct: f64,
+    /// Mean absolute error over the interior pixels where the reference
+    /// itself is fractional (strictly between [`GRADED_LOW`] and
+    /// [`GRADED_HIGH`]): light through translucent casters under a hard
+    /// light, penumbrae under an area light; `None` where there is none.
+    pub fractional_mae: Option<f64>,
 }
 
 /// Visibility above this and below [`GRADED_HIGH`] is neither shadow nor
@@ -220,6 +225,7 @@ pub fn mask_metrics(
     // Interior pixels, their absolute error, hard-reference pixels, graded.
     let (mut interior_n, mut interior_abs) = (0usize, 0.0f64);
     let (mut hard_n, mut graded_n) = (0usize, 0usize);
+    let (mut fractional_n, mut fractional_abs) = (0usize, 0.0f64);
     for i in 0..width * height {
         if !considered[i] {
             continue;
@@ -242,6 +248,10 @@ pub fn mask_metrics(
             if let Some(g) = graded(reference[i], test[i]) {
                 hard_n += 1;
                 graded_n += g as usize;
+            }
+            if reference[i] > GRADED_LOW && reference[i] < GRADED_HIGH {
+                fractional_n += 1;
+                fractional_abs += d.abs();
             }
         }
     }
@@ -266,6 +276,7 @@ pub fn mask_metrics(
             interior_abs / interior_n as f64
         },
         graded_interior_pct: super::percent(graded_n, hard_n),
+        fractional_mae: (fractional_n > 0).then(|| fractional_abs / fractional_n as f64),
     }
 }
 
@@ -529,6 +540,13 @@ mod tests {
         // Interior: columns 0..=2 (shadow, exact) and 7..=9 (lit, 0.3 off).
         assert!((m.interior_mae - 0.15).abs() < 1e-6, "{}", m.interior_mae);
         assert!((m.graded_interior_pct - 50.0).abs() < 1e-9);
+        assert_eq!(m.fractional_mae, None, "a hard reference");
+        // Seen through a pane passing 0.7, the dimmed half is exact there.
+        let through_pane: Vec<f32> = r.iter().map(|&v| v * 0.7).collect();
+        let m = mask_metrics(10, 10, &c, &through_pane, &dimmed);
+        assert!(m.fractional_mae.is_some_and(|e| e < 1e-6), "{m:?}");
+        let m = mask_metrics(10, 10, &c, &through_pane, &r);
+        assert!(m.fractional_mae.is_some_and(|e| (e - 0.3).abs() < 1e-6));
         // The edge band's own error counts in the MAE, not the interior's.
         let mut edge_only = r.clone();
         for y in 0..10 {

@@ -84,7 +84,7 @@ fn fs_gbuffer(i: GOut) -> GBuffer {
 fn fs_gbuffer_cutout(i: GOut) -> GBuffer {
     let g = gbuffer_of(i);
     let lod = opacity_lod(i.object, dpdx(i.uv), dpdy(i.uv));
-    if !is_solid_at(i.object, i.uv, lod) {
+    if !is_solid_at(i.object, i.uv, lod, 0.5) {
         discard;
     }
     return g;

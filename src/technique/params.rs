@@ -67,7 +67,12 @@ impl Choice for crate::frame::Compose {
 choice_enum! {
     /// How a technique's caster passes draw translucent (glTF `BLEND`)
     /// casters, which the reference traces as fractional transmittance.
-    pub enum BlendedCasters { Cutout = "cutout", Opaque = "opaque", Ignore = "ignore" }
+    pub enum BlendedCasters {
+        Cutout = "cutout",
+        Hashed = "hashed",
+        Opaque = "opaque",
+        Ignore = "ignore",
+    }
 }
 
 impl BlendedCasters {
@@ -76,7 +81,9 @@ impl BlendedCasters {
     /// at all (`None`).
     pub fn draws_as(self, mode: AlphaMode) -> Option<AlphaMode> {
         match (mode, self) {
-            (AlphaMode::Blend, BlendedCasters::Cutout) => Some(AlphaMode::Mask),
+            (AlphaMode::Blend, BlendedCasters::Cutout | BlendedCasters::Hashed) => {
+                Some(AlphaMode::Mask)
+            }
             (AlphaMode::Blend, BlendedCasters::Opaque) => Some(AlphaMode::Opaque),
             (AlphaMode::Blend, BlendedCasters::Ignore) => None,
             (m, _) => Some(m),
@@ -203,7 +210,7 @@ impl ParamSpec {
     pub const BLENDED_CASTERS: ParamSpec = ParamSpec::choice_of::<BlendedCasters>(
         "blended_casters",
         BlendedCasters::Cutout as usize,
-        "translucent (glTF BLEND) casters: cutout — solid where opacity ≥ ½; opaque — solid everywhere; ignore — cast no shadow (the reference lets 1 − opacity of the light through)",
+        "translucent (glTF BLEND) casters: cutout — solid where opacity ≥ ½; hashed — solid where opacity ≥ a per-texel hash (Wyman & McGuire 2017), so filtered lookups see fractional visibility; opaque — solid everywhere; ignore — cast no shadow (the reference lets 1 − opacity of the light through)",
     );
 
     /// Parses a textual value (`1.5`, `true`, a choice name) for this

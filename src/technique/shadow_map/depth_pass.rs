@@ -34,6 +34,8 @@ pub struct DepthPassKey {
     /// Cut-out casters: the fragment stage drops their holes
     /// (`CUTOUT` in depth_pass.wgsl).
     pub cutout: bool,
+    /// Translucent casters against a per-texel hash (`HASHED`).
+    pub hashed: bool,
 }
 
 impl CullFace {
@@ -185,14 +187,13 @@ impl ShadowMapShared {
                     casters,
                     surfaces: Surfaces::Opaque(blended),
                 };
+                let cutout_key = DepthPassKey {
+                    cutout: true,
+                    hashed: blended == BlendedCasters::Hashed,
+                    ..key
+                };
                 let cutout = cutouts.then(|| DepthDraw {
-                    pipeline: self.depth_pass(
-                        gpu,
-                        DepthPassKey {
-                            cutout: true,
-                            ..key
-                        },
-                    ),
+                    pipeline: self.depth_pass(gpu, cutout_key),
                     casters,
                     surfaces: Surfaces::Cutout(blended),
                 });
@@ -226,6 +227,7 @@ impl ShadowMapShared {
                 ),
                 ("VIRTUAL", key.virtual_map as u32 as f64),
                 ("CUTOUT", key.cutout as u32 as f64),
+                ("HASHED", key.hashed as u32 as f64),
             ];
             constants.extend(key.shape.constants());
             let options = wgpu::PipelineCompilationOptions {
@@ -338,6 +340,7 @@ mod tests {
             virtual_map: false,
             parts: false,
             cutout: false,
+            hashed: false,
         }
     }
 

@@ -327,6 +327,7 @@ impl ShadowTechnique for ShadowMapTechnique {
             virtual_map: false,
             parts,
             cutout: false,
+            hashed: false,
         };
         let lookup_key = LookupKey {
             filter: c.filter,

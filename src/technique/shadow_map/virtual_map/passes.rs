@@ -167,6 +167,7 @@ impl ShadowMapTechnique {
                             virtual_map: true,
                             parts: false,
                             cutout: false,
+                            hashed: false,
                         },
                         c.solid_front_bias,
                         c.blended_casters,
