@@ -107,14 +107,14 @@ fn plain_view(c: &Cell, kind: &str) -> bool {
     c.light_kinds.iter().any(|k| k == kind)
         && !c.area_light
         && c.key.camera != "in-shadow"
-        && !["bunny", "teapot", "curved"].contains(&c.key.scene.as_str())
+        && !["bunny", "teapot", "curved", "foliage"].contains(&c.key.scene.as_str())
 }
 
 /// Flicker (% of considered pixels per step) within which a technique
 /// counts as stable (issue 15's bar).
 pub const STABLE_FLICKER_PCT: f64 = 0.01;
 
-const CRITERIA: [Criterion; 11] = [
+const CRITERIA: [Criterion; 12] = [
     Criterion {
         name: "hard shadows exact",
         declared: None,
@@ -175,6 +175,14 @@ const CRITERIA: [Criterion; 11] = [
         name: "curved receivers",
         declared: Some(|k| k.curved_receivers),
         applies: |c| c.key.scene == "curved",
+        passes: below_failure,
+        figure: total,
+        unit: Unit::Percent("mismatch"),
+    },
+    Criterion {
+        name: "alpha-tested casters",
+        declared: Some(|k| k.cutout_casters),
+        applies: |c| c.key.scene == "foliage",
         passes: below_failure,
         figure: total,
         unit: Unit::Percent("mismatch"),

@@ -56,17 +56,18 @@ pub struct Matrix {
 /// The quick preset's views: a point light over a colonnade (z-fail's
 /// open-volume and far-plane failures), the camera inside the roof's shadow
 /// (z-pass's failure), a room, an open mesh under a spot, curved receivers
-/// and 2 km of landscape seen from the ground (perspective aliasing: the
-/// warped and partitioned maps). The million-triangle city (a second a
+/// 2 km of landscape seen from the ground (perspective aliasing: the
+/// warped and partitioned maps) and the see-through casters of `foliage`. The million-triangle city (a second a
 /// frame on lavapipe for several families) is left to `standard`, so that
 /// `quick` stays within 5 minutes on a 2-core machine without a GPU.
-const QUICK_VIEWS: [(&str, &str, &str); 6] = [
+const QUICK_VIEWS: [(&str, &str, &str); 7] = [
     ("columns", "default", "point"),
     ("columns", "in-shadow", "sun"),
     ("room", "default", "point"),
     ("bunny", "default", "spot"),
     ("curved", "default", "sun"),
     ("landscape", "ground", "sun-side"),
+    ("foliage", "eye-level", "spot"),
 ];
 
 /// A technique's benchmark stops after this many seconds (at least one

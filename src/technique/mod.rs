@@ -228,6 +228,9 @@ pub struct Capabilities {
     pub open_meshes: bool,
     /// Receivers that are not planes.
     pub curved_receivers: bool,
+    /// Casters with holes (alpha-tested cut-outs: leaves, fences): a
+    /// shadow volume is extruded from triangles and cannot cut them.
+    pub cutout_casters: bool,
 }
 
 /// A technique family: its parameter table, presets and constructor.

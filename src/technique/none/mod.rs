@@ -16,6 +16,7 @@ pub static FAMILY: Family = Family {
         self_shadowing: false,
         open_meshes: false,
         curved_receivers: false,
+        cutout_casters: false,
     },
     params: &[],
     presets: &[Preset {

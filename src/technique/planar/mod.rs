@@ -43,6 +43,7 @@ pub static FAMILY: Family = Family {
         self_shadowing: false,
         open_meshes: true,
         curved_receivers: false,
+        cutout_casters: true,
     },
     params: &[
         ParamSpec::DARKENING,

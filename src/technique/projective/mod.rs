@@ -70,6 +70,7 @@ pub static FAMILY: Family = Family {
         self_shadowing: false,
         open_meshes: true,
         curved_receivers: true,
+        cutout_casters: true,
     },
     params: &[SIZE, MARGIN, DEPTH_IN_ALPHA, ALPHA_BIAS],
     presets: &[

@@ -56,6 +56,7 @@ pub static FAMILY: Family = Family {
         self_shadowing: true,
         open_meshes: true,
         curved_receivers: true,
+        cutout_casters: true,
     },
     params: &[SAMPLES, OFFSET_ULPS, KERNEL],
     presets: &[

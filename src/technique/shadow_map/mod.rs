@@ -63,6 +63,7 @@ pub static FAMILY: Family = Family {
         self_shadowing: true,
         open_meshes: true,
         curved_receivers: true,
+        cutout_casters: true,
     },
     params: config::PARAMS,
     presets: presets::PRESETS,

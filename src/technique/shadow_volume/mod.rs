@@ -31,7 +31,7 @@ use scissor::range_scissor;
 use super::{DebugLine, Family, MaskContext, ParamValues, ShadowTechnique};
 use crate::frame::Compose;
 use crate::gpu::GpuContext;
-use crate::scene::LightType;
+use crate::scene::{AlphaMode, LightType};
 use adjacency::Adjacency;
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
@@ -44,7 +44,7 @@ use std::sync::Arc;
 
 pub static FAMILY: Family = Family {
     id: "shadow-volume",
-    summary: "stencil shadow volumes: silhouettes extruded away from the light, counted in the stencil buffer (exact hard shadows)",
+    summary: "stencil shadow volumes: silhouettes extruded away from the light, counted in the stencil buffer (exact hard shadows; cut-out and translucent casters shadow as solids: a volume is extruded from whole triangles and has no holes)",
     capabilities: super::Capabilities {
         point_lights: true,
         spot_lights: true,
@@ -53,6 +53,7 @@ pub static FAMILY: Family = Family {
         self_shadowing: true,
         open_meshes: true,
         curved_receivers: true,
+        cutout_casters: false,
     },
     params: config::PARAMS,
     presets: config::PRESETS,
@@ -136,6 +137,7 @@ pub struct ShadowVolumeRenderer {
     statistics: Option<(wgpu::QuerySet, wgpu::Buffer)>,
     depth_clamp: bool,
     warned_no_depth_clamp: bool,
+    warned_see_through: bool,
     adjacency: Option<(u64, Vec<Option<Adjacency>>)>,
     geometry: Option<Geometry>,
     stats: Stats,
@@ -209,6 +211,7 @@ impl ShadowVolumeRenderer {
             statistics,
             depth_clamp: gpu.depth_clamp,
             warned_no_depth_clamp: false,
+            warned_see_through: false,
             adjacency: None,
             geometry: None,
             stats: Stats::default(),
@@ -326,6 +329,16 @@ impl ShadowTechnique for ShadowVolumeRenderer {
         let plans = self.plan(ctx, &config)?;
         let length = config.length;
         let dark_cap = !(ctx.light.kind == LightType::Directional && length <= 0.0);
+        let see_through =
+            |d: &crate::frame::DrawCall| d.casts_shadow && d.alpha_mode != AlphaMode::Opaque;
+        if ctx.scene_gpu.draws.iter().any(see_through)
+            && !std::mem::replace(&mut self.warned_see_through, true)
+        {
+            log::warn!(
+                "shadow-volume: {}'s cut-out and translucent casters shadow as solids (a shadow volume has no holes)",
+                ctx.scene.name
+            );
+        }
         let clamp_asked = length <= 0.0 && config.far_plane == FarPlane::DepthClamp;
         if clamp_asked
             && !self.depth_clamp
