@@ -70,6 +70,16 @@ fn a_texel_sized_hole_in_a_cutout_lights_the_floor_behind_it() {
             "{technique}: the hole lit {lit} of {full} pixels"
         );
     }
+    // Without alpha testing the map sees a solid square.
+    let untested = shadowed(&mask_of(
+        &holed,
+        "shadow-map:pcf",
+        &["alpha_test=false"],
+        w,
+        h,
+    ));
+    let solid_pcf = shadowed(&mask_of(&solid, "shadow-map:pcf", &[], w, h));
+    assert_eq!(untested, solid_pcf, "alpha_test=false fills the hole");
     let reference = mask_of(&holed, "raytraced", &[], w, h);
     let pcf = mask_of(&holed, "shadow-map:pcf", &[], w, h);
     let flipped = reference

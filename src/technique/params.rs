@@ -91,6 +91,27 @@ impl BlendedCasters {
     }
 }
 
+/// How a technique's caster passes treat see-through casters: alpha-tested
+/// (`alpha_test`) or every caster solid, and the translucent ones as
+/// `blended` says.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CasterAlpha {
+    pub alpha_test: bool,
+    pub blended: BlendedCasters,
+}
+
+impl CasterAlpha {
+    /// How a caster of `mode` is drawn: opaque, as a cut-out
+    /// ([`AlphaMode::Mask`]) or not at all.
+    pub fn draws_as(self, mode: AlphaMode) -> Option<AlphaMode> {
+        if self.alpha_test {
+            self.blended.draws_as(mode)
+        } else {
+            Some(AlphaMode::Opaque)
+        }
+    }
+}
+
 /// What kind of value a parameter holds. Every value is stored as `f64`:
 /// booleans as 0/1, choices as the index into their names.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]

@@ -4,7 +4,7 @@
 //! WGSL constants and pipeline-overridable constants, into the shaders.
 
 use crate::scene::LightType;
-use crate::technique::params::{BlendedCasters, choice_enum};
+use crate::technique::params::{CasterAlpha, choice_enum};
 use crate::technique::{ParamSpec, ParamValues};
 use anyhow::Result;
 
@@ -238,6 +238,12 @@ pub const PART_IDS: ParamSpec = ParamSpec::boolean(
     "cull=solids, depth-compared filters (hard, pcf2x2, grid, disk, pcss, varwidth) of unwarped maps and cube faces: every texel also stores the convex part its depth came from (a closed, outward-wound piece of a mesh convex at every edge, or a flat one such as a floor), and a receiver facing the light ignores its own part's texels and takes no normal offset — a convex part never shadows its own lit side, so a lit wall is not compared against the back face that meets it at its corner (priority buffers, Hourcade & Nicolas 1985); 4 more bytes per texel",
 );
 
+pub const ALPHA_TEST: ParamSpec = ParamSpec::boolean(
+    "alpha_test",
+    true,
+    "cut-out (glTF MASK) and translucent casters are alpha-tested in the depth pass, their opacity map read at the mip level of the light's texel footprint; false draws every caster solid (what a shadow map without alpha testing shows, and what alpha testing costs)",
+);
+
 pub const OMNI: ParamSpec = ParamSpec::choice_of::<Omni>(
     "omni",
     Omni::Cube as usize,
@@ -309,6 +315,7 @@ pub const PARAMS: &[ParamSpec] = &[
     CULL,
     SOLID_FRONT_BIAS,
     PART_IDS,
+    ALPHA_TEST,
     ParamSpec::BLENDED_CASTERS,
     OMNI,
     NEAR,
@@ -372,7 +379,8 @@ pub struct ShadowMapConfig {
     pub solid_front_bias: f32,
     /// Convex part IDs beside the depth (see [`ShadowMapConfig::uses_part_ids`]).
     pub part_ids: bool,
-    pub blended_casters: BlendedCasters,
+    /// How the depth passes treat see-through casters.
+    pub caster_alpha: CasterAlpha,
     pub omni: Omni,
     pub near: f32,
     pub far: f32,
@@ -435,7 +443,10 @@ impl ShadowMapConfig {
             cull: p.choice(&CULL)?,
             solid_front_bias: p.float(&SOLID_FRONT_BIAS)?,
             part_ids: p.flag(&PART_IDS)?,
-            blended_casters: p.choice(&ParamSpec::BLENDED_CASTERS)?,
+            caster_alpha: CasterAlpha {
+                alpha_test: p.flag(&ALPHA_TEST)?,
+                blended: p.choice(&ParamSpec::BLENDED_CASTERS)?,
+            },
             omni: p.choice(&OMNI)?,
             near: p.float(&NEAR)?,
             far: p.float(&FAR)?,

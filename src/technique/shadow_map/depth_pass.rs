@@ -10,7 +10,7 @@ use crate::frame::{DrawCall, VERTEX_LAYOUT};
 use crate::gpu::GpuContext;
 use crate::scene::AlphaMode;
 use crate::scene::topology::SolidKind;
-use crate::technique::params::{BlendedCasters, Choice};
+use crate::technique::params::{BlendedCasters, CasterAlpha, Choice};
 
 /// What a depth-pass pipeline depends on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -81,18 +81,18 @@ impl Casters {
 pub enum Surfaces {
     /// Every caster, solid (the bare floor pass).
     AllSolid,
-    /// Those `blended` leaves opaque.
-    Opaque(BlendedCasters),
-    /// Those `blended` makes cut-outs ([`AlphaMode::Mask`]).
-    Cutout(BlendedCasters),
+    /// Those drawn opaque.
+    Opaque(CasterAlpha),
+    /// Those drawn as cut-outs.
+    Cutout(CasterAlpha),
 }
 
 impl Surfaces {
     fn holds(self, d: &DrawCall) -> bool {
         match self {
             Surfaces::AllSolid => true,
-            Surfaces::Opaque(b) => b.draws_as(d.alpha_mode) == Some(AlphaMode::Opaque),
-            Surfaces::Cutout(b) => b.draws_as(d.alpha_mode) == Some(AlphaMode::Mask),
+            Surfaces::Opaque(a) => a.draws_as(d.alpha_mode) == Some(AlphaMode::Opaque),
+            Surfaces::Cutout(a) => a.draws_as(d.alpha_mode) == Some(AlphaMode::Mask),
         }
     }
 }
@@ -112,11 +112,11 @@ impl DepthDraw {
     }
 }
 
-/// Whether `blended` makes any of `draws`' casters a cut-out.
-pub fn has_cutout_casters(draws: &[DrawCall], blended: BlendedCasters) -> bool {
+/// Whether `alpha` draws any of `draws`' casters as a cut-out.
+fn has_cutout_casters(draws: &[DrawCall], alpha: CasterAlpha) -> bool {
     draws
         .iter()
-        .any(|d| d.casts_shadow && blended.draws_as(d.alpha_mode) == Some(AlphaMode::Mask))
+        .any(|d| d.casts_shadow && alpha.draws_as(d.alpha_mode) == Some(AlphaMode::Mask))
 }
 
 impl DepthPassKey {
@@ -169,33 +169,33 @@ impl DepthPassKey {
 impl ShadowMapShared {
     /// The depth passes from the light and the casters each draws (see
     /// [`DepthPassKey::draws`]): each set once drawn opaque and, where
-    /// `blended` makes some of `scene_draws` cut-outs, once alpha-tested.
+    /// `alpha` makes some of `scene_draws` cut-outs, once alpha-tested.
     pub fn depth_passes(
         &self,
         gpu: &GpuContext,
         key: DepthPassKey,
         solid_front_bias: f32,
-        blended: BlendedCasters,
+        alpha: CasterAlpha,
         scene_draws: &[DrawCall],
     ) -> Vec<DepthDraw> {
-        let cutouts = has_cutout_casters(scene_draws, blended);
+        let cutouts = has_cutout_casters(scene_draws, alpha);
         key.draws(solid_front_bias)
             .into_iter()
             .flat_map(|(key, casters)| {
                 let opaque = DepthDraw {
                     pipeline: self.depth_pass(gpu, key),
                     casters,
-                    surfaces: Surfaces::Opaque(blended),
+                    surfaces: Surfaces::Opaque(alpha),
                 };
                 let cutout_key = DepthPassKey {
                     cutout: true,
-                    hashed: blended == BlendedCasters::Hashed,
+                    hashed: alpha.blended == BlendedCasters::Hashed,
                     ..key
                 };
                 let cutout = cutouts.then(|| DepthDraw {
                     pipeline: self.depth_pass(gpu, cutout_key),
                     casters,
-                    surfaces: Surfaces::Cutout(blended),
+                    surfaces: Surfaces::Cutout(alpha),
                 });
                 std::iter::once(opaque).chain(cutout)
             })

@@ -73,7 +73,7 @@ impl ShadowMapTechnique {
             ctx.gpu,
             key,
             c.solid_front_bias,
-            c.blended_casters,
+            c.caster_alpha,
             &ctx.scene_gpu.draws,
         )
     }

@@ -170,7 +170,7 @@ impl ShadowMapTechnique {
                             hashed: false,
                         },
                         c.solid_front_bias,
-                        c.blended_casters,
+                        c.caster_alpha,
                         &ctx.scene_gpu.draws,
                     )
                 })
