@@ -619,3 +619,45 @@ fn special_files_never_hang_a_loader() {
     let e = format!("{:#}", scene::load(toml.to_str().unwrap()).unwrap_err());
     assert!(e.contains("pipe.obj: not a regular file"), "{e}");
 }
+
+/// TOML models override their materials' opacity and sidedness; an
+/// opacity out of range is an error naming the field.
+#[test]
+fn toml_models_set_alpha_and_double_sidedness() {
+    let dir = tmpdir("toml-alpha");
+    let good = write(
+        &dir,
+        "glass.toml",
+        "[[model]]\nshape = \"plane\"\nsize = [4.0]\n[[model]]\nshape = \"box\"\nalpha_mode = \"blend\"\nalpha = 0.3\ndouble_sided = true\n",
+    );
+    let s = scene::load(good.to_str().unwrap()).unwrap();
+    let glass = &s.materials[s.objects[1].material];
+    assert_eq!(glass.alpha_mode, scene::AlphaMode::Blend);
+    assert_eq!(glass.alpha, 0.3);
+    assert!(glass.double_sided);
+    let mesh = &s.meshes[s.objects[1].mesh];
+    assert!(mesh.sides_doubled);
+    assert_eq!(
+        mesh.triangle_count(),
+        24,
+        "a box's 12 triangles and their back faces"
+    );
+    assert_eq!(
+        s.materials[s.objects[0].material].alpha_mode,
+        scene::AlphaMode::Opaque
+    );
+    let bad = write(
+        &dir,
+        "bad.toml",
+        "[[model]]\nshape = \"plane\"\nalpha_mode = \"mask\"\nalpha_cutoff = 1.5\n",
+    );
+    let e = format!("{:#}", scene::load(bad.to_str().unwrap()).unwrap_err());
+    assert!(e.contains("alpha_cutoff must be in 0..=1, got 1.5"), "{e}");
+    let unknown = write(
+        &dir,
+        "unknown.toml",
+        "[[model]]\nshape = \"plane\"\nalpha_mode = \"glass\"\n",
+    );
+    let e = format!("{:#}", scene::load(unknown.to_str().unwrap()).unwrap_err());
+    assert!(e.contains("unknown variant `glass`"), "{e}");
+}
