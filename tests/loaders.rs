@@ -564,7 +564,8 @@ fn export_round_trip_keeps_triangles_flags_lights_and_camera() {
 }
 
 /// Runs the Khronos glTF validator (npm package `gltf-validator`, installed
-/// into tools/ by the test script) on every built-in scene's export.
+/// into tools/ by the test script) on every built-in scene's export, and on
+/// one binary export.
 #[test]
 fn khronos_validator_finds_no_errors_in_exports() {
     let tools = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools");
@@ -573,8 +574,12 @@ fn khronos_validator_finds_no_errors_in_exports() {
         "gltf-validator is not installed: run `npm ci --prefix tools` (scripts/test.sh does)"
     );
     let dir = tmpdir("validator");
-    for name in builtin::NAMES {
-        let path = dir.join(format!("{name}.gltf"));
+    let files = builtin::NAMES
+        .iter()
+        .map(|name| (*name, "gltf"))
+        .chain([("foliage", "glb")]);
+    for (name, ext) in files {
+        let path = dir.join(format!("{name}.{ext}"));
         let o = shadowlab(&["export", "--scene", name, "--out", path.to_str().unwrap()]);
         assert!(o.status.success(), "{}", stderr(&o));
         let v = std::process::Command::new("node")
@@ -660,4 +665,33 @@ fn toml_models_set_alpha_and_double_sidedness() {
     );
     let e = format!("{:#}", scene::load(unknown.to_str().unwrap()).unwrap_err());
     assert!(e.contains("unknown variant `glass`"), "{e}");
+}
+
+/// `export --out x.glb` writes one binary glTF (magic, version 2, JSON and
+/// BIN chunks), which loads back as the same scene.
+#[test]
+fn export_to_glb_writes_one_binary_file() {
+    let dir = tmpdir("glb-export");
+    let path = dir.join("room.glb");
+    let o = shadowlab(&[
+        "export",
+        "--scene",
+        "foliage",
+        "--out",
+        path.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bytes = std::fs::read(&path).unwrap();
+    assert_eq!(&bytes[0..4], b"glTF");
+    assert_eq!(u32::from_le_bytes(bytes[4..8].try_into().unwrap()), 2);
+    assert_eq!(
+        u32::from_le_bytes(bytes[8..12].try_into().unwrap()) as usize,
+        bytes.len()
+    );
+    assert_eq!(&bytes[16..20], b"JSON");
+    assert!(!dir.join("room.bin").exists(), "no buffer beside it");
+    let back = scene::load(path.to_str().unwrap()).unwrap();
+    let original = scene::builtin::by_name("foliage").unwrap().unwrap();
+    assert_eq!(back.triangle_count(), original.triangle_count());
+    assert_eq!(back.textures.len(), original.textures.len());
 }

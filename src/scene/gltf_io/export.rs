@@ -64,7 +64,8 @@ impl BinWriter {
     }
 }
 
-/// Writes the scene as `.gltf` JSON plus a `.bin` buffer beside it: vertices
+/// Writes the scene as `.gltf` JSON plus a `.bin` buffer beside it, or as
+/// one binary `.glb` when `out` ends in `.glb`: vertices
 /// in world space (identity node transforms), Phong parameters and shadow
 /// flags in `extras.shadowlab`, lights via KHR_lights_punctual and the
 /// camera as a perspective camera node.
@@ -284,7 +285,6 @@ pub fn export(scene: &Scene, out: &Path) -> Result<()> {
             "yfov": c.fov_y_deg.to_radians(), "znear": c.near, "zfar": c.far}}],
         "accessors": w.accessors,
         "bufferViews": w.views,
-        "buffers": [{"uri": bin_name, "byteLength": w.bin.len()}],
     });
     if !images.is_empty() {
         doc["images"] = json!(images);
@@ -296,12 +296,42 @@ pub fn export(scene: &Scene, out: &Path) -> Result<()> {
         doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);
         doc["extensions"] = json!({"KHR_lights_punctual": {"lights": lights}});
     }
+    write_files(out, doc, &bin_name, &w.bin)
+}
+
+/// Writes `doc` and its buffer `bin`: one binary `.glb` (JSON and BIN
+/// chunks, glTF 2.0 §4.4) when `out` ends in `.glb`, else `.gltf` JSON with
+/// the buffer beside it as `bin_name`.
+fn write_files(out: &Path, mut doc: Value, bin_name: &str, bin: &[u8]) -> Result<()> {
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)?;
     }
-    std::fs::write(out, serde_json::to_string_pretty(&doc)?)
-        .with_context(|| format!("writing {}", out.display()))?;
-    let bin_path = out.with_file_name(&bin_name);
-    std::fs::write(&bin_path, &w.bin).with_context(|| format!("writing {}", bin_path.display()))?;
-    Ok(())
+    let glb = out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    if !glb {
+        doc["buffers"] = json!([{"uri": bin_name, "byteLength": bin.len()}]);
+        std::fs::write(out, serde_json::to_string_pretty(&doc)?)
+            .with_context(|| format!("writing {}", out.display()))?;
+        let bin_path = out.with_file_name(bin_name);
+        return std::fs::write(&bin_path, bin)
+            .with_context(|| format!("writing {}", bin_path.display()));
+    }
+    doc["buffers"] = json!([{"byteLength": bin.len()}]);
+    let mut json = serde_json::to_vec(&doc)?;
+    json.resize(json.len().next_multiple_of(4), b' ');
+    let mut bin = bin.to_vec();
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let total = u32::try_from(total).map_err(|_| anyhow!("{}: over 4 GiB", out.display()))?;
+    let mut file = Vec::with_capacity(total as usize);
+    file.extend_from_slice(b"glTF");
+    file.extend_from_slice(&2u32.to_le_bytes());
+    file.extend_from_slice(&total.to_le_bytes());
+    for (chunk, kind) in [(&json, b"JSON"), (&bin, b"BIN\0")] {
+        file.extend_from_slice(&(chunk.len() as u32).to_le_bytes());
+        file.extend_from_slice(kind);
+        file.extend_from_slice(chunk);
+    }
+    std::fs::write(out, file).with_context(|| format!("writing {}", out.display()))
 }
