@@ -217,7 +217,8 @@ fn foliage_masks_follow_the_reference_per_family() {
     // Bounds about 1.3 × the figures measured at 320×180 (the projective
     // textures keep their own limits: no depth test, so casters shadow
     // what lies behind them and themselves under the sun).
-    let views: [(&str, &str, &[(&str, f64)]); 2] = [
+    type Bounds<'a> = &'a [(&'a str, f64)];
+    let views: [(&str, &str, Bounds); 2] = [
         (
             "eye-level",
             "sun",
