@@ -393,3 +393,102 @@ fn bench_writes_ratios_to_none() {
         rows[1].ratio_to_none
     );
 }
+
+/// `bench` counts one frame's invocations per stage where the adapter has
+/// pipeline-statistics queries (lavapipe does): `none` asks nothing of the
+/// mask stage; a shadow map's lookup runs once per pixel beside its depth
+/// pass's vertices; shadow volumes extrude in compute and fill at least the
+/// fragments they count themselves; and bench.json carries it all.
+#[test]
+fn bench_counts_the_work_of_each_stage() {
+    if !gpu().pipeline_statistics {
+        eprintln!(
+            "SKIPPED: {} has no pipeline-statistics queries",
+            gpu().adapter_summary()
+        );
+        return;
+    }
+    let scene = shadowlab::scene::builtin::by_name("floating")
+        .unwrap()
+        .unwrap();
+    let out = tmpdir("bench-work");
+    let list = measure::parse_technique_list("shadow-map[size=256,filter=hard],shadow-volume:auto")
+        .unwrap();
+    let (w, h) = (96u64, 54u64);
+    let frames = measure::bench::BenchFrames {
+        warmup: 1,
+        measured: 2,
+        progress: false,
+        max_seconds: None,
+    };
+    let run = |out: &std::path::Path| {
+        measure::bench::run(
+            gpu(),
+            &scene,
+            &scene.camera,
+            &scene.lights,
+            (w as u32, h as u32),
+            &Default::default(),
+            &list,
+            frames,
+            out,
+        )
+        .unwrap()
+    };
+    let rows = run(&out);
+    let work = |i: usize| rows[i].work.expect("counted");
+    let none = work(0);
+    assert_eq!(
+        none.masks,
+        Default::default(),
+        "none draws nothing into its mask"
+    );
+    assert!(none.prepass.fragment_invocations >= w * h / 2, "{none:?}");
+    assert!(none.lighting.fragment_invocations > 0, "{none:?}");
+    let map = work(1);
+    assert!(map.masks.vertex_invocations > 0, "{map:?}");
+    assert!(
+        map.masks.fragment_invocations >= w * h,
+        "the lookup covers the frame: {map:?}"
+    );
+    assert_eq!(map.prepass, none.prepass, "the same prepass");
+    let volumes = work(2);
+    assert!(
+        volumes.masks.compute_invocations > 0,
+        "extrusion: {volumes:?}"
+    );
+    let counted = rows[2]
+        .counters
+        .iter()
+        .find(|(n, _)| n == "volume_fragments")
+        .map(|c| c.1)
+        .expect("volume_fragments");
+    assert!(
+        volumes.masks.fragment_invocations as f64 >= counted,
+        "{volumes:?} vs {counted}"
+    );
+    // The count is the frame's, not the run's: a second run counts the
+    // same fragments, compute invocations and primitives (vertex shader
+    // invocations depend on the rasterizer's vertex reuse: within 5 %).
+    let again = run(&tmpdir("bench-work-again"));
+    for (a, b) in rows.iter().zip(&again) {
+        let (a, b, t) = (a.work.unwrap(), b.work.unwrap(), &a.technique);
+        for (x, y) in [
+            (a.prepass, b.prepass),
+            (a.masks, b.masks),
+            (a.lighting, b.lighting),
+        ] {
+            assert_eq!(x.fragment_invocations, y.fragment_invocations, "{t}");
+            assert_eq!(x.compute_invocations, y.compute_invocations, "{t}");
+            assert_eq!(x.clipper_primitives, y.clipper_primitives, "{t}");
+            let (vx, vy) = (x.vertex_invocations as f64, y.vertex_invocations as f64);
+            assert!((vx - vy).abs() <= 0.05 * vx.max(vy), "{t}: {vx} vs {vy}");
+        }
+    }
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
+    assert_eq!(
+        j["rows"][1]["work"]["masks"]["fragment_invocations"].as_u64(),
+        Some(map.masks.fragment_invocations)
+    );
+}

@@ -305,23 +305,31 @@ pub fn write_mask(gpu: &GpuContext, frame: &FrameTargets, layer: usize, mask: &[
 }
 
 /// Clears a mask layer to `value` (a render pass with a clear and no draw).
-pub fn clear_mask(encoder: &mut wgpu::CommandEncoder, target: &wgpu::TextureView, value: f64) {
-    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some("mask clear"),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: target,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(wgpu::Color {
-                    r: value,
-                    g: value,
-                    b: value,
-                    a: 1.0,
-                }),
-                store: wgpu::StoreOp::Store,
-            },
-        })],
-        ..Default::default()
-    });
+pub fn clear_mask(
+    gpu: &GpuContext,
+    encoder: &mut wgpu::CommandEncoder,
+    target: &wgpu::TextureView,
+    value: f64,
+) {
+    gpu.render_pass(
+        encoder,
+        &wgpu::RenderPassDescriptor {
+            label: Some("mask clear"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: value,
+                        g: value,
+                        b: value,
+                        a: 1.0,
+                    }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        },
+    );
 }

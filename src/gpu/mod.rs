@@ -10,6 +10,7 @@ pub mod live;
 pub mod readback;
 pub mod timestamps;
 pub mod uniform_space;
+pub mod work;
 
 pub use cache::{DeviceCache, PIPELINE_CACHE_BOUND};
 pub use helpers::*;
@@ -17,6 +18,7 @@ pub use live::LiveResources;
 pub use readback::{AsyncReadback, FrameFeedback};
 pub use timestamps::{SectionTimer, Stamps, TimestampPairs};
 pub use uniform_space::UniformSpace;
+pub use work::{FrameWork, StageWork, WorkStage};
 
 use anyhow::{Result, bail};
 
@@ -59,6 +61,9 @@ pub struct GpuContext {
     pub cache: DeviceCache,
     /// Times the CPU has waited for the GPU ([`GpuContext::waits`]).
     waits: std::sync::atomic::AtomicU64,
+    /// The pipeline-statistics queries of a frame being counted
+    /// ([`GpuContext::count_work`]).
+    work: work::WorkCounter,
     /// Set by the device-lost callback: why the device was lost.
     lost: std::sync::Arc<std::sync::Mutex<Option<String>>>,
 }
@@ -215,6 +220,7 @@ impl GpuContext {
             memory_budget: DEFAULT_MEMORY_BUDGET_MIB << 20,
             cache: DeviceCache::default(),
             waits: Default::default(),
+            work: Default::default(),
             lost,
             instance,
             adapter,

@@ -7,7 +7,7 @@
 //! place in the order.
 
 use super::choice_label;
-use crate::gpu::GpuContext;
+use crate::gpu::{FrameWork, GpuContext, StageWork};
 use crate::headless::HeadlessFrame;
 use crate::renderer::{FrameTimings, RenderSettings};
 use crate::scene::{Camera, Light, Scene};
@@ -64,6 +64,9 @@ pub struct BenchRow {
     pub counters: Vec<(String, f64)>,
     /// Frames measured (fewer than asked when `max_seconds` ran out).
     pub measured_frames: usize,
+    /// Invocation counts of one frame after the warm-up, per stage
+    /// (pipeline-statistics queries; `None` where the adapter has none).
+    pub work: Option<FrameWork>,
 }
 
 /// How many frames `bench` renders per technique, and whether it draws its
@@ -145,6 +148,19 @@ pub fn run(
         )?;
         bar.inc(warmup as u64);
     }
+    // One counted frame each, outside the timed ones (the queries cost).
+    if gpu.pipeline_statistics {
+        let untimed = BenchFrames {
+            max_seconds: None,
+            ..counts
+        };
+        for s in &mut series {
+            let inputs = (gpu, scene, camera, lights, &settings);
+            let work =
+                gpu.count_work(|| s.render_frames(&mut hf, inputs, 1, &untimed, FrameUse::Warmup))?;
+            s.work = Some(work);
+        }
+    }
     let n = series.len();
     for round in 0..frames as usize {
         for k in 0..n {
@@ -193,7 +209,9 @@ pub fn run(
         "warmup_frames": warmup,
         "measured_frames": frames,
         "adapter": gpu.adapter_summary(),
+        "cpu_adapter": gpu.is_cpu_adapter(),
         "gpu_timestamps": gpu.timestamps,
+        "pipeline_statistics": gpu.pipeline_statistics,
     });
     std::fs::write(
         out.join("bench.json"),
@@ -215,6 +233,7 @@ struct Series {
     spent: std::time::Duration,
     /// Out of time ([`BenchFrames::max_seconds`]): no more frames.
     done: bool,
+    work: Option<FrameWork>,
 }
 
 /// Whether a bench frame is a warm-up (not kept) or measured.
@@ -242,6 +261,7 @@ impl Series {
             frame_counters: vec![],
             spent: Default::default(),
             done: false,
+            work: None,
         })
     }
 
@@ -311,6 +331,7 @@ impl Series {
                 .sum(),
             counters: counter_summary(&self.frame_counters),
             measured_frames: timings.len(),
+            work: self.work,
         }
     }
 }
@@ -340,8 +361,16 @@ fn write_csv(path: &Path, rows: &[BenchRow]) -> Result<()> {
             "triangles_drawn",
             "caster_triangles",
             "shadow_resource_bytes",
+            "masks_vertex_invocations",
+            "masks_fragment_invocations",
+            "masks_compute_invocations",
+            "masks_clipper_primitives",
+            "frame_fragment_invocations",
         ],
         rows.iter().map(|r| {
+            let work = |f: fn(&FrameWork) -> u64| {
+                r.work.as_ref().map_or(String::new(), |w| f(w).to_string())
+            };
             vec![
                 r.technique.clone(),
                 format!("{:.3}", r.frame_ms.median),
@@ -358,6 +387,11 @@ fn write_csv(path: &Path, rows: &[BenchRow]) -> Result<()> {
                 r.triangles_drawn.to_string(),
                 r.caster_triangles.to_string(),
                 r.shadow_resource_bytes.to_string(),
+                work(|w| w.masks.vertex_invocations),
+                work(|w| w.masks.fragment_invocations),
+                work(|w| w.masks.compute_invocations),
+                work(|w| w.masks.clipper_primitives),
+                work(FrameWork::fragment_invocations),
             ]
         }),
     )
@@ -365,20 +399,32 @@ fn write_csv(path: &Path, rows: &[BenchRow]) -> Result<()> {
 
 fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[BenchRow]) -> String {
     let mut s = format!(
-        "# Timings on `{}`\n\n{} × {}, adapter {}, {} warm-up + {} measured frames, the measured ones round-robin across the techniques. Frame = wall time (ms) of prepass + masks + lighting, each waited for; GPU = timestamp queries; × none: median frame over `none`'s, and the 5th–95th percentile of the ratio of each round's frames.\n\n",
+        "# Timings on `{}`\n\n{} × {}, adapter {}, {} warm-up + {} measured frames, the measured ones round-robin across the techniques. Frame = wall time (ms) of prepass + masks + lighting, each waited for; GPU = timestamp queries; × none: median frame over `none`'s, and the 5th–95th percentile of the ratio of each round's frames. Work: invocations of one frame's mask stage per pixel of the frame (pipeline-statistics queries), the same on any adapter.{}\n\n",
         scene.name,
         meta["size"]["width"],
         meta["size"]["height"],
         meta["adapter"].as_str().unwrap_or(""),
         meta["warmup_frames"],
-        meta["measured_frames"]
+        meta["measured_frames"],
+        if meta["cpu_adapter"].as_bool() == Some(true) {
+            " **The adapter is a CPU rasterizer: its times rank techniques as a CPU does (filling pixels is cheap beside a GPU's, depth-only passes are not); the work columns do not depend on it.**"
+        } else {
+            ""
+        }
     );
-    s += "| technique | frame median | p5 | p95 | masks (wall) | GPU frame | GPU prepass | GPU masks | GPU lighting | × none | × none p5–p95 | triangles | casters | shadow bytes |\n";
-    s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    let pixels = meta["size"]["width"].as_f64().unwrap_or(1.0)
+        * meta["size"]["height"].as_f64().unwrap_or(1.0);
+    let per_px = |r: &BenchRow, f: fn(&StageWork) -> u64| {
+        r.work.as_ref().map_or("–".into(), |w| {
+            format!("{:.2}", f(&w.masks) as f64 / pixels)
+        })
+    };
+    s += "| technique | frame median | p5 | p95 | masks (wall) | GPU frame | GPU prepass | GPU masks | GPU lighting | × none | × none p5–p95 | masks fragments/px | masks vertices/px | masks compute/px | triangles | casters | shadow bytes |\n";
+    s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for r in rows {
         let _ = writeln!(
             s,
-            "| `{}` | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | {} | {} | {:.2} | {:.2}–{:.2} | {} | {} | {} |",
+            "| `{}` | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | {} | {} | {:.2} | {:.2}–{:.2} | {} | {} | {} | {} | {} | {} |",
             r.technique,
             r.frame_ms.median,
             r.frame_ms.p5,
@@ -391,6 +437,9 @@ fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[BenchRow]) -> Strin
             r.ratio_to_none,
             r.ratio_spread.0,
             r.ratio_spread.1,
+            per_px(r, |w| w.fragment_invocations),
+            per_px(r, |w| w.vertex_invocations),
+            per_px(r, |w| w.compute_invocations),
             r.triangles_drawn,
             r.caster_triangles,
             r.shadow_resource_bytes

@@ -17,7 +17,7 @@ use lighting::LitLights;
 pub use timing::{FrameTimings, GpuPassTimes};
 
 use crate::frame::{self, FrameLayouts, FrameTargets, MAX_LIGHTS, SceneGpu};
-use crate::gpu::GpuContext;
+use crate::gpu::{GpuContext, WorkStage};
 use crate::scene::{AlphaMode, Camera, Light, Scene};
 use crate::technique::{Feedback, MaskContext, TechniqueInstance, TechniqueNeeds};
 use anyhow::{Result, bail};
@@ -327,6 +327,7 @@ impl Renderer {
         };
 
         let mut enc = gpu.device.create_command_encoder(&Default::default());
+        gpu.set_work_stage(WorkStage::Prepass);
         stamp(&mut enc, timing::PREPASS, false);
         self.record_prepass(gpu, &mut enc, scene_gpu, frame, settings);
         stamp(&mut enc, timing::PREPASS, true);
@@ -346,6 +347,7 @@ impl Renderer {
         let t1 = stage_wait()?;
 
         let mut enc = gpu.device.create_command_encoder(&Default::default());
+        gpu.set_work_stage(WorkStage::Masks);
         stamp(&mut enc, timing::MASKS, false);
         for (i, light) in lights.iter().enumerate() {
             let ctx = MaskContext {
@@ -374,6 +376,7 @@ impl Renderer {
         } else {
             Instant::now()
         };
+        gpu.set_work_stage(WorkStage::Lighting);
         stamp(&mut enc, timing::LIGHTING, false);
         let lit = LitLights::of(lights, &needs.compose);
         self.record_lighting(
@@ -442,29 +445,32 @@ impl Renderer {
         settings: &RenderSettings,
     ) {
         let [position, normal] = frame.gbuffer_views();
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("prepass"),
-            color_attachments: &[
-                Some(color_attachment(position, wgpu::Color::TRANSPARENT)),
-                Some(color_attachment(normal, wgpu::Color::TRANSPARENT)),
-                Some(color_attachment(
-                    frame.gbuffer_part_view(),
-                    wgpu::Color::TRANSPARENT,
-                )),
-            ],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: frame.depth_view(),
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
+        let mut pass = gpu.render_pass(
+            enc,
+            &wgpu::RenderPassDescriptor {
+                label: Some("prepass"),
+                color_attachments: &[
+                    Some(color_attachment(position, wgpu::Color::TRANSPARENT)),
+                    Some(color_attachment(normal, wgpu::Color::TRANSPARENT)),
+                    Some(color_attachment(
+                        frame.gbuffer_part_view(),
+                        wgpu::Color::TRANSPARENT,
+                    )),
+                ],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: frame.depth_view(),
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(0),
+                        store: wgpu::StoreOp::Store,
+                    }),
                 }),
-                stencil_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(0),
-                    store: wgpu::StoreOp::Store,
-                }),
-            }),
-            ..Default::default()
-        });
+                ..Default::default()
+            },
+        );
         pass.set_bind_group(frame::FRAME_GROUP, frame.frame_bind_group(), &[]);
         pass.set_bind_group(frame::OBJECTS_GROUP, &scene_gpu.object_bind_group, &[]);
         // Translucent surfaces are not in the G-buffer: what lies behind
@@ -490,27 +496,30 @@ impl Renderer {
         settings: &RenderSettings,
     ) {
         let bg = settings.background.unwrap_or(scene.background);
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("lighting"),
-            color_attachments: &[Some(color_attachment(
-                frame.color_view(),
-                wgpu::Color {
-                    r: bg.x as f64,
-                    g: bg.y as f64,
-                    b: bg.z as f64,
-                    a: 1.0,
-                },
-            ))],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: frame.depth_view(),
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
+        let mut pass = gpu.render_pass(
+            enc,
+            &wgpu::RenderPassDescriptor {
+                label: Some("lighting"),
+                color_attachments: &[Some(color_attachment(
+                    frame.color_view(),
+                    wgpu::Color {
+                        r: bg.x as f64,
+                        g: bg.y as f64,
+                        b: bg.z as f64,
+                        a: 1.0,
+                    },
+                ))],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: frame.depth_view(),
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
                 }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
+                ..Default::default()
+            },
+        );
         self.lighting
             .draw(gpu, &mut pass, scene_gpu, frame, lit, settings);
         if settings.show_light_icons {

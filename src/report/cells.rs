@@ -77,6 +77,11 @@ pub struct Cost {
     pub mask_ms: f64,
     /// GPU time of the mask stage, where the adapter has timestamps.
     pub mask_gpu_ms: Option<f64>,
+    /// Fragment and compute invocations of one frame's mask stage per
+    /// pixel of the frame (pipeline statistics), where the adapter counts
+    /// them: work that does not depend on the adapter.
+    pub mask_fragments_per_px: Option<f64>,
+    pub mask_compute_per_px: Option<f64>,
     pub shadow_bytes: u64,
     /// The technique's own counters (volume fragments, rays, pages…).
     pub counters: Vec<(String, f64)>,
@@ -168,6 +173,7 @@ pub fn from_rows(
     bench: &BenchRow,
     flicker: &[&FlickerRow],
     view_dir: &Path,
+    frame_pixels: f64,
 ) -> Cell {
     let pixels: usize = quality.iter().map(|r| r.mask.considered_pixels).sum();
     let mean = |f: &dyn Fn(&QualityRow) -> f64| {
@@ -224,6 +230,12 @@ pub fn from_rows(
             ratio_to_none: bench.ratio_to_none,
             mask_ms: bench.masks_ms.median,
             mask_gpu_ms: bench.gpu_masks_ms.map(|s| s.median),
+            mask_fragments_per_px: bench
+                .work
+                .map(|w| w.masks.fragment_invocations as f64 / frame_pixels),
+            mask_compute_per_px: bench
+                .work
+                .map(|w| w.masks.compute_invocations as f64 / frame_pixels),
             shadow_bytes: bench.shadow_resource_bytes,
             counters: bench.counters.clone(),
             frames: bench.measured_frames,
@@ -235,7 +247,7 @@ pub fn from_rows(
 
 /// The columns of `results.csv` and of the HTML results table, formatted
 /// once so that both show the same figures.
-pub const COLUMNS: [&str; 25] = [
+pub const COLUMNS: [&str; 27] = [
     "scene",
     "camera",
     "light",
@@ -259,6 +271,8 @@ pub const COLUMNS: [&str; 25] = [
     "ratio_to_none",
     "mask_ms",
     "mask_gpu_ms",
+    "mask_fragments_per_px",
+    "mask_compute_per_px",
     "shadow_bytes",
     "counters",
 ];
@@ -293,6 +307,12 @@ pub fn csv_row(c: &Cell) -> Vec<String> {
         format!("{:.2}", c.cost.mask_ms),
         c.cost
             .mask_gpu_ms
+            .map_or(String::new(), |v| format!("{v:.2}")),
+        c.cost
+            .mask_fragments_per_px
+            .map_or(String::new(), |v| format!("{v:.2}")),
+        c.cost
+            .mask_compute_per_px
             .map_or(String::new(), |v| format!("{v:.2}")),
         c.cost.shadow_bytes.to_string(),
         c.cost

@@ -30,10 +30,20 @@ pub fn chart_name(i: usize) -> String {
     format!("charts/view-{i}.svg")
 }
 
+/// What the report says of its adapter, at the top and under every table.
+pub fn adapter_note(report: &Report) -> String {
+    let mut s = format!("Costs measured on **{}**", report.adapter);
+    if report.cpu_adapter {
+        s += ", a CPU rasterizer: its times rank techniques as a CPU does (filling pixels is cheap beside a GPU's, depth-only passes are not), so read cost from the work columns (fragment and compute invocations per pixel, the same on any adapter) before the times";
+    }
+    s + "."
+}
+
 pub fn write(report: &Report) -> String {
     let m = report.matrix;
+    let adapter = adapter_note(report);
     let mut s = format!(
-        "# shadowlab: every shadow technique, measured\n\n{} technique presets × {} views at {} × {}, against `{}`; shadowlab {}. Mismatch: % of the pixels that receive shadows and face the light whose shadow state differs from the reference; cost: frame time × `none` in the same run. `index.html` shows the same with charts and images.\n\n## Is there one universal technique?\n\n",
+        "# shadowlab: every shadow technique, measured\n\n{adapter}\n\n{} technique presets × {} views at {} × {}, against `{}`; shadowlab {}. Mismatch: % of the pixels that receive shadows and face the light whose shadow state differs from the reference; cost: frame time × `none` in the same run, and the mask stage's invocations per pixel. `index.html` shows the same with charts and images.\n\n## Is there one universal technique?\n\n",
         m.techniques.len(),
         m.views.len(),
         m.size.0,
@@ -83,6 +93,7 @@ pub fn write(report: &Report) -> String {
         }
         s += "\n";
     }
+    let _ = write!(s, "\n*{adapter}*\n");
     s += "\n## Views\n\n";
     for (i, (view, front)) in report.fronts.iter().enumerate() {
         let names: Vec<String> = front
@@ -110,5 +121,6 @@ pub fn write(report: &Report) -> String {
         s += &values.join(" | ");
         s += " |\n";
     }
+    let _ = write!(s, "\n*{adapter}*\n");
     s
 }

@@ -79,7 +79,7 @@ pub fn run(gpu: &GpuContext, matrix: &Matrix, out: &Path, progress: bool) -> Res
     }
     bar.finish_and_clear();
     cells::write_results(out, matrix, &all)?;
-    let report = summary::Report::new(matrix, &all);
+    let report = summary::Report::new(matrix, &all, gpu.adapter_summary(), gpu.is_cpu_adapter());
     std::fs::create_dir_all(out.join("charts"))?;
     for i in 0..report.fronts.len() {
         std::fs::write(
@@ -164,7 +164,8 @@ fn measure_view(
             .with_context(|| format!("bench has no row for {label}"))?;
         let shimmer: Vec<&measure::flicker::FlickerRow> =
             flicker.iter().filter(|r| r.technique == label).collect();
-        let mut cell = cells::from_rows(matrix.key(view, t), t, &rows, b, &shimmer, &rel);
+        let pixels = matrix.size.0 as f64 * matrix.size.1 as f64;
+        let mut cell = cells::from_rows(matrix.key(view, t), t, &rows, b, &shimmer, &rel, pixels);
         cell.light_kinds = light_kinds.clone();
         cell.area_light = area;
         cells::store(out, &cell)?;

@@ -36,6 +36,10 @@ pub struct SummaryRow {
 /// Everything the report pages show.
 pub struct Report<'a> {
     pub matrix: &'a Matrix,
+    /// The adapter that measured every cost: name, type and backend.
+    pub adapter: String,
+    /// The adapter is a CPU rasterizer (its times rank as a CPU's).
+    pub cpu_adapter: bool,
     pub cells: &'a [Cell],
     /// Per view, the indices (into `cells`) of its Pareto front.
     pub fronts: Vec<(View, Vec<usize>)>,
@@ -52,7 +56,12 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 impl<'a> Report<'a> {
-    pub fn new(matrix: &'a Matrix, cells: &'a [Cell]) -> Report<'a> {
+    pub fn new(
+        matrix: &'a Matrix,
+        cells: &'a [Cell],
+        adapter: String,
+        cpu_adapter: bool,
+    ) -> Report<'a> {
         let fronts: Vec<(View, Vec<usize>)> = matrix
             .views
             .iter()
@@ -70,6 +79,8 @@ impl<'a> Report<'a> {
             .collect();
         let mut report = Report {
             matrix,
+            adapter,
+            cpu_adapter,
             cells,
             fronts,
             rows: vec![],

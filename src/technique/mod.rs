@@ -15,6 +15,7 @@ pub mod shadow_volume;
 
 use crate::frame::{Compose, FrameLayouts, FrameTargets, SceneGpu};
 use crate::gpu::GpuContext;
+use crate::gpu::work::CountedRenderPass;
 use crate::scene::{Light, Scene};
 use anyhow::{Context, Result, anyhow};
 pub use params::{ParamKind, ParamSpec, ParamValues};
@@ -322,7 +323,7 @@ pub fn mask_pass<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
     ctx: &MaskContext,
     label: &str,
-) -> wgpu::RenderPass<'e> {
+) -> CountedRenderPass<'e> {
     mask_pass_with(encoder, ctx, label, wgpu::LoadOp::Clear(wgpu::Color::WHITE))
 }
 
@@ -332,7 +333,7 @@ pub fn mask_pass_with<'e>(
     ctx: &MaskContext,
     label: &str,
     load: wgpu::LoadOp<wgpu::Color>,
-) -> wgpu::RenderPass<'e> {
+) -> CountedRenderPass<'e> {
     pass_over_frame_depth(encoder, ctx, label, ctx.target, load, true)
 }
 
@@ -345,31 +346,34 @@ pub fn pass_over_frame_depth<'e>(
     view: &wgpu::TextureView,
     load: wgpu::LoadOp<wgpu::Color>,
     clear_stencil: bool,
-) -> wgpu::RenderPass<'e> {
-    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some(label),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load,
-                store: wgpu::StoreOp::Store,
-            },
-        })],
-        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view: ctx.frame.depth_view(),
-            depth_ops: Some(wgpu::Operations {
-                load: wgpu::LoadOp::Load,
-                store: wgpu::StoreOp::Store,
+) -> CountedRenderPass<'e> {
+    ctx.gpu.render_pass(
+        encoder,
+        &wgpu::RenderPassDescriptor {
+            label: Some(label),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: ctx.frame.depth_view(),
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: clear_stencil.then_some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(0),
+                    store: wgpu::StoreOp::Store,
+                }),
             }),
-            stencil_ops: clear_stencil.then_some(wgpu::Operations {
-                load: wgpu::LoadOp::Clear(0),
-                store: wgpu::StoreOp::Store,
-            }),
-        }),
-        ..Default::default()
-    })
+            ..Default::default()
+        },
+    )
 }
 
 /// A technique for one light with its parameter values.

@@ -35,7 +35,7 @@ impl ShadowTechnique for NoShadows {
     }
 
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        crate::frame::clear_mask(encoder, ctx.target, 1.0);
+        crate::frame::clear_mask(ctx.gpu, encoder, ctx.target, 1.0);
         Ok(())
     }
 }

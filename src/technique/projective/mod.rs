@@ -362,27 +362,30 @@ impl ShadowTechnique for ProjectiveShadows {
             if frusta[i].is_none() {
                 continue;
             }
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("projective caster"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &p.color,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &p.depth,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
+            let mut pass = ctx.gpu.render_pass(
+                encoder,
+                &wgpu::RenderPassDescriptor {
+                    label: Some("projective caster"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &p.color,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &p.depth,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Discard,
+                        }),
+                        stencil_ops: None,
                     }),
-                    stencil_ops: None,
-                }),
-                ..Default::default()
-            });
+                    ..Default::default()
+                },
+            );
             pass.set_pipeline(&self.shared.caster_pipeline);
             ctx.bind_frame_groups(&mut pass);
             pass.set_bind_group(crate::frame::OWN_GROUP, &caster_group, &[i as u32 * stride]);

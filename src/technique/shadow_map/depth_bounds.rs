@@ -336,10 +336,13 @@ impl DepthReduction {
         // One pass per step: the second reads what the first wrote.
         self.timer.time(gpu, encoder, |encoder| {
             for pipeline in passes {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("sdsm reduction"),
-                    timestamp_writes: None,
-                });
+                let mut pass = gpu.compute_pass(
+                    encoder,
+                    &wgpu::ComputePassDescriptor {
+                        label: Some("sdsm reduction"),
+                        timestamp_writes: None,
+                    },
+                );
                 pass.set_pipeline(pipeline);
                 pass.set_bind_group(0, &group, &[]);
                 pass.dispatch_workgroups(w, h, 1);

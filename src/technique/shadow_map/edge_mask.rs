@@ -224,10 +224,13 @@ impl BoundsChain {
     /// Records the reduction of the map into every level.
     pub fn record(&self, gpu: &GpuContext, encoder: &mut wgpu::CommandEncoder, input: ChainInput) {
         let shared = &self.shared;
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("edge mask bounds chain"),
-            timestamp_writes: None,
-        });
+        let mut pass = gpu.compute_pass(
+            encoder,
+            &wgpu::ComputePassDescriptor {
+                label: Some("edge mask bounds chain"),
+                timestamp_writes: None,
+            },
+        );
         for (level, (side, destination, destination_parts)) in self.levels.iter().enumerate() {
             let (pipeline, depth, values, parts) = match (level.checked_sub(1), &input.depths) {
                 (None, ChainSource::Depth(d)) => (

@@ -111,19 +111,22 @@ impl ShadowMapTechnique {
                 ops: clear_op(clear),
             });
             let colors = [color];
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("shadow map depth"),
-                color_attachments: if colors[0].is_some() { &colors } else { &[] },
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &maps.depth_layer_views[f],
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
+            let mut pass = ctx.gpu.render_pass(
+                encoder,
+                &wgpu::RenderPassDescriptor {
+                    label: Some("shadow map depth"),
+                    color_attachments: if colors[0].is_some() { &colors } else { &[] },
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &maps.depth_layer_views[f],
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
                     }),
-                    stencil_ops: None,
-                }),
-                ..Default::default()
-            });
+                    ..Default::default()
+                },
+            );
             ctx.bind_frame_groups(&mut pass);
             pass.set_bind_group(
                 crate::frame::OWN_GROUP,
@@ -165,16 +168,19 @@ impl ShadowMapTechnique {
         };
         for (k, src, dst) in [(1u32, 0usize, 1usize), (2, 1, 0)] {
             for face in 0..p.layers {
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("shadow map blur"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &m[dst].0[face as usize],
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: clear_op(wgpu::Color::WHITE),
-                    })],
-                    ..Default::default()
-                });
+                let mut pass = ctx.gpu.render_pass(
+                    encoder,
+                    &wgpu::RenderPassDescriptor {
+                        label: Some("shadow map blur"),
+                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                            view: &m[dst].0[face as usize],
+                            depth_slice: None,
+                            resolve_target: None,
+                            ops: clear_op(wgpu::Color::WHITE),
+                        })],
+                        ..Default::default()
+                    },
+                );
                 pass.set_pipeline(&self.shared.blur(ctx.gpu, p.lookup_key));
                 ctx.bind_frame_groups(&mut pass);
                 pass.set_bind_group(crate::frame::OWN_GROUP, &groups[src], &[slot(si, face, k)]);

@@ -436,7 +436,7 @@ impl ShadowTechnique for ShadowMapTechnique {
         }
         if c.stage != Stage::Full {
             // The maps alone: no lookup, a lit mask.
-            crate::frame::clear_mask(encoder, ctx.target, 1.0);
+            crate::frame::clear_mask(ctx.gpu, encoder, ctx.target, 1.0);
         }
         self.render_debug(
             ctx,

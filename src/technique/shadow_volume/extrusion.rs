@@ -213,10 +213,13 @@ impl ShadowVolumeRenderer {
                     entry(5, &self.args),
                 ],
             });
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("shadow volume extrusion"),
-                timestamp_writes: None,
-            });
+            let mut pass = gpu.compute_pass(
+                encoder,
+                &wgpu::ComputePassDescriptor {
+                    label: Some("shadow volume extrusion"),
+                    timestamp_writes: None,
+                },
+            );
             pass.set_bind_group(0, &group, &[]);
             for (pipeline, n) in [
                 (&self.shared.extrude_edges, vm.edges.len()),

@@ -189,19 +189,22 @@ impl ShadowMapTechnique {
             if on_layer.is_empty() {
                 continue;
             }
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("virtual shadow map pages"),
-                color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
+            let mut pass = gpu.render_pass(
+                encoder,
+                &wgpu::RenderPassDescriptor {
+                    label: Some("virtual shadow map pages"),
+                    color_attachments: &[],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
                     }),
-                    stencil_ops: None,
-                }),
-                ..Default::default()
-            });
+                    ..Default::default()
+                },
+            );
             ctx.bind_frame_groups(&mut pass);
             for (i, (key, slot)) in on_layer {
                 let (_, x, y) = atlas.place(*slot);
