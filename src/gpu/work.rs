@@ -223,7 +223,11 @@ impl GpuContext {
             ty: wgpu::QueryType::PipelineStatistics(STATISTICS),
             count: MAX_COUNTED_PASSES,
         });
-        let _one_at_a_time = self.work.exclusive.lock().unwrap_or_else(|e| e.into_inner());
+        let _one_at_a_time = self
+            .work
+            .exclusive
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
         *self.work.state.lock().unwrap_or_else(|e| e.into_inner()) = Some(Counting {
             thread: std::thread::current().id(),
             set,

@@ -146,10 +146,15 @@ impl<'a> Report<'a> {
             .iter()
             .copied()
             .max_by(|a, b| a.cost.ratio_to_none.total_cmp(&b.cost.ratio_to_none));
+        // Work per pixel where the adapter counts it, beside the times.
+        let work: Option<Vec<f64>> = mine.iter().map(|c| c.cost.mask_fragments_per_px).collect();
+        let work = work.map_or(String::new(), |w| {
+            format!(", {:.1} mask fragments per pixel (median)", median(w))
+        });
         let cost = match dearest {
             Some(d) => Claim::of(
                 format!(
-                    "median ×{ratio:.2} the frame of `none`, mask stage median {:.1} ms (wall, CPU work included); at most ×{:.2} on `{}`; {} of shadow resources",
+                    "median ×{ratio:.2} the frame of `none`, mask stage median {:.1} ms (wall, CPU work included){work}; at most ×{:.2} on `{}`; {} of shadow resources",
                     median(mine.iter().map(|c| c.cost.mask_ms).collect()),
                     d.cost.ratio_to_none,
                     d.view().label(),
