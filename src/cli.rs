@@ -99,7 +99,8 @@ pub struct ViewCmdArgs {
     #[arg(long)]
     pub debug_views: bool,
     /// Start showing light N's visibility mask in grey instead of the image
-    /// (the M key toggles it).
+    /// (the M key toggles it). Lights count from 0 everywhere: the viewer's
+    /// labels, `visibility-N.png`, the `light` column of compare and bench.
     #[arg(long, value_name = "N")]
     pub mask: Option<usize>,
     /// Start moving the camera along this path, one step per frame (the

@@ -371,9 +371,10 @@ fn bad_cli_values_list_the_valid_ones() {
 }
 
 /// The binary's listing and measuring commands succeed and say what they
-/// wrote: every built-in scene and every preset listed, `compare` (a frame
-/// and a path) and `bench` write their tables, and `bench` names its adapter
-/// first.
+/// wrote: every built-in scene and every preset listed, `render`,
+/// `compare` (a frame and a path) and `bench` write their tables, print no
+/// line with "error" (headless runs do not probe the window system), and
+/// `bench` names its adapter first.
 #[test]
 fn listing_and_measuring_commands_succeed_and_write_their_tables() {
     let o = shadowlab(&["scenes"]);
@@ -406,8 +407,14 @@ fn listing_and_measuring_commands_succeed_and_write_their_tables() {
         let o = shadowlab(&all);
         assert!(o.status.success(), "{all:?}: {}", stderr(&o));
         assert!(out.join(wrote).is_file(), "{all:?}: no {wrote}");
+        let said = format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o));
+        assert!(
+            !said.to_lowercase().contains("error"),
+            "{all:?} succeeded but said: {said}"
+        );
         String::from_utf8_lossy(&o.stdout).to_string()
     };
+    run(&["render", "--technique", "shadow-map"], "image.png");
     let table = run(
         &["compare", "--techniques", "none,shadow-volume"],
         "quality.md",

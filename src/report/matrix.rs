@@ -59,7 +59,7 @@ pub struct Matrix {
 /// 2 km of landscape seen from the ground (perspective aliasing: the
 /// warped and partitioned maps) and the see-through casters of `foliage`. The million-triangle city (a second a
 /// frame on lavapipe for several families) is left to `standard`, so that
-/// `quick` stays within 5 minutes on a 2-core machine without a GPU.
+/// `quick` stays within 7 minutes on a 2-core machine without a GPU.
 const QUICK_VIEWS: [(&str, &str, &str); 7] = [
     ("columns", "default", "point"),
     ("columns", "in-shadow", "sun"),
@@ -83,7 +83,7 @@ pub const QUICK_BENCH_SECONDS: f64 = 2.0;
 /// Presets the quick report leaves to `standard`: the adaptive map refines
 /// its first frame in up to `refine_steps` read-back passes (nine on the
 /// landscape), which on lavapipe makes its cells twice as slow as the
-/// virtual map's (about 35 s of the quick report's 5 minutes).
+/// virtual map's (about 35 s of the quick report's time).
 const LEFT_TO_STANDARD: [&str; 1] = ["shadow-map:adaptive"];
 
 /// Every registered preset of every family, the reference's too.

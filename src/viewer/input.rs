@@ -91,14 +91,15 @@ impl ApplicationHandler for App {
                                 }
                             }
                             KeyCode::KeyH => self.start_heatmap(),
-                            KeyCode::Digit1
+                            KeyCode::Digit0
+                            | KeyCode::Digit1
                             | KeyCode::Digit2
-                            | KeyCode::Digit3
-                            | KeyCode::Digit4 => {
+                            | KeyCode::Digit3 => {
+                                // Lights count from 0, as everywhere.
                                 let i = match code {
-                                    KeyCode::Digit1 => 0,
-                                    KeyCode::Digit2 => 1,
-                                    KeyCode::Digit3 => 2,
+                                    KeyCode::Digit0 => 0,
+                                    KeyCode::Digit1 => 1,
+                                    KeyCode::Digit2 => 2,
                                     _ => 3,
                                 };
                                 if self.scene.as_ref().is_some_and(|s| i < s.lights.len()) {

@@ -96,7 +96,7 @@ fn vec3_edit(ui: &mut egui::Ui, label: &str, v: &mut Vec3, speed: f32) {
 fn light_panel(ui: &mut egui::Ui, state: &mut ViewerState, scene: &mut SceneState) {
     ui.horizontal(|ui| {
         for i in 0..scene.lights.len() {
-            ui.selectable_value(&mut state.selected_light, i, format!("light {}", i + 1));
+            ui.selectable_value(&mut state.selected_light, i, format!("light {i}"));
         }
         if scene.lights.len() < MAX_LIGHTS && ui.button("+").on_hover_text("add a light").clicked()
         {
@@ -400,7 +400,7 @@ fn stats_lines(state: &ViewerState, scene: &SceneState) -> Vec<String> {
             .map(|(k, v)| format!("{k} {v:.0}"))
             .collect();
         if !c.is_empty() {
-            lines.push(format!("light {}: {}", i + 1, c.join(", ")));
+            lines.push(format!("light {i}: {}", c.join(", ")));
         }
     }
     lines
@@ -415,11 +415,7 @@ fn debug_panel(
     ui.horizontal(|ui| {
         ui.selectable_value(&mut state.overlay, Overlay::Image, "image");
         for i in 0..scene.lights.len() {
-            ui.selectable_value(
-                &mut state.overlay,
-                Overlay::Mask(i),
-                format!("mask {}", i + 1),
-            );
+            ui.selectable_value(&mut state.overlay, Overlay::Mask(i), format!("mask {i}"));
         }
     });
     ui.checkbox(&mut state.show_debug, "technique debug views")
@@ -437,8 +433,8 @@ fn debug_panel(
 const HELP: &str = "\
 Mouse: left drag orbits (or drags a light icon), middle drag or wheel zooms, right drag pans.
 Keys: W/A/S/D fly, Q/E down/up; arrows and PageUp/PageDown move the selected light;
-1-4 select a light; M toggles the mask view; H computes the error heatmap against
-raytraced; P or F12 saves a screenshot (PNG + frame.json); Tab hides the panel;
+0-3 select light 0-3; M toggles the mask view; H computes the error heatmap against
+raytraced; P or F12 saves a screenshot (shadowlab-<time>.png and .json beside it); Tab hides the panel;
 F1 this help; Esc quits.";
 
 /// Builds every panel for this frame.
