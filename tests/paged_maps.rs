@@ -62,6 +62,9 @@ fn virtual_lookups_across_page_borders_match_one_full_map() {
                 // at the threshold, where the last bits of two renders
                 // differ (with the family's 2: 8 such pixels at radius 20).
                 "slope_bias=1",
+                // The level each pixel reads as measured then (one texel
+                // per pixel): the 512² pages' pool of 64 holds it whole.
+                "texels_per_pixel=1",
             ],
             256,
             256,
@@ -196,4 +199,30 @@ fn an_adaptive_map_refined_a_frame_late_converges_to_the_waited_one() {
         .masks
         .remove(0);
     assert_eq!(pixels_differing(&late, &waited), 0);
+}
+
+/// A local light's virtual map read one texel per pixel leaves a pixel of
+/// staircase along every shadow edge; the default four texels per pixel
+/// (two levels finer) halves the mismatch or better, on a point and a spot
+/// light's view, while a directional clipmap keeps its level.
+#[test]
+fn finer_levels_for_local_lights_cut_the_edge_mismatch() {
+    for (scene, light) in [("floating", "point"), ("room", "spot")] {
+        let mut s = builtin::by_name(scene).unwrap().unwrap();
+        s.lights = s.light_preset(light).unwrap();
+        let coarse = compare(&s, "shadow-map:virtual[texels_per_pixel=1]", (320, 180));
+        let fine = compare(&s, "shadow-map:virtual", (320, 180));
+        let (c, f) = (coarse.mask.all.total_pct, fine.mask.all.total_pct);
+        assert!(
+            c > 0.0 && f <= 0.5 * c,
+            "{scene}/{light}: {c:.4} % → {f:.4} %"
+        );
+    }
+    let mut sun = builtin::by_name("columns").unwrap().unwrap();
+    sun.lights = sun.light_preset("sun").unwrap();
+    let pages = |tpp: &str| {
+        let hf = rendered_frame(&sun, "shadow-map:virtual", &[tpp], 320, 180);
+        counter(&hf, "pages_needed")
+    };
+    assert_eq!(pages("texels_per_pixel=1"), pages("texels_per_pixel=4"));
 }

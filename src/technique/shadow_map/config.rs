@@ -12,7 +12,9 @@ use super::filter_params::{
     BLEEDING_REDUCTION, BLOCKER_SEARCH, BLUR, EXPONENT, EXPONENT_NEGATIVE, LIGHT_SIZE, MOMENT_BIAS,
     VARWIDTH_EXPONENT, VARWIDTH_SCALE,
 };
-use super::paging_params::{CLIPMAP_LEVELS, PAGE_SIZE, PAGING, POOL, REFINE_STEPS, VIRTUAL_SIZE};
+use super::paging_params::{
+    CLIPMAP_LEVELS, PAGE_SIZE, PAGING, POOL, REFINE_STEPS, TEXELS_PER_PIXEL, VIRTUAL_SIZE,
+};
 pub use super::paging_params::{Paging, PagingConfig};
 use super::partition_params::{
     BLEND, CASCADES, FIT, LISPSM_N, MAX_DISTANCE, ROLL, SELECT, SPLIT_LAMBDA, STABILIZE, TSM_FOCUS,
@@ -350,6 +352,7 @@ pub const PARAMS: &[ParamSpec] = &[
     POOL,
     CLIPMAP_LEVELS,
     REFINE_STEPS,
+    TEXELS_PER_PIXEL,
 ];
 
 /// The shadow-map family's parameters, parsed.

@@ -58,6 +58,14 @@ pub const REFINE_STEPS: ParamSpec = ParamSpec::int(
     "paging=adaptive: the most refinements per frame (each a marking pass and its read-back, one level finer at shadow edges); it stops earlier when no pixel asks for a new page; the viewer refines once a frame (the marks arrive a frame late)",
 );
 
+pub const TEXELS_PER_PIXEL: ParamSpec = ParamSpec::int(
+    "texels_per_pixel",
+    4,
+    1,
+    4,
+    "paging=virtual or adaptive, point and spot lights: texels per pixel side at the level each pixel looks up (1, 2 or 4); 1 takes the coarsest level whose texels span at most a pixel, which leaves a pixel of staircase along every shadow edge; each doubling goes a level finer for about twice the pages (a directional light's clipmap keeps 1: its windows are centred on the camera, and finer levels would outgrow the pool)",
+);
+
 /// A light's paging and the virtual map's sizes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PagingConfig {
@@ -67,6 +75,8 @@ pub struct PagingConfig {
     pub pool: u32,
     pub clipmap_levels: u32,
     pub refine_steps: u32,
+    /// Levels finer than one texel per pixel (log2 of `texels_per_pixel`).
+    pub oversample_levels: u32,
 }
 
 impl PagingConfig {
@@ -78,6 +88,13 @@ impl PagingConfig {
             pool: p.int(&POOL)?,
             clipmap_levels: p.int(&CLIPMAP_LEVELS)?,
             refine_steps: p.int(&REFINE_STEPS)?,
+            oversample_levels: {
+                let t = p.int(&TEXELS_PER_PIXEL)?;
+                if !t.is_power_of_two() {
+                    bail!("shadow-map: texels_per_pixel={t} is not 1, 2 or 4");
+                }
+                t.trailing_zeros()
+            },
         };
         for (name, v) in [("virtual_size", c.virtual_size), ("page_size", c.page_size)] {
             if !v.is_power_of_two() {

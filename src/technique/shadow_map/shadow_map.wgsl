@@ -134,7 +134,8 @@ struct VirtualMap {
     view_levels: u32,
     // texels per side of a pool slot: the page and its guard texels
     slot_texels: u32,
-    _pad: u32,
+    // levels finer than one texel per pixel that lookups take
+    oversample_levels: u32,
     levels: array<VirtualLevel>,
 };
 

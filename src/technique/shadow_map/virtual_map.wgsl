@@ -237,7 +237,8 @@ fn level_holds(f: FoundLevel) -> bool {
 }
 
 // The level for G-buffer point p (normal n) at `pixel`: in its view, the
-// coarsest whose texels span at most one pixel (footprint × 2^level ≤ 1);
+// coarsest whose texels span at most one pixel (footprint × 2^level ≤ 1),
+// `oversample_levels` finer for a local light's view;
 // for a clipmap, moved up until the window holds the whole kernel. Its
 // entry and point come with it (the marks use them).
 fn virtual_level_of(pixel: vec2i, p: vec3f, n: vec3f) -> FoundLevel {
@@ -246,7 +247,8 @@ fn virtual_level_of(pixel: vec2i, p: vec3f, n: vec3f) -> FoundLevel {
     let dx = neighbour_delta(base_level, pixel, p, vec2i(1, 0));
     let dy = neighbour_delta(base_level, pixel, p, vec2i(0, 1));
     let footprint = texel_footprint(dx, dy);
-    let steps = clamp(floor(-log2(max(footprint, 1e-12))), 0.0, f32(vsm.view_levels - 1u));
+    let finer = select(f32(vsm.oversample_levels), 0.0, is_orthographic());
+    let steps = clamp(floor(-log2(max(footprint, 1e-12))) - finer, 0.0, f32(vsm.view_levels - 1u));
     var found = FoundLevel(base + u32(steps), level_at(base + u32(steps)), VirtualPoint());
     found.point = virtual_point(found.level, p, n);
     // Up a level at a time, in a loop that llvmpipe leaves when no lane of

@@ -47,7 +47,8 @@ struct MapHeader {
     layer_pages: u32,
     view_levels: u32,
     slot_texels: u32,
-    pad: u32,
+    /// Levels finer than one texel per pixel that lookups take.
+    oversample_levels: u32,
 }
 
 /// One level (`VirtualLevel` of shadow_map.wgsl).
@@ -374,7 +375,7 @@ impl ShadowMapTechnique {
             layer_pages: atlas.layer_pages,
             view_levels: layout.view_levels,
             slot_texels: atlas.slot_texels(),
-            pad: 0,
+            oversample_levels: c.paging.oversample_levels,
         })
         .to_vec();
         for l in &layout.levels {
