@@ -207,6 +207,19 @@ impl FrameTargets {
         &self.depth_view
     }
 
+    /// The frame's depth as a pass attachment, loaded and kept, without its
+    /// stencil (passes that draw over the prepass's depth).
+    pub fn kept_depth(&self) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+        wgpu::RenderPassDepthStencilAttachment {
+            view: &self.depth_view,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }
+    }
+
     /// Group 0: the frame uniform.
     pub fn frame_bind_group(&self) -> &wgpu::BindGroup {
         &self.frame_bind_group

@@ -109,56 +109,71 @@ impl Counting {
     }
 }
 
-/// A render pass whose work is counted while it is open.
-pub struct CountedRenderPass<'e> {
-    pass: wgpu::RenderPass<'e>,
+/// A pass that can hold a pipeline-statistics query.
+pub trait StatisticsPass {
+    fn begin_statistics(&mut self, set: &wgpu::QuerySet, index: u32);
+    fn end_statistics(&mut self);
+}
+
+impl StatisticsPass for wgpu::RenderPass<'_> {
+    fn begin_statistics(&mut self, set: &wgpu::QuerySet, index: u32) {
+        self.begin_pipeline_statistics_query(set, index);
+    }
+    fn end_statistics(&mut self) {
+        self.end_pipeline_statistics_query();
+    }
+}
+
+impl StatisticsPass for wgpu::ComputePass<'_> {
+    fn begin_statistics(&mut self, set: &wgpu::QuerySet, index: u32) {
+        self.begin_pipeline_statistics_query(set, index);
+    }
+    fn end_statistics(&mut self) {
+        self.end_pipeline_statistics_query();
+    }
+}
+
+/// A pass whose work is counted while it is open (the query ends when it
+/// is dropped).
+pub struct Counted<P: StatisticsPass> {
+    pass: P,
     counting: bool,
 }
 
-impl<'e> std::ops::Deref for CountedRenderPass<'e> {
-    type Target = wgpu::RenderPass<'e>;
-    fn deref(&self) -> &Self::Target {
-        &self.pass
-    }
-}
+pub type CountedRenderPass<'e> = Counted<wgpu::RenderPass<'e>>;
+pub type CountedComputePass<'e> = Counted<wgpu::ComputePass<'e>>;
 
-impl std::ops::DerefMut for CountedRenderPass<'_> {
-    fn deref_mut(&mut self) -> &mut Self::Target {
-        &mut self.pass
-    }
-}
-
-impl Drop for CountedRenderPass<'_> {
-    fn drop(&mut self) {
-        if self.counting {
-            self.pass.end_pipeline_statistics_query();
+impl<P: StatisticsPass> Counted<P> {
+    /// Opens this thread's next query on `pass` when its frame is counted.
+    fn new(mut pass: P, counter: &WorkCounter) -> Counted<P> {
+        let query = counter.take();
+        if let Some((set, i)) = &query {
+            pass.begin_statistics(set, *i);
+        }
+        Counted {
+            pass,
+            counting: query.is_some(),
         }
     }
 }
 
-/// A compute pass whose work is counted while it is open.
-pub struct CountedComputePass<'e> {
-    pass: wgpu::ComputePass<'e>,
-    counting: bool,
-}
-
-impl<'e> std::ops::Deref for CountedComputePass<'e> {
-    type Target = wgpu::ComputePass<'e>;
-    fn deref(&self) -> &Self::Target {
+impl<P: StatisticsPass> std::ops::Deref for Counted<P> {
+    type Target = P;
+    fn deref(&self) -> &P {
         &self.pass
     }
 }
 
-impl std::ops::DerefMut for CountedComputePass<'_> {
-    fn deref_mut(&mut self) -> &mut Self::Target {
+impl<P: StatisticsPass> std::ops::DerefMut for Counted<P> {
+    fn deref_mut(&mut self) -> &mut P {
         &mut self.pass
     }
 }
 
-impl Drop for CountedComputePass<'_> {
+impl<P: StatisticsPass> Drop for Counted<P> {
     fn drop(&mut self) {
         if self.counting {
-            self.pass.end_pipeline_statistics_query();
+            self.pass.end_statistics();
         }
     }
 }
@@ -170,15 +185,7 @@ impl GpuContext {
         encoder: &'e mut wgpu::CommandEncoder,
         desc: &wgpu::RenderPassDescriptor,
     ) -> CountedRenderPass<'e> {
-        let mut pass = encoder.begin_render_pass(desc);
-        let query = self.work.take();
-        if let Some((set, i)) = &query {
-            pass.begin_pipeline_statistics_query(set, *i);
-        }
-        CountedRenderPass {
-            pass,
-            counting: query.is_some(),
-        }
+        Counted::new(encoder.begin_render_pass(desc), &self.work)
     }
 
     /// Opens a compute pass, counted while a frame is counted.
@@ -187,15 +194,7 @@ impl GpuContext {
         encoder: &'e mut wgpu::CommandEncoder,
         desc: &wgpu::ComputePassDescriptor,
     ) -> CountedComputePass<'e> {
-        let mut pass = encoder.begin_compute_pass(desc);
-        let query = self.work.take();
-        if let Some((set, i)) = &query {
-            pass.begin_pipeline_statistics_query(set, *i);
-        }
-        CountedComputePass {
-            pass,
-            counting: query.is_some(),
-        }
+        Counted::new(encoder.begin_compute_pass(desc), &self.work)
     }
 
     /// Whether this thread's frame is being counted.

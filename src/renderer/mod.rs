@@ -509,14 +509,7 @@ impl Renderer {
                         a: 1.0,
                     },
                 ))],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: frame.depth_view(),
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
+                depth_stencil_attachment: Some(frame.kept_depth()),
                 ..Default::default()
             },
         );
