@@ -123,7 +123,7 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "adaptive",
-        summary: "adaptive shadow map (Fernando et al. 2001) on the virtual map's pages: each pixel starts at its view's coarsest level and is refined a level at a time, up to the level where a texel covers at most a pixel, only where its kernel sees a shadow edge; 3×3 PCF grid, the family's slope bias",
+        summary: "adaptive shadow map (Fernando et al. 2001) on the virtual map's pages: each pixel starts at its view's coarsest level and is refined a level at a time, up to the level the virtual map reads (`texels_per_pixel`), only where its kernel sees a shadow edge; 3×3 PCF grid, the family's slope bias",
         values: &[("paging", "adaptive")],
     },
     Preset {
