@@ -117,3 +117,40 @@ fn projective_matches_on_receivers_and_alpha_depth_self_shadows() {
         alpha.off_planes
     );
 }
+
+/// The presets that darken instead of removing the light mark exactly the
+/// reference's shadow at 1 − darkening (½), and `planar:no-stencil` (0.6)
+/// at 0.4 where no shadows overlap: each against the ray-traced mask, pixel
+/// by pixel, all but a rim of edge pixels.
+#[test]
+fn darken_and_no_stencil_presets_follow_the_reference() {
+    let scene = squares_over_floor(
+        &[(Vec3::new(0.2, 1.0, -0.1), 0.8)],
+        Light::point(Vec3::new(0.4, 5.0, -0.3), 1.0),
+        true,
+    );
+    let (w, h) = (160, 160);
+    let reference = mask_of(&scene, "raytraced", &[], w, h);
+    let shadowed = reference.iter().filter(|&&v| v < 0.5).count();
+    assert!(shadowed > 1000, "{shadowed} shadowed pixels");
+    for (technique, inside) in [
+        ("planar:darken", 0.5),
+        ("shadow-volume:darken", 0.5),
+        ("planar:no-stencil", 0.4),
+    ] {
+        let mask = mask_of(&scene, technique, &[], w, h);
+        let off = reference
+            .iter()
+            .zip(&mask)
+            .filter(|(r, m)| {
+                let expected = if **r < 0.5 { inside } else { 1.0 };
+                (**m - expected).abs() > 0.01
+            })
+            .count();
+        // The shadow's rim: about its perimeter in pixels, a few percent.
+        assert!(
+            off * 25 <= shadowed,
+            "{technique}: {off} pixels off of {shadowed} shadowed"
+        );
+    }
+}
