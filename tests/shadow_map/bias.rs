@@ -41,6 +41,34 @@ fn capping_the_slope_bias_stops_light_leaking_at_grazing_casters() {
     }
 }
 
+/// Light 0's mask of one frame of `shadow-map` with `set`, and the frame's
+/// counted work where the adapter counts it.
+fn mask_and_work(
+    scene: &shadowlab::scene::Scene,
+    set: &[&str],
+) -> (Vec<f32>, Option<shadowlab::gpu::FrameWork>) {
+    let mut hf = frame_of(scene, "shadow-map", set, 240, 135);
+    let work = gpu().pipeline_statistics.then(|| {
+        gpu()
+            .count_work(|| {
+                render_again(&mut hf, scene);
+                Ok(())
+            })
+            .unwrap()
+    });
+    if work.is_none() {
+        eprintln!(
+            "no pipeline statistics on {}: the edge mask's run is not shown",
+            gpu().adapter_summary()
+        );
+        render_again(&mut hf, scene);
+    }
+    let masks = shadowlab::headless::read_back(gpu(), &hf.frame, 1)
+        .unwrap()
+        .masks;
+    (masks[0].clone(), work)
+}
+
 #[test]
 fn edge_masked_filters_equal_the_full_kernel_on_the_builtin_scenes() {
     for name in ["room", "columns", "city", "floating", "curved"] {
@@ -54,14 +82,16 @@ fn edge_masked_filters_equal_the_full_kernel_on_the_builtin_scenes() {
             ("grid", "receiver_plane=true"),
         ] {
             let set = ["filter", filter].join("=");
-            let full = mask_of(&scene, "shadow-map", &[&set, extra], 240, 135);
-            let masked = mask_of(
-                &scene,
-                "shadow-map",
-                &[&set, extra, "edge_mask=true"],
-                240,
-                135,
-            );
+            let (full, full_work) = mask_and_work(&scene, &[&set, extra]);
+            let (masked, masked_work) = mask_and_work(&scene, &[&set, extra, "edge_mask=true"]);
+            // The edge mask ran: its bounds chain is compute work the full
+            // kernel's frame does not have.
+            if let (Some(f), Some(m)) = (full_work, masked_work) {
+                assert!(
+                    m.masks.compute_invocations > f.masks.compute_invocations,
+                    "{name} {filter} {extra}: no bounds chain ran ({m:?})"
+                );
+            }
             let differ = pixels_differing(&full, &masked);
             assert!(
                 differ as f64 <= 1e-4 * full.len() as f64,
