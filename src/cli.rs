@@ -201,6 +201,21 @@ pub fn technique_choice(id: &str, set: &[String]) -> Result<TechniqueChoice> {
     Ok(c)
 }
 
+/// Warns of `--set` parameters that do nothing for some of `lights` with
+/// the chosen values (a cascade count under a point light, a blur under
+/// the grid filter).
+pub fn warn_without_effect(choice: &TechniqueChoice, set: &[String], lights: &[scene::Light]) {
+    for (i, l) in lights.iter().enumerate() {
+        for p in choice.params.without_effect(set, l.kind) {
+            log::warn!(
+                "--set {p}: it has no effect on light {i} ({:?}) with {}",
+                l.kind,
+                crate::measure::choice_label(choice)
+            );
+        }
+    }
+}
+
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Scenes => scenes(),
@@ -316,8 +331,12 @@ pub fn techniques_text() -> String {
                         s.format(s.step)
                     ),
                 };
+                let applies = s
+                    .applies
+                    .describe()
+                    .map_or(String::new(), |a| format!("[applies to {a}] "));
                 out += &format!(
-                    "    {:<20} default {:<10} {:<28} {}\n",
+                    "    {:<20} default {:<10} {:<28} {applies}{}\n",
                     s.name,
                     s.format(s.default),
                     range,
@@ -510,6 +529,7 @@ fn render(a: RenderArgs) -> Result<()> {
     let t0 = Instant::now();
     let (scene, camera, lights) = a.view.resolve()?;
     let choice = technique_choice(&a.technique, &a.set)?;
+    warn_without_effect(&choice, &a.set, &lights);
     let t_scene = t0.elapsed();
     let gpu = a.view.gpu()?;
     let t_gpu = t0.elapsed() - t_scene;

@@ -702,3 +702,37 @@ fn export_to_glb_writes_one_binary_file() {
     assert_eq!(back.triangle_count(), original.triangle_count());
     assert_eq!(back.textures.len(), original.textures.len());
 }
+
+/// `--set` of a parameter that does nothing for the chosen light or
+/// values warns (and the run goes on); one that acts does not.
+#[test]
+fn set_of_a_parameter_without_effect_warns() {
+    let dir = tmpdir("set-without-effect");
+    let out = dir.to_str().unwrap();
+    let run = |set: &str| {
+        let o = shadowlab(&[
+            "render",
+            "--scene",
+            "room",
+            "--light",
+            "point",
+            "--technique",
+            "shadow-map",
+            "--size",
+            "32x24",
+            "--set",
+            set,
+            "--out",
+            out,
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
+    };
+    let e = run("cascades=4");
+    assert!(
+        e.contains("--set cascades (applies to directional lights): it has no effect on light 0"),
+        "{e}"
+    );
+    let e = run("omni=dual-paraboloid");
+    assert!(!e.contains("no effect"), "{e}");
+}

@@ -2,7 +2,7 @@
 //! technique family drives the CLI (`--set key=value`), `shadowlab
 //! techniques` and the viewer's panels.
 
-use crate::scene::AlphaMode;
+use crate::scene::{AlphaMode, LightType};
 use anyhow::{Result, bail};
 use serde::Serialize;
 
@@ -133,9 +133,124 @@ pub struct ParamSpec {
     pub max: f64,
     pub step: f64,
     pub doc: &'static str,
+    /// When the parameter has an effect.
+    pub applies: Applies,
+}
+
+/// The light types a parameter applies to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct LightKinds {
+    pub point: bool,
+    pub spot: bool,
+    pub directional: bool,
+}
+
+impl LightKinds {
+    pub const ALL: LightKinds = LightKinds {
+        point: true,
+        spot: true,
+        directional: true,
+    };
+    pub const DIRECTIONAL: LightKinds = LightKinds {
+        point: false,
+        spot: false,
+        directional: true,
+    };
+    /// Point and spot lights.
+    pub const LOCAL: LightKinds = LightKinds {
+        point: true,
+        spot: true,
+        directional: false,
+    };
+    pub const POINT: LightKinds = LightKinds {
+        point: true,
+        spot: false,
+        directional: false,
+    };
+    pub const SPOT: LightKinds = LightKinds {
+        point: false,
+        spot: true,
+        directional: false,
+    };
+
+    pub fn holds(self, kind: LightType) -> bool {
+        match kind {
+            LightType::Point => self.point,
+            LightType::Spot => self.spot,
+            LightType::Directional => self.directional,
+        }
+    }
+
+    fn describe(self) -> Option<String> {
+        let names: Vec<&str> = [
+            (self.point, "point"),
+            (self.spot, "spot"),
+            (self.directional, "directional"),
+        ]
+        .iter()
+        .filter(|(on, _)| *on)
+        .map(|(_, n)| *n)
+        .collect();
+        (names.len() < 3).then(|| format!("{} lights", names.join(" and ")))
+    }
+}
+
+/// A condition on another parameter of the same table: its value (as
+/// [`ParamSpec::format`] writes it) is one of `values`, or none of them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Condition {
+    Is(&'static str, &'static [&'static str]),
+    IsNot(&'static str, &'static [&'static str]),
+}
+
+/// When a parameter has an effect: for lights of `lights`, and where
+/// `when` holds (the filter it tunes is chosen, paging is on, …).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct Applies {
+    pub lights: LightKinds,
+    pub when: Option<Condition>,
+}
+
+impl Applies {
+    pub const ALWAYS: Applies = Applies {
+        lights: LightKinds::ALL,
+        when: None,
+    };
+
+    /// What the condition says, for listings (`None`: always).
+    pub fn describe(&self) -> Option<String> {
+        let when = self.when.map(|c| match c {
+            Condition::Is(p, v) => format!("{p}={}", v.join("|")),
+            Condition::IsNot(p, v) => format!("{p}≠{}", v.join("|")),
+        });
+        let parts: Vec<String> = self.lights.describe().into_iter().chain(when).collect();
+        (!parts.is_empty()).then(|| parts.join(", "))
+    }
 }
 
 impl ParamSpec {
+    /// The same parameter, applying only to lights of `lights`.
+    pub const fn for_lights(self, lights: LightKinds) -> Self {
+        ParamSpec {
+            applies: Applies {
+                lights,
+                when: self.applies.when,
+            },
+            ..self
+        }
+    }
+
+    /// The same parameter, applying only where `when` holds.
+    pub const fn when(self, when: Condition) -> Self {
+        ParamSpec {
+            applies: Applies {
+                lights: self.applies.lights,
+                when: Some(when),
+            },
+            ..self
+        }
+    }
+
     pub const fn float(
         name: &'static str,
         default: f64,
@@ -152,6 +267,7 @@ impl ParamSpec {
             max,
             step,
             doc,
+            applies: Applies::ALWAYS,
         }
     }
     pub const fn int(
@@ -169,6 +285,7 @@ impl ParamSpec {
             max: max as f64,
             step: 1.0,
             doc,
+            applies: Applies::ALWAYS,
         }
     }
     pub const fn boolean(name: &'static str, default: bool, doc: &'static str) -> Self {
@@ -180,6 +297,7 @@ impl ParamSpec {
             max: 1.0,
             step: 1.0,
             doc,
+            applies: Applies::ALWAYS,
         }
     }
     /// A choice among the variants of `T`, defaulting to variant `default`
@@ -206,6 +324,7 @@ impl ParamSpec {
             max: (options.len() - 1) as f64,
             step: 1.0,
             doc,
+            applies: Applies::ALWAYS,
         }
     }
 
@@ -305,6 +424,47 @@ impl ParamValues {
             specs,
             values: specs.iter().map(|s| s.default).collect(),
         }
+    }
+
+    /// Whether `spec` has an effect with these values, for a light of
+    /// `kind` (any light when `None`). A condition on a parameter the table
+    /// lacks holds (a table built of shared rows).
+    pub fn applies(&self, spec: &ParamSpec, kind: Option<LightType>) -> bool {
+        if kind.is_some_and(|k| !spec.applies.lights.holds(k)) {
+            return false;
+        }
+        let value_of = |name: &str| {
+            self.specs
+                .iter()
+                .zip(&self.values)
+                .find(|(s, _)| s.name == name)
+                .map(|(s, v)| s.format(*v))
+        };
+        match spec.applies.when {
+            None => true,
+            Some(Condition::Is(p, vals)) => value_of(p).is_none_or(|v| vals.contains(&v.as_str())),
+            Some(Condition::IsNot(p, vals)) => {
+                value_of(p).is_none_or(|v| !vals.contains(&v.as_str()))
+            }
+        }
+    }
+
+    /// The parameters named in `settings` (`key=value`) that have no effect
+    /// with these values for a light of `kind`, each with its condition.
+    pub fn without_effect(&self, settings: &[String], kind: LightType) -> Vec<String> {
+        settings
+            .iter()
+            .filter_map(|kv| kv.split_once('=').map(|(k, _)| k.trim()))
+            .filter_map(|k| self.specs.iter().find(|s| s.name == k))
+            .filter(|s| !self.applies(s, Some(kind)))
+            .map(|s| {
+                format!(
+                    "{} (applies to {})",
+                    s.name,
+                    s.applies.describe().unwrap_or_default()
+                )
+            })
+            .collect()
     }
 
     fn index(&self, name: &str) -> Result<usize> {

@@ -179,6 +179,7 @@ pub fn run(options: ViewerOptions) -> Result<()> {
     }
     let mut choice = technique::parse_choice(&options.technique)?;
     technique::apply_settings(&mut choice.params, &options.set)?;
+    crate::cli::warn_without_effect(&choice, &options.set, &lights);
     let preloaded = Some((scene, camera, lights, choice));
     let event_loop = EventLoop::new().map_err(|e| anyhow!("cannot open a window (no display? set DISPLAY or WAYLAND_DISPLAY, or run under xvfb-run): {e}"))?;
     let scene_name = options.view.scene.clone();

@@ -62,24 +62,44 @@ pub fn param_widget(ui: &mut egui::Ui, spec: &ParamSpec, value: &mut f64) -> boo
 /// What a parameter panel did this frame.
 pub struct PanelResult {
     pub changed: bool,
-    /// Widgets drawn (one per parameter).
-    pub widgets: usize,
+    /// The parameters shown, one widget each: those that apply.
+    pub shown: Vec<&'static str>,
+    /// Parameters hidden because they have no effect here.
+    pub hidden: usize,
 }
 
-/// The parameter panel of a technique instance (hover for each doc).
-pub fn param_panel(ui: &mut egui::Ui, params: &mut ParamValues) -> PanelResult {
+/// The parameter panel of a technique instance for a light of `kind`:
+/// the parameters that apply to it with the current values (hover for
+/// each doc), and a note of how many are hidden.
+pub fn param_panel(
+    ui: &mut egui::Ui,
+    params: &mut ParamValues,
+    kind: Option<LightType>,
+) -> PanelResult {
     let mut r = PanelResult {
         changed: false,
-        widgets: 0,
+        shown: vec![],
+        hidden: 0,
     };
     if params.specs.is_empty() {
         ui.label("no parameters");
     }
-    for (spec, value) in params.specs.iter().zip(params.values.iter_mut()) {
-        let w = ui.scope(|ui| param_widget(ui, spec, value));
+    for i in 0..params.specs.len() {
+        let spec = &params.specs[i];
+        if !params.applies(spec, kind) {
+            r.hidden += 1;
+            continue;
+        }
+        let w = ui.scope(|ui| param_widget(ui, spec, &mut params.values[i]));
         r.changed |= w.inner;
-        r.widgets += 1;
+        r.shown.push(spec.name);
         w.response.on_hover_text(spec.doc);
+    }
+    if r.hidden > 0 {
+        ui.weak(format!(
+            "{} parameters that do not apply to this light and these settings are hidden",
+            r.hidden
+        ));
     }
     r
 }
@@ -208,7 +228,8 @@ fn technique_panel(
     }
     ui.label(scene.techniques[li].choice.family.summary);
     let mut params = scene.techniques[li].choice.params.clone();
-    if param_panel(ui, &mut params).changed {
+    let kind = scene.lights.get(li).map(|l| l.kind);
+    if param_panel(ui, &mut params, kind).changed {
         let range = if state.same_technique_for_all {
             0..MAX_LIGHTS
         } else {
@@ -545,7 +566,8 @@ mod tests {
     use crate::technique::FAMILIES;
 
     /// Every registered technique's parameter panel builds, with one widget
-    /// per parameter, and leaves valid values.
+    /// per parameter that applies and the rest counted as hidden, and leaves
+    /// valid values.
     #[test]
     fn parameter_panels_exist_for_every_technique() {
         let ctx = egui::Context::default();
@@ -553,15 +575,16 @@ mod tests {
             for p in f.presets {
                 let mut choice = technique::resolve(&format!("{}:{}", f.id, p.name)).unwrap();
                 let before = choice.params.values.clone();
-                let mut widgets = 0;
+                let mut panel = None;
                 ctx.run_ui(Default::default(), |ui| {
-                    widgets = param_panel(ui, &mut choice.params).widgets;
+                    panel = Some(param_panel(ui, &mut choice.params, None));
                 })
                 .drop_without_applying_deltas();
+                let panel = panel.unwrap();
                 assert_eq!(
-                    widgets,
+                    panel.shown.len() + panel.hidden,
                     f.params.len(),
-                    "{}: one widget per parameter",
+                    "{}: every parameter shown or hidden",
                     f.id
                 );
                 // Sliders snap to their step, so allow rounding noise only.
@@ -577,5 +600,85 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The shadow-map panel shows, per light type, the parameters that act
+    /// on it: a point light its cube or paraboloid choice and local normal
+    /// offset, a spot light its field of view and fit, a sun its cascades and
+    /// warps; the grid filter hides the moment filters' and PCSS's rows, and
+    /// choosing a moment filter shows its blur and hides the taps.
+    #[test]
+    fn the_panel_lists_the_parameters_of_each_light_type() {
+        let ctx = egui::Context::default();
+        let shown = |id: &str, kind: LightType| {
+            let mut choice = technique::resolve(id).unwrap();
+            let mut names = vec![];
+            ctx.run_ui(Default::default(), |ui| {
+                names = param_panel(ui, &mut choice.params, Some(kind)).shown;
+            })
+            .drop_without_applying_deltas();
+            names
+        };
+        let point = shown("shadow-map:pcf", LightType::Point);
+        let spot = shown("shadow-map:pcf", LightType::Spot);
+        let sun = shown("shadow-map:pcf", LightType::Directional);
+        for (list, has, lacks) in [
+            (
+                &point,
+                &["omni", "normal_offset_local", "samples", "radius"][..],
+                &[
+                    "fov",
+                    "cascades",
+                    "warp",
+                    "normal_offset_directional",
+                    "fit",
+                    "blur",
+                ][..],
+            ),
+            (
+                &spot,
+                &["fov", "fit", "roll", "normal_offset_local"][..],
+                &[
+                    "omni",
+                    "cascades",
+                    "normal_offset_directional",
+                    "slope_bias_clamp",
+                ][..],
+            ),
+            (
+                &sun,
+                &[
+                    "cascades",
+                    "warp",
+                    "fit",
+                    "normal_offset_directional",
+                    "slope_bias_clamp",
+                ][..],
+                &[
+                    "omni",
+                    "fov",
+                    "normal_offset_local",
+                    "split_lambda",
+                    "lispsm_n",
+                ][..],
+            ),
+        ] {
+            for n in has {
+                assert!(list.contains(n), "{n} missing from {list:?}");
+            }
+            for n in lacks {
+                assert!(!list.contains(n), "{n} shown in {list:?}");
+            }
+        }
+        let vsm = shown("shadow-map:vsm", LightType::Directional);
+        assert!(vsm.contains(&"blur") && vsm.contains(&"bleeding_reduction"));
+        assert!(!vsm.contains(&"samples") && !vsm.contains(&"exponent_negative"));
+        let csm = shown("shadow-map:csm", LightType::Directional);
+        assert!(csm.contains(&"split_lambda") && csm.contains(&"select"));
+        let virtual_point = shown("shadow-map:virtual", LightType::Point);
+        assert!(
+            virtual_point.contains(&"texels_per_pixel")
+                && !virtual_point.contains(&"clipmap_levels")
+        );
     }
 }

@@ -4,7 +4,7 @@
 //! WGSL constants and pipeline-overridable constants, into the shaders.
 
 use crate::scene::LightType;
-use crate::technique::params::{CasterAlpha, choice_enum};
+use crate::technique::params::{CasterAlpha, Condition, LightKinds, choice_enum};
 use crate::technique::{ParamSpec, ParamValues};
 use anyhow::Result;
 
@@ -131,7 +131,11 @@ pub const SAMPLES: ParamSpec = ParamSpec::int(
     1,
     16,
     "taps per side: grid N×N (up to 16×16), disk N²",
-);
+)
+.when(Condition::Is(
+    "filter",
+    &["grid", "disk", "pcss", "varwidth"],
+));
 
 pub const RADIUS: ParamSpec = ParamSpec::float(
     "radius",
@@ -140,7 +144,8 @@ pub const RADIUS: ParamSpec = ParamSpec::float(
     32.0,
     0.25,
     "filter radius in texels (grid and disk)",
-);
+)
+.when(Condition::Is("filter", &["grid", "disk"]));
 
 pub const SIZE: ParamSpec = ParamSpec::int(
     "size",
@@ -181,7 +186,8 @@ pub const SLOPE_BIAS_CLAMP: ParamSpec = ParamSpec::float(
     64.0,
     0.25,
     "directional maps (one map, cascades or a virtual clipmap, unwarped): the depth bias is capped at this many texel widths of depth (the depth step across one texel of a 45° surface, per cascade or clipmap level), so that casters lit at grazing angles do not push their stored depth far behind them and leak light onto what they shade; 0 = no cap",
-);
+)
+.for_lights(LightKinds::DIRECTIONAL);
 
 pub const NORMAL_OFFSET_DIRECTIONAL: ParamSpec = ParamSpec::float(
     "normal_offset_directional",
@@ -190,7 +196,8 @@ pub const NORMAL_OFFSET_DIRECTIONAL: ParamSpec = ParamSpec::float(
     10.0,
     0.05,
     "directional lights: lookup point moved along the geometric normal, in shadow-map texels (¼ with the bias cap of `slope_bias_clamp`: edges stay in place, acne stays away); none on solids under cull=solids and on receivers with a part (part_ids)",
-);
+)
+.for_lights(LightKinds::DIRECTIONAL);
 
 pub const NORMAL_OFFSET_SLOPE: ParamSpec = ParamSpec::boolean(
     "normal_offset_slope",
@@ -205,19 +212,22 @@ pub const NORMAL_OFFSET_LOCAL: ParamSpec = ParamSpec::float(
     10.0,
     0.1,
     "point and spot lights: lookup point moved along the geometric normal, in shadow-map texels at the point's distance; none on solids under cull=solids and on receivers with a part (part_ids)",
-);
+)
+.for_lights(LightKinds::LOCAL);
 
 pub const EDGE_MASK: ParamSpec = ParamSpec::boolean(
     "edge_mask",
     false,
     "grid, disk, pcss, varwidth: a chain of depth bounds of the map (per block, two planes that follow a flat or sloped surface, or its least and greatest depth) classifies each pixel as lit, shadowed or at a shadow edge from 4 texels covering its kernel, compared along the receiver plane with receiver_plane=true, with part_ids a cell of the receiver's own convex part counts as lit; where the chain finds an edge and the kernel reaches at most 2.5 texels, the texels it reads are compared one by one; only edge pixels run the kernel (PCF at shadow silhouettes, 000 §4.3); the mask is the full kernel's",
-);
+)
+.when(Condition::IsNot("filter", &["vsm", "esm", "evsm2", "evsm4", "msm"]));
 
 pub const RECEIVER_PLANE: ParamSpec = ParamSpec::boolean(
     "receiver_plane",
     false,
     "receiver-plane depth bias (Isidoro 2006): each texel a tap reads is compared against the receiver's plane (from its geometric normal) at the texel's centre, not against one depth — a lit wall then never falls behind the back face that meets it at its own corner (city/street/sun at 640×360: interior false shadow 0.105 → 0.015 %), but the plane passes in front of a caster that touches the receiver at a steep angle (a trunk under its canopy: landscape/ground/sun 0.44 → 0.55 % total mismatch); the virtual map takes the plane from screen derivatives",
-);
+)
+.when(Condition::IsNot("filter", &["vsm", "esm", "evsm2", "evsm4", "msm"]));
 
 pub const CULL: ParamSpec = ParamSpec::choice_of::<CullFace>(
     "cull",
@@ -232,13 +242,15 @@ pub const SOLID_FRONT_BIAS: ParamSpec = ParamSpec::float(
     64.0,
     0.5,
     "cull=solids, maps whose bias is capped (unwarped directional: one map, cascades, clipmap levels): concave solids (a convex one never shadows its own lit side) also store their front faces, with this many times the slope bias and its cap: where a back face lies too close before a receiver to shadow it (a smooth solid shadowing itself near its terminator), the pushed front face still does; 0 = back faces only (bunny/sun at 640×360: 0 gives 0.117 % total mismatch, 4 gives 0.032 %, cull=none 0.044 %)",
-);
+)
+.when(Condition::Is("cull", &["solids"]));
 
 pub const PART_IDS: ParamSpec = ParamSpec::boolean(
     "part_ids",
     true,
     "cull=solids, depth-compared filters (hard, pcf2x2, grid, disk, pcss, varwidth) of unwarped maps and cube faces: every texel also stores the convex part its depth came from (a closed, outward-wound piece of a mesh convex at every edge, or a flat one such as a floor), and a receiver facing the light ignores its own part's texels and takes no normal offset — a convex part never shadows its own lit side, so a lit wall is not compared against the back face that meets it at its corner (priority buffers, Hourcade & Nicolas 1985); 4 more bytes per texel",
-);
+)
+.when(Condition::Is("cull", &["solids"]));
 
 pub const ALPHA_TEST: ParamSpec = ParamSpec::boolean(
     "alpha_test",
@@ -250,7 +262,8 @@ pub const OMNI: ParamSpec = ParamSpec::choice_of::<Omni>(
     "omni",
     Omni::Cube as usize,
     "point lights: six 90° faces (cube) or two paraboloid hemispheres (Brabec 2002; distorts large triangles)",
-);
+)
+.for_lights(LightKinds::POINT);
 
 pub const NEAR: ParamSpec = ParamSpec::float(
     "near",
@@ -277,7 +290,8 @@ pub const FOV: ParamSpec = ParamSpec::float(
     170.0,
     1.0,
     "spot light frustum angle in degrees (0 = the cone plus 4°); precision degrades above 90°",
-);
+)
+.for_lights(LightKinds::SPOT);
 
 pub const AREA: ParamSpec = ParamSpec::boolean(
     "area",
@@ -291,7 +305,8 @@ pub const AREA_MAPS: ParamSpec = ParamSpec::int(
     1,
     64,
     "area: number of shadow maps (the documents use the 4 corners)",
-);
+)
+.when(Condition::Is("area", &["true"]));
 
 pub const STAGE: ParamSpec = ParamSpec::choice_of::<Stage>(
     "stage",

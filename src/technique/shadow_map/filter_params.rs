@@ -3,6 +3,7 @@
 //! maps' blur, light-bleeding reduction, exponents and bias.
 
 use crate::technique::ParamSpec;
+use crate::technique::params::Condition;
 
 pub const LIGHT_SIZE: ParamSpec = ParamSpec::float(
     "light_size",
@@ -11,7 +12,8 @@ pub const LIGHT_SIZE: ParamSpec = ParamSpec::float(
     400.0,
     1.0,
     "pcss: light size, as the penumbra width in texels per unit of (d_receiver − d_blocker)/d_blocker",
-);
+)
+.when(Condition::Is("filter", &["pcss"]));
 
 pub const BLOCKER_SEARCH: ParamSpec = ParamSpec::float(
     "blocker_search",
@@ -20,7 +22,8 @@ pub const BLOCKER_SEARCH: ParamSpec = ParamSpec::float(
     64.0,
     1.0,
     "pcss and varwidth: blocker-search radius in texels",
-);
+)
+.when(Condition::Is("filter", &["pcss", "varwidth"]));
 
 pub const VARWIDTH_SCALE: ParamSpec = ParamSpec::float(
     "varwidth_scale",
@@ -29,7 +32,8 @@ pub const VARWIDTH_SCALE: ParamSpec = ParamSpec::float(
     200.0,
     0.5,
     "varwidth: texels of radius per unit of |d_blocker − d_receiver|^exponent",
-);
+)
+.when(Condition::Is("filter", &["varwidth"]));
 
 pub const VARWIDTH_EXPONENT: ParamSpec = ParamSpec::float(
     "varwidth_exponent",
@@ -38,7 +42,8 @@ pub const VARWIDTH_EXPONENT: ParamSpec = ParamSpec::float(
     4.0,
     0.1,
     "varwidth: the exponent",
-);
+)
+.when(Condition::Is("filter", &["varwidth"]));
 
 pub const BLUR: ParamSpec = ParamSpec::int(
     "blur",
@@ -46,7 +51,11 @@ pub const BLUR: ParamSpec = ParamSpec::int(
     0,
     16,
     "moment filters: separable box blur radius in texels (0 = none)",
-);
+)
+.when(Condition::Is(
+    "filter",
+    &["vsm", "esm", "evsm2", "evsm4", "msm"],
+));
 
 pub const BLEEDING_REDUCTION: ParamSpec = ParamSpec::float(
     "bleeding_reduction",
@@ -55,7 +64,8 @@ pub const BLEEDING_REDUCTION: ParamSpec = ParamSpec::float(
     0.95,
     0.01,
     "vsm and evsm: light-bleeding reduction, the lower cut of the Chebyshev bound",
-);
+)
+.when(Condition::Is("filter", &["vsm", "evsm2", "evsm4"]));
 
 pub const EXPONENT: ParamSpec = ParamSpec::float(
     "exponent",
@@ -64,7 +74,8 @@ pub const EXPONENT: ParamSpec = ParamSpec::float(
     80.0,
     1.0,
     "esm and evsm: exponent c of the positive warp exp(c(z − 1))",
-);
+)
+.when(Condition::Is("filter", &["esm", "evsm2", "evsm4"]));
 
 pub const EXPONENT_NEGATIVE: ParamSpec = ParamSpec::float(
     "exponent_negative",
@@ -73,7 +84,8 @@ pub const EXPONENT_NEGATIVE: ParamSpec = ParamSpec::float(
     40.0,
     1.0,
     "evsm4: exponent of the negative warp −exp(−c z)",
-);
+)
+.when(Condition::Is("filter", &["evsm4"]));
 
 pub const MOMENT_BIAS: ParamSpec = ParamSpec::float(
     "moment_bias",
@@ -82,4 +94,5 @@ pub const MOMENT_BIAS: ParamSpec = ParamSpec::float(
     0.01,
     1e-5,
     "msm: moment bias α towards (0.5, 0.5, 0.5, 0.5)",
-);
+)
+.when(Condition::Is("filter", &["msm"]));

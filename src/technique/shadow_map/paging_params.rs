@@ -3,7 +3,7 @@
 //! the view needs, or only those at shadow edges), and the sizes of
 //! the virtual map, its pages and the physical pool.
 
-use crate::technique::params::choice_enum;
+use crate::technique::params::{Condition, LightKinds, choice_enum};
 use crate::technique::{ParamSpec, ParamValues};
 use anyhow::{Result, bail};
 
@@ -24,7 +24,8 @@ pub const VIRTUAL_SIZE: ParamSpec = ParamSpec::int(
     1024,
     65536,
     "paging=virtual or adaptive: texels per side of each clipmap window, or of level 0 of a local light's view (a power of two)",
-);
+)
+.when(Condition::IsNot("paging", &["off"]));
 
 pub const PAGE_SIZE: ParamSpec = ParamSpec::int(
     "page_size",
@@ -32,7 +33,8 @@ pub const PAGE_SIZE: ParamSpec = ParamSpec::int(
     32,
     512,
     "paging=virtual or adaptive: texels per page side (a power of two)",
-);
+)
+.when(Condition::IsNot("paging", &["off"]));
 
 pub const POOL: ParamSpec = ParamSpec::int(
     "pool",
@@ -40,7 +42,8 @@ pub const POOL: ParamSpec = ParamSpec::int(
     16,
     65536,
     "paging=virtual or adaptive: physical pages (each page_size² of d32f); when the view needs more, the finest levels give way to coarser ones (counter pages_degraded)",
-);
+)
+.when(Condition::IsNot("paging", &["off"]));
 
 pub const CLIPMAP_LEVELS: ParamSpec = ParamSpec::int(
     "clipmap_levels",
@@ -48,7 +51,9 @@ pub const CLIPMAP_LEVELS: ParamSpec = ParamSpec::int(
     2,
     14,
     "paging=virtual or adaptive, directional lights: clipmap levels; the coarsest window is twice the scene's width and each finer one half the last",
-);
+)
+.for_lights(LightKinds::DIRECTIONAL)
+.when(Condition::IsNot("paging", &["off"]));
 
 pub const REFINE_STEPS: ParamSpec = ParamSpec::int(
     "refine_steps",
@@ -56,7 +61,8 @@ pub const REFINE_STEPS: ParamSpec = ParamSpec::int(
     1,
     32,
     "paging=adaptive: the most refinements per frame (each a marking pass and its read-back, one level finer at shadow edges); it stops earlier when no pixel asks for a new page; the viewer refines once a frame (the marks arrive a frame late)",
-);
+)
+.when(Condition::Is("paging", &["adaptive"]));
 
 pub const TEXELS_PER_PIXEL: ParamSpec = ParamSpec::int(
     "texels_per_pixel",
@@ -64,7 +70,9 @@ pub const TEXELS_PER_PIXEL: ParamSpec = ParamSpec::int(
     1,
     4,
     "paging=virtual or adaptive, point and spot lights: texels per pixel side at the level each pixel looks up (1, 2 or 4); 1 takes the coarsest level whose texels span at most a pixel, which leaves a pixel of staircase along every shadow edge; each doubling goes a level finer for about twice the pages (a directional light's clipmap keeps 1: its windows are centred on the camera, and finer levels would outgrow the pool)",
-);
+)
+.for_lights(LightKinds::LOCAL)
+.when(Condition::IsNot("paging", &["off"]));
 
 /// A light's paging and the virtual map's sizes.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -2,7 +2,7 @@
 //! cascades (count, split scheme, reach, stabilisation, blending), what
 //! they are fitted to (SDSM), and the warps (PSM, LiSPSM, TSM).
 
-use crate::technique::params::choice_enum;
+use crate::technique::params::{Condition, LightKinds, choice_enum};
 use crate::technique::{ParamSpec, ParamValues};
 use anyhow::Result;
 
@@ -32,7 +32,8 @@ pub const CASCADES: ParamSpec = ParamSpec::int(
     1,
     8,
     "directional lights: maps partitioning the view depth (cascaded / parallel-split maps, Zhang et al. 2006), each `size`²",
-);
+)
+.for_lights(LightKinds::DIRECTIONAL);
 
 pub const SPLIT_LAMBDA: ParamSpec = ParamSpec::float(
     "split_lambda",
@@ -41,7 +42,9 @@ pub const SPLIT_LAMBDA: ParamSpec = ParamSpec::float(
     1.0,
     0.05,
     "cascade split scheme: z_i = λ·n·(f/n)^(i/N) + (1−λ)·(n + (f−n)·i/N); 1 logarithmic, 0 uniform",
-);
+)
+.for_lights(LightKinds::DIRECTIONAL)
+.when(Condition::IsNot("cascades", &["1"]));
 
 pub const MAX_DISTANCE: ParamSpec = ParamSpec::float(
     "max_distance",
@@ -50,13 +53,16 @@ pub const MAX_DISTANCE: ParamSpec = ParamSpec::float(
     100000.0,
     1.0,
     "cascades: view distance the last cascade ends at (0 = where the camera's view of the scene ends); beyond it the lookup is lit",
-);
+)
+.for_lights(LightKinds::DIRECTIONAL)
+.when(Condition::IsNot("cascades", &["1"]));
 
 pub const STABILIZE: ParamSpec = ParamSpec::boolean(
     "stabilize",
     true,
     "directional lights: texel edges stay in place when the camera moves or turns — cascades are bounding spheres snapped to whole texels, or on an axis where that square is wider than the scene seen from the light the scene's box, which does not move either (csm on city/default/sun at 640×360: 0.326 → 0.235 % total mismatch); one map's fitted window (a rectangle) has each side rounded up to eighths of an octave and its centre snapped, and keeps last frame's side while it holds the view and is at most a quarter octave larger",
-);
+)
+.for_lights(LightKinds::DIRECTIONAL);
 
 pub const BLEND: ParamSpec = ParamSpec::float(
     "blend",
@@ -65,31 +71,46 @@ pub const BLEND: ParamSpec = ParamSpec::float(
     0.5,
     0.05,
     "cascades: fraction of each cascade's depth range, at its far end, blended into the next cascade",
-);
+)
+.for_lights(LightKinds::DIRECTIONAL)
+.when(Condition::IsNot("cascades", &["1"]));
 
 pub const SELECT: ParamSpec = ParamSpec::choice_of::<Select>(
     "select",
     Select::Depth as usize,
     "cascades: how a pixel's cascade is chosen — depth: by its view depth against the split distances, the blend band the far `blend` fraction of each cascade's depth range; map: the finest cascade whose map holds it (kernel's reach and a texel inside the border, within the depth range; Microsoft's map-based selection), the blend band the outer `blend` fraction of that map. Split distances move with the camera, so on a dolly depth selection moves pixels between cascades every frame; stabilised maps move only in whole texels (csm dolly flicker on city/default/sun at 640×360: depth 0.0128 %, map 0.0013 %)",
-);
+)
+.for_lights(LightKinds::DIRECTIONAL)
+.when(Condition::IsNot("cascades", &["1"]));
+
+/// Fits and turns of a map that directional lights and focused spot
+/// lights have.
+const DIRECTIONAL_AND_SPOT: LightKinds = LightKinds {
+    point: false,
+    spot: true,
+    directional: true,
+};
 
 pub const FIT: ParamSpec = ParamSpec::choice_of::<Fit>(
     "fit",
     Fit::Samples as usize,
     "directional lights: what the map, or each cascade, is fitted to — frustum: the view frustum up to max_distance (one map: up to where the view of the scene ends), clipped to the scene; depth: the view depths the camera sees (SDSM, Lauritzen, Salvi & Lefohn 2011: min/max of a GPU reduction of the prepass depth); samples: those depths and the light-view x/y box of the pixels the map (each cascade) shades — one map's window is stabilised as a frustum fit is, but a fresh fit takes a quarter octave of room and is kept through a jump of a quarter octave either way, until it is 2^(5/8) times what it needs (the pixels' box jumps when a far feature comes into view by a pixel: tight, the one map flickered 0.15–0.90 % per step on landscape/ground paths at 640×360, held so ≤ 0.0015 % at 1280×720), and is never larger than the view of the scene needs; cascades fitted so are not stabilised; a single warped map is fitted by its warp. Spot lights (one map, no area sampling): samples focuses the map on the pixels the spot reaches, as a square of its image (x/−z, y/−z) inside the cone's, stabilised and turned as a directional map (city/street/spot at 640×360: 0.509 → 0.437 % total mismatch, interior false shadow 0.119 → 0.072 %); frustum and depth keep the whole cone. Measurements wait for the reduction; the viewer uses the previous frame's, widened",
-);
+)
+.for_lights(DIRECTIONAL_AND_SPOT);
 
 pub const ROLL: ParamSpec = ParamSpec::choice_of::<Roll>(
     "roll",
     Roll::Square as usize,
     "directional lights, one unwarped map, and spot maps focused with fit=samples: how it is turned about the light — up: the world's up along the map's y axis (every vertical edge then lies along a texel column, where no filter recovers its sub-texel place); square: the turn, in steps of 11.25°, with the smallest square around what the map covers (the pixels seen with fit=samples, else the view of the scene) among those that keep the world's vertical 15° and its x and z axes 8° off the texel axes (city/sun at 640×360: 0.271 → 0.167 % total mismatch), last frame's kept while at most an eighth of an octave larger; the map then covers that turn's box, not its square, so the texels along the box's shorter side are finer (landscape/ground/sun-low-back, a box 246 × 338: 27 % finer across, interior false shadow 0.127 → 0.048 %); a spot's perspective turns the world's axes across its image, so they are kept clear of at the corners and centre of the tightest box around the pixels seen (city/street/spot: upright 0.540 %, turned 0.437 %)",
-);
+)
+.for_lights(DIRECTIONAL_AND_SPOT);
 
 pub const WARP: ParamSpec = ParamSpec::choice_of::<Warp>(
     "warp",
     Warp::None as usize,
     "directional lights: none; psm — the map in the camera's post-perspective space, where the light becomes a point (Stamminger & Drettakis 2002), from a virtual camera moved back behind every caster; lispsm — a perspective inside the light's view along the view direction (Wimmer, Scherzer & Purgathofer 2004) that gives the surfaces near the camera more of the map; tsm — the trapezoid around the view in the light's image mapped onto the square (Martin & Tan 2004); one per cascade with cascades > 1, over the part of the view inside the scene; warped maps store depth linear along the light (biased in the depth pass's fragment stage) and are not stabilised",
-);
+)
+.for_lights(LightKinds::DIRECTIONAL);
 
 pub const LISPSM_N: ParamSpec = ParamSpec::float(
     "lispsm_n",
@@ -98,7 +119,9 @@ pub const LISPSM_N: ParamSpec = ParamSpec::float(
     100000.0,
     0.5,
     "lispsm: distance of the projection centre before the view (0 = n_opt = (z_n + √(z_n·z_f)) / sin γ); larger is closer to the uniform map",
-);
+)
+.for_lights(LightKinds::DIRECTIONAL)
+.when(Condition::Is("warp", &["lispsm"]));
 
 pub const TSM_FOCUS: ParamSpec = ParamSpec::float(
     "tsm_focus",
@@ -107,7 +130,9 @@ pub const TSM_FOCUS: ParamSpec = ParamSpec::float(
     1.0,
     0.01,
     "tsm: where the focus region that the trapezoid maps onto 80 % of the map (Martin & Tan's 80 % rule) ends, as a fraction of the view's depth range inside the scene; 0 = at √(z_n·z_f), the depth LiSPSM's n_opt balances around, whatever the scene's scale",
-);
+)
+.for_lights(LightKinds::DIRECTIONAL)
+.when(Condition::Is("warp", &["tsm"]));
 
 /// A directional light's warp and its parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
