@@ -166,7 +166,10 @@ fn light_panel(ui: &mut egui::Ui, state: &mut ViewerState, scene: &mut SceneStat
     });
     l.color = Vec3::from(c);
     ui.add(egui::Slider::new(&mut l.intensity, 0.0..=4.0).text("intensity"));
-    ui.add(egui::Slider::new(&mut l.range, 0.0..=100.0).text("range (0 = none)"));
+    // A directional light has no position, so no range to fall off over.
+    if l.kind != LightType::Directional {
+        ui.add(egui::Slider::new(&mut l.range, 0.0..=100.0).text("range (0 = none)"));
+    }
     if l.kind == LightType::Spot {
         ui.add(egui::Slider::new(&mut l.outer_cone_deg, 1.0..=89.0).text("outer cone°"));
         ui.add(
