@@ -82,7 +82,7 @@ pub struct ViewCmdArgs {
     /// Set a technique parameter, key=value (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
-    /// Save a screenshot (PNG, and frame.json beside it) after --frames frames, then exit.
+    /// Save a screenshot (PNG, and its frame description as .json beside it) after --frames frames, then exit.
     #[arg(long, requires = "frames")]
     pub screenshot: Option<PathBuf>,
     /// Render this many frames, then exit (with --screenshot: save it first).
@@ -199,21 +199,6 @@ pub fn technique_choice(id: &str, set: &[String]) -> Result<TechniqueChoice> {
     let mut c = technique::parse_choice(id)?;
     technique::apply_settings(&mut c.params, set)?;
     Ok(c)
-}
-
-/// Warns of `--set` parameters that do nothing for some of `lights` with
-/// the chosen values (a cascade count under a point light, a blur under
-/// the grid filter).
-pub fn warn_without_effect(choice: &TechniqueChoice, set: &[String], lights: &[scene::Light]) {
-    for (i, l) in lights.iter().enumerate() {
-        for p in choice.params.without_effect(set, l.kind) {
-            log::warn!(
-                "--set {p}: it has no effect on light {i} ({:?}) with {}",
-                l.kind,
-                crate::measure::choice_label(choice)
-            );
-        }
-    }
 }
 
 pub fn run(cli: Cli) -> Result<()> {
@@ -529,7 +514,7 @@ fn render(a: RenderArgs) -> Result<()> {
     let t0 = Instant::now();
     let (scene, camera, lights) = a.view.resolve()?;
     let choice = technique_choice(&a.technique, &a.set)?;
-    warn_without_effect(&choice, &a.set, &lights);
+    technique::warn_without_effect(&choice, &a.set, &lights);
     let t_scene = t0.elapsed();
     let gpu = a.view.gpu()?;
     let t_gpu = t0.elapsed() - t_scene;

@@ -513,6 +513,26 @@ pub fn parse_choice(spec: &str) -> Result<TechniqueChoice> {
     Ok(c)
 }
 
+/// Warns of `--set` parameters that do nothing for some of `lights` with
+/// the chosen values (a cascade count under a point light, a blur under
+/// the grid filter).
+pub fn warn_without_effect(
+    choice: &TechniqueChoice,
+    set: &[String],
+    lights: &[crate::scene::Light],
+) {
+    for (i, l) in lights.iter().enumerate() {
+        for p in choice.params.without_effect(set, l.kind) {
+            log::warn!(
+                "--set {p}: it has no effect on light {i} ({:?}) with {}:{}",
+                l.kind,
+                choice.family.id,
+                choice.preset
+            );
+        }
+    }
+}
+
 /// Parses `key=value` settings and applies them to `params`.
 pub fn apply_settings(params: &mut ParamValues, settings: &[String]) -> Result<()> {
     for s in settings {

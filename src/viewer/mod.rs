@@ -114,6 +114,9 @@ pub struct ViewerState {
     pub selected_light: usize,
     pub same_technique_for_all: bool,
     pub show_panel: bool,
+    /// The first frame has fitted the layout to the window (a small window
+    /// starts with the panel folded to its toggle).
+    pub layout_fitted: bool,
     pub show_help: bool,
     pub last_timings: Option<FrameTimings>,
     pub frame_times: std::collections::VecDeque<f64>,
@@ -179,7 +182,7 @@ pub fn run(options: ViewerOptions) -> Result<()> {
     }
     let mut choice = technique::parse_choice(&options.technique)?;
     technique::apply_settings(&mut choice.params, &options.set)?;
-    crate::cli::warn_without_effect(&choice, &options.set, &lights);
+    technique::warn_without_effect(&choice, &options.set, &lights);
     let preloaded = Some((scene, camera, lights, choice));
     let event_loop = EventLoop::new().map_err(|e| anyhow!("cannot open a window (no display? set DISPLAY or WAYLAND_DISPLAY, or run under xvfb-run): {e}"))?;
     let scene_name = options.view.scene.clone();
@@ -200,6 +203,7 @@ pub fn run(options: ViewerOptions) -> Result<()> {
             selected_light: 0,
             same_technique_for_all: true,
             show_panel: true,
+            layout_fitted: false,
             show_help: false,
             last_timings: None,
             frame_times: Default::default(),

@@ -461,6 +461,10 @@ Keys: W/A/S/D fly, Q/E down/up; arrows and PageUp/PageDown move the selected lig
 raytraced; P or F12 saves a screenshot (shadowlab-<time>.png and .json beside it); Tab hides the panel;
 F1 this help; Esc quits.";
 
+/// Below this width (points) the side panel starts folded to its toggle
+/// and the dock starts collapsed, leaving the view to the image.
+const SMALL_WINDOW: f32 = 800.0;
+
 /// Builds every panel for this frame.
 pub fn build(
     root: &mut egui::Ui,
@@ -470,9 +474,27 @@ pub fn build(
     actions: &mut Actions,
 ) {
     state.view_left = 0;
+    // The side panel keeps the width it is given (content scrolls inside
+    // it) and never takes more than 45 % of the window.
+    let width = root.ctx().content_rect().width();
+    let widest = (width * 0.45).max(200.0);
+    if !std::mem::replace(&mut state.layout_fitted, true) && width < SMALL_WINDOW {
+        state.show_panel = false;
+    }
+    if !state.show_panel {
+        egui::Area::new(egui::Id::new("panel toggle"))
+            .anchor(egui::Align2::LEFT_TOP, [8.0, 8.0])
+            .show(root.ctx(), |ui| {
+                if ui.button("▶ controls (Tab)").clicked() {
+                    state.show_panel = true;
+                }
+            });
+    }
     if state.show_panel {
         let panel = egui::Panel::left("controls")
-            .default_size(320.0)
+            .resizable(true)
+            .default_size(320.0f32.min(widest))
+            .size_range(200.0f32.min(widest)..=widest)
             .show(root, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {
                     ui.heading("shadowlab");
@@ -508,39 +530,73 @@ pub fn build(
         state.view_left =
             (panel.response.rect.right() * root.ctx().pixels_per_point()).round() as u32;
     }
-    let ctx = root.ctx().clone();
-    if state.show_help {
-        egui::Window::new("Help")
-            .open(&mut state.show_help)
-            .show(&ctx, |ui| {
-                ui.label(HELP);
-            });
+    dock(root, state);
+}
+
+/// The right-hand dock: the error heatmap, the technique's debug views and
+/// the help, one collapsible section each, in one scrollable window
+/// anchored to the window's right edge — over the 3D view, never over the
+/// side panel's controls.
+fn dock(root: &mut egui::Ui, state: &mut ViewerState) {
+    let debug = state.show_debug && !state.debug_images.is_empty();
+    if !(state.show_help || debug || state.heatmap.is_some()) {
+        return;
     }
-    if state.show_debug && !state.debug_images.is_empty() {
-        egui::Window::new("Technique debug views")
-            .default_height(680.0)
-            .show(&ctx, |ui| {
-                egui::ScrollArea::vertical().show(ui, |ui| {
-                    for (label, texture) in &state.debug_images {
-                        ui.label(label);
-                        let size = texture.size_vec2();
-                        ui.image((texture.id(), size * (320.0 / size.x).min(1.0)));
+    let ctx = root.ctx().clone();
+    let screen = ctx.content_rect();
+    let width = (screen.width() * 0.4).clamp(160.0, 360.0);
+    let mut close_heatmap = false;
+    egui::Window::new("views")
+        .anchor(egui::Align2::RIGHT_TOP, [-8.0, 8.0])
+        .default_width(width)
+        .max_width(width)
+        .max_height(screen.height() - 16.0)
+        .collapsible(true)
+        .default_open(screen.width() >= SMALL_WINDOW)
+        .resizable(false)
+        .show(&ctx, |ui| {
+            egui::ScrollArea::vertical()
+                .max_height(screen.height() - 64.0)
+                .show(ui, |ui| {
+                    let image_width = ui.available_width();
+                    if let Some(h) = &state.heatmap {
+                        egui::CollapsingHeader::new("Error heatmap vs raytraced")
+                            .default_open(true)
+                            .show(ui, |ui| {
+                                ui.label(&h.summary);
+                                ui.label("red: false shadow, blue: false lit");
+                                let size = h.texture.size_vec2();
+                                ui.image((h.texture.id(), size * (image_width / size.x).min(1.0)));
+                                close_heatmap = ui.button("close").clicked();
+                            });
+                    }
+                    if debug {
+                        egui::CollapsingHeader::new("Technique debug views")
+                            .default_open(true)
+                            .show(ui, |ui| {
+                                for (label, texture) in &state.debug_images {
+                                    ui.label(label);
+                                    let size = texture.size_vec2();
+                                    ui.image((
+                                        texture.id(),
+                                        size * (image_width / size.x).min(1.0),
+                                    ));
+                                }
+                            });
+                    }
+                    if state.show_help {
+                        egui::CollapsingHeader::new("Help")
+                            .default_open(true)
+                            .show(ui, |ui| {
+                                ui.label(HELP);
+                                if ui.button("close").clicked() {
+                                    state.show_help = false;
+                                }
+                            });
                     }
                 });
-            });
-    }
-    let mut close = false;
-    if let Some(h) = &state.heatmap {
-        egui::Window::new("Error heatmap vs raytraced").show(&ctx, |ui| {
-            ui.label(&h.summary);
-            ui.label("red: false shadow, blue: false lit");
-            let size = h.texture.size_vec2();
-            let scale = (480.0 / size.x).min(1.0);
-            ui.image((h.texture.id(), size * scale));
-            close = ui.button("close").clicked();
         });
-    }
-    if close {
+    if close_heatmap {
         state.heatmap = None;
     }
 }
