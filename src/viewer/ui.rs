@@ -482,7 +482,7 @@ pub fn build(
         state.show_panel = false;
     }
     if !state.show_panel {
-        egui::Area::new(egui::Id::new("panel toggle"))
+        egui::Area::new(egui::Id::unique("panel toggle"))
             .anchor(egui::Align2::LEFT_TOP, [8.0, 8.0])
             .show(root.ctx(), |ui| {
                 if ui.button("▶ controls (Tab)").clicked() {
