@@ -544,7 +544,7 @@ fn dock(root: &mut egui::Ui, state: &mut ViewerState) {
     }
     let ctx = root.ctx().clone();
     let screen = ctx.content_rect();
-    let width = (screen.width() * 0.4).clamp(160.0, 360.0);
+    let width = (screen.width() * 0.32).clamp(160.0, 360.0);
     let mut close_heatmap = false;
     egui::Window::new("views")
         .anchor(egui::Align2::RIGHT_TOP, [-8.0, 8.0])
