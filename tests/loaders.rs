@@ -736,3 +736,52 @@ fn set_of_a_parameter_without_effect_warns() {
     let e = run("omni=dual-paraboloid");
     assert!(!e.contains("no effect"), "{e}");
 }
+
+/// KHR_texture_transform on the base colour texture (offset, rotation,
+/// scale, as the extension's matrix T·R·S) is baked into the primitive's
+/// texture coordinates.
+#[test]
+fn gltf_texture_transforms_are_baked_into_the_uvs() {
+    let dir = tmpdir("texture-transform");
+    let floats: Vec<f32> = vec![0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 1., 0., 0., 1.];
+    let bytes: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
+    use base64::Engine as _;
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bytes)
+    );
+    let gltf = serde_json::json!({
+        "asset": { "version": "2.0" },
+        "extensionsUsed": ["KHR_texture_transform"],
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0, "TEXCOORD_0": 1 }, "material": 0 }] }],
+        "materials": [{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0,
+            "extensions": { "KHR_texture_transform": {
+                "offset": [0.5, 0.25], "rotation": std::f32::consts::FRAC_PI_2, "scale": [2.0, 3.0] } } } } }],
+        "textures": [{ "source": 0 }],
+        "images": [{ "uri": "missing.png" }],
+        "buffers": [{ "byteLength": bytes.len(), "uri": uri }],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": 36 },
+            { "buffer": 0, "byteOffset": 36, "byteLength": 24 }
+        ],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+              "min": [0, 0, 0], "max": [1, 0, 1] },
+            { "bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2" }
+        ]
+    });
+    let path = write(&dir, "tri.gltf", &gltf.to_string());
+    let s = scene::load(path.to_str().unwrap()).unwrap();
+    let uvs = &s.meshes[s.objects[0].mesh].uvs;
+    // uv (1, 0): scaled (2, 0), turned a quarter (0, 2), offset (0.5, 2.25);
+    // uv (0, 1): (0, 3) → (−3, 0) → (−2.5, 0.25); (0, 0) → the offset.
+    for (got, want) in uvs.iter().zip([[0.5, 0.25], [0.5, 2.25], [-2.5, 0.25]]) {
+        assert!(
+            (got.x - want[0]).abs() < 1e-5 && (got.y - want[1]).abs() < 1e-5,
+            "{uvs:?}"
+        );
+    }
+}

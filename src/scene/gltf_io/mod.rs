@@ -116,8 +116,22 @@ fn load_checked(file: &str, path: &Path) -> Result<Scene> {
             }
         }
     };
+    // Per material, the base colour texture's KHR_texture_transform, baked
+    // into the texture coordinates of the primitives that use it.
+    let mut uv_transforms: Vec<Option<glam::Mat3>> = vec![];
     for m in doc.materials() {
         let pbr = m.pbr_metallic_roughness();
+        uv_transforms.push(
+            pbr.base_color_texture()
+                .and_then(|t| t.texture_transform())
+                .map(|t| {
+                    glam::Mat3::from_scale_angle_translation(
+                        Vec2::from(t.scale()),
+                        t.rotation(),
+                        Vec2::from(t.offset()),
+                    )
+                }),
+        );
         let bc = Vec3::from_slice(&pbr.base_color_factor()[..3]);
         let mut mat = match extras_field::<PhongExtras>(m.extras(), "material")? {
             Some(p) => Material {
@@ -249,7 +263,16 @@ fn load_checked(file: &str, path: &Path) -> Result<Scene> {
                             .unwrap_or_default(),
                         uvs: reader
                             .read_tex_coords(0)
-                            .map(|t| t.into_f32().map(Vec2::from).collect())
+                            .map(|t| {
+                                let transform = prim
+                                    .material()
+                                    .index()
+                                    .and_then(|i| uv_transforms[i])
+                                    .unwrap_or(glam::Mat3::IDENTITY);
+                                t.into_f32()
+                                    .map(|uv| transform.transform_point2(Vec2::from(uv)))
+                                    .collect()
+                            })
                             .unwrap_or_default(),
                         positions,
                         indices,
