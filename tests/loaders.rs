@@ -118,46 +118,72 @@ fn undecodable_textures_warn_and_render() {
     }
 }
 
+/// A glTF of one triangle at y = 0 with texture coordinates (0, 0), (1, 0),
+/// (0, 1) and material 0 of `materials`, its buffer at `buffer_uri` (the
+/// bytes are [`uv_triangle_bytes`]), with `images` and one texture per image.
+fn uv_triangle_gltf(
+    materials: serde_json::Value,
+    images: serde_json::Value,
+    buffer_uri: &str,
+) -> String {
+    let textures: Vec<serde_json::Value> = (0..images.as_array().map_or(0, Vec::len))
+        .map(|i| serde_json::json!({ "source": i }))
+        .collect();
+    serde_json::json!({
+        "asset": { "version": "2.0" },
+        "extensionsUsed": ["KHR_texture_transform"],
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0, "TEXCOORD_0": 1 }, "material": 0 }] }],
+        "materials": materials,
+        "textures": textures,
+        "images": images,
+        "buffers": [{ "byteLength": uv_triangle_bytes().len(), "uri": buffer_uri }],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": 36 },
+            { "buffer": 0, "byteOffset": 36, "byteLength": 24 }
+        ],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+              "min": [0, 0, 0], "max": [1, 0, 1] },
+            { "bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2" }
+        ]
+    })
+    .to_string()
+}
+
+/// The positions and texture coordinates of [`uv_triangle_gltf`].
+fn uv_triangle_bytes() -> Vec<u8> {
+    let floats: Vec<f32> = vec![0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 1., 0., 0., 1.];
+    floats.iter().flat_map(|f| f.to_le_bytes()).collect()
+}
+
+/// [`uv_triangle_bytes`] as a data URI.
+fn uv_triangle_data_uri() -> String {
+    use base64::Engine as _;
+    format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(uv_triangle_bytes())
+    )
+}
+
 /// A glTF whose images are missing loads with a warning naming each and
 /// renders its material's flat colour; a missing buffer stays an error.
 #[test]
 fn missing_gltf_images_warn_and_render() {
     let dir = tmpdir("missing-gltf-image");
-    let floats: Vec<f32> = vec![0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 1., 0., 0., 1.];
-    let bytes: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
-    let buffer = |uri: String| serde_json::json!([{ "byteLength": bytes.len(), "uri": uri }]);
-    use base64::Engine as _;
-    let data_uri = format!(
-        "data:application/octet-stream;base64,{}",
-        base64::engine::general_purpose::STANDARD.encode(&bytes)
-    );
-    let gltf = |buffers: serde_json::Value| {
-        serde_json::json!({
-            "asset": { "version": "2.0" },
-            "scene": 0,
-            "scenes": [{ "nodes": [0] }],
-            "nodes": [{ "mesh": 0 }],
-            "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0, "TEXCOORD_0": 1 }, "material": 0 }] }],
-            "materials": [{
+    let gltf = |uri: &str| {
+        uv_triangle_gltf(
+            serde_json::json!([{
                 "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } },
                 "normalTexture": { "index": 1 }
-            }],
-            "textures": [{ "source": 0 }, { "source": 1 }],
-            "images": [{ "uri": "textures/base.png" }, { "uri": "textures/normal_1.png" }],
-            "buffers": buffers,
-            "bufferViews": [
-                { "buffer": 0, "byteOffset": 0, "byteLength": 36 },
-                { "buffer": 0, "byteOffset": 36, "byteLength": 24 }
-            ],
-            "accessors": [
-                { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
-                  "min": [0, 0, 0], "max": [1, 0, 1] },
-                { "bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2" }
-            ]
-        })
-        .to_string()
+            }]),
+            serde_json::json!([{ "uri": "textures/base.png" }, { "uri": "textures/normal_1.png" }]),
+            uri,
+        )
     };
-    let path = write(&dir, "tri.gltf", &gltf(buffer(data_uri)));
+    let path = write(&dir, "tri.gltf", &gltf(&uv_triangle_data_uri()));
     let s = scene::load(path.to_str().unwrap()).unwrap();
     assert!(s.textures.is_empty());
     let m = &s.materials[s.objects[0].material];
@@ -192,7 +218,7 @@ fn missing_gltf_images_warn_and_render() {
         "{}",
         stderr(&o)
     );
-    let gone = write(&dir, "gone.gltf", &gltf(buffer("gone.bin".into())));
+    let gone = write(&dir, "gone.gltf", &gltf("gone.bin"));
     let err = scene::load(gone.to_str().unwrap()).unwrap_err().to_string();
     assert!(err.contains("'gone.bin' not found"), "{err}");
 }
@@ -743,37 +769,14 @@ fn set_of_a_parameter_without_effect_warns() {
 #[test]
 fn gltf_texture_transforms_are_baked_into_the_uvs() {
     let dir = tmpdir("texture-transform");
-    let floats: Vec<f32> = vec![0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 1., 0., 0., 1.];
-    let bytes: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
-    use base64::Engine as _;
-    let uri = format!(
-        "data:application/octet-stream;base64,{}",
-        base64::engine::general_purpose::STANDARD.encode(&bytes)
-    );
-    let gltf = serde_json::json!({
-        "asset": { "version": "2.0" },
-        "extensionsUsed": ["KHR_texture_transform"],
-        "scene": 0,
-        "scenes": [{ "nodes": [0] }],
-        "nodes": [{ "mesh": 0 }],
-        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0, "TEXCOORD_0": 1 }, "material": 0 }] }],
-        "materials": [{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0,
+    let gltf = uv_triangle_gltf(
+        serde_json::json!([{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0,
             "extensions": { "KHR_texture_transform": {
-                "offset": [0.5, 0.25], "rotation": std::f32::consts::FRAC_PI_2, "scale": [2.0, 3.0] } } } } }],
-        "textures": [{ "source": 0 }],
-        "images": [{ "uri": "missing.png" }],
-        "buffers": [{ "byteLength": bytes.len(), "uri": uri }],
-        "bufferViews": [
-            { "buffer": 0, "byteOffset": 0, "byteLength": 36 },
-            { "buffer": 0, "byteOffset": 36, "byteLength": 24 }
-        ],
-        "accessors": [
-            { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
-              "min": [0, 0, 0], "max": [1, 0, 1] },
-            { "bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2" }
-        ]
-    });
-    let path = write(&dir, "tri.gltf", &gltf.to_string());
+                "offset": [0.5, 0.25], "rotation": std::f32::consts::FRAC_PI_2, "scale": [2.0, 3.0] } } } } }]),
+        serde_json::json!([{ "uri": "missing.png" }]),
+        &uv_triangle_data_uri(),
+    );
+    let path = write(&dir, "tri.gltf", &gltf);
     let s = scene::load(path.to_str().unwrap()).unwrap();
     let uvs = &s.meshes[s.objects[0].mesh].uvs;
     // uv (1, 0): scaled (2, 0), turned a quarter (0, 2), offset (0.5, 2.25);
