@@ -191,13 +191,8 @@ impl SceneGpu {
                 parts: [part_base, 0, 0, 0],
                 alpha: {
                     let m = &scene.materials[o.material];
-                    let mode = if m.is_see_through() {
-                        m.alpha_mode
-                    } else {
-                        AlphaMode::Opaque
-                    };
                     [
-                        mode as u32,
+                        m.alpha_mode as u32,
                         m.alpha_cutoff.to_bits(),
                         m.alpha.to_bits(),
                         m.uv_scale.to_bits(),

@@ -11,7 +11,7 @@ use crate::frame::{
     self, Compose, DrawCall, FrameLayouts, FrameTargets, MAX_LIGHTS, MaterialVariant, SceneGpu,
 };
 use crate::gpu::GpuContext;
-use crate::scene::{Light, LightType};
+use crate::scene::{AlphaMode, Light, LightType};
 
 /// The lighting pass's own groups: the material's, and the masks with the
 /// material sampler.
@@ -305,7 +305,7 @@ impl Lighting {
         let mut bound_material = usize::MAX;
         let mut bound_key = None;
         let eye = frame.uniform().camera_pos.truncate();
-        let translucent = |d: &&DrawCall| scene_gpu.material_variants[d.material].translucent;
+        let translucent = |d: &&DrawCall| d.alpha_mode == AlphaMode::Blend;
         let mut behind_first: Vec<&DrawCall> = scene_gpu.draws.iter().filter(translucent).collect();
         behind_first.sort_by(|a, b| {
             let distance = |d: &DrawCall| d.bounds.center().distance_squared(eye);

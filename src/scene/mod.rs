@@ -54,9 +54,7 @@ impl Object {
     fn needs_back_faces(&self, scene: &Scene) -> bool {
         scene.materials[self.material].double_sided && !scene.meshes[self.mesh].sides_doubled
     }
-}
 
-impl Object {
     /// Applies the naming conventions of SEEDS §1: a name ending in upper-case
     /// `NS` casts no shadow; a name containing `ShadowPlane` is a shadow plane.
     pub fn from_name(name: &str, mesh: usize, material: usize, transform: Mat4) -> Object {
@@ -183,28 +181,17 @@ impl Scene {
             // sees both sides whatever its culling, and the normal faces the
             // viewer on each side.
             if o.needs_back_faces(self) {
-                let mesh = o.mesh;
-                let copy = *doubled.entry(mesh).or_insert_with(|| {
-                    let mut m = self.meshes[mesh].clone();
+                self.objects[i].mesh = self.mesh_copy(&mut doubled, o.mesh, |m| {
+                    let mut m = m.clone();
                     m.make_double_sided();
-                    self.meshes.push(m);
-                    self.meshes.len() - 1
+                    m
                 });
-                self.objects[i].mesh = copy;
             }
             let o = &self.objects[i];
             // A mirroring transform turns counter-clockwise triangles
             // clockwise: draw a winding-reversed copy instead (once).
             if (det < 0.0) != o.winding_reversed {
-                let mesh = o.mesh;
-                let copy = match reversed.get(&mesh) {
-                    Some(&c) => c,
-                    None => {
-                        let c = self.add_mesh(self.meshes[mesh].with_reversed_winding());
-                        reversed.insert(mesh, c);
-                        c
-                    }
-                };
+                let copy = self.mesh_copy(&mut reversed, o.mesh, Mesh::with_reversed_winding);
                 let o = &mut self.objects[i];
                 o.mesh = copy;
                 o.winding_reversed = !o.winding_reversed;
@@ -239,6 +226,22 @@ impl Scene {
                 .push(("default".into(), self.lights.clone()));
         }
         Ok(())
+    }
+
+    /// The copy of mesh `mesh` that `make` derives from it, made once per
+    /// mesh: `copies` remembers each one made.
+    fn mesh_copy(
+        &mut self,
+        copies: &mut std::collections::HashMap<usize, usize>,
+        mesh: usize,
+        make: impl FnOnce(&Mesh) -> Mesh,
+    ) -> usize {
+        if let Some(&c) = copies.get(&mesh) {
+            return c;
+        }
+        let c = self.add_mesh(make(&self.meshes[mesh]));
+        copies.insert(mesh, c);
+        c
     }
 
     /// Triangles drawn (shadow planes excluded).
