@@ -194,3 +194,72 @@ fn the_html_report_renders_in_chromium() {
         grey_rules / px
     );
 }
+
+/// `shadowlab report` stopped in the middle of a view (killed as soon as
+/// the first technique's `compare` rows are kept): the next run reuses
+/// those rows, leaves their images untouched and measures the rest.
+#[test]
+fn a_run_stopped_mid_view_keeps_the_measured_cells() {
+    let out = tmpdir("report-stopped");
+    let args = [
+        "report",
+        "--scenes",
+        "teapot",
+        "--techniques",
+        "shadow-map:pcf,shadow-volume:auto,shadow-map:csm",
+        "--out",
+    ];
+    let bin = env!("CARGO_BIN_EXE_shadowlab");
+    let files = |ext: &str| -> Vec<std::path::PathBuf> {
+        let mut found = vec![];
+        for view in std::fs::read_dir(out.join("cells")).into_iter().flatten() {
+            for f in std::fs::read_dir(view.unwrap().path()).unwrap() {
+                let p = f.unwrap().path();
+                if p.to_string_lossy().ends_with(ext) {
+                    found.push(p);
+                }
+            }
+        }
+        found
+    };
+    let mut child = std::process::Command::new(bin)
+        .args(args)
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    while files(".quality.json").is_empty() {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before keeping any rows"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let kept = files(".quality.json");
+    let cells = files(".json").len() - kept.len();
+    assert_eq!(cells, 0, "stopped before the first view's bench");
+    let image = |q: &std::path::Path| {
+        let png = q.to_string_lossy().replace(".quality.json", ".png");
+        std::fs::metadata(png).unwrap().modified().unwrap()
+    };
+    let before: Vec<_> = kept.iter().map(|q| image(q)).collect();
+    let o = std::process::Command::new(bin)
+        .args(args)
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains(&format!(
+            "9 cells measured ({} from the compare rows a stopped run kept), 0 reused",
+            kept.len()
+        )),
+        "{stdout}"
+    );
+    let after: Vec<_> = kept.iter().map(|q| image(q)).collect();
+    assert_eq!(before, after, "kept cells' images not rendered again");
+}

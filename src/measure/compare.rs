@@ -12,12 +12,12 @@ use crate::technique::TechniqueInstance;
 use crate::technique::{MapLookup, TechniqueChoice};
 use anyhow::{Context, Result};
 use glam::Vec3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::Path;
 
 /// One technique's quality for one light.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct QualityRow {
     pub technique: String,
     pub light: usize,
@@ -151,85 +151,165 @@ pub fn run(
     reference: &TechniqueChoice,
     out: &Path,
 ) -> Result<Vec<QualityRow>> {
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    if lights.is_empty() {
-        log::warn!("scene has no light: every technique is trivially exact");
-    }
-    let settings = RenderSettings {
-        show_light_icons: false,
-        ..Default::default()
+    let view = FrameRequest {
+        scene,
+        camera,
+        lights,
+        size,
     };
-    let (w, h) = size;
-    let mut hf = HeadlessFrame::new(gpu, scene, std::slice::from_ref(reference), w, h)?;
-    let Rendered {
-        images: ref_img,
-        ms: ref_ms,
-        ..
-    } = render_with(
-        gpu, &mut hf, scene, camera, lights, &settings, reference, false,
-    )?;
-    headless::write_images(&out.join("reference"), &ref_img)?;
-    let considered = considered_pixels(gpu, &hf, lights)?;
-    // Each light's reference edge band, shared by every technique's seams.
-    let edges: Vec<Vec<bool>> = considered
-        .iter()
-        .zip(&ref_img.masks)
-        .map(|(cons, mask)| {
-            quality::edge_band(w as usize, h as usize, cons, mask, quality::EDGE_RADIUS)
-        })
-        .collect();
-    let on_plane = plane_pixels(gpu, &hf, scene)?;
-    let split = |cons: &[bool], want: bool| -> Vec<bool> {
-        cons.iter()
-            .zip(&on_plane)
-            .map(|(&c, &p)| c && p == want)
-            .collect()
-    };
+    let mut comparison = Comparison::new(gpu, view, reference, out)?;
     let mut rows = vec![];
     for choice in techniques {
+        rows.extend(comparison.measure(choice)?);
+    }
+    comparison.write_tables(&rows)?;
+    Ok(rows)
+}
+
+/// One frame to render: the scene, the camera, the lights and the size.
+#[derive(Clone, Copy)]
+pub struct FrameRequest<'a> {
+    pub scene: &'a Scene,
+    pub camera: &'a Camera,
+    pub lights: &'a [Light],
+    pub size: (u32, u32),
+}
+
+/// One frame's reference, rendered once, against which techniques are
+/// measured one at a time (so a caller can keep each one's rows as soon as
+/// they are measured).
+pub struct Comparison<'a> {
+    gpu: &'a GpuContext,
+    view: FrameRequest<'a>,
+    reference: &'a TechniqueChoice,
+    out: &'a Path,
+    settings: RenderSettings,
+    hf: HeadlessFrame,
+    reference_images: FrameImages,
+    reference_ms: f64,
+    /// Per light: the pixels that count, and the reference's edge band.
+    considered: Vec<Vec<bool>>,
+    edges: Vec<Vec<bool>>,
+    /// Pixels on one of the scene's receiver planes.
+    on_plane: Vec<bool>,
+}
+
+impl<'a> Comparison<'a> {
+    /// Renders the reference into `out` and finds the pixels that count.
+    pub fn new(
+        gpu: &'a GpuContext,
+        view: FrameRequest<'a>,
+        reference: &'a TechniqueChoice,
+        out: &'a Path,
+    ) -> Result<Comparison<'a>> {
+        std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+        if view.lights.is_empty() {
+            log::warn!("scene has no light: every technique is trivially exact");
+        }
+        let settings = RenderSettings {
+            show_light_icons: false,
+            ..Default::default()
+        };
+        let (w, h) = view.size;
+        let mut hf = HeadlessFrame::new(gpu, view.scene, std::slice::from_ref(reference), w, h)?;
+        let FrameRequest {
+            scene,
+            camera,
+            lights,
+            ..
+        } = view;
+        let reference_render = render_with(
+            gpu, &mut hf, scene, camera, lights, &settings, reference, false,
+        )?;
+        headless::write_images(&out.join("reference"), &reference_render.images)?;
+        let considered = considered_pixels(gpu, &hf, lights)?;
+        let edges = considered
+            .iter()
+            .zip(&reference_render.images.masks)
+            .map(|(cons, mask)| {
+                quality::edge_band(w as usize, h as usize, cons, mask, quality::EDGE_RADIUS)
+            })
+            .collect();
+        let on_plane = plane_pixels(gpu, &hf, scene)?;
+        Ok(Comparison {
+            gpu,
+            view,
+            reference,
+            out,
+            settings,
+            hf,
+            reference_images: reference_render.images,
+            reference_ms: reference_render.ms,
+            considered,
+            edges,
+            on_plane,
+        })
+    }
+
+    /// Renders `choice`, writes its image and heatmaps, and returns its rows
+    /// (one per light).
+    pub fn measure(&mut self, choice: &TechniqueChoice) -> Result<Vec<QualityRow>> {
+        let FrameRequest {
+            scene,
+            camera,
+            lights,
+            size: (w, h),
+        } = self.view;
         let label = choice_label(choice);
         let stem = file_stem(&label);
-        let Rendered {
-            images: img,
-            ms,
-            lookups,
-        } = render_with(gpu, &mut hf, scene, camera, lights, &settings, choice, true)?;
+        let rendered = render_with(
+            self.gpu,
+            &mut self.hf,
+            scene,
+            camera,
+            lights,
+            &self.settings,
+            choice,
+            true,
+        )?;
+        let img = &rendered.images;
+        let reference = &self.reference_images;
         let image_name = format!("{stem}.png");
         image::save_buffer(
-            out.join(&image_name),
+            self.out.join(&image_name),
             &img.color,
             w,
             h,
             image::ExtendedColorType::Rgba8,
         )?;
-        let flip = quality::flip(&ref_img.color, &img.color, w, h);
-        for (li, cons) in considered.iter().enumerate() {
+        let flip = quality::flip(&reference.color, &img.color, w, h);
+        let mut rows = vec![];
+        for (li, cons) in self.considered.iter().enumerate() {
             let metrics = |c: &[bool]| {
                 quality::mask_metrics(
                     w as usize,
                     h as usize,
                     c,
-                    &ref_img.masks[li],
+                    &reference.masks[li],
                     &img.masks[li],
                 )
             };
-            let mask = metrics(cons);
-            let on_planes = metrics(&split(cons, true));
-            let off_planes = metrics(&split(cons, false));
-            let heat = quality::heatmap(&ref_img.color, cons, &ref_img.masks[li], &img.masks[li]);
+            let split = |want: bool| -> Vec<bool> {
+                cons.iter()
+                    .zip(&self.on_plane)
+                    .map(|(&c, &p)| c && p == want)
+                    .collect()
+            };
+            let heat =
+                quality::heatmap(&reference.color, cons, &reference.masks[li], &img.masks[li]);
             let heat_name = if lights.len() > 1 {
                 format!("heatmap-{stem}-light{li}.png")
             } else {
                 format!("heatmap-{stem}.png")
             };
             image::save_buffer(
-                out.join(&heat_name),
+                self.out.join(&heat_name),
                 &heat,
                 w,
                 h,
                 image::ExtendedColorType::Rgba8,
             )?;
-            let lookup = lookups[li].as_ref();
+            let lookup = rendered.lookups[li].as_ref();
             let aliasing = lookup.and_then(|l| quality::footprint_stats(cons, &l.footprint));
             let seams = lookup.and_then(|l| {
                 quality::seam_stats(
@@ -237,8 +317,8 @@ pub fn run(
                     h as usize,
                     cons,
                     &l.partition,
-                    &ref_img.masks[li],
-                    &edges[li],
+                    &reference.masks[li],
+                    &self.edges[li],
                     &img.masks[li],
                 )
             });
@@ -247,33 +327,46 @@ pub fn run(
                 light: li,
                 aliasing,
                 seams,
-                mask,
-                on_planes,
-                off_planes,
+                mask: metrics(cons),
+                on_planes: metrics(&split(true)),
+                off_planes: metrics(&split(false)),
                 flip,
-                frame_ms: ms,
+                frame_ms: rendered.ms,
                 image: image_name.clone(),
                 heatmap: heat_name,
             });
         }
+        Ok(rows)
     }
-    let meta = serde_json::json!({
-        "scene": scene.name,
-        "size": {"width": w, "height": h},
-        "camera": camera,
-        "lights": lights,
-        "reference": choice_label(reference),
-        "reference_frame_ms": ref_ms,
-        "adapter": gpu.adapter_summary(),
-        "pixels": format!("considered = geometry that receives shadows with its geometric normal facing the light (N·L > 0); percentages are of considered pixels; edge = within {} px of a reference shadow boundary", quality::EDGE_RADIUS),
-    });
-    std::fs::write(
-        out.join("quality.json"),
-        serde_json::to_string_pretty(&serde_json::json!({"meta": meta, "rows": rows}))?,
-    )?;
-    write_csv(&out.join("quality.csv"), &rows)?;
-    std::fs::write(out.join("quality.md"), markdown(scene, &meta, &rows))?;
-    Ok(rows)
+
+    /// Writes `quality.{json,csv,md}` of `rows` (measured by this
+    /// comparison or by an earlier one of the same frame).
+    pub fn write_tables(&self, rows: &[QualityRow]) -> Result<()> {
+        let FrameRequest {
+            scene,
+            camera,
+            lights,
+            size: (w, h),
+        } = self.view;
+        let meta = serde_json::json!({
+            "scene": scene.name,
+            "size": {"width": w, "height": h},
+            "camera": camera,
+            "lights": lights,
+            "reference": choice_label(self.reference),
+            "reference_frame_ms": self.reference_ms,
+            "adapter": self.gpu.adapter_summary(),
+            "pixels": format!("considered = geometry that receives shadows with its geometric normal facing the light (N·L > 0); percentages are of considered pixels; edge = within {} px of a reference shadow boundary", quality::EDGE_RADIUS),
+        });
+        let out = self.out;
+        std::fs::write(
+            out.join("quality.json"),
+            serde_json::to_string_pretty(&serde_json::json!({"meta": meta, "rows": rows}))?,
+        )?;
+        write_csv(&out.join("quality.csv"), rows)?;
+        std::fs::write(out.join("quality.md"), markdown(scene, &meta, rows))?;
+        Ok(())
+    }
 }
 
 /// `quality.csv`.

@@ -1,9 +1,9 @@
 //! Mask and image quality metrics against the ray-traced reference.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Mismatch counts as percentages of the considered pixels.
-#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq)]
 pub struct Mismatch {
     /// Technique says shadow (< 0.5), reference says lit.
     pub false_shadow_pct: f64,
@@ -13,7 +13,7 @@ pub struct Mismatch {
 }
 
 /// Quality of one technique's mask for one light.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct MaskMetrics {
     /// Pixels showing shadow-receiving geometry that faces the light.
     pub considered_pixels: usize,
@@ -57,7 +57,7 @@ fn graded(reference: f32, test: f32) -> Option<bool> {
 
 /// Screen pixels per shadow-map texel (the aliasing measure) over the
 /// considered pixels where a map was looked up.
-#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
 pub struct FootprintStats {
     pub mean: f64,
     pub p95: f64,
@@ -124,7 +124,7 @@ fn band_where_class_changes<K: PartialEq>(
 /// Mismatch near the borders between a map's partitions (cascades, cube
 /// faces) against the mismatch elsewhere, in % of each region's considered
 /// pixels.
-#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
 pub struct SeamStats {
     /// Considered pixels within [`SEAM_RADIUS`] px of another partition.
     pub seam_pixels: usize,
@@ -281,7 +281,7 @@ pub fn mask_metrics(
 }
 
 /// FLIP statistics over all pixels of the frame.
-#[derive(Clone, Copy, Debug, Default, Serialize)]
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
 pub struct FlipStats {
     pub mean: f64,
     pub p95: f64,

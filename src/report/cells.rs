@@ -164,6 +164,36 @@ pub fn store(root: &Path, cell: &Cell) -> Result<()> {
         .with_context(|| format!("writing {}", path.display()))
 }
 
+/// A cell's `compare` rows, kept as soon as they are measured so that a
+/// run stopped before the view's `bench` reuses them (`NAME.quality.json`
+/// beside the cell).
+#[derive(Serialize, Deserialize)]
+struct MeasuredQuality {
+    key: CellKey,
+    rows: Vec<QualityRow>,
+}
+
+fn quality_path(root: &Path, key: &CellKey) -> PathBuf {
+    cell_path(root, key).with_extension("quality.json")
+}
+
+/// The `compare` rows measured earlier for `key`, if any.
+pub fn load_quality(root: &Path, key: &CellKey) -> Option<Vec<QualityRow>> {
+    let text = std::fs::read_to_string(quality_path(root, key)).ok()?;
+    let kept: MeasuredQuality = serde_json::from_str(&text).ok()?;
+    (kept.key == *key).then_some(kept.rows)
+}
+
+pub fn store_quality(root: &Path, key: &CellKey, rows: &[QualityRow]) -> Result<()> {
+    let path = quality_path(root, key);
+    let kept = MeasuredQuality {
+        key: key.clone(),
+        rows: rows.to_vec(),
+    };
+    std::fs::write(&path, serde_json::to_string_pretty(&kept)?)
+        .with_context(|| format!("writing {}", path.display()))
+}
+
 /// The cell of `technique` from its `compare` rows (one per light), its
 /// `bench` row and its flicker rows (empty when not measured).
 pub fn from_rows(

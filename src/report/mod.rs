@@ -31,6 +31,9 @@ pub struct RunStats {
     pub computed: usize,
     /// Cells taken from the folder's cache.
     pub reused: usize,
+    /// Cells measured by this run whose `compare` rows a stopped run had
+    /// kept (only their `bench` was measured again).
+    pub quality_kept: usize,
 }
 
 /// Measures what `matrix` asks that `out` does not hold yet, then writes
@@ -64,7 +67,7 @@ pub fn run(gpu: &GpuContext, matrix: &Matrix, out: &Path, progress: bool) -> Res
                 loaded = Some(scene::load(&view.scene)?);
             }
             let scene = loaded.as_ref().expect("loaded above");
-            let fresh = measure_view(gpu, scene, matrix, view, &missing, out)?;
+            let fresh = measure_view(gpu, scene, matrix, view, &missing, out, &mut stats)?;
             stats.computed += fresh.len();
             bar.inc(fresh.len() as u64);
             cached.extend(fresh);
@@ -90,16 +93,19 @@ pub fn run(gpu: &GpuContext, matrix: &Matrix, out: &Path, progress: bool) -> Res
     std::fs::write(out.join("report.md"), markdown::write(&report))?;
     std::fs::write(out.join("index.html"), html::write(&report, out)?)?;
     log::info!(
-        "report: {} cells measured, {} reused, {:.0} s",
+        "report: {} cells measured ({} from compare rows a stopped run kept), {} reused, {:.0} s",
         stats.computed,
+        stats.quality_kept,
         stats.reused,
         started.elapsed().as_secs_f64()
     );
     Ok(stats)
 }
 
-/// Measures `techniques` on `view`: `compare` against the reference, then
-/// `bench` with `none` in the same run; stores and returns their cells.
+/// Measures `techniques` on `view`: `compare` against the reference (each
+/// technique's rows kept as soon as measured, and those kept by a stopped
+/// run reused), then `bench` with `none` in the same run; stores and
+/// returns their cells.
 fn measure_view(
     gpu: &GpuContext,
     scene: &Scene,
@@ -107,21 +113,42 @@ fn measure_view(
     view: &View,
     techniques: &[crate::technique::TechniqueChoice],
     out: &Path,
+    stats: &mut RunStats,
 ) -> Result<Vec<Cell>> {
     let camera = scene.camera_preset(&view.camera)?;
     let lights = scene.light_preset(&view.light)?;
     let rel = cells::view_dir(view);
     let dir = out.join(&rel);
-    let quality = measure::compare::run(
-        gpu,
+    let request = measure::compare::FrameRequest {
         scene,
-        &camera,
-        &lights,
-        matrix.size,
-        techniques,
-        &matrix.reference,
-        &dir,
-    )?;
+        camera: &camera,
+        lights: &lights,
+        size: matrix.size,
+    };
+    let mut quality = vec![];
+    let mut comparison = None;
+    for t in techniques {
+        let key = matrix.key(view, t);
+        if let Some(rows) = cells::load_quality(out, &key) {
+            stats.quality_kept += 1;
+            quality.extend(rows);
+            continue;
+        }
+        if comparison.is_none() {
+            comparison = Some(measure::compare::Comparison::new(
+                gpu,
+                request,
+                &matrix.reference,
+                &dir,
+            )?);
+        }
+        let rows = comparison.as_mut().expect("made above").measure(t)?;
+        cells::store_quality(out, &key, &rows)?;
+        quality.extend(rows);
+    }
+    if let Some(c) = &comparison {
+        c.write_tables(&quality)?;
+    }
     let bench = measure::bench::run(
         gpu,
         scene,

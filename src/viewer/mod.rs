@@ -129,6 +129,9 @@ pub struct ViewerState {
     pub screenshot_requested: bool,
     /// Left edge of the 3D view in physical pixels (the width of the panel).
     pub view_left: u32,
+    /// The dock's rectangle in physical pixels while it is shown: presses
+    /// there belong to the dock, not to the camera.
+    pub dock_rect: Option<egui::Rect>,
     /// Show the selected light's technique debug views (frusta, depth map).
     pub show_debug: bool,
     /// The camera path being followed, one step per frame.
@@ -143,12 +146,29 @@ pub struct ViewerState {
     pub message: Option<String>,
 }
 
+impl ViewerState {
+    /// Whether the right-hand dock (heatmap, debug views, help) is shown.
+    pub fn dock_open(&self) -> bool {
+        self.show_help
+            || self.heatmap.is_some()
+            || (self.show_debug && !self.debug_images.is_empty())
+    }
+
+    /// Closes every view of the dock.
+    pub fn close_dock(&mut self) {
+        self.show_help = false;
+        self.show_debug = false;
+        self.heatmap = None;
+    }
+}
+
 struct App {
     options: ViewerOptions,
     gfx: Option<Gfx>,
     scene: Option<SceneState>,
     state: ViewerState,
-    cursor: Vec2,
+    /// The pointer in physical pixels of the window.
+    pointer: Vec2,
     buttons: [bool; 3],
     dragging_light: Option<usize>,
     keys: std::collections::HashSet<KeyCode>,
@@ -214,6 +234,7 @@ pub fn run(options: ViewerOptions) -> Result<()> {
             heatmap_job: None,
             screenshot_requested: false,
             view_left: 0,
+            dock_rect: None,
             show_debug: options.debug_views,
             camera_motion: None,
             camera_path: options.camera_path,
@@ -225,7 +246,7 @@ pub fn run(options: ViewerOptions) -> Result<()> {
         options,
         gfx: None,
         scene: None,
-        cursor: Vec2::ZERO,
+        pointer: Vec2::ZERO,
         buttons: [false; 3],
         dragging_light: None,
         keys: Default::default(),

@@ -459,7 +459,8 @@ Mouse: left drag orbits (or drags a light icon), middle drag or wheel zooms, rig
 Keys: W/A/S/D fly, Q/E down/up; arrows and PageUp/PageDown move the selected light;
 0-3 select light 0-3; M toggles the mask view; H computes the error heatmap against
 raytraced; P or F12 saves a screenshot (shadowlab-<time>.png and .json beside it); Tab hides the panel;
-F1 this help; Esc quits.";
+F1 this help; Esc closes this dock, and quits when no dock is open. Keys act on the view unless a
+text field has the focus; drags that start on a panel or the dock do not move the camera.";
 
 /// Below this width (points) the side panel starts folded to its toggle
 /// and the dock starts collapsed, leaving the view to the image.
@@ -538,15 +539,16 @@ pub fn build(
 /// anchored to the window's right edge — over the 3D view, never over the
 /// side panel's controls.
 fn dock(root: &mut egui::Ui, state: &mut ViewerState) {
-    let debug = state.show_debug && !state.debug_images.is_empty();
-    if !(state.show_help || debug || state.heatmap.is_some()) {
+    state.dock_rect = None;
+    if !state.dock_open() {
         return;
     }
+    let debug = state.show_debug && !state.debug_images.is_empty();
     let ctx = root.ctx().clone();
     let screen = ctx.content_rect();
     let width = (screen.width() * 0.32).clamp(160.0, 360.0);
     let mut close_heatmap = false;
-    egui::Window::new("views")
+    let shown = egui::Window::new("views")
         .anchor(egui::Align2::RIGHT_TOP, [-8.0, 8.0])
         .default_width(width)
         .max_width(width)
@@ -596,6 +598,7 @@ fn dock(root: &mut egui::Ui, state: &mut ViewerState) {
                     }
                 });
         });
+    state.dock_rect = shown.map(|r| r.response.rect * ctx.pixels_per_point());
     if close_heatmap {
         state.heatmap = None;
     }
@@ -670,7 +673,7 @@ mod tests {
     fn the_panel_lists_the_parameters_of_each_light_type() {
         let ctx = egui::Context::default();
         let shown = |id: &str, kind: LightType| {
-            let mut choice = technique::resolve(id).unwrap();
+            let mut choice = crate::measure::parse_technique_list(id).unwrap().remove(0);
             let mut names = vec![];
             ctx.run_ui(Default::default(), |ui| {
                 names = param_panel(ui, &mut choice.params, Some(kind)).shown;
@@ -734,6 +737,15 @@ mod tests {
         assert!(!vsm.contains(&"samples") && !vsm.contains(&"exponent_negative"));
         let csm = shown("shadow-map:csm", LightType::Directional);
         assert!(csm.contains(&"split_lambda") && csm.contains(&"select"));
+        // Shadow volumes: the scissor needs a light's range, the far-plane
+        // choice volumes extruded to infinity; projective shadows' alpha
+        // bias the depth-in-alpha comparison.
+        let volumes_sun = shown("shadow-volume:auto", LightType::Directional);
+        let volumes_point = shown("shadow-volume:auto", LightType::Point);
+        let finite = shown("shadow-volume:auto[length=50]", LightType::Point);
+        assert!(!volumes_sun.contains(&"scissor") && volumes_point.contains(&"scissor"));
+        assert!(volumes_point.contains(&"far_plane") && !finite.contains(&"far_plane"));
+        assert!(!shown("projective:default", LightType::Spot).contains(&"alpha_bias"));
         let virtual_point = shown("shadow-map:virtual", LightType::Point);
         assert!(
             virtual_point.contains(&"texels_per_pixel")

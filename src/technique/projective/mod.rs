@@ -8,6 +8,7 @@
 //! receiver, whose low precision gives false self-shadowing.
 
 use super::light_space::{LightFrustum, fit_bounds};
+use super::params::Condition;
 use super::{Family, MaskContext, ParamSpec, ParamValues, Preset, ShadowTechnique};
 use crate::frame::{MASK_FORMAT, VERTEX_LAYOUT};
 use crate::gpu::GpuContext;
@@ -37,7 +38,8 @@ const ALPHA_BIAS: ParamSpec = ParamSpec::float(
     0.1,
     0.001,
     "depth-in-alpha comparison bias, as a fraction of the fitted depth range",
-);
+)
+.when(Condition::Is("depth_in_alpha", &["true"]));
 
 /// The projective family's parameters, parsed.
 #[derive(Clone, Copy, Debug)]

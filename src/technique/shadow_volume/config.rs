@@ -2,7 +2,7 @@
 //! ([`VolumeConfig`]).
 
 use crate::frame::Compose;
-use crate::technique::params::choice_enum;
+use crate::technique::params::{Condition, LightKinds, choice_enum};
 use crate::technique::{ParamSpec, ParamValues, Preset};
 use anyhow::Result;
 
@@ -54,7 +54,8 @@ pub const FAR_PLANE: ParamSpec = ParamSpec::choice_of::<FarPlane>(
     "far_plane",
     FarPlane::Infinite as usize,
     "how volumes extruded to infinity escape far-plane clipping: a projection with the far plane at infinity, or depth clamping (unclipped_depth; falls back to infinite where the adapter lacks it); clip: they do not — the camera's finite far plane cuts them, z-fail's documented failure",
-);
+)
+.when(Condition::Is("length", &["0"]));
 
 pub const CAPS: ParamSpec = ParamSpec::boolean(
     "caps",
@@ -70,7 +71,8 @@ pub const SCISSOR: ParamSpec = ParamSpec::boolean(
     "scissor",
     true,
     "restrict the stencil work to the screen rectangle of an attenuated light's range",
-);
+)
+.for_lights(LightKinds::LOCAL);
 pub const CULL_CASTERS: ParamSpec = ParamSpec::boolean(
     "cull_casters",
     true,
