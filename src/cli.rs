@@ -4,7 +4,7 @@ use crate::args::ViewArgs;
 use crate::headless::{self, FrameRecord, HeadlessFrame};
 use crate::measure;
 use crate::scene;
-use crate::technique::{self, FAMILIES, ParamKind, TechniqueChoice};
+use crate::technique::{self, TechniqueChoice};
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
@@ -32,7 +32,7 @@ pub enum Command {
     /// List the built-in scenes with their camera and light presets.
     Scenes,
     /// List technique families, presets and every parameter (default, min, max, doc).
-    Techniques,
+    Techniques(TechniquesArgs),
     /// Write a scene as glTF 2.0 (world space, KHR_lights_punctual, camera, shadow flags in extras).
     Export(ExportArgs),
     /// Render one frame headless: DIR/image.png, DIR/visibility-N.png, DIR/frame.json.
@@ -49,11 +49,21 @@ pub enum Command {
     Report(ReportArgs),
     /// Interactive viewer: switch and tune techniques, move camera and lights.
     View(Box<ViewCmdArgs>),
+    /// The command-line reference as Markdown (the guide's CLI page).
+    #[command(hide = true)]
+    CliMarkdown,
+}
+
+#[derive(Args)]
+pub struct TechniquesArgs {
+    /// Markdown tables (the guide's parameter pages) instead of text.
+    #[arg(long)]
+    pub markdown: bool,
 }
 
 #[derive(Args)]
 pub struct ReportArgs {
-    /// Size of the matrix: quick (6 views, 640×360), standard (every
+    /// Size of the matrix: quick (7 views, 640×360), standard (every
     /// scene's default camera under each light preset, 1280×720), full
     /// (every camera preset too).
     #[arg(long, value_enum, default_value = "quick")]
@@ -204,8 +214,16 @@ pub fn technique_choice(id: &str, set: &[String]) -> Result<TechniqueChoice> {
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Scenes => scenes(),
-        Command::Techniques => {
-            print!("{}", techniques_text());
+        Command::Techniques(a) => {
+            if a.markdown {
+                print!("{}", technique::listing::markdown());
+            } else {
+                print!("{}", technique::listing::text());
+            }
+            Ok(())
+        }
+        Command::CliMarkdown => {
+            print!("{}", clap_markdown::help_markdown::<Cli>());
             Ok(())
         }
         Command::Export(a) => {
@@ -279,58 +297,6 @@ fn scenes() -> Result<()> {
         println!("{:<22}lights:  {}", "", lights.join(", "));
     }
     Ok(())
-}
-
-/// The text of `shadowlab techniques`.
-pub fn techniques_text() -> String {
-    let mut out = String::new();
-    for f in FAMILIES {
-        out += &format!("{}: {}\n", f.id, f.summary);
-        out += "  presets:\n";
-        for p in f.presets {
-            let vals: Vec<String> = p.values.iter().map(|(k, v)| format!("{k}={v}")).collect();
-            out += &format!(
-                "    {}:{:<14} {}{}\n",
-                f.id,
-                p.name,
-                p.summary,
-                if vals.is_empty() {
-                    String::new()
-                } else {
-                    format!(" [{}]", vals.join(" "))
-                }
-            );
-        }
-        if f.params.is_empty() {
-            out += "  parameters: none\n";
-        } else {
-            out += "  parameters:\n";
-            for s in f.params {
-                let range = match s.kind {
-                    ParamKind::Choice(o) => format!("one of {}", o.join("|")),
-                    ParamKind::Bool => "true|false".into(),
-                    _ => format!(
-                        "{} .. {} step {}",
-                        s.format(s.min),
-                        s.format(s.max),
-                        s.format(s.step)
-                    ),
-                };
-                let applies = s
-                    .applies
-                    .describe()
-                    .map_or(String::new(), |a| format!("[applies to {a}] "));
-                out += &format!(
-                    "    {:<20} default {:<10} {:<28} {applies}{}\n",
-                    s.name,
-                    s.format(s.default),
-                    range,
-                    s.doc
-                );
-            }
-        }
-    }
-    out
 }
 
 fn compare(a: CompareArgs) -> Result<()> {

@@ -1,4 +1,4 @@
-//! The module layers of the README: no two top-level modules of `src/`
+//! The module layers of the guide (docs/book/src/contributing/architecture.md): no two top-level modules of `src/`
 //! import each other, and the lower layers import nothing above them.
 
 use std::collections::{BTreeMap, BTreeSet};

@@ -5,6 +5,7 @@
 //! composes as `ambient + visibility × (diffuse + specular)`.
 
 pub mod light_space;
+pub mod listing;
 pub mod none;
 pub mod params;
 pub mod planar;

@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# Regenerates the guide's generated pages from the binary (the technique
+# reference and the CLI reference) and builds the guide into out/book.
+# Usage: scripts/book.sh   (after `cargo build --release`; mdbook from
+# `scripts/setup.sh --test`, in tools/mdbook)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin=target/release/shadowlab
+$bin techniques --markdown > docs/book/src/techniques/parameters.md
+$bin cli-markdown > docs/book/src/cli-reference.md
+tools/mdbook/bin/mdbook build docs/book --dest-dir out/book
+echo "book: out/book/index.html"
