@@ -1,4 +1,4 @@
-//! Light icons (SEEDS §1): a sphere for point lights, an arrow for
+//! Light icons ([000] §5): a sphere for point lights, an arrow for
 //! directional lights, an arrow inside a cone for spot lights; unlit, in the
 //! light's colour, sized from the scene bounds.
 

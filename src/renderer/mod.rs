@@ -25,7 +25,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
-/// Shading modes of SEEDS §1.
+/// Shading modes of [004].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Shading {

@@ -1,4 +1,4 @@
-// Procedural textures of SEEDS §1 (lecture 004): stripes, checker, and
+// Procedural textures of [004]: stripes, checker, and
 // Perlin's improved noise (fade 6t^5 − 15t^4 + 10t^3) summed in octaves
 // weighted 1/o, its absolute value (turbulence) and a sine of it (marble).
 

@@ -240,7 +240,7 @@ fn vs_lit_gouraud(v: VertexIn) -> GouraudOut {
     o.uv = v.uv * material.ka.w;
     o.local_pos = v.position;
     o.receives = obj.info.z;
-    // Intensities per vertex, interpolated (SEEDS §1).
+    // Intensities per vertex, interpolated ([004]).
     let n = world_normal(obj, v.normal);
     let view = normalize(frame.camera_pos.xyz - o.world_pos);
     if LIGHT_COUNT > 0u {

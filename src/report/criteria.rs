@@ -1,4 +1,4 @@
-//! The summary's ✔/✗ criteria (SEEDS §7): which views test each, what
+//! The summary's ✔/✗ criteria ([001] §5.2): which views test each, what
 //! passes, and the figure each mark quotes, with the thresholds they use;
 //! and the measured statements ([`Claim`]) the summary is made of.
 

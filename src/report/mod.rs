@@ -1,4 +1,4 @@
-//! `shadowlab report`: the comparison of SEEDS §7 measured — every
+//! `shadowlab report`: the comparison of [001] §5.2 measured — every
 //! technique preset on a matrix of views, against the ray-traced reference
 //! (`compare`) and against `none` (`bench`), written as one self-contained
 //! `index.html` (inline SVG charts by `plotters`, embedded images),

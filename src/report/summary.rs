@@ -1,4 +1,4 @@
-//! The documents' summary table (SEEDS §7), filled from measurements: per
+//! The documents' summary table ([001] §5.2), filled from measurements: per
 //! technique preset its quality, cost, advantages, disadvantages, use,
 //! implementation difficulty, extensibility and ✔/✗ marks
 //! ([`super::criteria`]), every claim a measured figure with the cell it

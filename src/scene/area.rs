@@ -1,4 +1,4 @@
-//! Sampling lights with an area (SEEDS §5's soft shadows): stratified
+//! Sampling lights with an area (the soft shadows of [001] §3, [002] §2): stratified
 //! points of the unit square, mapped onto a disk or a rectangle. The ray
 //! tracer's shadow rays and the shadow maps' sample lights share them.
 

@@ -1,6 +1,6 @@
 //! The built-in `landscape`: 2 km × 2 km of rolling hills with trees and
 //! rocks under a low sun — the view that needs warped and partitioned
-//! shadow maps (SEEDS §5): a ground camera sees shadows from a metre to the
+//! shadow maps ([000] §4, [001] §3, [002] §2): a ground camera sees shadows from a metre to the
 //! horizon. Deterministic: a fixed height function and a fixed-seed LCG.
 
 use super::shapes::{cylinder, heightfield, lathe, sphere};

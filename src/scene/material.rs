@@ -1,11 +1,11 @@
-//! Phong materials, their textures and procedural patterns (SEEDS §1).
+//! Phong materials, their textures and procedural patterns ([004]).
 
 use anyhow::{Context, Result, bail};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
-/// Procedural texture patterns of SEEDS §1 (lecture 004).
+/// Procedural texture patterns of [004].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ProceduralKind {
@@ -106,7 +106,7 @@ impl Texture {
     }
 }
 
-/// Phong material (SEEDS §1): `ka`, `kd`, `ks`, shininess `n`, with the
+/// Phong material ([004]): `ka`, `kd`, `ks`, shininess `n`, with the
 /// opacity and sidedness of glTF 2.0 materials.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {

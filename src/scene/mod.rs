@@ -55,7 +55,7 @@ impl Object {
         scene.materials[self.material].double_sided && !scene.meshes[self.mesh].sides_doubled
     }
 
-    /// Applies the naming conventions of SEEDS §1: a name ending in upper-case
+    /// Applies the naming conventions of [000] §5: a name ending in upper-case
     /// `NS` casts no shadow; a name containing `ShadowPlane` is a shadow plane.
     pub fn from_name(name: &str, mesh: usize, material: usize, transform: Mat4) -> Object {
         let shadow_plane = name.contains("ShadowPlane");

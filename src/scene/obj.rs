@@ -1,6 +1,6 @@
 //! Wavefront OBJ + MTL loading through `tobj`, with a line-checking pass
 //! first so that malformed files are reported with file and line, and with
-//! the SEEDS §1 conventions: `…NS` objects cast no shadow, `ShadowPlane…`
+//! the [000] §5 conventions: `…NS` objects cast no shadow, `ShadowPlane…`
 //! objects are shadow planes, `s off` objects are flat-shaded.
 
 use super::{AlphaMode, Material, Mesh, Object, Scene, Texture, frame_scene_defaults};

@@ -8,7 +8,7 @@ use glam::{Mat4, Vec3, Vec4};
 /// directional) onto plane `p` (`p·x = 0` for points on it):
 /// `M = (p·l)·I − l·pᵀ`, row i = `(p·l)·δij − l_i·p_j`. For any point `v`,
 /// `M v` lies on the plane and on the line through `l` and `v`
-/// (SEEDS §2; 000 eq. 24 and 001 §2.4 carry typos).
+/// ([000] §2, [001] §2, [003]; [000] eq. 24 and [001] §2.4 carry typos).
 pub fn shadow_matrix(p: Vec4, l: Vec4) -> Mat4 {
     let d = p.dot(l);
     Mat4::from_cols(

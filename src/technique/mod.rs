@@ -140,7 +140,7 @@ pub trait ShadowTechnique: Send {
 /// Per pixel of a frame (row-major), what a shadow-map lookup saw.
 #[derive(Clone, Debug, Default)]
 pub struct MapLookup {
-    /// Screen pixels one map texel spans (SEEDS §5's aliasing measure d;
+    /// Screen pixels one map texel spans (the aliasing measure d of [001] §3;
     /// > 1: a texel covers more than a pixel), 0 where no map is looked up.
     pub footprint: Vec<f32>,
     /// The map partition looked up, counted from 1 (cascade or cube face);

@@ -59,7 +59,7 @@ pub(super) fn tiles(size: u32) -> (image::RgbaImage, image::GrayImage) {
 }
 
 /// Tangent-space normal map from a height map by central differences
-/// (bump mapping, SEEDS §1): `n = normalize(−s·∂h/∂x, −s·∂h/∂y, 1)`.
+/// (bump mapping, [004]): `n = normalize(−s·∂h/∂x, −s·∂h/∂y, 1)`.
 fn normal_map_from_height(h: &image::GrayImage, strength: f32) -> image::RgbaImage {
     let (w, ht) = h.dimensions();
     let at = |x: i64, y: i64| {

@@ -1,4 +1,4 @@
-//! `planar`: projected planar shadows (SEEDS §2; Blinn 1988, 000 §2, 001 §2).
+//! `planar`: projected planar shadows (Blinn 1988; [000] §2, [001] §2, [003]).
 //! Each caster is drawn a second time through the shadow matrix
 //! `M = (P·L)·I − L·Pᵀ` onto each receiver plane, into the visibility mask.
 //! With `stencil` on, the visible pixels of plane i are first tagged with

@@ -1,4 +1,4 @@
-// Planar projected shadows (SEEDS §2). common.wgsl and gbuffer.wgsl are prepended.
+// Planar projected shadows ([000] §2, [001] §2, [003]). common.wgsl and gbuffer.wgsl are prepended.
 
 struct PlanarUniform {
     // M = (P·L)·I − L·Pᵀ

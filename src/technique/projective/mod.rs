@@ -1,10 +1,10 @@
-//! `projective`: projective shadow-mask textures (SEEDS §3; 001 §3.5.3,
-//! 002 §1, 003 §2). Per caster, a black-on-white texture is rendered from
+//! `projective`: projective shadow-mask textures ([001] §3.5.3, [002] §1,
+//! [003] §2). Per caster, a black-on-white texture is rendered from
 //! the light with a frustum fitted around the caster (orthographic for
 //! directional lights, perspective otherwise) and projected onto the visible
 //! receivers through the texture matrix `bias · P_light · V_light`. There is
 //! no depth test, hence no self-shadowing. Preset `projective:alpha-depth` is
-//! 003 §4's variant: the caster's depth in an 8-bit channel, compared per
+//! [003] §4's variant: the caster's depth in an 8-bit channel, compared per
 //! receiver, whose low precision gives false self-shadowing.
 
 use super::light_space::{LightFrustum, fit_bounds};
@@ -29,7 +29,7 @@ const MARGIN: ParamSpec = ParamSpec::float(
 const DEPTH_IN_ALPHA: ParamSpec = ParamSpec::boolean(
     "depth_in_alpha",
     false,
-    "store the caster's depth in an 8-bit channel and compare it per receiver (003 §4): shadows on the caster itself, with 8-bit acne",
+    "store the caster's depth in an 8-bit channel and compare it per receiver ([003] §4): shadows on the caster itself, with 8-bit acne",
 );
 const ALPHA_BIAS: ParamSpec = ParamSpec::float(
     "alpha_bias",

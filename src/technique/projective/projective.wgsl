@@ -1,4 +1,4 @@
-// Projective shadow textures (SEEDS §3). common.wgsl and gbuffer.wgsl are prepended.
+// Projective shadow textures ([001] §3.5.3, [002] §1, [003] §2). common.wgsl and gbuffer.wgsl are prepended.
 
 struct Projector {
     // light view-projection fitted around one caster
@@ -42,7 +42,7 @@ fn vs_caster(v: VertexIn) -> CasterOut {
     return o;
 }
 
-// Black caster on white, or (003 §4) its linear depth stored in 8 bits; a
+// Black caster on white, or ([003] §4) its linear depth stored in 8 bits; a
 // cut-out caster's holes stay white.
 @fragment
 fn fs_caster(i: CasterOut) -> @location(0) vec4f {

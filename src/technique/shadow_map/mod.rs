@@ -1,5 +1,5 @@
-//! `shadow-map`: shadow maps (Williams 1978; SEEDS §5, 000 §4, 001 §3,
-//! 002 §2). Depth from the light — perspective for spot lights, six 90°
+//! `shadow-map`: shadow maps (Williams 1978; [000] §4, [001] §3,
+//! [002] §2). Depth from the light — perspective for spot lights, six 90°
 //! faces for point lights, orthographic for directional lights fitted to the
 //! scene and clipped to what the camera sees — then a screen-space lookup
 //! that moves each G-buffer point along its normal (normal offset), projects
@@ -8,54 +8,35 @@
 //! outside the map is lit) and filters: nearest, hardware 2×2 PCF, N×N grid,
 //! rotated Vogel disk, PCSS, or the documents' variable-width PCF.
 
-mod bias_cap;
-pub mod cascades;
-mod caster_cull;
 pub mod config;
-mod debug;
-mod depth_bounds;
-mod depth_pass;
-mod edge_mask;
-mod filter_params;
-mod map_passes;
-mod maps;
-pub mod paging_params;
-pub mod partition_params;
-mod perspective;
-mod pipelines;
-mod presets;
-mod projection;
-mod roll;
-mod setup;
-mod spot_focus;
-mod stable_window;
-mod trapezoid;
-mod uniform;
+mod gpu;
+mod passes;
+pub mod projection;
 mod virtual_map;
-pub mod warp;
 
 pub use config::{
     Cascades, CullFace, DepthFormat, Filter, Fit, Omni, Roll, Select, ShadowMapConfig, Stage, Warp,
 };
-pub use setup::{CascadeSplit, FrustumParams, LightSetup, cube_views, light_setup};
+pub use projection::FrustumParams;
+pub use projection::setup::{CascadeSplit, LightSetup, cube_views, light_setup};
 
-use super::{Family, MaskContext, ParamValues, ShadowTechnique};
 use crate::gpu::{GpuContext, SectionTimer};
 use crate::scene::area::area_samples;
+use crate::technique::{Family, MaskContext, ParamValues, ShadowTechnique};
 use anyhow::Result;
-use depth_bounds::{DepthReduction, SeenBounds};
-use depth_pass::DepthPassKey;
-use edge_mask::BoundsChain;
 use glam::{Mat4, Vec2};
-use maps::Maps;
-use pipelines::{LookupKey, MapProjection, MapShape, ShadowMapShared};
+use gpu::depth_pass::DepthPassKey;
+use gpu::edge_mask::BoundsChain;
+use gpu::maps::Maps;
+use gpu::pipelines::{LookupKey, MapProjection, MapShape, ShadowMapShared};
+use gpu::uniform::{FrameTerms, SLOTS, STRIDE, ShadowMapUniform, slot_data, slot_offset};
+use projection::depth_bounds::{DepthReduction, SeenBounds};
 use std::sync::Arc;
-use uniform::{FrameTerms, SLOTS, STRIDE, ShadowMapUniform, slot_data, slot_offset};
 
 pub static FAMILY: Family = Family {
     id: "shadow-map",
     summary: "shadow maps: depth from the light, compared per pixel, with the PCF family of filters",
-    capabilities: super::Capabilities {
+    capabilities: crate::technique::Capabilities {
         point_lights: true,
         spot_lights: true,
         directional_lights: true,
@@ -66,7 +47,7 @@ pub static FAMILY: Family = Family {
         cutout_casters: true,
     },
     params: config::PARAMS,
-    presets: presets::PRESETS,
+    presets: config::presets::PRESETS,
     create: |gpu, params| {
         Ok(Box::new(ShadowMapTechnique::new(
             gpu,
@@ -401,7 +382,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 None
             }
         };
-        let passes = map_passes::SamplePasses {
+        let passes = passes::SamplePasses {
             maps,
             render_group,
             blur_groups,
@@ -469,11 +450,11 @@ impl ShadowTechnique for ShadowMapTechnique {
         self.want_debug = on;
     }
 
-    fn debug_views(&self, gpu: &GpuContext) -> Result<super::DebugViews> {
+    fn debug_views(&self, gpu: &GpuContext) -> Result<crate::technique::DebugViews> {
         self.read_debug_views(gpu)
     }
 
-    fn map_lookup(&self, gpu: &GpuContext) -> Result<Option<super::MapLookup>> {
+    fn map_lookup(&self, gpu: &GpuContext) -> Result<Option<crate::technique::MapLookup>> {
         self.read_map_lookup(gpu)
     }
 
@@ -516,10 +497,12 @@ impl ShadowTechnique for ShadowMapTechnique {
                         .as_ref()
                         .map(|_| ("edge_chain_ms", self.chain_timer.last_ms)),
                 )
-                .chain(
-                    self.turn
-                        .map(|t| ("map_turn_deg", roll::turn_angle(t).to_degrees() as f64)),
-                )
+                .chain(self.turn.map(|t| {
+                    (
+                        "map_turn_deg",
+                        projection::roll::turn_angle(t).to_degrees() as f64,
+                    )
+                }))
                 .chain(self.last_seen.as_ref().map_or(vec![], |s| {
                     vec![
                         ("sdsm_near", s.near as f64),

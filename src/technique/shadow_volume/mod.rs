@@ -1,5 +1,5 @@
 //! `shadow-volume`: stencil shadow volumes (Crow 1977; Heidmann 1991;
-//! Everitt & Kilgard 2002; SEEDS §4, 000 §3, 001 §4). Each caster's
+//! Everitt & Kilgard 2002; [000] §3, [001] §4). Each caster's
 //! silhouette edges, found with the light in object space (`P·L > 0` is a
 //! lit face), are extruded away from the light — to infinity as w = 0
 //! vertices, or by a finite length — and capped with the lit faces (light

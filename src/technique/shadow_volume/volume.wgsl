@@ -1,4 +1,4 @@
-// Shadow volumes (SEEDS §4): the volume vertex shader that extrudes odd
+// Shadow volumes ([000] §3, [001] §4–5, [002] §3): the volume vertex shader that extrudes odd
 // indices away from the light, the stencil-to-mask pass and the debug
 // view. common.wgsl and gbuffer.wgsl are prepended.
 

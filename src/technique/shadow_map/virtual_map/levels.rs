@@ -7,10 +7,10 @@
 //! perspective view, a point light six cube faces, each a mip chain: level l
 //! covers the whole view with `size`/2^l texels, down to one page.
 
-use super::super::pipelines::{MapProjection, MapShape};
-use super::super::setup::{self, FrustumParams};
 use super::atlas::GUARD_TEXELS;
 use crate::scene::{Aabb, Camera, Light, LightType};
+use crate::technique::shadow_map::gpu::pipelines::{MapProjection, MapShape};
+use crate::technique::shadow_map::projection::{FrustumParams, setup};
 use glam::{DMat4, IVec2, Mat4, Vec2, Vec3};
 
 /// One level: a window of `pages`² pages over its view's uv square.

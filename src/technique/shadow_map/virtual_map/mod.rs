@@ -23,9 +23,9 @@ pub use pages::PagePool;
 
 use atlas::Atlas;
 
-use super::pipelines::LookupKey;
-use super::setup::FrustumParams;
-use super::uniform::{MAX_FACES, STRIDE, ShadowMapUniform};
+use super::gpu::pipelines::LookupKey;
+use super::gpu::uniform::{MAX_FACES, STRIDE, ShadowMapUniform};
+use super::projection::FrustumParams;
 use super::{CullFace, ShadowMapTechnique};
 use crate::gpu::{FrameFeedback, GpuContext, SectionTimer};
 use crate::scene::Aabb;
@@ -262,7 +262,7 @@ impl VirtualState {
 
 impl ShadowMapTechnique {
     /// The frame of a light with `paging=virtual`.
-    pub(super) fn render_virtual(
+    pub(in crate::technique::shadow_map) fn render_virtual(
         &mut self,
         ctx: &MaskContext,
         encoder: &mut wgpu::CommandEncoder,

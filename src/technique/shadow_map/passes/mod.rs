@@ -3,13 +3,15 @@
 //! a directional light, to those that can shadow what the camera sees),
 //! the moment blur, the edge mask's chain and the screen-space lookup.
 
-use super::bias_cap::bias_clamp;
-use super::caster_cull::CasterCull;
-use super::depth_pass::{Casters, DepthDraw, DepthPassKey, Surfaces};
-use super::edge_mask::{ChainInput, ChainSource};
-use super::maps::Maps;
-use super::pipelines::LookupKey;
-use super::uniform::slot_offset;
+mod debug;
+
+use super::gpu::depth_pass::{Casters, DepthDraw, DepthPassKey, Surfaces};
+use super::gpu::edge_mask::{ChainInput, ChainSource};
+use super::gpu::maps::Maps;
+use super::gpu::pipelines::LookupKey;
+use super::gpu::uniform::slot_offset;
+use super::projection::bias_cap::bias_clamp;
+use super::projection::caster_cull::CasterCull;
 use super::{LightSetup, ShadowMapTechnique, clear_op};
 use crate::gpu::Stamps;
 use crate::scene::{Light, LightType};
@@ -17,7 +19,7 @@ use crate::technique::MaskContext;
 use crate::technique::light_space::outside_clip_volume;
 
 /// What every light sample's passes share in one frame.
-pub(super) struct SamplePasses<'a> {
+pub(in crate::technique::shadow_map) struct SamplePasses<'a> {
     pub maps: &'a Maps,
     /// The technique's bind group while the maps are rendered (no maps).
     pub render_group: wgpu::BindGroup,
@@ -80,7 +82,7 @@ impl ShadowMapTechnique {
 
     /// Light sample `si`'s maps: each face's depth pass, then the moment
     /// blur. Returns the triangles drawn.
-    pub(super) fn record_maps(
+    pub(in crate::technique::shadow_map) fn record_maps(
         &self,
         ctx: &MaskContext,
         encoder: &mut wgpu::CommandEncoder,
@@ -193,7 +195,7 @@ impl ShadowMapTechnique {
     /// chain where there is one; timed by `stamps` (the chain also by
     /// `chain_stamps`). One sample writes the mask; several add 1/N each
     /// onto a cleared mask.
-    pub(super) fn record_lookup(
+    pub(in crate::technique::shadow_map) fn record_lookup(
         &self,
         ctx: &MaskContext,
         encoder: &mut wgpu::CommandEncoder,

@@ -1,4 +1,4 @@
-//! Trapezoidal shadow maps, TSM (Martin & Tan 2004; SEEDS §5): in the
+//! Trapezoidal shadow maps, TSM (Martin & Tan 2004; [000] §4, [001] §3, [002] §2): in the
 //! light's image plane, the trapezoid around the camera's view (clipped to
 //! the scene) whose top and base are perpendicular to the view's centre
 //! line is mapped projectively onto the square map. Its apex is placed so
@@ -10,9 +10,9 @@
 //! ξ = 0.6 when η = λδ'(1 − ξ) / ((1 + ξ)λ − 2δ') (their η with the sign
 //! of ξ flipped: their y runs the other way).
 
-use super::setup::linear_depth_row;
-use super::warp::Warped;
+use super::Warped;
 use crate::scene::{Aabb, Camera};
+use crate::technique::shadow_map::projection::setup::linear_depth_row;
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
 /// Where the focus region's far end lands in the map's [−1, 1] (80 %).
@@ -120,8 +120,12 @@ pub fn tsm(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::technique::shadow_map::setup::{clip_to_bounds, light_view_of_scene, slice_corners};
-    use crate::technique::shadow_map::warp::tests::{assert_magnifies_near_the_camera, ndc};
+    use crate::technique::shadow_map::projection::setup::{
+        clip_to_bounds, light_view_of_scene, slice_corners,
+    };
+    use crate::technique::shadow_map::projection::warp::tests::{
+        assert_magnifies_near_the_camera, ndc,
+    };
 
     fn setting() -> (Camera, Aabb, Vec3) {
         let scene = Aabb {

@@ -1,18 +1,21 @@
 //! Light-space perspective shadow maps, LiSPSM (Wimmer, Scherzer &
-//! Purgathofer 2004; SEEDS §5): a perspective transform inside the light's
+//! Purgathofer 2004; [000] §4, [001] §3, [002] §2): a perspective transform inside the light's
 //! view, its axis along the view direction projected onto the light's
 //! plane, spends more of the map near the camera. The projection centre
 //! stands n_opt = (z_n + √(z_n·z_f)) / sin γ before the body (γ the angle
 //! between view and light directions); as γ → 0 (light along the view) n
 //! grows without bound and the warp relaxes to the uniform map.
 
-use super::partition_params::{Warp, WarpParams};
-use super::perspective::psm;
+mod psm;
+mod tsm;
+
+use self::psm::psm;
+use self::tsm::tsm;
 use super::setup::{
     LightSetup, clip_to_bounds, light_view_of_scene, linear_depth_row, slice_corners, view_reach,
 };
-use super::trapezoid::tsm;
 use crate::scene::{Aabb, Camera};
+use crate::technique::shadow_map::config::partition::{Warp, WarpParams};
 use glam::{Mat4, Vec3, Vec4};
 
 /// Below this sin γ the light runs along the view: no warp (uniform map).
@@ -237,7 +240,8 @@ pub(super) mod tests {
             max: Vec3::new(50.0, 10.0, 50.0),
         };
         let cam = Camera::new(Vec3::new(0.0, 2.0, 40.0), Vec3::new(0.0, 0.0, 0.0));
-        let body = crate::technique::shadow_map::setup::slice_corners(&cam, 1.5, 0.5, 80.0);
+        let body =
+            crate::technique::shadow_map::projection::setup::slice_corners(&cam, 1.5, 0.5, 80.0);
         let light = Vec3::new(1.0, -1.0, 0.2);
         let w = lispsm(&cam, light, &scene, &body, (0.5, 80.0), 0.0).unwrap();
         for p in body {

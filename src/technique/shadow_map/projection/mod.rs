@@ -5,21 +5,30 @@
 //! default), to what the camera saw (`cascades`, `depth_bounds`), and the
 //! warps (`warp`, `trapezoid`).
 
-use super::depth_bounds::{DepthReduction, ReduceInputs, SpotImage};
-use super::setup::Turn;
-use super::setup::ViewFit;
-use super::{
-    Cascades, Fit, FrustumParams, LightSetup, Omni, Roll, ShadowMapTechnique, Warp, cascades,
-    light_setup, setup, warp,
-};
+pub(super) mod bias_cap;
+pub mod cascades;
+pub(super) mod caster_cull;
+pub(super) mod depth_bounds;
+pub(super) mod roll;
+pub mod setup;
+pub(super) mod spot_focus;
+pub(super) mod stable_window;
+pub mod warp;
+
+use self::depth_bounds::{DepthReduction, ReduceInputs, SpotImage};
+use self::setup::Turn;
+use self::setup::ViewFit;
+use self::setup::{LightSetup, light_setup};
+use super::{Cascades, Fit, Omni, Roll, ShadowMapTechnique, Warp};
 use crate::scene::{Light, LightType};
 use crate::technique::MaskContext;
 use anyhow::Result;
+use glam::Vec2;
 
 impl ShadowMapTechnique {
     /// The setups of `lights` for this frame, seen with `aspect`; with
     /// SDSM, records (or waits for) the reduction of the frame's G-buffer.
-    pub(super) fn light_setups(
+    pub(in crate::technique::shadow_map) fn light_setups(
         &mut self,
         ctx: &MaskContext,
         encoder: &mut wgpu::CommandEncoder,
@@ -191,6 +200,42 @@ impl ShadowMapTechnique {
                 ViewFit::Depths { near, far }
             }
             _ => ViewFit::Frustum,
+        }
+    }
+}
+
+/// The user's choices for the light frustum (0 = fitted).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FrustumParams {
+    pub near: f32,
+    pub far: f32,
+    pub fov_deg: f32,
+    /// Point lights: two paraboloid hemispheres instead of six faces.
+    pub paraboloid: bool,
+    /// Directional lights and focused spot maps: the fitted window's sides
+    /// rounded up to eighths of an octave and its centre snapped to whole
+    /// texels of a map of `size`², so that small camera moves leave the
+    /// texel grid in place.
+    pub stabilize_size: Option<u32>,
+    /// The same, stabilised: the previous frame's half-extents, each kept
+    /// while the fit's [`stable_window::Hold`] keeps it (hysteresis: a size at a rounding
+    /// step does not flip from frame to frame, moving every texel edge).
+    pub previous_half: Option<Vec2>,
+    /// Directional, one map: what its window is fitted to; spot lights:
+    /// `Samples` focuses the map on them (`spot_focus`), in the light's
+    /// image (x/−z, y/−z) rather than its view.
+    pub view_fit: ViewFit,
+    /// Directional, one map: how it is turned about the light.
+    pub turn: Turn,
+}
+
+impl FrustumParams {
+    /// These parameters with last frame's window dropped where `turn`
+    /// differs from last frame's ([`Turn::keeps_window`]).
+    pub(super) fn kept_under(&self, turn: usize) -> FrustumParams {
+        FrustumParams {
+            previous_half: self.previous_half.filter(|_| self.turn.keeps_window(turn)),
+            ..*self
         }
     }
 }

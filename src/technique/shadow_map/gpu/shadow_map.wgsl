@@ -1,4 +1,4 @@
-// Shadow maps (SEEDS §5): the uniform, bindings and projections shared by
+// Shadow maps ([000] §4, [001] §3, [002] §2): the uniform, bindings and projections shared by
 // the depth pass (depth_pass.wgsl), the filters (filters.wgsl), the
 // screen-space lookup that writes the visibility mask (lookup.wgsl) and the
 // debug views (debug.wgsl), composed in that order after common.wgsl,

@@ -3,13 +3,14 @@
 //! ([`ShadowMapShared`]), and the lookup's pipelines, specialised by
 //! filter, taps, depth format, receiver-plane bias and map shape and taken
 //! from the device's bounded cache. The depth pass's are in
-//! [`super::depth_pass`].
+//! [`crate::technique::shadow_map::gpu::depth_pass`].
 
-use super::config::Filter;
-use super::setup::LightSetup;
+use super::{LOOKUP_FORMAT, MOMENT_FORMAT, PART_FORMAT, placeholder};
 use crate::frame::MASK_FORMAT;
 use crate::gpu::GpuContext;
 use crate::technique::params::{Choice, choice_enum};
+use crate::technique::shadow_map::config::Filter;
+use crate::technique::shadow_map::projection::setup::LightSetup;
 
 choice_enum! {
     /// How a light's map faces project (`PROJECTION_*` in the shaders):
@@ -63,7 +64,7 @@ impl MapShape {
     }
 
     /// The values of the shape's pipeline-overridable constants.
-    pub(super) fn constants(self) -> [(&'static str, f64); 3] {
+    pub(in crate::technique::shadow_map) fn constants(self) -> [(&'static str, f64); 3] {
         [
             ("PROJECTION", self.projection.index() as f64),
             ("CASCADED", self.cascaded as u32 as f64),
@@ -71,14 +72,6 @@ impl MapShape {
         ]
     }
 }
-
-/// The debug frame's numbers per pixel: texel footprint (pixels per texel)
-/// and the partition looked up (see [`crate::technique::MapLookup`]).
-pub const LOOKUP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
-/// Format of the moment maps (vsm, esm, evsm, msm).
-pub const MOMENT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
-/// Format of the part maps (`part_ids`): a convex part's scene-wide ID.
-pub const PART_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
 /// What a lookup pipeline depends on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -124,27 +117,10 @@ impl LookupKey {
     }
 }
 
-/// A 1×1 array texture bound in place of a map that is not in use.
-pub fn placeholder(device: &wgpu::Device, format: wgpu::TextureFormat) -> wgpu::TextureView {
-    crate::gpu::texture_2d(
-        device,
-        "shadow map placeholder",
-        1,
-        1,
-        1,
-        format,
-        wgpu::TextureUsages::TEXTURE_BINDING,
-    )
-    .create_view(&wgpu::TextureViewDescriptor {
-        dimension: Some(wgpu::TextureViewDimension::D2Array),
-        ..Default::default()
-    })
-}
-
 pub struct ShadowMapShared {
     pub layout: wgpu::BindGroupLayout,
-    pub(super) pipeline_layout: wgpu::PipelineLayout,
-    pub(super) module: wgpu::ShaderModule,
+    pub(in crate::technique::shadow_map) pipeline_layout: wgpu::PipelineLayout,
+    pub(in crate::technique::shadow_map) module: wgpu::ShaderModule,
     pub compare_sampler: wgpu::Sampler,
     pub placeholder_bytes: wgpu::TextureView,
     /// Bound in place of the maps while they are rendered.

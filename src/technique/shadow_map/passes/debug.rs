@@ -2,16 +2,17 @@
 //! projected onto the scene (tinted per cascade), the texels per pixel, and
 //! the numbers `compare` reads (texel footprint, partition looked up).
 
-use super::pipelines::{LOOKUP_FORMAT, LookupKey};
-use super::{ShadowMapTechnique, clear_op};
 use crate::gpu::GpuContext;
+use crate::technique::shadow_map::gpu::LOOKUP_FORMAT;
+use crate::technique::shadow_map::gpu::pipelines::LookupKey;
+use crate::technique::shadow_map::{ShadowMapTechnique, clear_op};
 use crate::technique::{DebugImage, DebugViews, MapLookup, MaskContext, frustum_lines};
 use anyhow::Result;
 
 impl ShadowMapTechnique {
     /// With debug views on, renders them from the lookup bind group at
     /// `offset` (the last map sample's face 0).
-    pub(super) fn render_debug(
+    pub(in crate::technique::shadow_map) fn render_debug(
         &mut self,
         ctx: &MaskContext,
         encoder: &mut wgpu::CommandEncoder,
@@ -99,7 +100,10 @@ impl ShadowMapTechnique {
         pass.draw(0..3, 0..1);
     }
 
-    pub(super) fn read_debug_views(&self, gpu: &GpuContext) -> Result<DebugViews> {
+    pub(in crate::technique::shadow_map) fn read_debug_views(
+        &self,
+        gpu: &GpuContext,
+    ) -> Result<DebugViews> {
         let mut views = DebugViews::default();
         if !self.last_paraboloid {
             for m in &self.last_faces {
@@ -148,7 +152,10 @@ impl ShadowMapTechnique {
         Ok(views)
     }
 
-    pub(super) fn read_map_lookup(&self, gpu: &GpuContext) -> Result<Option<MapLookup>> {
+    pub(in crate::technique::shadow_map) fn read_map_lookup(
+        &self,
+        gpu: &GpuContext,
+    ) -> Result<Option<MapLookup>> {
         let Some([_, _, lookup]) = &self.debug_frame else {
             return Ok(None);
         };

@@ -1,4 +1,4 @@
-//! Edge-masked filtering (`edge_mask=true`; 000 §4.3: PCF only at shadow
+//! Edge-masked filtering (`edge_mask=true`; [000] §4.3: PCF only at shadow
 //! silhouettes): a chain of depth bounds of the map (`edge_mask.wgsl`: per
 //! cell, two parallel planes that every stored depth lies between — on a
 //! flat or sloped surface they follow it, elsewhere they are the least and
@@ -14,7 +14,7 @@
 //! the one part all its texels came from, or [`MIXED_PART`]. A cell of the
 //! receiver's own part is lit whatever its depths; a mixed one is an edge.
 
-use super::pipelines::{PART_FORMAT, placeholder};
+use super::{PART_FORMAT, placeholder};
 use crate::gpu::GpuContext;
 use anyhow::Result;
 use std::sync::Arc;

@@ -3,24 +3,29 @@
 //! parameter once; the enums carry the choices into Rust and, as generated
 //! WGSL constants and pipeline-overridable constants, into the shaders.
 
+pub mod filter;
+pub mod paging;
+pub mod partition;
+pub(super) mod presets;
+
 use crate::scene::LightType;
 use crate::technique::params::{CasterAlpha, Condition, LightKinds, choice_enum};
 use crate::technique::{ParamSpec, ParamValues};
 use anyhow::Result;
 
-use super::filter_params::{
+use self::filter::{
     BLEEDING_REDUCTION, BLOCKER_SEARCH, BLUR, EXPONENT, EXPONENT_NEGATIVE, LIGHT_SIZE, MOMENT_BIAS,
     VARWIDTH_EXPONENT, VARWIDTH_SCALE,
 };
-use super::paging_params::{
+use self::paging::{
     CLIPMAP_LEVELS, PAGE_SIZE, PAGING, POOL, REFINE_STEPS, TEXELS_PER_PIXEL, VIRTUAL_SIZE,
 };
-pub use super::paging_params::{Paging, PagingConfig};
-use super::partition_params::{
+pub use self::paging::{Paging, PagingConfig};
+use self::partition::{
     BLEND, CASCADES, FIT, LISPSM_N, MAX_DISTANCE, ROLL, SELECT, SPLIT_LAMBDA, STABILIZE, TSM_FOCUS,
     WARP,
 };
-pub use super::partition_params::{Cascades, Fit, Roll, Select, Warp, WarpParams};
+pub use self::partition::{Cascades, Fit, Roll, Select, Warp, WarpParams};
 
 choice_enum! {
     /// The lookup's filter.
@@ -218,7 +223,7 @@ pub const NORMAL_OFFSET_LOCAL: ParamSpec = ParamSpec::float(
 pub const EDGE_MASK: ParamSpec = ParamSpec::boolean(
     "edge_mask",
     false,
-    "grid, disk, pcss, varwidth: a chain of depth bounds of the map (per block, two planes that follow a flat or sloped surface, or its least and greatest depth) classifies each pixel as lit, shadowed or at a shadow edge from 4 texels covering its kernel, compared along the receiver plane with receiver_plane=true, with part_ids a cell of the receiver's own convex part counts as lit; where the chain finds an edge and the kernel reaches at most 2.5 texels, the texels it reads are compared one by one; only edge pixels run the kernel (PCF at shadow silhouettes, 000 §4.3); the mask is the full kernel's",
+    "grid, disk, pcss, varwidth: a chain of depth bounds of the map (per block, two planes that follow a flat or sloped surface, or its least and greatest depth) classifies each pixel as lit, shadowed or at a shadow edge from 4 texels covering its kernel, compared along the receiver plane with receiver_plane=true, with part_ids a cell of the receiver's own convex part counts as lit; where the chain finds an edge and the kernel reaches at most 2.5 texels, the texels it reads are compared one by one; only edge pixels run the kernel (PCF at shadow silhouettes, [000] §4.3); the mask is the full kernel's",
 )
 .when(Condition::IsNot("filter", &["vsm", "esm", "evsm2", "evsm4", "msm"]));
 

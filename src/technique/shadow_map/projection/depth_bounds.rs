@@ -5,9 +5,9 @@
 //! viewer reads the latest that has arrived, a frame late, without a stall
 //! ([`Feedback`]), and widens it for the camera's motion in between.
 
-use super::partition_params::Fit;
 use super::roll::{DIRECTIONS, Supports};
 use crate::gpu::{FrameFeedback, GpuContext, SectionTimer};
+use crate::technique::shadow_map::config::partition::Fit;
 use crate::technique::{Feedback, MaskContext};
 use anyhow::Result;
 use glam::{Mat4, UVec4, Vec3, Vec4};

@@ -1,9 +1,9 @@
 //! The shadow-map family's uniform (`ShadowMap` of shadow_map.wgsl) and
 //! its slots: one per face for the depth pass and lookup, two for the blur.
 
-use super::config::{CullFace, DepthFormat, Select, ShadowMapConfig};
-use super::setup::LightSetup;
 use crate::scene::Light;
+use crate::technique::shadow_map::config::{CullFace, DepthFormat, Select, ShadowMapConfig};
+use crate::technique::shadow_map::projection::setup::LightSetup;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec3, Vec4};
 

@@ -4,8 +4,8 @@
 //! to what the camera sees (wgpu's [0, 1] depth).
 
 use super::roll::{self, AxisClearance, Supports};
-use super::spot_focus;
 use super::stable_window::{Hold, Window, stabilized, widen_for_kernels, xy_box};
+use super::{FrustumParams, spot_focus};
 use crate::scene::{Aabb, Camera, Light, LightType};
 use crate::technique::light_space::up_for;
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -108,42 +108,6 @@ pub fn cube_views(pos: Vec3) -> [Mat4; 6] {
     ]
 }
 
-/// The user's choices for the light frustum (0 = fitted).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct FrustumParams {
-    pub near: f32,
-    pub far: f32,
-    pub fov_deg: f32,
-    /// Point lights: two paraboloid hemispheres instead of six faces.
-    pub paraboloid: bool,
-    /// Directional lights and focused spot maps: the fitted window's sides
-    /// rounded up to eighths of an octave and its centre snapped to whole
-    /// texels of a map of `size`², so that small camera moves leave the
-    /// texel grid in place.
-    pub stabilize_size: Option<u32>,
-    /// The same, stabilised: the previous frame's half-extents, each kept
-    /// while the fit's [`Hold`] keeps it (hysteresis: a size at a rounding
-    /// step does not flip from frame to frame, moving every texel edge).
-    pub previous_half: Option<Vec2>,
-    /// Directional, one map: what its window is fitted to; spot lights:
-    /// `Samples` focuses the map on them (`spot_focus`), in the light's
-    /// image (x/−z, y/−z) rather than its view.
-    pub view_fit: ViewFit,
-    /// Directional, one map: how it is turned about the light.
-    pub turn: Turn,
-}
-
-impl FrustumParams {
-    /// These parameters with last frame's window dropped where `turn`
-    /// differs from last frame's ([`Turn::keeps_window`]).
-    fn kept_under(&self, turn: usize) -> FrustumParams {
-        FrustumParams {
-            previous_half: self.previous_half.filter(|_| self.turn.keeps_window(turn)),
-            ..*self
-        }
-    }
-}
-
 /// How a directional light's single map, or a focused spot light's, is
 /// turned about the light.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -169,7 +133,7 @@ impl Turn {
 
     /// Whether last frame's window may be kept under `turn`: a turned grid
     /// moved every texel anyway.
-    fn keeps_window(self, turn: usize) -> bool {
+    pub(super) fn keeps_window(self, turn: usize) -> bool {
         match self {
             Turn::Fitted { previous } => previous == Some(turn),
             Turn::Upright => true,

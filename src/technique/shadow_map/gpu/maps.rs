@@ -4,9 +4,9 @@
 //! `part_ids`, with per-layer views to render into and array views to look
 //! up.
 
-use super::config::DepthFormat;
-use super::pipelines::{MOMENT_FORMAT, PART_FORMAT};
+use super::{MOMENT_FORMAT, PART_FORMAT};
 use crate::gpu::GpuContext;
+use crate::technique::shadow_map::config::DepthFormat;
 use anyhow::Result;
 
 /// Per-layer views and the array view of one texture array.

@@ -31,7 +31,7 @@ struct DebugFrame {
     // The map's stored depth where each pixel projects (grey, tinted by
     // cascade: red, green, blue, yellow, …; dark red outside the map).
     @location(0) projection: vec4f,
-    // Shadow-map texels per screen pixel (SEEDS §5's aliasing measure
+    // Shadow-map texels per screen pixel (the aliasing measure of [001] §3
     // d = ds·rs/ri·cosα/cosβ, measured with screen derivatives), log2-coloured:
     // blue < 1/4 (undersampled: aliasing), green 1, red > 4 (oversampled).
     @location(1) texels: vec4f,

@@ -4,13 +4,14 @@
 //! pipelines themselves, with the bare `stage=floor` pass
 //! (`depth_pass.wgsl`).
 
-use super::config::{CullFace, DepthFormat, Filter};
-use super::pipelines::{MOMENT_FORMAT, MapProjection, MapShape, PART_FORMAT, ShadowMapShared};
+use super::pipelines::{MapProjection, MapShape, ShadowMapShared};
+use super::{MOMENT_FORMAT, PART_FORMAT};
 use crate::frame::{DrawCall, VERTEX_LAYOUT};
 use crate::gpu::GpuContext;
 use crate::scene::AlphaMode;
 use crate::scene::topology::SolidKind;
 use crate::technique::params::{BlendedCasters, CasterAlpha, Choice};
+use crate::technique::shadow_map::config::{CullFace, DepthFormat, Filter};
 
 /// What a depth-pass pipeline depends on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

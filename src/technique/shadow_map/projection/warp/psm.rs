@@ -1,4 +1,4 @@
-//! Perspective shadow maps, PSM (Stamminger & Drettakis 2002; SEEDS §5):
+//! Perspective shadow maps, PSM (Stamminger & Drettakis 2002; [000] §4, [001] §3, [002] §2):
 //! the map is rendered in the camera's post-perspective space (PPS), where
 //! objects near the camera are already large. A directional light becomes
 //! a point light there, at h = M·(−L, 0) with M the camera's view-projection:
@@ -16,9 +16,11 @@
 //! the view until every caster that can shade the visible part of the scene
 //! stands at least the view's near depth before its eye.
 
-use super::setup::{clip_to_bounds, light_view_of_scene, linear_depth_row};
-use super::warp::Warped;
+use super::Warped;
 use crate::scene::{Aabb, Camera};
+use crate::technique::shadow_map::projection::setup::{
+    clip_to_bounds, light_view_of_scene, linear_depth_row,
+};
 use glam::{DMat4, DVec3, DVec4, Mat4, Vec3};
 
 /// Below this |h.w| / |h.xyz| the light runs across the view: it stays a
@@ -214,8 +216,10 @@ fn rows(x: DVec4, y: DVec4, w: DVec4) -> DMat4 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::technique::shadow_map::setup::slice_corners;
-    use crate::technique::shadow_map::warp::tests::{assert_magnifies_near_the_camera, ndc};
+    use crate::technique::shadow_map::projection::setup::slice_corners;
+    use crate::technique::shadow_map::projection::warp::tests::{
+        assert_magnifies_near_the_camera, ndc,
+    };
 
     fn setting() -> (Camera, Aabb) {
         let scene = Aabb {

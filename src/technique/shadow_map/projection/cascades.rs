@@ -1,5 +1,5 @@
 //! Cascaded (parallel-split) shadow maps for directional lights (Zhang et
-//! al. 2006, SEEDS §5): the view depth [n, f] cut at
+//! al. 2006, [000] §4, [001] §3, [002] §2): the view depth [n, f] cut at
 //! z_i = λ·n·(f/n)^(i/N) + (1−λ)·(n + (f−n)·i/N), one orthographic map per
 //! slice. A stabilised cascade bounds its slice by a sphere, whose radius
 //! does not change when the camera moves or turns, and snaps its centre to
@@ -8,10 +8,10 @@
 //! extent, as fixed as the sphere.
 
 use super::depth_bounds::SeenBounds;
-use super::partition_params::{Cascades, Fit};
 use super::setup::{CascadeSplit, LightSetup, light_view_of_scene, slice_corners, view_reach};
 use super::stable_window::{Window, quantize_down, quantize_up, widen_for_kernels, xy_box};
 use crate::scene::{Aabb, Camera};
+use crate::technique::shadow_map::config::partition::{Cascades, Fit};
 use glam::{Vec2, Vec3};
 
 /// The `count + 1` split distances from `near` to `far` (view depth).
@@ -177,8 +177,8 @@ pub fn cascade_setup(
 
 #[cfg(test)]
 mod tests {
-    use super::super::partition_params::Select;
     use super::*;
+    use crate::technique::shadow_map::config::partition::Select;
     use glam::{Mat4, Vec4};
 
     /// The NDC position of `p` in `face`.
@@ -281,8 +281,10 @@ mod tests {
 
     #[test]
     fn stable_sizes_are_eighth_octaves_and_centres_whole_texels() {
-        use crate::technique::shadow_map::setup::FrustumParams;
-        use crate::technique::shadow_map::stable_window::{Hold, Window, quantize_up, stabilized};
+        use crate::technique::shadow_map::projection::FrustumParams;
+        use crate::technique::shadow_map::projection::stable_window::{
+            Hold, Window, quantize_up, stabilized,
+        };
         assert!((quantize_up(1.0) - 1.0).abs() < 1e-6);
         assert!((quantize_up(1.01) - 2f32.powf(0.125)).abs() < 1e-5);
         // log2 100 = 6.644: the next eighth is 54/8.

@@ -6,7 +6,7 @@
 //! while it still holds what is needed ([`Hold`]); and the window around
 //! a fitted box, widened for the kernels that read past it.
 
-use super::setup::FrustumParams;
+use super::FrustumParams;
 use crate::scene::Aabb;
 use glam::Vec2;
 
@@ -154,8 +154,9 @@ pub fn stabilized(need: Window, fp: &FrustumParams, hold: Hold) -> Window {
 mod tests {
     use super::*;
     use crate::scene::{Aabb, Camera, Light};
-    use crate::technique::shadow_map::roll::Supports;
-    use crate::technique::shadow_map::setup::{FrustumParams, ViewFit, directional_setup};
+    use crate::technique::shadow_map::projection::FrustumParams;
+    use crate::technique::shadow_map::projection::roll::Supports;
+    use crate::technique::shadow_map::projection::setup::{ViewFit, directional_setup};
     use glam::{Vec2, Vec3};
 
     /// A sun straight down over a 200 × 200 floor and a narrow camera 10 m

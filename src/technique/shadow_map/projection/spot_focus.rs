@@ -19,8 +19,8 @@
 //! 640×360: square 0.43 %, the box 0.95 %, the box widened to at most
 //! 1.19 : 1 still 0.48 %).
 
+use super::FrustumParams;
 use super::roll::{AxisClearance, Supports, TURNS, turn_angle, world_axes_in_perspective_image};
-use super::setup::FrustumParams;
 use super::stable_window::{Hold, Window, stabilized, widen_for_kernels};
 use glam::{Mat4, Vec2};
 

@@ -1,5 +1,5 @@
 //! The shadow-map family's presets: named sets of parameter values (the
-//! table in [`super::config`]), each with the measurement that chose it.
+//! table in [`crate::technique::shadow_map::config`]), each with the measurement that chose it.
 
 use crate::technique::Preset;
 
