@@ -118,3 +118,164 @@ fn lower_layers_import_nothing_above_them() {
         assert!(extra.is_empty(), "`{module}` imports {extra:?}");
     }
 }
+
+/// A file's module path under `src/` (`technique::shadow_map::gpu`).
+fn module_path(src: &Path, file: &Path) -> Vec<String> {
+    let mut parts: Vec<String> = file
+        .strip_prefix(src)
+        .unwrap()
+        .with_extension("")
+        .iter()
+        .map(|s| s.to_string_lossy().into_owned())
+        .collect();
+    if matches!(
+        parts.last().map(String::as_str),
+        Some("mod" | "lib" | "main")
+    ) {
+        parts.pop();
+    }
+    parts
+}
+
+/// The module paths a file names with `crate::…` or `super::…` (a brace
+/// group's names each), resolved against the file's own module `me`;
+/// tests and comments left out.
+fn named_paths(source: &str, me: &[String]) -> Vec<Vec<String>> {
+    let code = source
+        .split("#[cfg(test)]\nmod tests")
+        .next()
+        .unwrap()
+        .lines()
+        .map(|l| l.split("//").next().unwrap())
+        .collect::<Vec<_>>()
+        .join("\n");
+    let ident = |c: char| c.is_alphanumeric() || c == '_';
+    let mut found = vec![];
+    let bytes = code.as_bytes();
+    let mut i = 0;
+    while i < code.len() {
+        if !code.is_char_boundary(i) {
+            i += 1;
+            continue;
+        }
+        let at_word = i == 0 || !ident(bytes[i - 1] as char);
+        let rest = &code[i..];
+        if !(at_word && (rest.starts_with("crate::") || rest.starts_with("super::"))) {
+            i += 1;
+            continue;
+        }
+        let len = rest
+            .find(|c: char| !(ident(c) || c == ':'))
+            .unwrap_or(rest.len());
+        let path: Vec<&str> = rest[..len].split("::").filter(|s| !s.is_empty()).collect();
+        let mut base: Vec<String> = if path[0] == "crate" {
+            vec![]
+        } else {
+            me.to_vec()
+        };
+        let mut segs = &path[..];
+        if path[0] == "crate" {
+            segs = &segs[1..];
+        }
+        while segs.first() == Some(&"super") {
+            base.pop();
+            segs = &segs[1..];
+        }
+        base.extend(segs.iter().map(|s| s.to_string()));
+        let after = &rest[len..];
+        if let Some(group) = after.strip_prefix('{') {
+            let inner = &group[..group.find('}').unwrap_or(group.len())];
+            for name in inner.split(',') {
+                let first = name.trim().split("::").next().unwrap().trim();
+                if !first.is_empty() && first != "self" {
+                    let mut p = base.clone();
+                    p.push(first.to_string());
+                    found.push(p);
+                }
+            }
+        }
+        found.push(base);
+        i += len.max(1);
+    }
+    found
+}
+
+/// No two children of any module import each other, directly or around a
+/// circle (children import their parent; a parent composes its children).
+#[test]
+fn no_sibling_modules_import_each_other_in_a_circle() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = vec![];
+    rust_files(&src, &mut files);
+    let paths: Vec<(Vec<String>, Vec<Vec<String>>)> = files
+        .iter()
+        .map(|f| {
+            let me = module_path(&src, f);
+            let named = named_paths(&std::fs::read_to_string(f).unwrap(), &me);
+            (me, named)
+        })
+        .collect();
+    let modules: BTreeSet<Vec<String>> = paths.iter().map(|(m, _)| m.clone()).collect();
+    let mut circles = vec![];
+    for parent in modules.iter().chain(std::iter::once(&vec![])) {
+        let children: BTreeSet<&String> = modules
+            .iter()
+            .filter(|m| m.len() == parent.len() + 1 && m.starts_with(parent))
+            .map(|m| m.last().unwrap())
+            .collect();
+        let mut edges: BTreeMap<&String, BTreeSet<&String>> = BTreeMap::new();
+        for (me, named) in &paths {
+            if me.len() <= parent.len() || !me.starts_with(parent) {
+                continue;
+            }
+            let from = &me[parent.len()];
+            for p in named {
+                if p.len() > parent.len() && p.starts_with(parent) {
+                    if let Some(to) = children.get(&p[parent.len()]) {
+                        if *to != from {
+                            edges
+                                .entry(children.get(from).unwrap())
+                                .or_default()
+                                .insert(to);
+                        }
+                    }
+                }
+            }
+        }
+        // A circle: a child that reaches itself.
+        for start in &children {
+            let mut seen = BTreeSet::new();
+            let mut stack: Vec<&String> = edges.get(start).into_iter().flatten().copied().collect();
+            while let Some(m) = stack.pop() {
+                if m == *start {
+                    circles.push(format!("{}::{start}", parent.join("::")));
+                    break;
+                }
+                if seen.insert(m) {
+                    stack.extend(edges.get(m).into_iter().flatten().copied());
+                }
+            }
+        }
+    }
+    assert!(
+        circles.is_empty(),
+        "modules in an import circle with a sibling: {circles:?}"
+    );
+}
+
+/// The resolver: `super` and brace groups, against the file's module.
+#[test]
+fn paths_resolve_against_the_module() {
+    let me: Vec<String> = ["technique", "shadow_map", "gpu"]
+        .map(String::from)
+        .to_vec();
+    let found = named_paths(
+        "use super::{config::Filter, projection};\nlet x = crate::scene::Aabb::new();\n// super::ignored\n",
+        &me,
+    );
+    let s = |p: &[&str]| p.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+    assert!(found.contains(&s(&["technique", "shadow_map", "config"])));
+    assert!(found.contains(&s(&["technique", "shadow_map", "projection"])));
+    assert!(found.contains(&s(&["scene", "Aabb", "new"])));
+    assert!(!found.iter().any(|p| p.contains(&"ignored".to_string())));
+}
