@@ -230,15 +230,15 @@ fn no_sibling_modules_import_each_other_in_a_circle() {
             }
             let from = &me[parent.len()];
             for p in named {
-                if p.len() > parent.len() && p.starts_with(parent) {
-                    if let Some(to) = children.get(&p[parent.len()]) {
-                        if *to != from {
-                            edges
-                                .entry(children.get(from).unwrap())
-                                .or_default()
-                                .insert(to);
-                        }
-                    }
+                if p.len() > parent.len()
+                    && p.starts_with(parent)
+                    && let Some(to) = children.get(&p[parent.len()])
+                    && *to != from
+                {
+                    edges
+                        .entry(children.get(from).unwrap())
+                        .or_default()
+                        .insert(to);
                 }
             }
         }
