@@ -4,6 +4,7 @@
 
 mod blit;
 mod compose;
+mod dock;
 mod gfx;
 mod heatmap;
 mod input;
@@ -487,7 +488,7 @@ impl SceneState {
             match self.techniques[li].technique.debug_views(&gfx.gpu) {
                 Ok(views) => {
                     gfx.renderer.draw_lines(&gfx.gpu, frame, &views.lines);
-                    state.debug_images = ui::debug_textures(&gfx.egui_ctx, views.images);
+                    state.debug_images = dock::debug_textures(&gfx.egui_ctx, views.images);
                 }
                 Err(e) => state.error = Some(format!("{e:#}")),
             }

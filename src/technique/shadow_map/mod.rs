@@ -179,6 +179,64 @@ impl ShadowMapTechnique {
     }
 
     /// The technique's bind group of `b`.
+    /// Starts the lookup's and the edge chain's GPU timers for `samples`
+    /// maps (cleared where the frame has no lookup or no chain).
+    fn begin_lookup_timers(
+        &mut self,
+        gpu: &GpuContext,
+        samples: u32,
+    ) -> (Option<crate::gpu::Stamps>, Option<crate::gpu::Stamps>) {
+        let stamps = match self.config.stage {
+            Stage::Full => self.lookup_timer.begin(gpu, samples),
+            // No lookup: no time, not an earlier stage's.
+            _ => {
+                self.lookup_timer.clear();
+                None
+            }
+        };
+        let chain_stamps = match &self.chain {
+            Some(_) => self.chain_timer.begin(gpu, samples),
+            None => {
+                self.chain_timer.clear();
+                None
+            }
+        };
+        (stamps, chain_stamps)
+    }
+
+    /// The lookup's bind group: every map of this frame, placeholders for
+    /// those not in use.
+    fn lookup_group(&self, ctx: &MaskContext, maps: &Maps) -> wgpu::BindGroup {
+        let shared = &self.shared;
+        self.bind_group(
+            ctx,
+            MapBindings {
+                depth: &maps.depth_array,
+                bytes: maps
+                    .byte
+                    .as_ref()
+                    .map_or(&shared.placeholder_bytes, |b| &b.1),
+                moments: maps
+                    .moment
+                    .as_ref()
+                    .map_or(&shared.placeholder_moments, |m| &m[0].1),
+                bounds: self
+                    .chain
+                    .as_ref()
+                    .map_or(&shared.placeholder_bounds, |c| &c.view),
+                bound_parts: self
+                    .chain
+                    .as_ref()
+                    .map_or(&shared.placeholder_parts, |c| &c.part_view),
+                parts: maps
+                    .part
+                    .as_ref()
+                    .map_or(&shared.placeholder_parts, |p| &p.1),
+                ..MapBindings::empty(shared, &self.uniforms)
+            },
+        )
+    }
+
     fn bind_group(&self, ctx: &MaskContext, b: MapBindings) -> wgpu::BindGroup {
         let view = |binding, v| wgpu::BindGroupEntry {
             binding,
@@ -223,6 +281,68 @@ impl ShadowMapTechnique {
     }
 }
 
+/// The depth pass's and the lookup's pipeline keys of a map that is not
+/// paged.
+fn dense_keys(
+    c: &ShadowMapConfig,
+    cull: CullFace,
+    shape: MapShape,
+    parts: bool,
+    edge_mask: bool,
+) -> (DepthPassKey, LookupKey) {
+    let (format, moments) = (c.format, c.filter.is_moment());
+    let depth_key = DepthPassKey {
+        format,
+        cull,
+        bias: c.depth_bias,
+        slope_bits: c.slope_bias.to_bits(),
+        clamp_bits: 0,
+        moments: moments.then_some(c.filter),
+        shape,
+        virtual_map: false,
+        parts,
+        cutout: false,
+        hashed: false,
+    };
+    let lookup_key = LookupKey {
+        filter: c.filter,
+        taps: if c.filter.uses_taps() { c.samples } else { 0 },
+        byte_map: format == DepthFormat::R8,
+        receiver_plane: c.receiver_plane,
+        accumulate: false,
+        edge_mask,
+        virtual_map: false,
+        marked_resident: false,
+        wide_kernel: false,
+        parts,
+        shape,
+    };
+    (depth_key, lookup_key)
+}
+
+/// The point lights a map is rendered from: an area light with `area` on
+/// becomes several samples; one light keeps its area's radius for PCSS.
+fn light_samples(c: &ShadowMapConfig, ctx: &MaskContext) -> (Vec<crate::scene::Light>, f32) {
+    // An area light with `area` on becomes several point samples.
+    let lights = if c.area && ctx.light.area.is_some() {
+        area_samples(
+            ctx.light,
+            c.area_maps as usize,
+            ctx.scene_gpu.bounds.center(),
+        )
+    } else {
+        vec![*ctx.light]
+    };
+    let area_radius = match ctx.light.area {
+        Some(crate::scene::LightArea::Sphere { radius }) if lights.len() == 1 => radius,
+        Some(crate::scene::LightArea::Rect { width, height }) if lights.len() == 1 => {
+            width.max(height) * 0.5
+        }
+        _ => 0.0,
+    };
+    (lights, area_radius)
+}
+
 fn clear_op(color: wgpu::Color) -> wgpu::Operations<wgpu::Color> {
     wgpu::Operations {
         load: wgpu::LoadOp::Clear(color),
@@ -250,23 +370,7 @@ impl ShadowTechnique for ShadowMapTechnique {
         let moments = c.filter.is_moment();
         let blur = c.moment_blur();
         let normal_offset = c.normal_offset(ctx.light.kind);
-        // An area light with `area` on becomes several point samples.
-        let lights = if c.area && ctx.light.area.is_some() {
-            area_samples(
-                ctx.light,
-                c.area_maps as usize,
-                ctx.scene_gpu.bounds.center(),
-            )
-        } else {
-            vec![*ctx.light]
-        };
-        let area_radius = match ctx.light.area {
-            Some(crate::scene::LightArea::Sphere { radius }) if lights.len() == 1 => radius,
-            Some(crate::scene::LightArea::Rect { width, height }) if lights.len() == 1 => {
-                width.max(height) * 0.5
-            }
-            _ => 0.0,
-        };
+        let (lights, area_radius) = light_samples(&c, ctx);
         let setups = self.light_setups(ctx, encoder, &lights, aspect)?;
         let layers = setups[0].faces.len() as u32;
         // Every sample of an area light has the first one's shape.
@@ -298,32 +402,8 @@ impl ShadowTechnique for ShadowMapTechnique {
         );
         ctx.gpu.queue.write_buffer(&self.uniforms, 0, &data);
         let floor = c.stage == Stage::Floor;
-        let depth_key = DepthPassKey {
-            format,
-            cull,
-            bias: c.depth_bias,
-            slope_bits: c.slope_bias.to_bits(),
-            clamp_bits: 0,
-            moments: moments.then_some(c.filter),
-            shape,
-            virtual_map: false,
-            parts,
-            cutout: false,
-            hashed: false,
-        };
-        let lookup_key = LookupKey {
-            filter: c.filter,
-            taps: if c.filter.uses_taps() { c.samples } else { 0 },
-            byte_map: format == DepthFormat::R8,
-            receiver_plane: c.receiver_plane,
-            accumulate: false,
-            edge_mask,
-            virtual_map: false,
-            marked_resident: false,
-            wide_kernel: false,
-            parts,
-            shape,
-        };
+        let (depth_key, lookup_key) = dense_keys(&c, cull, shape, parts, edge_mask);
+        let (stamps, chain_stamps) = self.begin_lookup_timers(gpu, lights.len() as u32);
         let maps = self.maps.as_ref().expect("ensured above");
         // Bind groups: none of the maps while they are rendered; the moment
         // maps as blur sources; everything for the lookup.
@@ -340,48 +420,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 )
             })
         });
-        let lookup_group = self.bind_group(
-            ctx,
-            MapBindings {
-                depth: &maps.depth_array,
-                bytes: maps
-                    .byte
-                    .as_ref()
-                    .map_or(&shared.placeholder_bytes, |b| &b.1),
-                moments: maps
-                    .moment
-                    .as_ref()
-                    .map_or(&shared.placeholder_moments, |m| &m[0].1),
-                bounds: self
-                    .chain
-                    .as_ref()
-                    .map_or(&shared.placeholder_bounds, |c| &c.view),
-                bound_parts: self
-                    .chain
-                    .as_ref()
-                    .map_or(&shared.placeholder_parts, |c| &c.part_view),
-                parts: maps
-                    .part
-                    .as_ref()
-                    .map_or(&shared.placeholder_parts, |p| &p.1),
-                ..MapBindings::empty(shared, &self.uniforms)
-            },
-        );
-        let stamps = match c.stage {
-            Stage::Full => self.lookup_timer.begin(gpu, lights.len() as u32),
-            // No lookup: no time, not an earlier stage's.
-            _ => {
-                self.lookup_timer.clear();
-                None
-            }
-        };
-        let chain_stamps = match &self.chain {
-            Some(_) => self.chain_timer.begin(gpu, lights.len() as u32),
-            None => {
-                self.chain_timer.clear();
-                None
-            }
-        };
+        let lookup_group = self.lookup_group(ctx, maps);
         let passes = passes::SamplePasses {
             maps,
             render_group,

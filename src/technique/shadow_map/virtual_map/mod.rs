@@ -14,6 +14,7 @@
 //! rendering each pass's pages before the next marks.
 
 mod atlas;
+mod frame;
 mod levels;
 mod pages;
 mod passes;
@@ -26,7 +27,7 @@ use atlas::Atlas;
 use super::gpu::pipelines::LookupKey;
 use super::gpu::uniform::{MAX_FACES, STRIDE, ShadowMapUniform};
 use super::projection::FrustumParams;
-use super::{CullFace, ShadowMapTechnique};
+use super::{CullFace, ShadowMapConfig, ShadowMapTechnique};
 use crate::gpu::{FrameFeedback, GpuContext, SectionTimer};
 use crate::scene::Aabb;
 use crate::technique::light_space::outside_clip_volume;
@@ -312,131 +313,9 @@ impl ShadowMapTechnique {
         let gpu = ctx.gpu;
         let shared = self.shared.clone();
         let p = c.paging;
-        if state
-            .atlas
-            .as_ref()
-            .is_none_or(|a| (a.page, a.capacity) != (p.page_size, p.pool))
-        {
-            state.atlas = None;
-            state.atlas = Some(Atlas::new(gpu, p.page_size, p.pool)?);
-            state.pool = PagePool::new(p.pool);
-        }
-        // Stale pages.
-        let key = CacheKey {
-            views: layout.views.iter().map(|v| v.to_cols_array()).collect(),
-            levels: layout
-                .levels
-                .iter()
-                .map(|l| (l.view, l.texel, l.pages))
-                .collect(),
-            depth_bias: c.depth_bias,
-            slope_bias: c.slope_bias.to_bits(),
-            cull: c.cull,
-        };
-        let casters = ctx
-            .scene_gpu
-            .draws
-            .iter()
-            .filter(|d| d.casts_shadow && !d.shadow_plane)
-            .map(|d| d.bounds)
-            .collect();
-        state.invalidate(&layout, key, casters);
-        let atlas = state.atlas.as_ref().expect("made above");
-        // Buffers of this layout and frame size.
-        let words = layout.table_len.div_ceil(32) as u64;
-        crate::gpu::grow_buffer(
-            &gpu.device,
-            &mut state.marks,
-            words * 4,
-            "virtual map marks",
-        );
-        if state.feedback.size() < words * 4 {
-            state.feedback =
-                FrameFeedback::new(&gpu.device, "virtual map marks read-back", words * 4);
-        }
-        crate::gpu::grow_buffer(
-            &gpu.device,
-            &mut state.table,
-            layout.table_len as u64 * 4,
-            "virtual map page table",
-        );
-        let pixels = ctx.frame.width() as u64 * ctx.frame.height() as u64;
-        crate::gpu::grow_buffer(
-            &gpu.device,
-            &mut state.pixel_levels,
-            pixels * 4,
-            "virtual map pixel levels",
-        );
-        let mut level_bytes = bytemuck::bytes_of(&MapHeader {
-            axis_u: layout.axis_u.to_array(),
-            atlas_pages: atlas.row_pages,
-            axis_v: layout.axis_v.to_array(),
-            page_texels: layout.page,
-            layer_pages: atlas.layer_pages,
-            view_levels: layout.view_levels,
-            slot_texels: atlas.slot_texels(),
-            oversample_levels: c.paging.oversample_levels,
-        })
-        .to_vec();
-        for l in &layout.levels {
-            level_bytes.extend_from_slice(bytemuck::bytes_of(&LevelGpu {
-                origin: l.origin.to_array(),
-                eye_texel: l.eye_texel.to_array(),
-                origin_page: l.origin_page.to_array(),
-                texel: l.texel,
-                view: l.view,
-                pages: l.pages,
-                table: l.table,
-                texel_world: l.texel_world,
-                parent: l.parent,
-            }));
-        }
-        crate::gpu::grow_buffer(
-            &gpu.device,
-            &mut state.levels,
-            level_bytes.len() as u64,
-            "virtual map levels",
-        );
-        gpu.queue.write_buffer(&state.levels, 0, &level_bytes);
+        let words = state.prepare(ctx, &c, &layout)?;
         // Uniforms: slot 0 marking and lookup, then one per page rendered.
-        let mut faces = [Mat4::IDENTITY; MAX_FACES];
-        for (i, f) in faces.iter_mut().zip(0..layout.views.len()) {
-            *i = layout.view_relative(f);
-        }
-        let normal_offset = c.normal_offset(ctx.light.kind);
-        let base = ShadowMapUniform {
-            faces,
-            map: Vec4::new(
-                p.virtual_size as f32,
-                1.0 / p.virtual_size as f32,
-                layout.levels[0].texel_world,
-                c.kernel_reach(),
-            ),
-            depth: Vec4::new(layout.near, layout.far, 0.0, 0.0),
-            warp: ctx.light.direction.normalize_or_zero().extend(0.0),
-            cascade_view_z: ctx.fit_camera.view().row(2),
-            ..ShadowMapUniform::with_filter(
-                &c,
-                normal_offset,
-                ctx.light.position,
-                c.cull.for_shape(layout.shape()),
-            )
-        };
-        let lookup_key = LookupKey {
-            filter: c.filter,
-            taps: if c.filter.uses_taps() { c.samples } else { 0 },
-            byte_map: false,
-            receiver_plane: c.receiver_plane,
-            accumulate: false,
-            edge_mask: false,
-            virtual_map: true,
-            marked_resident: false,
-            // The marked reach (`marked_reach()` of virtual_map.wgsl: the
-            // kernel's and half a texel) spans a page.
-            wide_kernel: 2.0 * (c.kernel_reach() + 0.5) >= p.page_size as f32,
-            parts: false,
-            shape: layout.shape(),
-        };
+        let (base, lookup_key) = page_terms(&c, ctx, &layout);
         // Adaptive maps refine a level per pass; a pass's pages are rendered
         // and submitted before the next pass marks (its edge test reads
         // them). Without waiting (the viewer) one pass a frame, marked
@@ -526,7 +405,29 @@ impl ShadowMapTechnique {
             pass.set_bind_group(crate::frame::OWN_GROUP, &lookup_group, &[0]);
             pass.draw(0..3, 0..1);
         });
-        state.counters = PageCounters {
+        state.counters =
+            PageCounters::of(&allocation, &rendered, state, &layout, passes, feedback_ms);
+        self.render_debug(ctx, encoder, &lookup_group, lookup_key, 0);
+        self.map_triangles = map_triangles;
+        self.samples = 1;
+        self.last_faces = layout.views.iter().map(|v| v.as_mat4()).collect();
+        self.last_paraboloid = false;
+        state.last_layout = Some(layout);
+        Ok(())
+    }
+}
+
+impl PageCounters {
+    /// This frame's page counts after `passes` marking passes.
+    fn of(
+        allocation: &pages::Allocation,
+        rendered: &HashSet<PageKey>,
+        state: &VirtualState,
+        layout: &VirtualLayout,
+        passes: u32,
+        feedback_ms: f64,
+    ) -> PageCounters {
+        PageCounters {
             needed: allocation.needed,
             rendered: rendered.len(),
             cached: allocation
@@ -541,15 +442,57 @@ impl ShadowMapTechnique {
             levels: layout.levels.len(),
             refine_passes: passes as usize,
             feedback_ms,
-        };
-        self.render_debug(ctx, encoder, &lookup_group, lookup_key, 0);
-        self.map_triangles = map_triangles;
-        self.samples = 1;
-        self.last_faces = layout.views.iter().map(|v| v.as_mat4()).collect();
-        self.last_paraboloid = false;
-        state.last_layout = Some(layout);
-        Ok(())
+        }
     }
+}
+
+/// A paged frame's uniform (slot 0: marking and lookup; each page's slot
+/// starts from it) and its lookup's pipeline key.
+fn page_terms(
+    c: &ShadowMapConfig,
+    ctx: &MaskContext,
+    layout: &VirtualLayout,
+) -> (ShadowMapUniform, LookupKey) {
+    let p = c.paging;
+    let mut faces = [Mat4::IDENTITY; MAX_FACES];
+    for (i, f) in faces.iter_mut().zip(0..layout.views.len()) {
+        *i = layout.view_relative(f);
+    }
+    let normal_offset = c.normal_offset(ctx.light.kind);
+    let base = ShadowMapUniform {
+        faces,
+        map: Vec4::new(
+            p.virtual_size as f32,
+            1.0 / p.virtual_size as f32,
+            layout.levels[0].texel_world,
+            c.kernel_reach(),
+        ),
+        depth: Vec4::new(layout.near, layout.far, 0.0, 0.0),
+        warp: ctx.light.direction.normalize_or_zero().extend(0.0),
+        cascade_view_z: ctx.fit_camera.view().row(2),
+        ..ShadowMapUniform::with_filter(
+            c,
+            normal_offset,
+            ctx.light.position,
+            c.cull.for_shape(layout.shape()),
+        )
+    };
+    let lookup_key = LookupKey {
+        filter: c.filter,
+        taps: if c.filter.uses_taps() { c.samples } else { 0 },
+        byte_map: false,
+        receiver_plane: c.receiver_plane,
+        accumulate: false,
+        edge_mask: false,
+        virtual_map: true,
+        marked_resident: false,
+        // The marked reach (`marked_reach()` of virtual_map.wgsl: the
+        // kernel's and half a texel) spans a page.
+        wide_kernel: 2.0 * (c.kernel_reach() + 0.5) >= p.page_size as f32,
+        parts: false,
+        shape: layout.shape(),
+    };
+    (base, lookup_key)
 }
 
 /// The page-table entries whose bit is set in `marks`.
