@@ -15,11 +15,11 @@ pub(super) mod spot_focus;
 pub(super) mod stable_window;
 pub mod warp;
 
-use self::depth_bounds::{DepthReduction, ReduceInputs, SpotImage};
+use self::depth_bounds::{DepthReduction, ReduceInputs, SeenBounds, SpotImage};
 use self::setup::Turn;
 use self::setup::ViewFit;
 use self::setup::{LightSetup, light_setup};
-use super::{Cascades, Fit, Omni, Roll, ShadowMapTechnique, Warp};
+use super::{Cascades, Fit, Omni, Roll, ShadowMapConfig, ShadowMapTechnique, Warp};
 use crate::scene::{Light, LightType};
 use crate::technique::MaskContext;
 use anyhow::Result;
@@ -39,16 +39,7 @@ impl ShadowMapTechnique {
         let size = c.size;
         // Warped maps are not stabilised.
         let stabilize = c.cascades.stabilize && c.warp.kind == Warp::None;
-        let frustum_params = FrustumParams {
-            near: c.near,
-            far: c.far,
-            fov_deg: c.fov_deg,
-            paraboloid: c.omni == Omni::DualParaboloid,
-            stabilize_size: stabilize.then_some(size),
-            previous_half: None,
-            view_fit: ViewFit::Frustum,
-            turn: Turn::Upright,
-        };
+        let frustum_params = FrustumParams::of(&c, stabilize);
         let directional = ctx.light.kind == LightType::Directional;
         let cascaded = directional && c.cascades.count > 1;
         // One unwarped map: fitted and turned by `directional_setup`.
@@ -62,33 +53,7 @@ impl ShadowMapTechnique {
                 cone_tan: (ctx.light.outer_cone_deg.to_radians()).tan(),
                 position: ctx.light.position,
             });
-        // A single warped map is fitted by its warp, not to what was seen.
-        let fits_seen = spot.is_some()
-            || (directional
-                && c.cascades.fit != Fit::Frustum
-                && (cascaded || c.warp.kind == Warp::None));
-        self.last_seen = if fits_seen {
-            let reduction = self
-                .depth_reduction
-                .get_or_insert_with(|| DepthReduction::new(ctx.gpu));
-            let inputs = ReduceInputs {
-                fit: c.cascades.fit,
-                light_view: match spot {
-                    Some(_) => setup::spot_view(ctx.light),
-                    None => {
-                        setup::light_view_of_scene(ctx.light.direction, &ctx.scene_gpu.bounds).0
-                    }
-                },
-                supports: spot.is_some() || (single && c.cascades.fit == Fit::Samples),
-                spot,
-                cascades: c.cascades.count,
-                split_lambda: c.cascades.split_lambda,
-                far_limit: c.cascades.far_limit(ctx.fit_camera.far),
-            };
-            reduction.seen(ctx, encoder, &inputs)?
-        } else {
-            None
-        };
+        self.last_seen = self.reduce_seen(ctx, encoder, spot, single, cascaded)?;
         let fitted_turn = match c.roll {
             Roll::Up => Turn::Upright,
             Roll::Square => Turn::Fitted {
@@ -177,6 +142,44 @@ impl ShadowMapTechnique {
         Ok(setups)
     }
 
+    /// SDSM: records (or waits for) the reduction of what the frame's
+    /// G-buffer shows, where this frame's maps are fitted to it.
+    fn reduce_seen(
+        &mut self,
+        ctx: &MaskContext,
+        encoder: &mut wgpu::CommandEncoder,
+        spot: Option<SpotImage>,
+        single: bool,
+        cascaded: bool,
+    ) -> Result<Option<SeenBounds>> {
+        let c = self.config;
+        let directional = ctx.light.kind == LightType::Directional;
+        // A single warped map is fitted by its warp, not to what was seen.
+        let fits_seen = spot.is_some()
+            || (directional
+                && c.cascades.fit != Fit::Frustum
+                && (cascaded || c.warp.kind == Warp::None));
+        if !fits_seen {
+            return Ok(None);
+        }
+        let reduction = self
+            .depth_reduction
+            .get_or_insert_with(|| DepthReduction::new(ctx.gpu));
+        let inputs = ReduceInputs {
+            fit: c.cascades.fit,
+            light_view: match spot {
+                Some(_) => setup::spot_view(ctx.light),
+                None => setup::light_view_of_scene(ctx.light.direction, &ctx.scene_gpu.bounds).0,
+            },
+            supports: spot.is_some() || (single && c.cascades.fit == Fit::Samples),
+            spot,
+            cascades: c.cascades.count,
+            split_lambda: c.cascades.split_lambda,
+            far_limit: c.cascades.far_limit(ctx.fit_camera.far),
+        };
+        reduction.seen(ctx, encoder, &inputs)
+    }
+
     /// What a directional light's single map is fitted to this frame: the
     /// view frustum, or (SDSM with one map) the depths or the light-view
     /// box of the pixels the camera saw, when the reduction has them.
@@ -230,6 +233,21 @@ pub struct FrustumParams {
 }
 
 impl FrustumParams {
+    /// The configuration's choices, fitted to the frustum and upright;
+    /// stabilised to texels of the map's size where `stabilize`.
+    fn of(c: &ShadowMapConfig, stabilize: bool) -> FrustumParams {
+        FrustumParams {
+            near: c.near,
+            far: c.far,
+            fov_deg: c.fov_deg,
+            paraboloid: c.omni == Omni::DualParaboloid,
+            stabilize_size: stabilize.then_some(c.size),
+            previous_half: None,
+            view_fit: ViewFit::Frustum,
+            turn: Turn::Upright,
+        }
+    }
+
     /// These parameters with last frame's window dropped where `turn`
     /// differs from last frame's ([`Turn::keeps_window`]).
     pub(super) fn kept_under(&self, turn: usize) -> FrustumParams {

@@ -9,10 +9,10 @@ use crate::scene::Aabb;
 use crate::technique::MaskContext;
 use crate::technique::light_space::outside_clip_volume;
 use crate::technique::shadow_map::gpu::depth_pass::{DepthDraw, DepthPassKey};
-use crate::technique::shadow_map::gpu::pipelines::LookupKey;
+use crate::technique::shadow_map::gpu::pipelines::{LookupKey, MapShape};
 use crate::technique::shadow_map::gpu::uniform::{MAX_FACES, STRIDE, ShadowMapUniform};
 use crate::technique::shadow_map::projection::bias_cap::texel_bias_clamp;
-use crate::technique::shadow_map::{DepthFormat, MapBindings, ShadowMapTechnique};
+use crate::technique::shadow_map::{DepthFormat, MapBindings, ShadowMapConfig, ShadowMapTechnique};
 use anyhow::Result;
 use glam::{Mat4, UVec4};
 
@@ -107,34 +107,7 @@ impl ShadowMapTechnique {
     ) -> u64 {
         let c = self.config;
         let gpu = ctx.gpu;
-        // Uniforms: slot 0 marking and lookup, then one per page rendered.
-        let slots = 1 + allocation.render.len() as u64;
-        crate::gpu::grow_buffer(
-            &gpu.device,
-            &mut state.uniforms,
-            slots * STRIDE,
-            "virtual map uniforms",
-        );
-        let page_matrices: Vec<Mat4> = allocation
-            .render
-            .iter()
-            .map(|(k, _)| layout.page_view_proj(*k))
-            .collect();
-        let mut data = vec![0u8; (slots * STRIDE) as usize];
-        data[..std::mem::size_of::<ShadowMapUniform>()].copy_from_slice(bytemuck::bytes_of(base));
-        for (i, m) in page_matrices.iter().enumerate() {
-            let mut faces = [Mat4::IDENTITY; MAX_FACES];
-            faces[0] = *m;
-            let u = ShadowMapUniform {
-                faces,
-                face: UVec4::ZERO,
-                ..*base
-            };
-            let at = ((i as u64 + 1) * STRIDE) as usize;
-            data[at..at + std::mem::size_of::<ShadowMapUniform>()]
-                .copy_from_slice(bytemuck::bytes_of(&u));
-        }
-        gpu.queue.write_buffer(&state.uniforms, 0, &data);
+        let page_matrices = write_page_uniforms(gpu, state, layout, allocation, base);
         if allocation.render.is_empty() {
             return 0;
         }
@@ -156,19 +129,7 @@ impl ShadowMapTechnique {
                     };
                     self.shared.depth_passes(
                         gpu,
-                        DepthPassKey {
-                            format: DepthFormat::D32f,
-                            cull: c.cull.for_shape(lookup_key.shape),
-                            bias: c.depth_bias,
-                            slope_bits: c.slope_bias.to_bits(),
-                            clamp_bits: clamp.to_bits(),
-                            moments: None,
-                            shape: lookup_key.shape,
-                            virtual_map: true,
-                            parts: false,
-                            cutout: false,
-                            hashed: false,
-                        },
+                        page_depth_key(&c, lookup_key.shape, clamp),
                         c.solid_front_bias,
                         c.caster_alpha,
                         &ctx.scene_gpu.draws,
@@ -236,5 +197,62 @@ impl ShadowMapTechnique {
             }
         }
         map_triangles
+    }
+}
+
+/// Writes the paged frame's uniforms — slot 0 for marking and lookup, then
+/// one per page rendered — and returns each new page's matrix.
+fn write_page_uniforms(
+    gpu: &crate::gpu::GpuContext,
+    state: &mut VirtualState,
+    layout: &VirtualLayout,
+    allocation: &Allocation,
+    base: &ShadowMapUniform,
+) -> Vec<Mat4> {
+    // Uniforms: slot 0 marking and lookup, then one per page rendered.
+    let slots = 1 + allocation.render.len() as u64;
+    crate::gpu::grow_buffer(
+        &gpu.device,
+        &mut state.uniforms,
+        slots * STRIDE,
+        "virtual map uniforms",
+    );
+    let page_matrices: Vec<Mat4> = allocation
+        .render
+        .iter()
+        .map(|(k, _)| layout.page_view_proj(*k))
+        .collect();
+    let mut data = vec![0u8; (slots * STRIDE) as usize];
+    data[..std::mem::size_of::<ShadowMapUniform>()].copy_from_slice(bytemuck::bytes_of(base));
+    for (i, m) in page_matrices.iter().enumerate() {
+        let mut faces = [Mat4::IDENTITY; MAX_FACES];
+        faces[0] = *m;
+        let u = ShadowMapUniform {
+            faces,
+            face: UVec4::ZERO,
+            ..*base
+        };
+        let at = ((i as u64 + 1) * STRIDE) as usize;
+        data[at..at + std::mem::size_of::<ShadowMapUniform>()]
+            .copy_from_slice(bytemuck::bytes_of(&u));
+    }
+    gpu.queue.write_buffer(&state.uniforms, 0, &data);
+    page_matrices
+}
+
+/// The depth pass of a page: 32-bit depth, the level's bias cap `clamp`.
+fn page_depth_key(c: &ShadowMapConfig, shape: MapShape, clamp: f32) -> DepthPassKey {
+    DepthPassKey {
+        format: DepthFormat::D32f,
+        cull: c.cull.for_shape(shape),
+        bias: c.depth_bias,
+        slope_bits: c.slope_bias.to_bits(),
+        clamp_bits: clamp.to_bits(),
+        moments: None,
+        shape,
+        virtual_map: true,
+        parts: false,
+        cutout: false,
+        hashed: false,
     }
 }
