@@ -284,32 +284,21 @@ impl Renderer {
         settings: &RenderSettings,
     ) -> Result<FrameTimings> {
         let camera = cameras.view;
-        if lights.len() > MAX_LIGHTS {
-            bail!(
-                "{} lights given; at most {MAX_LIGHTS} are supported",
-                lights.len()
-            );
-        }
-        if techniques.len() < lights.len() {
-            bail!("one technique instance per light is needed");
-        }
-        camera.validate()?;
-        for l in lights {
-            l.validate()?;
-        }
+        check_frame(camera, lights, techniques)?;
         let t0 = Instant::now();
         let needs = TechniqueNeeds::of(&techniques[..lights.len()]);
-        frame.set_uniform(
-            gpu,
+        let (width, height) = (frame.width(), frame.height());
+        let uniform_of = |seen_by: &Camera| {
             frame::frame_uniform(
                 scene,
-                camera,
+                seen_by,
                 lights,
                 needs.infinite_far_plane,
-                frame.width(),
-                frame.height(),
-            ),
-        );
+                width,
+                height,
+            )
+        };
+        frame.set_uniform(gpu, uniform_of(camera));
         let queries = match self.timer.as_mut() {
             Some(t) if settings.gpu_timing => Some(t.begin_frame()),
             _ => None,
@@ -334,21 +323,17 @@ impl Renderer {
         gpu.queue.submit([enc.finish()]);
         let separate_fit = cameras.fit != camera;
         if separate_fit {
-            let uniform = frame::frame_uniform(
-                scene,
-                cameras.fit,
-                lights,
-                needs.infinite_far_plane,
-                frame.width(),
-                frame.height(),
-            );
-            self.render_fit_prepass(gpu, scene_gpu, frame, uniform, settings)?;
+            self.render_fit_prepass(gpu, scene_gpu, frame, uniform_of(cameras.fit), settings)?;
         }
         let t1 = stage_wait()?;
 
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         gpu.set_work_stage(WorkStage::Masks);
         stamp(&mut enc, timing::MASKS, false);
+        let fit_frame = match &self.fit_frame {
+            Some(f) if separate_fit => f,
+            _ => frame,
+        };
         for (i, light) in lights.iter().enumerate() {
             let ctx = MaskContext {
                 gpu,
@@ -359,10 +344,7 @@ impl Renderer {
                 light,
                 camera,
                 fit_camera: cameras.fit,
-                fit_frame: match &self.fit_frame {
-                    Some(f) if separate_fit => f,
-                    _ => frame,
-                },
+                fit_frame,
                 target: frame.mask_layer(i),
                 feedback: settings.feedback,
             };
@@ -535,4 +517,22 @@ fn color_attachment(
             store: wgpu::StoreOp::Store,
         },
     }
+}
+/// A frame's inputs that no pass can draw: more lights than the lighting
+/// pass takes, a light without a technique, a bad camera or light.
+fn check_frame(camera: &Camera, lights: &[Light], techniques: &[TechniqueInstance]) -> Result<()> {
+    if lights.len() > MAX_LIGHTS {
+        bail!(
+            "{} lights given; at most {MAX_LIGHTS} are supported",
+            lights.len()
+        );
+    }
+    if techniques.len() < lights.len() {
+        bail!("one technique instance per light is needed");
+    }
+    camera.validate()?;
+    for l in lights {
+        l.validate()?;
+    }
+    Ok(())
 }

@@ -278,6 +278,42 @@ impl ProjectiveShadows {
     }
 }
 
+/// Each projector's uniform: its caster's frustum from the light (an
+/// identity where the caster contains the light and is skipped).
+fn projector_uniforms(
+    projectors: &[Projector],
+    frusta: &[Option<LightFrustum>],
+    config: &ProjectiveConfig,
+) -> Vec<ProjectorUniform> {
+    let ProjectiveConfig {
+        size,
+        depth_in_alpha: depth_mode,
+        alpha_bias,
+        ..
+    } = *config;
+    projectors
+        .iter()
+        .zip(frusta)
+        .map(|(p, f)| {
+            let f = f.unwrap_or(LightFrustum {
+                view: Mat4::IDENTITY,
+                proj: Mat4::IDENTITY,
+                near: 0.0,
+                far: 1.0,
+                orthographic: true,
+            });
+            ProjectorUniform {
+                view_proj: f.view_proj(),
+                view: f.view,
+                texture: f.texture_matrix(),
+                params: Vec4::new(f.near, f.far, alpha_bias, depth_mode as u32 as f32),
+                info: UVec4::new(p.object, size, 0, 0),
+                _pad: [Vec4::ZERO; 2],
+            }
+        })
+        .collect()
+}
+
 impl ShadowTechnique for ProjectiveShadows {
     fn configure(&mut self, params: &ParamValues) -> Result<()> {
         self.config = ProjectiveConfig::parse(params)?;
@@ -285,12 +321,7 @@ impl ShadowTechnique for ProjectiveShadows {
     }
 
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        let ProjectiveConfig {
-            size,
-            margin,
-            depth_in_alpha: depth_mode,
-            alpha_bias,
-        } = self.config;
+        let ProjectiveConfig { size, margin, .. } = self.config;
         let key = (crate::scene::scene_fingerprint(ctx.scene), size);
         if self.made_for != Some(key) {
             self.make_projectors(ctx, size)?;
@@ -306,28 +337,7 @@ impl ShadowTechnique for ProjectiveShadows {
                 fit_bounds(ctx.light, &b, margin)
             })
             .collect();
-        let uniforms: Vec<ProjectorUniform> = self
-            .projectors
-            .iter()
-            .zip(&frusta)
-            .map(|(p, f)| {
-                let f = f.unwrap_or(LightFrustum {
-                    view: Mat4::IDENTITY,
-                    proj: Mat4::IDENTITY,
-                    near: 0.0,
-                    far: 1.0,
-                    orthographic: true,
-                });
-                ProjectorUniform {
-                    view_proj: f.view_proj(),
-                    view: f.view,
-                    texture: f.texture_matrix(),
-                    params: Vec4::new(f.near, f.far, alpha_bias, depth_mode as u32 as f32),
-                    info: UVec4::new(p.object, size, 0, 0),
-                    _pad: [Vec4::ZERO; 2],
-                }
-            })
-            .collect();
+        let uniforms = projector_uniforms(&self.projectors, &frusta, &self.config);
         let Some(ubuf) = &self.uniforms else {
             return Ok(());
         };
