@@ -183,24 +183,9 @@ pub fn run(
         .map(|s| s.timings.iter().map(|t| t.total_ms).collect())
         .collect();
     bar.finish_and_clear();
-    // `none`'s frame of each round, for the per-round ratios.
-    let none_frames: Vec<f64> = series
-        .iter()
-        .position(|s| s.label.starts_with("none:"))
-        .map(|i| per_round[i].clone())
-        .unwrap_or_default();
+    let none = series.iter().position(|s| s.label.starts_with("none:"));
     let mut rows: Vec<BenchRow> = series.into_iter().map(|s| s.row(&hf)).collect();
-    let none_ms = Stat::of(none_frames.clone()).median;
-    for (r, frames) in rows.iter_mut().zip(&per_round) {
-        r.ratio_to_none = r.frame_ms.median / none_ms;
-        let ratios: Vec<f64> = frames
-            .iter()
-            .zip(&none_frames)
-            .map(|(t, n)| t / n)
-            .collect();
-        let spread = Stat::of(ratios);
-        r.ratio_spread = (spread.p5, spread.p95);
-    }
+    set_ratios_to_none(&mut rows, &per_round, none);
     let meta = serde_json::json!({
         "scene": scene.name,
         "size": {"width": size.0, "height": size.1},
@@ -220,6 +205,23 @@ pub fn run(
     write_csv(&out.join("bench.csv"), &rows)?;
     std::fs::write(out.join("bench.md"), markdown(scene, &meta, &rows))?;
     Ok(rows)
+}
+
+/// Each row's median frame over `none`'s (row `none`), and the 5th–95th
+/// percentile of the ratio of the same round's frames.
+fn set_ratios_to_none(rows: &mut [BenchRow], per_round: &[Vec<f64>], none: Option<usize>) {
+    let none_frames: Vec<f64> = none.map(|i| per_round[i].clone()).unwrap_or_default();
+    let none_ms = Stat::of(none_frames.clone()).median;
+    for (r, frames) in rows.iter_mut().zip(per_round) {
+        r.ratio_to_none = r.frame_ms.median / none_ms;
+        let ratios: Vec<f64> = frames
+            .iter()
+            .zip(&none_frames)
+            .map(|(t, n)| t / n)
+            .collect();
+        let spread = Stat::of(ratios);
+        r.ratio_spread = (spread.p5, spread.p95);
+    }
 }
 
 /// One technique's instances and measured frames in a round-robin run.
