@@ -67,60 +67,30 @@ impl FrameTargets {
         )?;
         let device = &gpu.device;
         use wgpu::TextureUsages as U;
-        let depth = crate::gpu::texture_2d(
-            device,
+        let target = |label: &str, layers: u32, format: wgpu::TextureFormat, usage: U| {
+            crate::gpu::texture_2d(device, label, width, height, layers, format, usage)
+        };
+        let depth = target(
             "depth",
-            width,
-            height,
             1,
             DEPTH_FORMAT,
             U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
         );
         let depth_view = depth.create_view(&Default::default());
         let gusage = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
-        let gbuffer_position = crate::gpu::texture_2d(
-            device,
-            "gbuffer position",
-            width,
-            height,
-            1,
-            GBUFFER_POSITION_FORMAT,
-            gusage,
-        );
-        let gbuffer_normal = crate::gpu::texture_2d(
-            device,
-            "gbuffer normal",
-            width,
-            height,
-            1,
-            GBUFFER_NORMAL_FORMAT,
-            gusage,
-        );
-        let gbuffer_part = crate::gpu::texture_2d(
-            device,
-            "gbuffer part",
-            width,
-            height,
-            1,
-            GBUFFER_PART_FORMAT,
-            gusage,
-        );
-        let masks = crate::gpu::texture_2d(
-            device,
+        let gbuffer_position = target("gbuffer position", 1, GBUFFER_POSITION_FORMAT, gusage);
+        let gbuffer_normal = target("gbuffer normal", 1, GBUFFER_NORMAL_FORMAT, gusage);
+        let gbuffer_part = target("gbuffer part", 1, GBUFFER_PART_FORMAT, gusage);
+        let masks = target(
             "visibility masks",
-            width,
-            height,
             MAX_LIGHTS as u32,
             MASK_FORMAT,
             gusage | U::COPY_DST,
         );
         let (mask_layer_views, mask_array_view) =
             crate::gpu::layer_views(&masks, MAX_LIGHTS as u32);
-        let color = crate::gpu::texture_2d(
-            device,
+        let color = target(
             "color",
-            width,
-            height,
             1,
             color_format,
             U::RENDER_ATTACHMENT | U::COPY_SRC | U::TEXTURE_BINDING,
