@@ -127,6 +127,119 @@ fn shape_mesh(shape: &str, size: &[f32]) -> Result<Mesh> {
     })
 }
 
+/// Adds model `m` of a scene file (`at` names it in errors): a loaded file
+/// placed and overridden, or a shape.
+fn add_model(
+    scene: &mut Scene,
+    m: &ModelEntry,
+    at: &str,
+    dir: &Path,
+    includes: &[PathBuf],
+) -> Result<()> {
+    let ctx = |what: &str| format!("{at}: {what}");
+    let scale = match m.scale {
+        None => Vec3::ONE,
+        Some(Scale::Uniform(s)) => Vec3::splat(s),
+        Some(Scale::Axes(a)) => a.into(),
+    };
+    if !scale.is_finite() || scale.cmpeq(Vec3::ZERO).any() {
+        bail!(
+            "{}",
+            ctx(&format!(
+                "`scale` must be finite and non-zero on every axis, got {scale} (a zero scale flattens the model)"
+            ))
+        );
+    }
+    if !(Vec3::from(m.translate).is_finite() && Vec3::from(m.rotate_deg).is_finite()) {
+        bail!("{}", ctx("`translate` and `rotate_deg` must be finite"));
+    }
+    let r = m.rotate_deg.map(f32::to_radians);
+    let placement = Mat4::from_scale_rotation_translation(
+        scale,
+        Quat::from_euler(EulerRot::XYZ, r[0], r[1], r[2]),
+        m.translate.into(),
+    );
+    let first_object = scene.objects.len();
+    match (&m.path, &m.shape) {
+        (Some(p), None) => {
+            let sub = super::load_file_included(&dir.join(p), includes)
+                .with_context(|| ctx("loading model"))?;
+            let (mesh_off, mat_off, tex_off) = (
+                scene.meshes.len(),
+                scene.materials.len(),
+                scene.textures.len(),
+            );
+            scene.textures.extend(sub.textures);
+            scene.meshes.extend(sub.meshes);
+            for mut mat in sub.materials {
+                mat.diffuse_texture = mat.diffuse_texture.map(|t| t + tex_off);
+                mat.normal_map = mat.normal_map.map(|t| t + tex_off);
+                mat.alpha_texture = mat.alpha_texture.map(|t| t + tex_off);
+                m.override_material(&mut mat);
+                scene.materials.push(mat);
+            }
+            for mut o in sub.objects {
+                o.mesh += mesh_off;
+                o.material += mat_off;
+                o.transform = placement * o.transform;
+                scene.objects.push(o);
+            }
+        }
+        (None, Some(shape)) => {
+            let mesh = shape_mesh(shape, m.size.as_deref().unwrap_or(&[]))
+                .with_context(|| ctx("shape"))?;
+            let mesh = scene.add_mesh(mesh);
+            let colour = m.color.map(Vec3::from).unwrap_or(Vec3::splat(0.8));
+            let mut mat = Material::color(shape, colour);
+            m.override_material(&mut mat);
+            let mat = scene.add_material(mat);
+            scene.add_object(m.name.as_deref().unwrap_or(shape), mesh, mat, placement);
+        }
+        _ => bail!("{}", ctx("needs exactly one of `path` or `shape`")),
+    }
+    for o in &mut scene.objects[first_object..] {
+        if let (Some(n), None) = (&m.name, &m.path) {
+            o.name = n.clone();
+        }
+        o.casts_shadow = m.casts_shadow.unwrap_or(o.casts_shadow);
+        o.receives_shadow = m.receives_shadow.unwrap_or(o.receives_shadow);
+        o.shadow_plane = m.shadow_plane.unwrap_or(o.shadow_plane);
+    }
+    Ok(())
+}
+
+/// Light `l` of a scene file (`at` names it in errors).
+fn light_of(l: &LightEntry, at: &str) -> Result<Light> {
+    let need = |v: Option<[f32; 3]>, what: &str| {
+        v.map(Vec3::from)
+            .ok_or_else(|| anyhow!("{at}: {:?} light needs `{what}`", l.kind))
+    };
+    let mut light = match l.kind {
+        LightType::Point => Light::point(need(l.position, "position")?, 1.0),
+        LightType::Spot => {
+            let p = need(l.position, "position")?;
+            Light::spot(p, p + need(l.direction, "direction")?, 1.0, 25.0, 35.0)
+        }
+        LightType::Directional => Light::directional(need(l.direction, "direction")?, 1.0),
+    };
+    light.color = l.color.map(Vec3::from).unwrap_or(light.color);
+    light.intensity = l.intensity.unwrap_or(light.intensity);
+    light.range = l.range.unwrap_or(0.0);
+    light.inner_cone_deg = l.inner_cone_deg.unwrap_or(light.inner_cone_deg);
+    light.outer_cone_deg = l.outer_cone_deg.unwrap_or(light.outer_cone_deg);
+    light.area = match (l.area_radius, l.area_size) {
+        (Some(r), None) => Some(LightArea::Sphere { radius: r }),
+        (None, Some([w, h])) => Some(LightArea::Rect {
+            width: w,
+            height: h,
+        }),
+        (None, None) => None,
+        _ => bail!("{at}: give `area_radius` or `area_size`, not both"),
+    };
+    light.validate().with_context(|| at.to_string())?;
+    Ok(light)
+}
+
 /// Loads a TOML scene file; errors name the file and the line/field.
 /// `includes` are the scene files that include this one, outermost first
 /// (see [`super::load_file_included`]), so that include cycles are errors.
@@ -155,110 +268,15 @@ pub fn load(path: &Path, includes: &[PathBuf]) -> Result<Scene> {
         scene.ambient = a.into();
     }
     for (i, m) in f.model.iter().enumerate() {
-        let ctx = |what: &str| format!("{file}: model[{i}]: {what}");
-        let scale = match m.scale {
-            None => Vec3::ONE,
-            Some(Scale::Uniform(s)) => Vec3::splat(s),
-            Some(Scale::Axes(a)) => a.into(),
-        };
-        if !scale.is_finite() || scale.cmpeq(Vec3::ZERO).any() {
-            bail!(
-                "{}",
-                ctx(&format!(
-                    "`scale` must be finite and non-zero on every axis, got {scale} (a zero scale flattens the model)"
-                ))
-            );
-        }
-        if !(Vec3::from(m.translate).is_finite() && Vec3::from(m.rotate_deg).is_finite()) {
-            bail!("{}", ctx("`translate` and `rotate_deg` must be finite"));
-        }
-        let r = m.rotate_deg.map(f32::to_radians);
-        let placement = Mat4::from_scale_rotation_translation(
-            scale,
-            Quat::from_euler(EulerRot::XYZ, r[0], r[1], r[2]),
-            m.translate.into(),
-        );
-        let first_object = scene.objects.len();
-        match (&m.path, &m.shape) {
-            (Some(p), None) => {
-                let sub = super::load_file_included(&dir.join(p), includes)
-                    .with_context(|| ctx("loading model"))?;
-                let (mesh_off, mat_off, tex_off) = (
-                    scene.meshes.len(),
-                    scene.materials.len(),
-                    scene.textures.len(),
-                );
-                scene.textures.extend(sub.textures);
-                scene.meshes.extend(sub.meshes);
-                for mut mat in sub.materials {
-                    mat.diffuse_texture = mat.diffuse_texture.map(|t| t + tex_off);
-                    mat.normal_map = mat.normal_map.map(|t| t + tex_off);
-                    mat.alpha_texture = mat.alpha_texture.map(|t| t + tex_off);
-                    m.override_material(&mut mat);
-                    scene.materials.push(mat);
-                }
-                for mut o in sub.objects {
-                    o.mesh += mesh_off;
-                    o.material += mat_off;
-                    o.transform = placement * o.transform;
-                    scene.objects.push(o);
-                }
-            }
-            (None, Some(shape)) => {
-                let mesh = shape_mesh(shape, m.size.as_deref().unwrap_or(&[]))
-                    .with_context(|| ctx("shape"))?;
-                let mesh = scene.add_mesh(mesh);
-                let colour = m.color.map(Vec3::from).unwrap_or(Vec3::splat(0.8));
-                let mut mat = Material::color(shape, colour);
-                m.override_material(&mut mat);
-                let mat = scene.add_material(mat);
-                scene.add_object(m.name.as_deref().unwrap_or(shape), mesh, mat, placement);
-            }
-            _ => bail!("{}", ctx("needs exactly one of `path` or `shape`")),
-        }
-        for o in &mut scene.objects[first_object..] {
-            if let (Some(n), None) = (&m.name, &m.path) {
-                o.name = n.clone();
-            }
-            o.casts_shadow = m.casts_shadow.unwrap_or(o.casts_shadow);
-            o.receives_shadow = m.receives_shadow.unwrap_or(o.receives_shadow);
-            o.shadow_plane = m.shadow_plane.unwrap_or(o.shadow_plane);
-        }
+        add_model(&mut scene, m, &format!("{file}: model[{i}]"), dir, includes)?;
     }
     if scene.objects.is_empty() {
         bail!("{file}: no [[model]] entries");
     }
     for (i, l) in f.light.iter().enumerate() {
-        let need = |v: Option<[f32; 3]>, what: &str| {
-            v.map(Vec3::from)
-                .ok_or_else(|| anyhow!("{file}: light[{i}]: {:?} light needs `{what}`", l.kind))
-        };
-        let mut light = match l.kind {
-            LightType::Point => Light::point(need(l.position, "position")?, 1.0),
-            LightType::Spot => {
-                let p = need(l.position, "position")?;
-                Light::spot(p, p + need(l.direction, "direction")?, 1.0, 25.0, 35.0)
-            }
-            LightType::Directional => Light::directional(need(l.direction, "direction")?, 1.0),
-        };
-        light.color = l.color.map(Vec3::from).unwrap_or(light.color);
-        light.intensity = l.intensity.unwrap_or(light.intensity);
-        light.range = l.range.unwrap_or(0.0);
-        light.inner_cone_deg = l.inner_cone_deg.unwrap_or(light.inner_cone_deg);
-        light.outer_cone_deg = l.outer_cone_deg.unwrap_or(light.outer_cone_deg);
-        light.area = match (l.area_radius, l.area_size) {
-            (Some(r), None) => Some(LightArea::Sphere { radius: r }),
-            (None, Some([w, h])) => Some(LightArea::Rect {
-                width: w,
-                height: h,
-            }),
-            (None, None) => None,
-            _ => bail!("{file}: light[{i}]: give `area_radius` or `area_size`, not both"),
-        };
-        light
-            .validate()
-            .with_context(|| format!("{file}: light[{i}]"))?;
-        scene.lights.push(light);
+        scene
+            .lights
+            .push(light_of(l, &format!("{file}: light[{i}]"))?);
     }
     let had_lights = !scene.lights.is_empty();
     super::frame_scene_defaults(&mut scene);
