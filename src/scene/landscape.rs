@@ -173,6 +173,13 @@ pub fn landscape() -> Scene {
             }
         }
     }
+    add_presets(&mut s);
+    s
+}
+
+/// The ground and flyover cameras, and the suns (high, across, low in
+/// front and behind), a point and a spot light over the centre.
+fn add_presets(s: &mut Scene) {
     let eye_height = height(GROUND_EYE.x, GROUND_EYE.y) + 1.7;
     s.camera_presets = vec![
         (
@@ -220,7 +227,6 @@ pub fn landscape() -> Scene {
             )],
         ),
     ];
-    s
 }
 
 #[cfg(test)]
