@@ -165,6 +165,37 @@ impl<'a> Report<'a> {
             None => Claim::plain("not measured".into()),
         };
         let on_front = self.fronts_with(technique);
+        let advantages = self.advantages(&on_front, &mine);
+        let disadvantages = disadvantages(&mine, dearest);
+        let usage = self.usage(technique, &on_front, &mine);
+        let difficulty = FAMILY_LINES
+            .iter()
+            .find(|(id, _, _)| *id == family_id)
+            .map_or(String::new(), |(_, rs, wgsl)| {
+                format!("{rs} lines of Rust, {wgsl} of WGSL (family `{family_id}`)")
+            });
+        let marks = marks(&mine);
+        let extensibility = family
+            .map(|f| extensibility(&f.capabilities, &marks))
+            .unwrap_or_default();
+        SummaryRow {
+            technique: technique.to_string(),
+            family: family_id,
+            description,
+            quality,
+            cost,
+            advantages,
+            disadvantages,
+            usage,
+            difficulty,
+            extensibility,
+            marks,
+        }
+    }
+
+    /// What a preset does well: the Pareto fronts it is on, the views where
+    /// it is exact, else its best view.
+    fn advantages(&self, on_front: &[&'a Cell], mine: &[&'a Cell]) -> Vec<Claim> {
         let mut advantages = vec![];
         if !on_front.is_empty() {
             advantages.push(Claim::of(
@@ -172,7 +203,7 @@ impl<'a> Report<'a> {
                     "on the error/cost Pareto front of {} of {} views: {}",
                     on_front.len(),
                     self.fronts.len(),
-                    labels(&on_front)
+                    labels(on_front)
                 ),
                 on_front[0],
             ));
@@ -202,66 +233,7 @@ impl<'a> Report<'a> {
                 best,
             ));
         }
-        let mut failed: Vec<&Cell> = mine.iter().copied().filter(|c| !below_failure(c)).collect();
-        failed.sort_by(|a, b| total(b).total_cmp(&total(a)));
-        let mut disadvantages: Vec<Claim> = failed
-            .iter()
-            .take(2)
-            .map(|c| {
-                let q = &c.quality;
-                let kind = if q.false_lit_pct > 2.0 * q.false_shadow_pct {
-                    "missing shadows (light leaks)"
-                } else if q.false_shadow_pct > 2.0 * q.false_lit_pct {
-                    "false shadows"
-                } else {
-                    "wrong shadows"
-                };
-                Claim::of(
-                    format!(
-                        "{kind}: {} % mismatch on `{}` ({} % false shadow, {} % false lit)",
-                        pct(q.total_pct),
-                        c.view().label(),
-                        pct(q.false_shadow_pct),
-                        pct(q.false_lit_pct)
-                    ),
-                    c,
-                )
-            })
-            .collect();
-        if let Some(d) = dearest.filter(|d| d.cost.ratio_to_none > CHEAP_RATIO) {
-            disadvantages.push(Claim::of(
-                format!(
-                    "costly: ×{:.2} the frame of `none` on `{}`",
-                    d.cost.ratio_to_none,
-                    d.view().label()
-                ),
-                d,
-            ));
-        }
-        let usage = self.usage(technique, &on_front, &mine);
-        let difficulty = FAMILY_LINES
-            .iter()
-            .find(|(id, _, _)| *id == family_id)
-            .map_or(String::new(), |(_, rs, wgsl)| {
-                format!("{rs} lines of Rust, {wgsl} of WGSL (family `{family_id}`)")
-            });
-        let marks = marks(&mine);
-        let extensibility = family
-            .map(|f| extensibility(&f.capabilities, &marks))
-            .unwrap_or_default();
-        SummaryRow {
-            technique: technique.to_string(),
-            family: family_id,
-            description,
-            quality,
-            cost,
-            advantages,
-            disadvantages,
-            usage,
-            difficulty,
-            extensibility,
-            marks,
-        }
+        advantages
     }
 
     fn usage(&self, technique: &str, on_front: &[&'a Cell], mine: &[&'a Cell]) -> Vec<Claim> {
@@ -366,4 +338,45 @@ fn bytes(b: u64) -> String {
     } else {
         format!("{b} B")
     }
+}
+/// What a preset does badly: its two worst failures, by kind, and its
+/// cost where it is not cheap.
+fn disadvantages(mine: &[&Cell], dearest: Option<&Cell>) -> Vec<Claim> {
+    let mut failed: Vec<&Cell> = mine.iter().copied().filter(|c| !below_failure(c)).collect();
+    failed.sort_by(|a, b| total(b).total_cmp(&total(a)));
+    let mut disadvantages: Vec<Claim> = failed
+        .iter()
+        .take(2)
+        .map(|c| {
+            let q = &c.quality;
+            let kind = if q.false_lit_pct > 2.0 * q.false_shadow_pct {
+                "missing shadows (light leaks)"
+            } else if q.false_shadow_pct > 2.0 * q.false_lit_pct {
+                "false shadows"
+            } else {
+                "wrong shadows"
+            };
+            Claim::of(
+                format!(
+                    "{kind}: {} % mismatch on `{}` ({} % false shadow, {} % false lit)",
+                    pct(q.total_pct),
+                    c.view().label(),
+                    pct(q.false_shadow_pct),
+                    pct(q.false_lit_pct)
+                ),
+                c,
+            )
+        })
+        .collect();
+    if let Some(d) = dearest.filter(|d| d.cost.ratio_to_none > CHEAP_RATIO) {
+        disadvantages.push(Claim::of(
+            format!(
+                "costly: ×{:.2} the frame of `none` on `{}`",
+                d.cost.ratio_to_none,
+                d.view().label()
+            ),
+            d,
+        ));
+    }
+    disadvantages
 }
