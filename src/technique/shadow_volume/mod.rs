@@ -302,6 +302,79 @@ fn index_usage() -> wgpu::BufferUsages {
         | wgpu::BufferUsages::COPY_SRC
 }
 
+impl Stats {
+    /// The counts of a frame's plans: skipped, z-pass, z-fail and
+    /// per-triangle volumes.
+    fn of(plans: &[CasterPlan]) -> Stats {
+        Stats {
+            skipped: plans.iter().filter(|p| p.kind == VolumeKind::Skip).count(),
+            zpass: plans
+                .iter()
+                .filter(|p| p.kind != VolumeKind::Skip && !p.zfail)
+                .count(),
+            zfail: plans
+                .iter()
+                .filter(|p| p.kind != VolumeKind::Skip && p.zfail)
+                .count(),
+            per_triangle: plans
+                .iter()
+                .filter(|p| p.kind == VolumeKind::Triangles)
+                .count(),
+            ..Default::default()
+        }
+    }
+}
+
+impl ShadowVolumeRenderer {
+    /// The debug view: the scene with the volumes over it, translucent.
+    fn render_debug(
+        &mut self,
+        ctx: &MaskContext,
+        encoder: &mut wgpu::CommandEncoder,
+        group: &wgpu::BindGroup,
+        unclipped: bool,
+    ) {
+        let (w, h) = (ctx.frame.width(), ctx.frame.height());
+        if self
+            .debug
+            .as_ref()
+            .is_none_or(|t| (t.width(), t.height()) != (w, h))
+        {
+            self.debug = Some(crate::gpu::texture_2d(
+                &ctx.gpu.device,
+                "shadow volume debug",
+                w,
+                h,
+                1,
+                wgpu::TextureFormat::Rgba8Unorm,
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            ));
+        }
+        let volume_pipeline = self.shared.debug_volume_pipeline(ctx.gpu, unclipped);
+        let view = self
+            .debug
+            .as_ref()
+            .expect("made above")
+            .create_view(&Default::default());
+        let mut pass = super::pass_over_frame_depth(
+            encoder,
+            ctx,
+            "shadow volume debug",
+            &view,
+            wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+            false,
+        );
+        ctx.bind_frame_groups(&mut pass);
+        pass.set_bind_group(crate::frame::OWN_GROUP, group, &[]);
+        pass.set_pipeline(&self.shared.debug_scene_pipeline);
+        pass.draw(0..3, 0..1);
+        pass.set_pipeline(&volume_pipeline);
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed_indirect(&self.args, 0);
+        pass.draw_indexed_indirect(&self.args, ZFAIL_ARGS);
+    }
+}
+
 impl ShadowTechnique for ShadowVolumeRenderer {
     fn configure(&mut self, params: &ParamValues) -> Result<()> {
         self.config = VolumeConfig::parse(params)?;
@@ -356,22 +429,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
             dark_cap,
             config.extrusion == Extrusion::Gpu,
         )?;
-        self.stats = Stats {
-            skipped: plans.iter().filter(|p| p.kind == VolumeKind::Skip).count(),
-            zpass: plans
-                .iter()
-                .filter(|p| p.kind != VolumeKind::Skip && !p.zfail)
-                .count(),
-            zfail: plans
-                .iter()
-                .filter(|p| p.kind != VolumeKind::Skip && p.zfail)
-                .count(),
-            per_triangle: plans
-                .iter()
-                .filter(|p| p.kind == VolumeKind::Triangles)
-                .count(),
-            ..Default::default()
-        };
+        self.stats = Stats::of(&plans);
         let geometry = self.geometry.as_ref().expect("ensured");
         let vm = &geometry.mesh;
         if self.want_debug {
@@ -448,44 +506,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
         }
 
         if self.want_debug {
-            let (w, h) = (width, height);
-            if self
-                .debug
-                .as_ref()
-                .is_none_or(|t| (t.width(), t.height()) != (w, h))
-            {
-                self.debug = Some(crate::gpu::texture_2d(
-                    &gpu.device,
-                    "shadow volume debug",
-                    w,
-                    h,
-                    1,
-                    wgpu::TextureFormat::Rgba8Unorm,
-                    wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-                ));
-            }
-            let volume_pipeline = self.shared.debug_volume_pipeline(gpu, unclipped);
-            let view = self
-                .debug
-                .as_ref()
-                .expect("made above")
-                .create_view(&Default::default());
-            let mut pass = super::pass_over_frame_depth(
-                encoder,
-                ctx,
-                "shadow volume debug",
-                &view,
-                wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                false,
-            );
-            ctx.bind_frame_groups(&mut pass);
-            pass.set_bind_group(crate::frame::OWN_GROUP, &group, &[]);
-            pass.set_pipeline(&self.shared.debug_scene_pipeline);
-            pass.draw(0..3, 0..1);
-            pass.set_pipeline(&volume_pipeline);
-            pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed_indirect(&self.args, 0);
-            pass.draw_indexed_indirect(&self.args, ZFAIL_ARGS);
+            self.render_debug(ctx, encoder, &group, unclipped);
         }
         Ok(())
     }
