@@ -226,23 +226,7 @@ pub fn run(
         );
         considered.push(cons);
     }
-    let mut hidden_pct = vec![];
-    for (step, cons) in considered.iter_mut().enumerate() {
-        let seen = seen_from(
-            &positions[step],
-            &cameras[step + 1],
-            &positions[step + 1],
-            w,
-        );
-        let surface = positions[step].iter().filter(|p| p[3] > 0.5).count();
-        hidden_pct.push(percent(
-            surface - seen.iter().filter(|s| **s).count(),
-            surface,
-        ));
-        for c in cons.iter_mut() {
-            c.iter_mut().zip(&seen).for_each(|(c, s)| *c &= *s);
-        }
-    }
+    let hidden_pct = keep_seen(&mut considered, &positions, &cameras, w);
     let mut rows = vec![];
     for choice in techniques {
         let mut hf = frame_of(choice)?;
@@ -299,6 +283,46 @@ pub fn run(
         "pixels": "per step, the surface points seen from the earlier camera are held fixed; a pixel flickers when the technique's shadow state (visibility < 0.5) there differs between light views fitted to the earlier and to the later camera; % of considered pixels (receiving, N·L > 0, still seen by the later camera), mean over the steps; edge = within 2 px of a reference shadow boundary",
         "hidden_pct_per_step": hidden_pct,
     });
+    write_tables(out, &meta, path, &rows)?;
+    Ok(rows)
+}
+
+/// Per step, keeps the considered pixels whose surface point the later
+/// camera still sees; returns the % of surface points hidden per step.
+fn keep_seen(
+    considered: &mut [Vec<Vec<bool>>],
+    positions: &[Vec<[f32; 4]>],
+    cameras: &[Camera],
+    w: usize,
+) -> Vec<f64> {
+    let mut hidden_pct = vec![];
+    for (step, cons) in considered.iter_mut().enumerate() {
+        let seen = seen_from(
+            &positions[step],
+            &cameras[step + 1],
+            &positions[step + 1],
+            w,
+        );
+        let surface = positions[step].iter().filter(|p| p[3] > 0.5).count();
+        hidden_pct.push(percent(
+            surface - seen.iter().filter(|s| **s).count(),
+            surface,
+        ));
+        for c in cons.iter_mut() {
+            c.iter_mut().zip(&seen).for_each(|(c, s)| *c &= *s);
+        }
+    }
+    hidden_pct
+}
+
+/// `flicker.{json,csv,md}` of `rows`, described by `meta`.
+fn write_tables(
+    out: &Path,
+    meta: &serde_json::Value,
+    path: CameraPath,
+    rows: &[FlickerRow],
+) -> Result<()> {
+    let text = |key: &str| meta[key].as_str().unwrap_or("").to_string();
     std::fs::write(
         out.join("flicker.json"),
         serde_json::to_string_pretty(&serde_json::json!({"meta": meta, "rows": rows}))?,
@@ -316,16 +340,17 @@ pub fn run(
         }),
     )?;
     let mut md = format!(
-        "# Flicker on `{}` along `{:?}` ({frames} frames) against `{}`\n\n{} × {}, adapter {}. {}.\n\n| technique | light | flicker % | edge flicker % |\n|---|---:|---:|---:|\n",
-        scene.name,
+        "# Flicker on `{}` along `{:?}` ({} frames) against `{}`\n\n{} × {}, adapter {}. {}.\n\n| technique | light | flicker % | edge flicker % |\n|---|---:|---:|---:|\n",
+        text("scene"),
         path,
-        choice_label(reference),
-        size.0,
-        size.1,
-        gpu.adapter_summary(),
-        meta["pixels"].as_str().unwrap_or("")
+        meta["frames"],
+        text("reference"),
+        meta["size"]["width"],
+        meta["size"]["height"],
+        text("adapter"),
+        text("pixels")
     );
-    for r in &rows {
+    for r in rows {
         let _ = writeln!(
             md,
             "| `{}` | {} | {:.4} | {:.4} |",
@@ -333,7 +358,7 @@ pub fn run(
         );
     }
     // Counters that change along the path, per step.
-    for r in &rows {
+    for r in rows {
         let Some(first) = r.per_step_counters.first() else {
             continue;
         };
@@ -356,7 +381,7 @@ pub fn run(
         }
     }
     std::fs::write(out.join("flicker.md"), md)?;
-    Ok(rows)
+    Ok(())
 }
 
 #[cfg(test)]
