@@ -3,10 +3,10 @@
 
 use super::{FrameLayouts, Vertex, textures};
 use crate::gpu::GpuContext;
-use crate::scene::clusters::{CLUSTER_TRIANGLES, Cluster, clustered};
+use crate::scene::clusters::{CLUSTER_TRIANGLES, Cluster, Clustered, clustered};
 use crate::scene::opacity::OpacityMaps;
 use crate::scene::topology::{SolidKind, Solidity};
-use crate::scene::{Aabb, AlphaMode, Material, Scene};
+use crate::scene::{Aabb, AlphaMode, Material, Object, Scene};
 use anyhow::{Context, Result, bail};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
@@ -131,6 +131,149 @@ impl MaterialVariant {
     }
 }
 
+/// One draw per object (its mesh's range in the shared buffers) and the
+/// clusters it is drawn in, with their world bounds.
+fn draw_calls(
+    scene: &Scene,
+    ranges: &[(i32, u32, u32)],
+    clustered: &[Clustered],
+    solidity: &[Solidity],
+) -> (Vec<DrawCall>, Vec<DrawPart>) {
+    let mut parts = vec![];
+    let draws = scene
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(i, o)| {
+            let (base_vertex, first_index, index_count) = ranges[o.mesh];
+            let first_part = parts.len() as u32;
+            parts.extend(
+                clustered[o.mesh]
+                    .clusters
+                    .iter()
+                    .map(|c: &Cluster| DrawPart {
+                        first_index: first_index + c.first_index,
+                        index_count: c.index_count,
+                        bounds: c.bounds.transformed(o.transform),
+                    }),
+            );
+            DrawCall {
+                object: i as u32,
+                first_index,
+                index_count,
+                base_vertex,
+                material: o.material,
+                casts_shadow: o.casts_shadow,
+                shadow_plane: o.shadow_plane,
+                alpha_mode: scene.materials[o.material].alpha_mode,
+                solid: solidity[o.mesh].kind,
+                bounds: scene.meshes[o.mesh].bounds().transformed(o.transform),
+                first_part,
+                part_count: parts.len() as u32 - first_part,
+            }
+        })
+        .collect();
+    (draws, parts)
+}
+
+/// Object `o`'s row of the object table: transforms, flags, its parts'
+/// first ID, its material's alpha terms and its opacity map.
+fn object_gpu(
+    scene: &Scene,
+    o: &Object,
+    part_base: u32,
+    solidity: &[Solidity],
+    opacity_maps: &OpacityMaps,
+    map_starts: &[u32],
+) -> ObjectGpu {
+    ObjectGpu {
+        model: o.transform,
+        normal_matrix: o.transform.inverse().transpose(),
+        info: [
+            o.material as u32,
+            o.casts_shadow as u32,
+            o.receives_shadow as u32,
+            (solidity[o.mesh].kind != SolidKind::NotSolid) as u32,
+        ],
+        parts: [part_base, 0, 0, 0],
+        alpha: {
+            let m = &scene.materials[o.material];
+            [
+                m.alpha_mode as u32,
+                m.alpha_cutoff.to_bits(),
+                m.alpha.to_bits(),
+                m.uv_scale.to_bits(),
+            ]
+        },
+        opacity_map: {
+            let m = &scene.materials[o.material];
+            match (m.alpha_texture, opacity_maps.for_material(m)) {
+                (Some(t), Some(map)) => [
+                    map_starts[opacity_maps.of_texture[&t]],
+                    map.width,
+                    map.height,
+                    map.levels.len() as u32,
+                ],
+                _ => [0; 4],
+            }
+        },
+    }
+}
+
+/// Material `m`'s bind group: its uniform, its diffuse texture and normal
+/// map (`[white, flat normal]` where it has none).
+fn material_group(
+    gpu: &GpuContext,
+    layouts: &FrameLayouts,
+    m: &Material,
+    gpu_textures: &[wgpu::TextureView],
+    [white, flat_normal]: [&wgpu::TextureView; 2],
+) -> wgpu::BindGroup {
+    let device = &gpu.device;
+    let proc_kind = m.procedural.map_or(0.0, |p| p.kind as u32 as f32 + 1.0);
+    let p = m.procedural;
+    let data = MaterialGpu {
+        ka: m.ka.extend(m.uv_scale),
+        kd: m.kd.extend(m.diffuse_texture.is_some() as u32 as f32),
+        ks: m.ks.extend(m.shininess.max(1.0)),
+        proc_a: p.map_or(Vec3::ZERO, |p| p.color_a).extend(proc_kind),
+        proc_b: p
+            .map_or(Vec3::ZERO, |p| p.color_b)
+            .extend(p.map_or(1.0, |p| p.scale)),
+        flags: Vec4::new(
+            m.normal_map.is_some() as u32 as f32,
+            p.map_or(0.0, |p| p.octaves as f32),
+            m.alpha,
+            0.0,
+        ),
+    };
+    let buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("material"),
+        contents: bytemuck::bytes_of(&data),
+        usage: gpu.uniform_space.usage(),
+    });
+    let diffuse = m.diffuse_texture.map_or(white, |t| &gpu_textures[t]);
+    let normal = m.normal_map.map_or(flat_normal, |t| &gpu_textures[t]);
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(&m.name),
+        layout: &layouts.material,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: buf.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::TextureView(diffuse),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: wgpu::BindingResource::TextureView(normal),
+            },
+        ],
+    })
+}
+
 impl SceneGpu {
     /// Uploads a scene: meshes, object table, materials and textures.
     pub fn upload(gpu: &GpuContext, scene: &Scene) -> Result<SceneGpu> {
@@ -179,73 +322,11 @@ impl SceneGpu {
             .objects
             .iter()
             .zip(&part_bases)
-            .map(|(o, &part_base)| ObjectGpu {
-                model: o.transform,
-                normal_matrix: o.transform.inverse().transpose(),
-                info: [
-                    o.material as u32,
-                    o.casts_shadow as u32,
-                    o.receives_shadow as u32,
-                    (solidity[o.mesh].kind != SolidKind::NotSolid) as u32,
-                ],
-                parts: [part_base, 0, 0, 0],
-                alpha: {
-                    let m = &scene.materials[o.material];
-                    [
-                        m.alpha_mode as u32,
-                        m.alpha_cutoff.to_bits(),
-                        m.alpha.to_bits(),
-                        m.uv_scale.to_bits(),
-                    ]
-                },
-                opacity_map: {
-                    let m = &scene.materials[o.material];
-                    match (m.alpha_texture, opacity_maps.for_material(m)) {
-                        (Some(t), Some(map)) => [
-                            map_starts[opacity_maps.of_texture[&t]],
-                            map.width,
-                            map.height,
-                            map.levels.len() as u32,
-                        ],
-                        _ => [0; 4],
-                    }
-                },
+            .map(|(o, &part_base)| {
+                object_gpu(scene, o, part_base, &solidity, &opacity_maps, &map_starts)
             })
             .collect();
-        let mut parts = vec![];
-        let draws = scene
-            .objects
-            .iter()
-            .enumerate()
-            .map(|(i, o)| {
-                let (base_vertex, first_index, index_count) = ranges[o.mesh];
-                let first_part = parts.len() as u32;
-                parts.extend(
-                    clustered[o.mesh]
-                        .clusters
-                        .iter()
-                        .map(|c: &Cluster| DrawPart {
-                            first_index: first_index + c.first_index,
-                            index_count: c.index_count,
-                            bounds: c.bounds.transformed(o.transform),
-                        }),
-                );
-                DrawCall {
-                    object: i as u32,
-                    first_index,
-                    index_count,
-                    base_vertex,
-                    material: o.material,
-                    casts_shadow: o.casts_shadow,
-                    shadow_plane: o.shadow_plane,
-                    alpha_mode: scene.materials[o.material].alpha_mode,
-                    solid: solidity[o.mesh].kind,
-                    bounds: scene.meshes[o.mesh].bounds().transformed(o.transform),
-                    first_part,
-                    part_count: parts.len() as u32 - first_part,
-                }
-            })
-            .collect();
+        let (draws, parts) = draw_calls(scene, &ranges, &clustered, &solidity);
         let init = |label: &str, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -290,50 +371,7 @@ impl SceneGpu {
         let material_bind_groups = scene
             .materials
             .iter()
-            .map(|m| {
-                let proc_kind = m.procedural.map_or(0.0, |p| p.kind as u32 as f32 + 1.0);
-                let p = m.procedural;
-                let data = MaterialGpu {
-                    ka: m.ka.extend(m.uv_scale),
-                    kd: m.kd.extend(m.diffuse_texture.is_some() as u32 as f32),
-                    ks: m.ks.extend(m.shininess.max(1.0)),
-                    proc_a: p.map_or(Vec3::ZERO, |p| p.color_a).extend(proc_kind),
-                    proc_b: p
-                        .map_or(Vec3::ZERO, |p| p.color_b)
-                        .extend(p.map_or(1.0, |p| p.scale)),
-                    flags: Vec4::new(
-                        m.normal_map.is_some() as u32 as f32,
-                        p.map_or(0.0, |p| p.octaves as f32),
-                        m.alpha,
-                        0.0,
-                    ),
-                };
-                let buf = init(
-                    "material",
-                    bytemuck::bytes_of(&data),
-                    gpu.uniform_space.usage(),
-                );
-                let diffuse = m.diffuse_texture.map_or(&white, |t| &gpu_textures[t]);
-                let normal = m.normal_map.map_or(&flat_normal, |t| &gpu_textures[t]);
-                device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(&m.name),
-                    layout: &layouts.material,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: buf.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 1,
-                            resource: wgpu::BindingResource::TextureView(diffuse),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: wgpu::BindingResource::TextureView(normal),
-                        },
-                    ],
-                })
-            })
+            .map(|m| material_group(gpu, &layouts, m, &gpu_textures, [&white, &flat_normal]))
             .collect();
         Ok(SceneGpu {
             vertex_buffer,
