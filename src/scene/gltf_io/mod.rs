@@ -47,6 +47,217 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
     without_panics(&file, || load_checked(&file, path))
 }
 
+/// The document's images, decoded; `None` for one that is missing or
+/// cannot be decoded (warned about).
+fn read_images(
+    file: &str,
+    doc: &gltf::Document,
+    base: &Path,
+    buffers: &[gltf::buffer::Data],
+) -> Vec<Option<gltf::image::Data>> {
+    // An image that is missing or cannot be decoded leaves its materials
+    // their flat colour, with a warning (as the OBJ loader does).
+    doc.images()
+        .map(|im| {
+            gltf::image::Data::from_source(im.source(), Some(base), buffers)
+                .map_err(|e| {
+                    let name = match im.source() {
+                        gltf::image::Source::Uri { uri, .. } => format!(" '{uri}'"),
+                        gltf::image::Source::View { .. } => String::new(),
+                    };
+                    log::warn!(
+                        "{file}: image {}{name}: {e}; using the flat material colour",
+                        im.index()
+                    )
+                })
+                .ok()
+        })
+        .collect()
+}
+
+/// Material `m`'s KHR_texture_transform of its base colour texture.
+fn uv_transform(m: &gltf::Material) -> Option<glam::Mat3> {
+    let pbr = m.pbr_metallic_roughness();
+    pbr.base_color_texture()
+        .and_then(|t| t.texture_transform())
+        .map(|t| {
+            glam::Mat3::from_scale_angle_translation(
+                Vec2::from(t.scale()),
+                t.rotation(),
+                Vec2::from(t.offset()),
+            )
+        })
+}
+
+/// Material `m` without its textures: Phong terms from the shadowlab
+/// extras or from metallic-roughness, and the alpha mode, factor and cutoff.
+fn material_of(m: &gltf::Material) -> Result<Material> {
+    let pbr = m.pbr_metallic_roughness();
+    let bc = Vec3::from_slice(&pbr.base_color_factor()[..3]);
+    let mut mat = match extras_field::<PhongExtras>(m.extras(), "material")? {
+        Some(p) => Material {
+            ka: p.ka.into(),
+            kd: p.kd.into(),
+            ks: p.ks.into(),
+            shininess: p.shininess,
+            uv_scale: p.uv_scale,
+            procedural: p.procedural,
+            ..Material::default()
+        },
+        None => {
+            // Phong from metallic-roughness: n = 2/r² − 2.
+            let r = pbr.roughness_factor().max(0.05);
+            Material {
+                ks: Vec3::splat(0.04 + 0.5 * pbr.metallic_factor()),
+                shininess: (2.0 / (r * r) - 2.0).clamp(1.0, 1000.0),
+                ..Material::color("", bc)
+            }
+        }
+    };
+    mat.name = m.name().unwrap_or("material").into();
+    mat.alpha = pbr.base_color_factor()[3].clamp(0.0, 1.0);
+    mat.alpha_mode = match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+        gltf::material::AlphaMode::Mask => AlphaMode::Mask,
+        gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+    };
+    mat.alpha_cutoff = m.alpha_cutoff().unwrap_or(0.5).clamp(0.0, 1.0);
+    mat.double_sided = m.double_sided();
+    Ok(mat)
+}
+
+/// A KHR_lights_punctual light at `pos`, shining along `forward`.
+fn light_of(l: &gltf::khr_lights_punctual::Light, pos: Vec3, forward: Vec3) -> Result<Light> {
+    use gltf::khr_lights_punctual::Kind;
+    let mut light = match l.kind() {
+        Kind::Directional => Light::directional(forward, l.intensity()),
+        Kind::Point => Light::point(pos, l.intensity()),
+        Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => Light::spot(
+            pos,
+            pos + forward,
+            l.intensity(),
+            inner_cone_angle.to_degrees(),
+            outer_cone_angle.to_degrees(),
+        ),
+    };
+    light.color = l.color().into();
+    light.range = l.range().unwrap_or(0.0);
+    if let Some(area) = extras_field::<super::LightArea>(l.extras(), "light")? {
+        light.area = Some(area);
+    }
+    Ok(light)
+}
+
+/// Primitive `pi` of `gmesh` (on node `name`) as a mesh, its texture
+/// coordinates through its material's KHR_texture_transform.
+fn read_mesh(
+    file: &str,
+    gmesh: &gltf::Mesh,
+    name: &str,
+    pi: usize,
+    prim: &gltf::Primitive,
+    buffers: &[gltf::buffer::Data],
+    uv_transforms: &[Option<glam::Mat3>],
+) -> Result<Mesh> {
+    check_primitive_accessors(file, gmesh.name().unwrap_or(name), pi, prim)?;
+    let reader = prim.reader(|b| Some(&buffers[b.index()]));
+    let positions: Vec<Vec3> = reader
+        .read_positions()
+        .ok_or_else(|| {
+            anyhow!(
+                "{file}: mesh '{}' has no POSITION",
+                gmesh.name().unwrap_or("")
+            )
+        })?
+        .map(Vec3::from)
+        .collect();
+    let indices: Vec<u32> = match reader.read_indices() {
+        Some(i) => i.into_u32().collect(),
+        None => (0..positions.len() as u32).collect(),
+    };
+    let mesh = Mesh {
+        name: gmesh.name().unwrap_or(name).to_string(),
+        normals: reader
+            .read_normals()
+            .map(|n| n.map(Vec3::from).collect())
+            .unwrap_or_default(),
+        uvs: reader
+            .read_tex_coords(0)
+            .map(|t| {
+                let transform = prim
+                    .material()
+                    .index()
+                    .and_then(|i| uv_transforms[i])
+                    .unwrap_or(glam::Mat3::IDENTITY);
+                t.into_f32()
+                    .map(|uv| transform.transform_point2(Vec2::from(uv)))
+                    .collect()
+            })
+            .unwrap_or_default(),
+        positions,
+        indices,
+        ..Default::default()
+    };
+    Ok(mesh)
+}
+
+/// A perspective camera node at `pos`, turned by `rot`, looking along
+/// `forward`.
+fn camera_of(c: &gltf::Camera, pos: Vec3, rot: glam::Quat, forward: Vec3) -> Option<Camera> {
+    let gltf::camera::Projection::Perspective(p) = c.projection() else {
+        return None;
+    };
+    Some(Camera {
+        eye: pos,
+        target: pos + forward,
+        up: rot * Vec3::Y,
+        fov_y_deg: p.yfov().to_degrees(),
+        near: p.znear(),
+        far: p.zfar().unwrap_or(p.znear() * 1e4),
+    })
+}
+
+/// The scene's textures made from the document's images, once per image
+/// and colour space.
+struct TextureCache<'a> {
+    file: &'a str,
+    images: &'a [Option<gltf::image::Data>],
+    made: std::collections::HashMap<(usize, bool), usize>,
+}
+
+impl TextureCache<'_> {
+    /// The scene texture of `t` (sRGB or linear), added on first use;
+    /// `None` for an image that is missing or unusable (warned about).
+    fn get(&mut self, scene: &mut Scene, t: gltf::Texture, srgb: bool) -> Option<usize> {
+        let idx = t.source().index();
+        if let Some(&i) = self.made.get(&(idx, srgb)) {
+            return Some(i);
+        }
+        // A missing image was reported when it was read.
+        let image = self.images.get(idx)?.as_ref()?;
+        match to_rgba(image) {
+            Ok(image) => {
+                scene.textures.push(Texture {
+                    name: t.source().name().unwrap_or("texture").into(),
+                    image,
+                    srgb,
+                    source: None,
+                });
+                self.made.insert((idx, srgb), scene.textures.len() - 1);
+                Some(scene.textures.len() - 1)
+            }
+            Err(e) => {
+                let file = self.file;
+                log::warn!("{file}: image {idx} unusable ({e}); using the flat material colour");
+                None
+            }
+        }
+    }
+}
+
 fn load_checked(file: &str, path: &Path) -> Result<Scene> {
     let file = file.to_string();
     let bytes = std::fs::read(path).with_context(|| format!("reading {file}"))?;
@@ -68,107 +279,30 @@ fn load_checked(file: &str, path: &Path) -> Result<Scene> {
     } = gltf::Gltf::from_slice(&bytes).map_err(|e| anyhow!("{file}: {e}"))?;
     let buffers =
         gltf::import_buffers(&doc, Some(base), blob).map_err(|e| anyhow!("{file}: {e}"))?;
-    // An image that is missing or cannot be decoded leaves its materials
-    // their flat colour, with a warning (as the OBJ loader does).
-    let images: Vec<Option<gltf::image::Data>> = doc
-        .images()
-        .map(|im| {
-            gltf::image::Data::from_source(im.source(), Some(base), &buffers)
-                .map_err(|e| {
-                    let name = match im.source() {
-                        gltf::image::Source::Uri { uri, .. } => format!(" '{uri}'"),
-                        gltf::image::Source::View { .. } => String::new(),
-                    };
-                    log::warn!(
-                        "{file}: image {}{name}: {e}; using the flat material colour",
-                        im.index()
-                    )
-                })
-                .ok()
-        })
-        .collect();
+    let images = read_images(&file, &doc, base, &buffers);
     check_node_forest(&file, &doc)?;
     check_accessors(&file, &doc, &buffers)?;
     let mut scene = Scene::new(path.file_stem().and_then(|s| s.to_str()).unwrap_or("gltf"));
     scene.source = file.clone();
-    let mut tex_map = std::collections::HashMap::new();
-    let mut texture = |scene: &mut Scene, t: gltf::Texture, srgb: bool| -> Option<usize> {
-        let idx = t.source().index();
-        if let Some(&i) = tex_map.get(&(idx, srgb)) {
-            return Some(i);
-        }
-        // A missing image was reported when it was read.
-        let image = images.get(idx)?.as_ref()?;
-        match to_rgba(image) {
-            Ok(image) => {
-                scene.textures.push(Texture {
-                    name: t.source().name().unwrap_or("texture").into(),
-                    image,
-                    srgb,
-                    source: None,
-                });
-                tex_map.insert((idx, srgb), scene.textures.len() - 1);
-                Some(scene.textures.len() - 1)
-            }
-            Err(e) => {
-                log::warn!("{file}: image {idx} unusable ({e}); using the flat material colour");
-                None
-            }
-        }
+    let mut textures = TextureCache {
+        file: &file,
+        images: &images,
+        made: Default::default(),
     };
     // Per material, the base colour texture's KHR_texture_transform, baked
     // into the texture coordinates of the primitives that use it.
     let mut uv_transforms: Vec<Option<glam::Mat3>> = vec![];
     for m in doc.materials() {
         let pbr = m.pbr_metallic_roughness();
-        uv_transforms.push(
-            pbr.base_color_texture()
-                .and_then(|t| t.texture_transform())
-                .map(|t| {
-                    glam::Mat3::from_scale_angle_translation(
-                        Vec2::from(t.scale()),
-                        t.rotation(),
-                        Vec2::from(t.offset()),
-                    )
-                }),
-        );
-        let bc = Vec3::from_slice(&pbr.base_color_factor()[..3]);
-        let mut mat = match extras_field::<PhongExtras>(m.extras(), "material")? {
-            Some(p) => Material {
-                ka: p.ka.into(),
-                kd: p.kd.into(),
-                ks: p.ks.into(),
-                shininess: p.shininess,
-                uv_scale: p.uv_scale,
-                procedural: p.procedural,
-                ..Material::default()
-            },
-            None => {
-                // Phong from metallic-roughness: n = 2/r² − 2.
-                let r = pbr.roughness_factor().max(0.05);
-                Material {
-                    ks: Vec3::splat(0.04 + 0.5 * pbr.metallic_factor()),
-                    shininess: (2.0 / (r * r) - 2.0).clamp(1.0, 1000.0),
-                    ..Material::color("", bc)
-                }
-            }
-        };
-        mat.name = m.name().unwrap_or("material").into();
-        mat.alpha = pbr.base_color_factor()[3].clamp(0.0, 1.0);
-        mat.alpha_mode = match m.alpha_mode() {
-            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
-            gltf::material::AlphaMode::Mask => AlphaMode::Mask,
-            gltf::material::AlphaMode::Blend => AlphaMode::Blend,
-        };
-        mat.alpha_cutoff = m.alpha_cutoff().unwrap_or(0.5).clamp(0.0, 1.0);
-        mat.double_sided = m.double_sided();
+        uv_transforms.push(uv_transform(&m));
+        let mut mat = material_of(&m)?;
         mat.diffuse_texture = pbr
             .base_color_texture()
-            .and_then(|t| texture(&mut scene, t.texture(), true));
+            .and_then(|t| textures.get(&mut scene, t.texture(), true));
         mat.alpha_texture = mat.diffuse_texture.filter(|_| mat.is_see_through());
         mat.normal_map = m
             .normal_texture()
-            .and_then(|t| texture(&mut scene, t.texture(), false));
+            .and_then(|t| textures.get(&mut scene, t.texture(), false));
         scene.add_material(mat);
     }
     let default_mat = scene.add_material(Material::default());
@@ -190,39 +324,10 @@ fn load_checked(file: &str, path: &Path) -> Result<Scene> {
         let (_, rot, pos) = world.to_scale_rotation_translation();
         let forward = (rot * Vec3::NEG_Z).normalize();
         if let Some(l) = node.light() {
-            use gltf::khr_lights_punctual::Kind;
-            let mut light = match l.kind() {
-                Kind::Directional => Light::directional(forward, l.intensity()),
-                Kind::Point => Light::point(pos, l.intensity()),
-                Kind::Spot {
-                    inner_cone_angle,
-                    outer_cone_angle,
-                } => Light::spot(
-                    pos,
-                    pos + forward,
-                    l.intensity(),
-                    inner_cone_angle.to_degrees(),
-                    outer_cone_angle.to_degrees(),
-                ),
-            };
-            light.color = l.color().into();
-            light.range = l.range().unwrap_or(0.0);
-            if let Some(area) = extras_field::<super::LightArea>(l.extras(), "light")? {
-                light.area = Some(area);
-            }
-            scene.lights.push(light);
+            scene.lights.push(light_of(&l, pos, forward)?);
         }
-        if let (Some(c), None) = (node.camera(), camera)
-            && let gltf::camera::Projection::Perspective(p) = c.projection()
-        {
-            camera = Some(Camera {
-                eye: pos,
-                target: pos + forward,
-                up: rot * Vec3::Y,
-                fov_y_deg: p.yfov().to_degrees(),
-                near: p.znear(),
-                far: p.zfar().unwrap_or(p.znear() * 1e4),
-            });
+        if camera.is_none() {
+            camera = node.camera().and_then(|c| camera_of(&c, pos, rot, forward));
         }
         let Some(gmesh) = node.mesh() else { continue };
         let flags: ShadowFlags =
@@ -239,45 +344,8 @@ fn load_checked(file: &str, path: &Path) -> Result<Scene> {
             let mesh_id = match mesh_ids.get(&key) {
                 Some(&id) => id,
                 None => {
-                    check_primitive_accessors(&file, gmesh.name().unwrap_or(&name), pi, &prim)?;
-                    let reader = prim.reader(|b| Some(&buffers[b.index()]));
-                    let positions: Vec<Vec3> = reader
-                        .read_positions()
-                        .ok_or_else(|| {
-                            anyhow!(
-                                "{file}: mesh '{}' has no POSITION",
-                                gmesh.name().unwrap_or("")
-                            )
-                        })?
-                        .map(Vec3::from)
-                        .collect();
-                    let indices: Vec<u32> = match reader.read_indices() {
-                        Some(i) => i.into_u32().collect(),
-                        None => (0..positions.len() as u32).collect(),
-                    };
-                    let mesh = Mesh {
-                        name: gmesh.name().unwrap_or(&name).to_string(),
-                        normals: reader
-                            .read_normals()
-                            .map(|n| n.map(Vec3::from).collect())
-                            .unwrap_or_default(),
-                        uvs: reader
-                            .read_tex_coords(0)
-                            .map(|t| {
-                                let transform = prim
-                                    .material()
-                                    .index()
-                                    .and_then(|i| uv_transforms[i])
-                                    .unwrap_or(glam::Mat3::IDENTITY);
-                                t.into_f32()
-                                    .map(|uv| transform.transform_point2(Vec2::from(uv)))
-                                    .collect()
-                            })
-                            .unwrap_or_default(),
-                        positions,
-                        indices,
-                        ..Default::default()
-                    };
+                    let mesh =
+                        read_mesh(&file, &gmesh, &name, pi, &prim, &buffers, &uv_transforms)?;
                     let id = scene.add_mesh(mesh);
                     mesh_ids.insert(key, id);
                     id

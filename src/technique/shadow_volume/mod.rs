@@ -21,6 +21,7 @@
 
 pub mod adjacency;
 pub mod config;
+mod debug;
 mod extrusion;
 mod pipelines;
 mod scissor;
@@ -39,7 +40,7 @@ use config::{Extrusion, FarPlane, Method, SilhouetteMode, StencilMode, VolumeCon
 use extrusion::Geometry;
 use glam::Vec4;
 use pipelines::{VolumeKey, VolumeShared};
-use silhouette::{CasterPlan, VolumeKind, VolumeMesh};
+use silhouette::{CasterPlan, VolumeKind};
 use std::sync::Arc;
 
 pub static FAMILY: Family = Family {
@@ -325,56 +326,6 @@ impl Stats {
     }
 }
 
-impl ShadowVolumeRenderer {
-    /// The debug view: the scene with the volumes over it, translucent.
-    fn render_debug(
-        &mut self,
-        ctx: &MaskContext,
-        encoder: &mut wgpu::CommandEncoder,
-        group: &wgpu::BindGroup,
-        unclipped: bool,
-    ) {
-        let (w, h) = (ctx.frame.width(), ctx.frame.height());
-        if self
-            .debug
-            .as_ref()
-            .is_none_or(|t| (t.width(), t.height()) != (w, h))
-        {
-            self.debug = Some(crate::gpu::texture_2d(
-                &ctx.gpu.device,
-                "shadow volume debug",
-                w,
-                h,
-                1,
-                wgpu::TextureFormat::Rgba8Unorm,
-                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            ));
-        }
-        let volume_pipeline = self.shared.debug_volume_pipeline(ctx.gpu, unclipped);
-        let view = self
-            .debug
-            .as_ref()
-            .expect("made above")
-            .create_view(&Default::default());
-        let mut pass = super::pass_over_frame_depth(
-            encoder,
-            ctx,
-            "shadow volume debug",
-            &view,
-            wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-            false,
-        );
-        ctx.bind_frame_groups(&mut pass);
-        pass.set_bind_group(crate::frame::OWN_GROUP, group, &[]);
-        pass.set_pipeline(&self.shared.debug_scene_pipeline);
-        pass.draw(0..3, 0..1);
-        pass.set_pipeline(&volume_pipeline);
-        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed_indirect(&self.args, 0);
-        pass.draw_indexed_indirect(&self.args, ZFAIL_ARGS);
-    }
-}
-
 impl ShadowTechnique for ShadowVolumeRenderer {
     fn configure(&mut self, params: &ParamValues) -> Result<()> {
         self.config = VolumeConfig::parse(params)?;
@@ -433,7 +384,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
         let geometry = self.geometry.as_ref().expect("ensured");
         let vm = &geometry.mesh;
         if self.want_debug {
-            self.silhouette_lines = silhouette_lines(vm, &plans);
+            self.silhouette_lines = debug::silhouette_lines(vm, &plans);
         }
 
         // Count in the stencil, then write the mask where the count is not 0.
@@ -577,24 +528,4 @@ impl ShadowTechnique for ShadowVolumeRenderer {
         }
         Ok(views)
     }
-}
-
-/// World-space silhouette edges of the silhouette casters, for the debug view.
-fn silhouette_lines(vm: &VolumeMesh, plans: &[CasterPlan]) -> Vec<DebugLine> {
-    let mut lines = vec![];
-    for (c, plan) in vm.casters.iter().zip(plans) {
-        if plan.kind != VolumeKind::Silhouette {
-            continue;
-        }
-        let world = |v: u32| {
-            c.model
-                .transform_point3(vm.positions[v as usize].truncate())
-        };
-        lines.extend(plan.extruded_edges(vm, c).map(|(e, _)| DebugLine {
-            a: world(e.a),
-            b: world(e.b),
-            color: [0.2, 1.0, 0.3, 1.0],
-        }));
-    }
-    lines
 }

@@ -1,7 +1,14 @@
 //! A paged frame's set-up: the pool's atlas, the cache's stale pages and
 //! the buffers the marking and lookup passes read, sized and written.
 
-use super::*;
+use super::atlas::Atlas;
+use super::levels::VirtualLayout;
+use super::pages::PagePool;
+use super::{CacheKey, LevelGpu, MapHeader, VirtualState};
+use crate::gpu::FrameFeedback;
+use crate::technique::MaskContext;
+use crate::technique::shadow_map::ShadowMapConfig;
+use anyhow::Result;
 
 impl VirtualState {
     /// Readies this frame's pool, caches and buffers for `layout`: a new
