@@ -279,3 +279,95 @@ fn paths_resolve_against_the_module() {
     assert!(found.contains(&s(&["scene", "Aabb", "new"])));
     assert!(!found.iter().any(|p| p.contains(&"ignored".to_string())));
 }
+
+/// Lines of `code` without string and char literals and `//` comments, for
+/// counting braces.
+fn braces_of(line: &str) -> (i32, i32) {
+    let (mut open, mut close) = (0, 0);
+    let mut chars = line.chars().peekable();
+    let mut in_str = false;
+    while let Some(c) = chars.next() {
+        match c {
+            '\\' if in_str => {
+                chars.next();
+            }
+            '"' => in_str = !in_str,
+            '/' if !in_str && chars.peek() == Some(&'/') => break,
+            '\'' if !in_str => {
+                // A char literal ('{', '\n') or a lifetime ('a).
+                let rest: String = chars.clone().take(3).collect();
+                if rest.starts_with('\\') || rest.chars().nth(1) == Some('\'') {
+                    let len = if rest.starts_with('\\') { 3 } else { 2 };
+                    for _ in 0..len {
+                        chars.next();
+                    }
+                }
+            }
+            '{' if !in_str => open += 1,
+            '}' if !in_str => close += 1,
+            _ => {}
+        }
+    }
+    (open, close)
+}
+
+/// No source file over 600 lines and no function over 120 lines, outside
+/// the test modules (split along the passes or steps instead).
+#[test]
+fn files_and_functions_stay_short() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = vec![];
+    rust_files(&src, &mut files);
+    let mut long = vec![];
+    for f in &files {
+        let text = std::fs::read_to_string(f).unwrap();
+        let code = text.split("#[cfg(test)]\nmod tests").next().unwrap();
+        let lines: Vec<&str> = code.lines().collect();
+        let name = f.strip_prefix(&src).unwrap().display().to_string();
+        if lines.len() > 600 {
+            long.push(format!("{name}: {} lines", lines.len()));
+        }
+        for (i, line) in lines.iter().enumerate() {
+            let t = line.trim_start();
+            let is_fn = [
+                "fn ",
+                "pub fn ",
+                "pub(crate) fn ",
+                "pub(super) fn ",
+                "const fn ",
+                "pub const fn ",
+            ]
+            .iter()
+            .any(|p| t.starts_with(p))
+                || (t.starts_with("pub(in ") && t.contains(") fn "));
+            if !is_fn {
+                continue;
+            }
+            let mut depth = 0;
+            let mut opened = false;
+            for (j, l) in lines[i..].iter().enumerate() {
+                let (o, c) = braces_of(l);
+                depth += o - c;
+                opened |= o > 0;
+                if !opened && l.trim_end().ends_with(';') {
+                    break;
+                }
+                if opened && depth == 0 {
+                    if j + 1 > 120 {
+                        long.push(format!("{name}:{}: a function of {} lines", i + 1, j + 1));
+                    }
+                    break;
+                }
+            }
+        }
+    }
+    assert!(long.is_empty(), "too long: {long:#?}");
+}
+
+#[test]
+fn braces_skip_strings_chars_and_comments() {
+    assert_eq!(braces_of(r#"let s = "{"; // }"#), (0, 0));
+    assert_eq!(braces_of("match c { '{' => 1, '}' => 2 }"), (1, 1));
+    assert_eq!(braces_of("fn f<'a>(x: &'a str) {"), (1, 0));
+    assert_eq!(braces_of(r#"format!("{x} \" {{")"#), (0, 0));
+}

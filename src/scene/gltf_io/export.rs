@@ -3,7 +3,7 @@
 //! lights and the camera.
 
 use super::extras::{PhongExtras, ShadowFlags};
-use crate::scene::{Aabb, AlphaMode, LightType, Scene};
+use crate::scene::{Aabb, AlphaMode, Light, LightType, Material, Object, Scene};
 use anyhow::{Context, Result, anyhow};
 use glam::{Quat, Vec3};
 use serde_json::{Value, json};
@@ -64,6 +64,168 @@ impl BinWriter {
     }
 }
 
+/// glTF component types and buffer-view targets.
+const FLOAT: u32 = 5126;
+const UINT: u32 = 5125;
+const ARRAY: u32 = 34962;
+const ELEMENTS: u32 = 34963;
+
+/// Material `m` as glTF: base colour and roughness from the Phong terms,
+/// which the shadowlab extras keep exactly; alpha mode, cutoff and sides.
+fn material_json(m: &Material) -> Value {
+    let r = (2.0 / (m.shininess + 2.0)).sqrt();
+    let mut pbr = json!({
+        "baseColorFactor": [m.kd.x.clamp(0.0, 1.0), m.kd.y.clamp(0.0, 1.0), m.kd.z.clamp(0.0, 1.0), m.alpha.clamp(0.0, 1.0)],
+        "metallicFactor": 0.0,
+        "roughnessFactor": r.clamp(0.0, 1.0),
+    });
+    if let Some(t) = m.diffuse_texture {
+        pbr["baseColorTexture"] = json!({"index": t});
+    }
+    let mut v = json!({
+        "name": m.name,
+        "pbrMetallicRoughness": pbr,
+        "extras": {"shadowlab": PhongExtras {
+            ka: m.ka.into(), kd: m.kd.into(), ks: m.ks.into(),
+            shininess: m.shininess, uv_scale: m.uv_scale, procedural: m.procedural,
+        }},
+    });
+    if let Some(t) = m.normal_map {
+        v["normalTexture"] = json!({"index": t});
+    }
+    if m.alpha_mode != AlphaMode::Opaque {
+        v["alphaMode"] = json!(m.alpha_mode.gltf_name());
+    }
+    if m.alpha_mode == AlphaMode::Mask {
+        v["alphaCutoff"] = json!(m.alpha_cutoff);
+    }
+    if m.double_sided {
+        v["doubleSided"] = json!(true);
+    }
+    if m.alpha_texture.is_some() && m.alpha_texture != m.diffuse_texture {
+        log::warn!(
+            "material '{}': glTF keeps opacity in the base colour texture's alpha; its separate opacity map is not written",
+            m.name
+        );
+    }
+    v
+}
+
+/// Object `o`'s mesh in world space (its transform baked in), single-sided
+/// where its material is double-sided, its arrays written to `w`.
+fn mesh_json(w: &mut BinWriter, scene: &Scene, o: &Object) -> Value {
+    // A double-sided material's back faces are the loader's: glTF says
+    // `doubleSided` instead.
+    let m = &scene.meshes[o.mesh];
+    let single;
+    let m = if scene.materials[o.material].double_sided && m.sides_doubled {
+        single = m.single_sided();
+        &single
+    } else {
+        m
+    };
+    let nm = o.transform.inverse().transpose();
+    let pos: Vec<Vec3> = m
+        .positions
+        .iter()
+        .map(|&p| o.transform.transform_point3(p))
+        .collect();
+    let nrm: Vec<Vec3> = m
+        .normals
+        .iter()
+        .map(|&n| nm.transform_vector3(n).try_normalize().unwrap_or(Vec3::Y))
+        .collect();
+    let b = Aabb::from_points(pos.iter().copied());
+    let pa = w.accessor(
+        bytemuck::cast_slice(&pos),
+        pos.len(),
+        "VEC3",
+        FLOAT,
+        ARRAY,
+        Some((b.min, b.max)),
+    );
+    let na = w.accessor(
+        bytemuck::cast_slice(&nrm),
+        nrm.len(),
+        "VEC3",
+        FLOAT,
+        ARRAY,
+        None,
+    );
+    let ta = w.accessor(
+        bytemuck::cast_slice(&m.uvs),
+        m.uvs.len(),
+        "VEC2",
+        FLOAT,
+        ARRAY,
+        None,
+    );
+    let ia = w.accessor(
+        bytemuck::cast_slice(&m.indices),
+        m.indices.len(),
+        "SCALAR",
+        UINT,
+        ELEMENTS,
+        None,
+    );
+    let mut attributes = json!({"POSITION": pa, "NORMAL": na, "TEXCOORD_0": ta});
+    // Normal-mapped materials get their tangent space (xyz unit, w ±1).
+    if scene.materials[o.material].normal_map.is_some() && m.tangents.len() == m.positions.len() {
+        let tangents: Vec<glam::Vec4> = m
+            .tangents
+            .iter()
+            .map(|t| {
+                let v = o
+                    .transform
+                    .transform_vector3(t.truncate())
+                    .try_normalize()
+                    .unwrap_or(Vec3::X);
+                v.extend(if t.w < 0.0 { -1.0 } else { 1.0 })
+            })
+            .collect();
+        attributes["TANGENT"] = json!(w.accessor(
+            bytemuck::cast_slice(&tangents),
+            tangents.len(),
+            "VEC4",
+            FLOAT,
+            ARRAY,
+            None
+        ));
+    }
+    json!({
+        "name": m.name,
+        "primitives": [{
+            "attributes": attributes,
+            "indices": ia,
+            "material": o.material,
+            "mode": 4,
+        }],
+    })
+}
+
+/// Light `l` (number `i`) as a KHR_lights_punctual light.
+fn light_json(l: &Light, i: usize) -> Value {
+    let mut lj = json!({
+        "name": format!("light{i}"),
+        "type": match l.kind { LightType::Point => "point", LightType::Spot => "spot", LightType::Directional => "directional" },
+        "color": l.color.to_array(),
+        "intensity": l.intensity,
+    });
+    if l.range > 0.0 && l.kind != LightType::Directional {
+        lj["range"] = json!(l.range);
+    }
+    if l.kind == LightType::Spot {
+        lj["spot"] = json!({
+            "innerConeAngle": l.inner_cone_deg.to_radians(),
+            "outerConeAngle": l.outer_cone_deg.to_radians(),
+        });
+    }
+    if let Some(a) = l.area {
+        lj["extras"] = json!({"shadowlab": a});
+    }
+    lj
+}
+
 /// Writes the scene as `.gltf` JSON plus a `.bin` buffer beside it, or as
 /// one binary `.glb` when `out` ends in `.glb`: vertices
 /// in world space (identity node transforms), Phong parameters and shadow
@@ -81,10 +243,6 @@ pub fn export(scene: &Scene, out: &Path) -> Result<()> {
         views: vec![],
         accessors: vec![],
     };
-    const FLOAT: u32 = 5126;
-    const UINT: u32 = 5125;
-    const ARRAY: u32 = 34962;
-    const ELEMENTS: u32 = 34963;
     let mut images = vec![];
     let mut textures = vec![];
     for t in &scene.textures {
@@ -94,139 +252,11 @@ pub fn export(scene: &Scene, out: &Path) -> Result<()> {
         images.push(json!({"bufferView": view, "mimeType": "image/png", "name": t.name}));
         textures.push(json!({"source": images.len() - 1, "sampler": 0}));
     }
-    let materials: Vec<Value> = scene
-        .materials
-        .iter()
-        .map(|m| {
-            let r = (2.0 / (m.shininess + 2.0)).sqrt();
-            let mut pbr = json!({
-                "baseColorFactor": [m.kd.x.clamp(0.0, 1.0), m.kd.y.clamp(0.0, 1.0), m.kd.z.clamp(0.0, 1.0), m.alpha.clamp(0.0, 1.0)],
-                "metallicFactor": 0.0,
-                "roughnessFactor": r.clamp(0.0, 1.0),
-            });
-            if let Some(t) = m.diffuse_texture {
-                pbr["baseColorTexture"] = json!({"index": t});
-            }
-            let mut v = json!({
-                "name": m.name,
-                "pbrMetallicRoughness": pbr,
-                "extras": {"shadowlab": PhongExtras {
-                    ka: m.ka.into(), kd: m.kd.into(), ks: m.ks.into(),
-                    shininess: m.shininess, uv_scale: m.uv_scale, procedural: m.procedural,
-                }},
-            });
-            if let Some(t) = m.normal_map {
-                v["normalTexture"] = json!({"index": t});
-            }
-            if m.alpha_mode != AlphaMode::Opaque {
-                v["alphaMode"] = json!(m.alpha_mode.gltf_name());
-            }
-            if m.alpha_mode == AlphaMode::Mask {
-                v["alphaCutoff"] = json!(m.alpha_cutoff);
-            }
-            if m.double_sided {
-                v["doubleSided"] = json!(true);
-            }
-            if m.alpha_texture.is_some() && m.alpha_texture != m.diffuse_texture {
-                log::warn!(
-                    "material '{}': glTF keeps opacity in the base colour texture's alpha; its separate opacity map is not written",
-                    m.name
-                );
-            }
-            v
-        })
-        .collect();
+    let materials: Vec<Value> = scene.materials.iter().map(material_json).collect();
     let mut meshes = vec![];
     let mut nodes = vec![];
     for o in &scene.objects {
-        // A double-sided material's back faces are the loader's: glTF says
-        // `doubleSided` instead.
-        let m = &scene.meshes[o.mesh];
-        let single;
-        let m = if scene.materials[o.material].double_sided && m.sides_doubled {
-            single = m.single_sided();
-            &single
-        } else {
-            m
-        };
-        let nm = o.transform.inverse().transpose();
-        let pos: Vec<Vec3> = m
-            .positions
-            .iter()
-            .map(|&p| o.transform.transform_point3(p))
-            .collect();
-        let nrm: Vec<Vec3> = m
-            .normals
-            .iter()
-            .map(|&n| nm.transform_vector3(n).try_normalize().unwrap_or(Vec3::Y))
-            .collect();
-        let b = Aabb::from_points(pos.iter().copied());
-        let pa = w.accessor(
-            bytemuck::cast_slice(&pos),
-            pos.len(),
-            "VEC3",
-            FLOAT,
-            ARRAY,
-            Some((b.min, b.max)),
-        );
-        let na = w.accessor(
-            bytemuck::cast_slice(&nrm),
-            nrm.len(),
-            "VEC3",
-            FLOAT,
-            ARRAY,
-            None,
-        );
-        let ta = w.accessor(
-            bytemuck::cast_slice(&m.uvs),
-            m.uvs.len(),
-            "VEC2",
-            FLOAT,
-            ARRAY,
-            None,
-        );
-        let ia = w.accessor(
-            bytemuck::cast_slice(&m.indices),
-            m.indices.len(),
-            "SCALAR",
-            UINT,
-            ELEMENTS,
-            None,
-        );
-        let mut attributes = json!({"POSITION": pa, "NORMAL": na, "TEXCOORD_0": ta});
-        // Normal-mapped materials get their tangent space (xyz unit, w ±1).
-        if scene.materials[o.material].normal_map.is_some() && m.tangents.len() == m.positions.len()
-        {
-            let tangents: Vec<glam::Vec4> = m
-                .tangents
-                .iter()
-                .map(|t| {
-                    let v = o
-                        .transform
-                        .transform_vector3(t.truncate())
-                        .try_normalize()
-                        .unwrap_or(Vec3::X);
-                    v.extend(if t.w < 0.0 { -1.0 } else { 1.0 })
-                })
-                .collect();
-            attributes["TANGENT"] = json!(w.accessor(
-                bytemuck::cast_slice(&tangents),
-                tangents.len(),
-                "VEC4",
-                FLOAT,
-                ARRAY,
-                None
-            ));
-        }
-        meshes.push(json!({
-            "name": m.name,
-            "primitives": [{
-                "attributes": attributes,
-                "indices": ia,
-                "material": o.material,
-                "mode": 4,
-            }],
-        }));
+        meshes.push(mesh_json(&mut w, scene, o));
         nodes.push(json!({
             "name": o.name,
             "mesh": meshes.len() - 1,
@@ -239,25 +269,7 @@ pub fn export(scene: &Scene, out: &Path) -> Result<()> {
     }
     let mut lights = vec![];
     for (i, l) in scene.lights.iter().enumerate() {
-        let mut lj = json!({
-            "name": format!("light{i}"),
-            "type": match l.kind { LightType::Point => "point", LightType::Spot => "spot", LightType::Directional => "directional" },
-            "color": l.color.to_array(),
-            "intensity": l.intensity,
-        });
-        if l.range > 0.0 && l.kind != LightType::Directional {
-            lj["range"] = json!(l.range);
-        }
-        if l.kind == LightType::Spot {
-            lj["spot"] = json!({
-                "innerConeAngle": l.inner_cone_deg.to_radians(),
-                "outerConeAngle": l.outer_cone_deg.to_radians(),
-            });
-        }
-        if let Some(a) = l.area {
-            lj["extras"] = json!({"shadowlab": a});
-        }
-        lights.push(lj);
+        lights.push(light_json(l, i));
         let rot = rotation_towards(l.direction, safe_up(l.direction));
         nodes.push(json!({
             "name": format!("Light{i}"),
