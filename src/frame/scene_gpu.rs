@@ -442,3 +442,37 @@ impl SceneGpu {
         triangles
     }
 }
+
+#[cfg(test)]
+mod wgsl_tests {
+    use super::*;
+
+    /// The frame uniform, its lights and the object table are laid out as
+    /// `Frame`, `LightGpu` and `ObjectGpu` of common.wgsl.
+    #[test]
+    fn the_shared_structs_match_common_wgsl() {
+        use crate::gpu::wgsl_layout::assert_struct_matches;
+        use std::mem::size_of;
+        let source = crate::frame::COMMON_WGSL;
+        assert_struct_matches(
+            source,
+            "Frame",
+            crate::field_offsets!(crate::frame::FrameUniform; view_proj, inv_view_proj, view,
+                proj, camera_pos, ambient, size, lights),
+            size_of::<crate::frame::FrameUniform>(),
+        );
+        assert_struct_matches(
+            source,
+            "LightGpu",
+            crate::field_offsets!(crate::frame::LightGpu; position, direction, color),
+            size_of::<crate::frame::LightGpu>(),
+        );
+        assert_struct_matches(
+            source,
+            "ObjectGpu",
+            crate::field_offsets!(ObjectGpu; model, normal_matrix, info, parts, alpha,
+                opacity_map),
+            size_of::<ObjectGpu>(),
+        );
+    }
+}

@@ -10,6 +10,8 @@ pub mod live;
 pub mod readback;
 pub mod timestamps;
 pub mod uniform_space;
+#[cfg(test)]
+pub mod wgsl_layout;
 pub mod work;
 
 pub use cache::{DeviceCache, PIPELINE_CACHE_BOUND};

@@ -173,22 +173,7 @@ impl ShadowMapShared {
                 tex(14, wgpu::TextureSampleType::Uint),
             ],
         });
-        let constants = Filter::wgsl_constants("FILTER")
-            + &MapProjection::wgsl_constants("PROJECTION")
-            + &super::edge_mask::wgsl_constants();
-        let module = crate::frame::technique_shader(
-            gpu,
-            "shadow map",
-            &[
-                &constants,
-                include_str!("shadow_map.wgsl"),
-                include_str!("depth_pass.wgsl"),
-                include_str!("filters.wgsl"),
-                include_str!("lookup.wgsl"),
-                include_str!("virtual_map.wgsl"),
-                include_str!("debug.wgsl"),
-            ],
-        );
+        let module = crate::frame::technique_shader(gpu, "shadow map", &[&module_source()]);
         ShadowMapShared {
             pipeline_layout: crate::technique::pipeline_layout(gpu, "shadow map", &layout),
             layout,
@@ -375,4 +360,23 @@ impl ShadowMapShared {
             None,
         )
     }
+}
+
+/// The family's WGSL after the frame's shared declarations: its choices'
+/// constants, then the uniform and bindings, the depth passes, the filters,
+/// the lookup, the virtual map's passes and the debug views.
+pub(in crate::technique::shadow_map) fn module_source() -> String {
+    let constants = Filter::wgsl_constants("FILTER")
+        + &MapProjection::wgsl_constants("PROJECTION")
+        + &super::edge_mask::wgsl_constants();
+    [
+        &constants,
+        include_str!("shadow_map.wgsl"),
+        include_str!("depth_pass.wgsl"),
+        include_str!("filters.wgsl"),
+        include_str!("lookup.wgsl"),
+        include_str!("virtual_map.wgsl"),
+        include_str!("debug.wgsl"),
+    ]
+    .join("\n")
 }

@@ -51,8 +51,9 @@ struct ShadowMap {
     // normal offset scales with sin θ between normal and light
     kernel: vec4f,
     // x map size, y 1/size, z world size of a texel at unit distance
-    // (perspective, paraboloid) or of any texel (orthographic),
-    // w unused (the projection is `PROJECTION`)
+    // (perspective, paraboloid) or of any texel (orthographic), w the
+    // filter's reach in texels (`ShadowMapConfig::kernel_reach`: how far
+    // a lookup's taps spread)
     map: vec4f,
     // x light size (texels at unit depth ratio, pcss), y variable-width scale,
     // z variable-width exponent, w blocker-search radius (texels)
@@ -67,7 +68,8 @@ struct ShadowMap {
     // z exponent c− (evsm), w moment bias (msm)
     moments: vec4f,
     // x cascades (0 when not `CASCADED`), y fraction of each cascade blended into
-    // the next, z view depth where the first cascade starts
+    // the next, z view depth where the first cascade starts, w 1 where the
+    // maps choose the cascade (`select=map`), 0 where the view depth does
     cascade: vec4f,
     // view depth at which cascade i ends: [i / 4][i % 4]
     cascade_far: array<vec4f, 2>,

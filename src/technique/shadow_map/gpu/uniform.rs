@@ -159,3 +159,27 @@ pub fn slot_data(
     }
     data
 }
+
+#[cfg(test)]
+mod wgsl_tests {
+    use super::*;
+
+    /// `ShadowMap` of shadow_map.wgsl is laid out as `ShadowMapUniform`
+    /// (every member's offset, the face count, the size).
+    #[test]
+    fn the_uniform_matches_its_wgsl_struct() {
+        let source = [
+            crate::frame::COMMON_WGSL,
+            crate::frame::GBUFFER_WGSL,
+            &super::super::pipelines::module_source(),
+        ]
+        .join("\n");
+        crate::gpu::wgsl_layout::assert_struct_matches(
+            &source,
+            "ShadowMap",
+            crate::field_offsets!(ShadowMapUniform; faces, light, kernel, map, soft, depth, face,
+                moments, cascade, cascade_far, cascade_texel, cascade_view_z, warp, warp_depth),
+            std::mem::size_of::<ShadowMapUniform>(),
+        );
+    }
+}
