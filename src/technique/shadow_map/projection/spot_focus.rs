@@ -4,20 +4,16 @@
 //! (x/−z, y/−z) — is fitted around the pixels the light reaches, from
 //! SDSM's reduction (`depth_bounds.wgsl`), instead of the whole cone.
 //! Seen from inside a scene a spot covers, the camera sees a small part of
-//! the cone, and every texel spent on the rest is lost: `city`/`street`/
-//! `spot` saw a grazing wall's shadow edge as a staircase of whole texels.
-//! Casters need no room of their own: one that shades a seen pixel lies on
-//! the ray from the light to it, so at the same place in the image. The
-//! window is the square around the pixels' box, stabilised as a
-//! directional map's window is (its side in eighths of an octave, its
-//! centre on whole texels, last frame's kept while it fits), so that it
-//! does not slide its texel grid as the camera moves. It stays square
-//! where a directional map takes the box: a spot seen along a street is a
-//! strip of its image (3.4 : 1 on `city`/`street`/`spot`), and texels that
-//! much finer across it narrow the PCF kernel, which then averages a
-//! staircase across a grazing wall over fewer steps (total mismatch at
-//! 640×360: square 0.43 %, the box 0.95 %, the box widened to at most
-//! 1.19 : 1 still 0.48 %).
+//! the cone, and every texel spent on the rest is lost. Casters need no
+//! room of their own: one that shades a seen pixel lies on the ray from the
+//! light to it, so at the same place in the image. The window is the
+//! square around the pixels' box, stabilised as a directional map's window
+//! is (its side in eighths of an octave, its centre on whole texels, last
+//! frame's kept while it fits), so that it does not slide its texel grid as
+//! the camera moves. It stays square: a spot seen along a street covers a
+//! strip of its image, and texels much finer across the strip narrow the
+//! PCF kernel, which then averages a staircase across a grazing wall over
+//! fewer steps.
 
 use super::FrustumParams;
 use super::roll::{AxisClearance, Supports, TURNS, turn_angle, world_axes_in_perspective_image};
