@@ -42,8 +42,8 @@ pub struct DepthPassKey {
 impl CullFace {
     /// The culling maps of `shape` get: `Solids` becomes `None` on warped
     /// maps (a perspective warp can mirror the light's image, which swaps
-    /// front and back faces: PSM and TSM stored lit faces unbiased, 7 %
-    /// false shadow on landscape/ground/sun-side) and on paraboloid
+    /// front and back faces: PSM and TSM stored lit faces unbiased, a
+    /// false shadow over whole lit surfaces) and on paraboloid
     /// hemispheres (projected in the vertex stage).
     pub fn for_shape(self, shape: MapShape) -> CullFace {
         let keeps_facing = !shape.warped && shape.projection != MapProjection::Paraboloid;
@@ -130,8 +130,7 @@ impl DepthPassKey {
     /// back face can lie too close before the part of it that it shadows
     /// (a convex one never shadows its own lit side). Uncapped, at grazing
     /// light the pushed front faces still meet the lit faces they come from,
-    /// which take no normal offset (columns/point at 640×360: 0.048 → 0.54 %
-    /// total mismatch with them).
+    /// which take no normal offset, and shadow them.
     fn draws(self, solid_front_bias: f32) -> Vec<(DepthPassKey, Casters)> {
         if self.cull != CullFace::Solids {
             return vec![(self, Casters::All)];

@@ -344,9 +344,8 @@ fn plane_sway(slope: vec2f) -> f32 {
 // The widest kernel reach (texels) that `edge_class` reads texel by texel
 // where the chain finds an edge: at most 6 texels a side, 3×3 gathers (a
 // grid of radius 1.5 reaches 1.5 to 2). The chain's cells, 8 texels or
-// more, call a pixel an edge wherever any depth step lies within them
-// (city/sun, 5×5 grid at 1280×720: 33 % of pixels; its texels, 5.3 %; the
-// kernel filters 3.8 % to neither 0 nor 1).
+// more, call a pixel an edge wherever any depth step lies within them, far
+// more pixels than the kernel actually filters to neither 0 nor 1.
 const FOOTPRINT_REACH: f32 = 2.5;
 
 // `edge_class` from the texels themselves: every texel the kernel can read

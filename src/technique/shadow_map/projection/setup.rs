@@ -388,9 +388,8 @@ pub fn spot_setup(light: &Light, scene_bounds: &Aabb, fp: &FrustumParams) -> (Li
 /// `fp.stabilize_size`), and what it took. The turn is the one with the
 /// smallest square around that view ([`Supports::fitted_turn`]), and the
 /// window is that square's box: its shorter side needs no texels past the
-/// box, so they go to finer texels along it (`city`/`default`/`sun`, a box
-/// 96 × 82 seen from the sun: 15 % finer; `landscape`/`ground`/
-/// `sun-low-back`, 246 × 338: 27 %). `texel_scale` is the longer side's.
+/// box, so they go to finer texels along it. `texel_scale` is the longer
+/// side's.
 pub fn directional_setup(
     light: &Light,
     scene_bounds: &Aabb,
@@ -423,9 +422,9 @@ pub fn directional_setup(
     };
     let fitted = match fp.view_fit {
         // The pixels seen, with room to grow; the view of the scene where
-        // its longer side fits in that room, which is steadier (both sides
-        // fitting made `landscape`/`flyover`/`sun` take the pixels' window:
-        // 0.667 → 0.712 % total mismatch at 640×360).
+        // its longer side fits in that room, which is steadier (asking both
+        // sides to fit took the pixels' window where the scene's was
+        // better).
         ViewFit::Samples { supports, size } => {
             let samples = window_of(supports, Some(size), Hold::SAMPLES);
             let room = samples.need.half.max_element() * Hold::SAMPLES.headroom;

@@ -109,17 +109,11 @@ impl Hold {
         kept_ratio: QUARTER_OCTAVE,
     };
     /// Fits to the pixels seen: their extents jump when a far feature comes
-    /// into view or leaves it by a pixel (the box of `landscape`/`ground`/
-    /// `sun-side` grew 16 % in one 0.25 % dolly step and shrank back), so a
-    /// fresh fit takes a quarter octave more, and is kept through a jump of
-    /// a quarter octave either way: it is up to 2^(3/8) times its need
-    /// (the room, then rounding up to an eighth), so it is kept down to
-    /// where it is 2^(5/8) times the need. `compare --path` at 640×360
-    /// (the one map, mean flicker over 5 steps of dolly, strafe and turn on
-    /// the four `landscape`/`ground` sun views): 0.15–0.90 % held tight;
-    /// kept only down to √2 times the need, a fresh fit 1.30 times its
-    /// need was dropped when the box shrank back (`sun-side` dolly at
-    /// 1280×720: 0.37 %).
+    /// into view or leaves it by a pixel, so a fresh fit takes a quarter
+    /// octave more, and is kept through a jump of a quarter octave either
+    /// way: it is up to 2^(3/8) times its need (the room, then rounding up
+    /// to an eighth), so it is kept down to where it is 2^(5/8) times the
+    /// need (a lower bound dropped fresh fits when the box shrank back).
     pub const SAMPLES: Hold = Hold {
         headroom: QUARTER_OCTAVE,
         kept_ratio: QUARTER_OCTAVE * QUARTER_OCTAVE * EIGHTH_OCTAVE,
