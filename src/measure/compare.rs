@@ -342,17 +342,12 @@ impl<'a> Comparison<'a> {
     /// Writes `quality.{json,csv,md}` of `rows` (measured by this
     /// comparison or by an earlier one of the same frame).
     pub fn write_tables(&self, rows: &[QualityRow]) -> Result<()> {
-        let FrameRequest {
-            scene,
-            camera,
-            lights,
-            size: (w, h),
-        } = self.view;
+        let view = self.view;
         let meta = serde_json::json!({
-            "scene": scene.name,
-            "size": {"width": w, "height": h},
-            "camera": camera,
-            "lights": lights,
+            "scene": view.scene.name,
+            "size": {"width": view.size.0, "height": view.size.1},
+            "camera": view.camera,
+            "lights": view.lights,
             "reference": choice_label(self.reference),
             "reference_frame_ms": self.reference_ms,
             "adapter": self.gpu.adapter_summary(),
@@ -364,7 +359,7 @@ impl<'a> Comparison<'a> {
             serde_json::to_string_pretty(&serde_json::json!({"meta": meta, "rows": rows}))?,
         )?;
         write_csv(&out.join("quality.csv"), rows)?;
-        std::fs::write(out.join("quality.md"), markdown(scene, &meta, rows))?;
+        std::fs::write(out.join("quality.md"), markdown(view.scene, &meta, rows))?;
         Ok(())
     }
 }
