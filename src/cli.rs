@@ -1,4 +1,7 @@
-//! Command-line interface: `scenes`, `techniques`, `export`, `render`.
+//! The command line (clap): `scenes`, `techniques`, `export`, `render`,
+//! `compare`, `bench`, `report`, `view` and the hidden `cli-markdown` (the
+//! guide's CLI reference); each command parses its arguments and calls the
+//! library.
 
 use crate::args::ViewArgs;
 use crate::headless::{self, FrameRecord, HeadlessFrame};
