@@ -25,6 +25,20 @@ pub fn wgsl_struct(source: &str, name: &str) -> (Vec<(String, u32)>, u32) {
     (fields, layouter[handle].size)
 }
 
+/// The global variables of bind group `group` in `source`: (name, binding).
+pub fn wgsl_bindings(source: &str, group: u32) -> Vec<(String, u32)> {
+    let module = naga::front::wgsl::parse_str(source)
+        .unwrap_or_else(|e| panic!("WGSL does not parse: {}", e.emit_to_string(source)));
+    module
+        .global_variables
+        .iter()
+        .filter_map(|(_, v)| {
+            let b = v.binding.as_ref()?;
+            (b.group == group).then(|| (v.name.clone().unwrap_or_default(), b.binding))
+        })
+        .collect()
+}
+
 /// Asserts that the WGSL struct `name` has exactly the members `rust`
 /// (name, `offset_of!`) in order and the Rust struct's `size`.
 pub fn assert_struct_matches(source: &str, name: &str, rust: &[(&str, usize)], size: usize) {

@@ -25,6 +25,7 @@ use crate::scene::area::area_samples;
 use crate::technique::{Family, MaskContext, ParamValues, ShadowTechnique};
 use anyhow::Result;
 use glam::{Mat4, Vec2};
+use gpu::binding as B;
 use gpu::depth_pass::DepthPassKey;
 use gpu::edge_mask::BoundsChain;
 use gpu::maps::Maps;
@@ -255,27 +256,27 @@ impl ShadowMapTechnique {
                 layout: &self.shared.layout,
                 entries: &[
                     wgpu::BindGroupEntry {
-                        binding: 0,
+                        binding: B::UNIFORM,
                         resource: crate::gpu::dynamic_uniform::<ShadowMapUniform>(b.uniforms),
                     },
-                    view(3, b.depth),
+                    view(B::DEPTH_MAP, b.depth),
                     wgpu::BindGroupEntry {
-                        binding: 4,
+                        binding: B::COMPARE_SAMPLER,
                         resource: wgpu::BindingResource::Sampler(&self.shared.compare_sampler),
                     },
-                    view(5, b.bytes),
-                    view(6, b.moments),
-                    view(7, b.bounds),
-                    buffer(8, b.virtual_buffers[0]),
-                    buffer(9, b.virtual_buffers[1]),
-                    buffer(10, b.virtual_buffers[2]),
-                    buffer(11, b.virtual_buffers[3]),
-                    view(12, b.parts),
+                    view(B::BYTE_MAP, b.bytes),
+                    view(B::MOMENT_MAP, b.moments),
+                    view(B::EDGE_BOUNDS, b.bounds),
+                    buffer(B::VIRTUAL[0], b.virtual_buffers[0]),
+                    buffer(B::VIRTUAL[1], b.virtual_buffers[1]),
+                    buffer(B::VIRTUAL[2], b.virtual_buffers[2]),
+                    buffer(B::VIRTUAL[3], b.virtual_buffers[3]),
+                    view(B::PART_MAP, b.parts),
                     wgpu::BindGroupEntry {
-                        binding: 13,
+                        binding: B::PART_SAMPLER,
                         resource: wgpu::BindingResource::Sampler(&self.shared.part_sampler),
                     },
-                    view(14, b.bound_parts),
+                    view(B::EDGE_PARTS, b.bound_parts),
                 ],
             })
     }

@@ -9,6 +9,51 @@ pub(super) mod maps;
 pub(super) mod pipelines;
 pub(super) mod uniform;
 
+/// The family's group-2 bindings, declared once: the layout
+/// (`ShadowMapShared::new`) and the bind groups use these, and a test
+/// checks that the WGSL's `@binding`s agree, by variable name.
+pub mod binding {
+    /// `sm`: the uniform, one slot per face and sample (dynamic offset).
+    pub const UNIFORM: u32 = 0;
+    /// `depth_map`: the depth maps, one layer per face.
+    pub const DEPTH_MAP: u32 = 3;
+    /// `compare_sampler`: hardware 2×2 PCF.
+    pub const COMPARE_SAMPLER: u32 = 4;
+    /// `byte_map`: the 8-bit depth maps (`format=r8`).
+    pub const BYTE_MAP: u32 = 5;
+    /// `moment_map`: the moment filters' maps.
+    pub const MOMENT_MAP: u32 = 6;
+    /// `edge_bounds`: the edge mask's bounds chain.
+    pub const EDGE_BOUNDS: u32 = 7;
+    /// `vsm_marks`, `vsm_table`, `vsm`, `vsm_pixel_level`: a virtual map's
+    /// page marks, page table, levels and each pixel's level.
+    pub const VIRTUAL: [u32; 4] = [8, 9, 10, 11];
+    /// `part_map`: the convex part each texel's depth came from.
+    pub const PART_MAP: u32 = 12;
+    /// `part_sampler`: nearest texels of the part maps.
+    pub const PART_SAMPLER: u32 = 13;
+    /// `edge_parts`: the bounds chain's part per cell.
+    pub const EDGE_PARTS: u32 = 14;
+
+    /// Every binding with the WGSL variable bound there (checked by a test).
+    #[cfg(test)]
+    pub const NAMED: [(&str, u32); 13] = [
+        ("sm", UNIFORM),
+        ("depth_map", DEPTH_MAP),
+        ("compare_sampler", COMPARE_SAMPLER),
+        ("byte_map", BYTE_MAP),
+        ("moment_map", MOMENT_MAP),
+        ("edge_bounds", EDGE_BOUNDS),
+        ("vsm_marks", VIRTUAL[0]),
+        ("vsm_table", VIRTUAL[1]),
+        ("vsm", VIRTUAL[2]),
+        ("vsm_pixel_level", VIRTUAL[3]),
+        ("part_map", PART_MAP),
+        ("part_sampler", PART_SAMPLER),
+        ("edge_parts", EDGE_PARTS),
+    ];
+}
+
 /// The debug frame's numbers per pixel: texel footprint (pixels per texel)
 /// and the partition looked up (see [`crate::technique::MapLookup`]).
 pub const LOOKUP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;

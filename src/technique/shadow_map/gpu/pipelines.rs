@@ -5,6 +5,7 @@
 //! from the device's bounded cache. The depth pass's are in
 //! [`crate::technique::shadow_map::gpu::depth_pass`].
 
+use super::binding as B;
 use super::{LOOKUP_FORMAT, MOMENT_FORMAT, PART_FORMAT, placeholder};
 use crate::frame::MASK_FORMAT;
 use crate::gpu::GpuContext;
@@ -148,29 +149,43 @@ impl ShadowMapShared {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadow map"),
             entries: &[
-                crate::gpu::uniform_entry(gpu, 0, wgpu::ShaderStages::VERTEX_FRAGMENT, true),
-                tex(3, wgpu::TextureSampleType::Depth),
+                crate::gpu::uniform_entry(
+                    gpu,
+                    B::UNIFORM,
+                    wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    true,
+                ),
+                tex(B::DEPTH_MAP, wgpu::TextureSampleType::Depth),
                 wgpu::BindGroupLayoutEntry {
-                    binding: 4,
+                    binding: B::COMPARE_SAMPLER,
                     visibility: wgpu::ShaderStages::FRAGMENT,
                     ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
                     count: None,
                 },
-                tex(5, wgpu::TextureSampleType::Float { filterable: false }),
-                tex(6, wgpu::TextureSampleType::Float { filterable: false }),
-                tex(7, wgpu::TextureSampleType::Float { filterable: false }),
-                crate::gpu::storage_entry(8, wgpu::ShaderStages::FRAGMENT, false),
-                crate::gpu::storage_entry(9, wgpu::ShaderStages::FRAGMENT, true),
-                crate::gpu::storage_entry(10, wgpu::ShaderStages::FRAGMENT, true),
-                crate::gpu::storage_entry(11, wgpu::ShaderStages::FRAGMENT, false),
-                tex(12, wgpu::TextureSampleType::Uint),
+                tex(
+                    B::BYTE_MAP,
+                    wgpu::TextureSampleType::Float { filterable: false },
+                ),
+                tex(
+                    B::MOMENT_MAP,
+                    wgpu::TextureSampleType::Float { filterable: false },
+                ),
+                tex(
+                    B::EDGE_BOUNDS,
+                    wgpu::TextureSampleType::Float { filterable: false },
+                ),
+                crate::gpu::storage_entry(B::VIRTUAL[0], wgpu::ShaderStages::FRAGMENT, false),
+                crate::gpu::storage_entry(B::VIRTUAL[1], wgpu::ShaderStages::FRAGMENT, true),
+                crate::gpu::storage_entry(B::VIRTUAL[2], wgpu::ShaderStages::FRAGMENT, true),
+                crate::gpu::storage_entry(B::VIRTUAL[3], wgpu::ShaderStages::FRAGMENT, false),
+                tex(B::PART_MAP, wgpu::TextureSampleType::Uint),
                 wgpu::BindGroupLayoutEntry {
-                    binding: 13,
+                    binding: B::PART_SAMPLER,
                     visibility: wgpu::ShaderStages::FRAGMENT,
                     ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
                     count: None,
                 },
-                tex(14, wgpu::TextureSampleType::Uint),
+                tex(B::EDGE_PARTS, wgpu::TextureSampleType::Uint),
             ],
         });
         let module = crate::frame::technique_shader(gpu, "shadow map", &[&module_source()]);

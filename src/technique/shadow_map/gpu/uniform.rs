@@ -182,4 +182,27 @@ mod wgsl_tests {
             std::mem::size_of::<ShadowMapUniform>(),
         );
     }
+
+    /// Every group-2 variable of the module is bound where
+    /// [`super::super::binding`] says, and every binding declared is used.
+    #[test]
+    fn the_bindings_match_their_wgsl_variables() {
+        let source = [
+            crate::frame::COMMON_WGSL,
+            crate::frame::GBUFFER_WGSL,
+            &super::super::pipelines::module_source(),
+        ]
+        .join("\n");
+        let mut wgsl = crate::gpu::wgsl_layout::wgsl_bindings(&source, 2);
+        let mut rust: Vec<(String, u32)> = super::super::binding::NAMED
+            .iter()
+            .map(|(n, b)| (n.to_string(), *b))
+            .collect();
+        wgsl.sort();
+        rust.sort();
+        assert_eq!(
+            wgsl, rust,
+            "group 2: WGSL (left) against gpu::binding (right)"
+        );
+    }
 }
