@@ -86,11 +86,29 @@ impl<'a> MapBindings<'a> {
     }
 }
 
+/// A light's maps across frames.
+enum MapState {
+    /// Nothing rendered yet.
+    Empty,
+    /// Maps that are not paged.
+    Dense(Box<DenseMaps>),
+    /// `paging=virtual|adaptive`: the pool, page table and cache.
+    Virtual(Box<virtual_map::VirtualState>),
+}
+
+/// A light's maps that are not paged, with the edge mask's bounds chain
+/// when `edge_mask=true`.
+struct DenseMaps {
+    maps: Maps,
+    chain: Option<BoundsChain>,
+}
+
 pub struct ShadowMapTechnique {
     shared: Arc<ShadowMapShared>,
     config: ShadowMapConfig,
     uniforms: wgpu::Buffer,
-    maps: Option<Maps>,
+    /// The maps kept across frames: dense or virtual, never both.
+    state: MapState,
     /// Shadow maps rendered per face last frame (area lights: several).
     samples: usize,
     /// Debug views: a 256² picture of face 0 and the last light matrices.
@@ -111,10 +129,6 @@ pub struct ShadowMapTechnique {
     depth_reduction: Option<DepthReduction>,
     /// What the cascades were fitted to last frame with SDSM.
     last_seen: Option<SeenBounds>,
-    /// The edge mask's bounds chain of the maps (`edge_mask=true`).
-    chain: Option<BoundsChain>,
-    /// `paging=virtual`: the pool, page table and cache across frames.
-    virtual_state: Option<virtual_map::VirtualState>,
     /// Counter `lookup_ms`: GPU time of the screen-space lookup of each
     /// map sample, with the edge mask's bounds chain (part of the
     /// lookup's cost), not the depth passes — the time the edge mask and the
@@ -136,7 +150,7 @@ impl ShadowMapTechnique {
                 usage: crate::gpu::uniform_usage(gpu),
                 mapped_at_creation: false,
             }),
-            maps: None,
+            state: MapState::Empty,
             samples: 0,
             debug: None,
             debug_frame: None,
@@ -148,8 +162,6 @@ impl ShadowMapTechnique {
             map_triangles: 0,
             depth_reduction: None,
             last_seen: None,
-            chain: None,
-            virtual_state: None,
             lookup_timer: SectionTimer::new("shadow map lookup timestamps"),
             chain_timer: SectionTimer::new("edge mask chain timestamps"),
         }
@@ -167,16 +179,44 @@ impl ShadowMapTechnique {
         parts: bool,
     ) -> Result<()> {
         if self
-            .maps
-            .as_ref()
+            .maps()
             .is_some_and(|m| m.matches(size, layers, format, moments, parts))
         {
             return Ok(());
         }
-        // Free the old maps first; keep the new ones only once created.
-        self.maps = None;
-        self.maps = Some(Maps::allocate(gpu, size, layers, format, moments, parts)?);
+        // Free the old maps first (the chain stays: it checks its own
+        // size); keep the new ones only once created.
+        let chain = match std::mem::replace(&mut self.state, MapState::Empty) {
+            MapState::Dense(dense) => dense.chain,
+            _ => None,
+        };
+        let maps = Maps::allocate(gpu, size, layers, format, moments, parts)?;
+        self.state = MapState::Dense(Box::new(DenseMaps { maps, chain }));
         Ok(())
+    }
+
+    /// The dense maps, when the last frame rendered them.
+    fn maps(&self) -> Option<&Maps> {
+        match &self.state {
+            MapState::Dense(dense) => Some(&dense.maps),
+            _ => None,
+        }
+    }
+
+    /// The dense maps' edge-mask bounds chain, when there is one.
+    fn chain(&self) -> Option<&BoundsChain> {
+        match &self.state {
+            MapState::Dense(dense) => dense.chain.as_ref(),
+            _ => None,
+        }
+    }
+
+    /// The virtual map's state, when the last frame was paged.
+    fn virtual_state(&self) -> Option<&virtual_map::VirtualState> {
+        match &self.state {
+            MapState::Virtual(v) => Some(v),
+            _ => None,
+        }
     }
 
     /// The technique's bind group of `b`.
@@ -195,7 +235,7 @@ impl ShadowMapTechnique {
                 None
             }
         };
-        let chain_stamps = match &self.chain {
+        let chain_stamps = match self.chain() {
             Some(_) => self.chain_timer.begin(gpu, samples),
             None => {
                 self.chain_timer.clear();
@@ -221,13 +261,9 @@ impl ShadowMapTechnique {
                     .moment
                     .as_ref()
                     .map_or(&shared.placeholder_moments, |m| &m[0].1),
-                bounds: self
-                    .chain
-                    .as_ref()
-                    .map_or(&shared.placeholder_bounds, |c| &c.view),
+                bounds: self.chain().map_or(&shared.placeholder_bounds, |c| &c.view),
                 bound_parts: self
-                    .chain
-                    .as_ref()
+                    .chain()
                     .map_or(&shared.placeholder_parts, |c| &c.part_view),
                 parts: maps
                     .part
@@ -359,11 +395,8 @@ impl ShadowTechnique for ShadowMapTechnique {
 
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
         if self.config.paging.is_paged() {
-            self.maps = None;
-            self.chain = None;
             return self.render_virtual(ctx, encoder);
         }
-        self.virtual_state = None;
         let c = self.config;
         let gpu = ctx.gpu;
         let aspect = ctx.frame.width() as f32 / ctx.frame.height() as f32;
@@ -380,10 +413,12 @@ impl ShadowTechnique for ShadowMapTechnique {
         let parts = c.uses_part_ids(cull);
         self.ensure_maps(ctx.gpu, size, layers, format, moments, parts)?;
         let edge_mask = c.edge_masked() && c.stage == Stage::Full;
-        if edge_mask {
-            BoundsChain::ensure(&mut self.chain, ctx.gpu, size, layers)?;
-        } else {
-            self.chain = None;
+        if let MapState::Dense(dense) = &mut self.state {
+            if edge_mask {
+                BoundsChain::ensure(&mut dense.chain, ctx.gpu, size, layers)?;
+            } else {
+                dense.chain = None;
+            }
         }
         let frame = FrameTerms {
             size,
@@ -405,7 +440,7 @@ impl ShadowTechnique for ShadowMapTechnique {
         let floor = c.stage == Stage::Floor;
         let (depth_key, lookup_key) = dense_keys(&c, cull, shape, parts, edge_mask);
         let (stamps, chain_stamps) = self.begin_lookup_timers(gpu, lights.len() as u32);
-        let maps = self.maps.as_ref().expect("ensured above");
+        let maps = self.maps().expect("ensured above");
         // Bind groups: none of the maps while they are rendered; the moment
         // maps as blur sources; everything for the lookup.
         let shared = &self.shared;
@@ -477,7 +512,7 @@ impl ShadowTechnique for ShadowMapTechnique {
         if let Some(r) = &mut self.depth_reduction {
             r.after_frame(gpu)?;
         }
-        if let Some(v) = &mut self.virtual_state {
+        if let MapState::Virtual(v) = &mut self.state {
             v.after_frame(gpu)?;
         }
         self.chain_timer.after_frame(gpu)?;
@@ -499,7 +534,7 @@ impl ShadowTechnique for ShadowMapTechnique {
     }
 
     fn counters(&self) -> Vec<(&'static str, f64)> {
-        if let Some(v) = &self.virtual_state {
+        if let Some(v) = self.virtual_state() {
             let p = v.counters;
             return vec![
                 ("pages_needed", p.needed as f64),
@@ -521,8 +556,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 ("map_triangles", self.map_triangles as f64),
             ];
         }
-        self.maps
-            .as_ref()
+        self.maps()
             .map(|m| {
                 vec![
                     ("map_size", m.size as f64),
@@ -533,8 +567,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 ]
                 .into_iter()
                 .chain(
-                    self.chain
-                        .as_ref()
+                    self.chain()
                         .map(|_| ("edge_chain_ms", self.chain_timer.last_ms)),
                 )
                 .chain(self.turn.map(|t| {
@@ -565,11 +598,12 @@ impl ShadowTechnique for ShadowMapTechnique {
     }
 
     fn resource_bytes(&self) -> u64 {
-        self.maps.as_ref().map_or(0, |m| m.bytes)
-            + self.chain.as_ref().map_or(0, |c| c.bytes)
-            + self
-                .virtual_state
-                .as_ref()
-                .map_or(0, |v| v.resource_bytes())
+        match &self.state {
+            MapState::Empty => 0,
+            MapState::Dense(dense) => {
+                dense.maps.bytes + dense.chain.as_ref().map_or(0, |c| c.bytes)
+            }
+            MapState::Virtual(v) => v.resource_bytes(),
+        }
     }
 }

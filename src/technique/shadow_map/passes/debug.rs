@@ -112,7 +112,7 @@ impl ShadowMapTechnique {
         }
         if let Some(t) = &self.debug {
             views.images.push(DebugImage {
-                label: if self.virtual_state.is_some() {
+                label: if self.virtual_state().is_some() {
                     "virtual map pool, layer 0 (every resident page, depth)"
                 } else {
                     "shadow map (face 0, linear depth)"
@@ -123,14 +123,14 @@ impl ShadowMapTechnique {
                 rgba: gpu.read_texture(t, 0, 4)?,
             });
         }
-        if let Some(v) = &self.virtual_state {
+        if let Some(v) = self.virtual_state() {
             views.images.extend(v.page_table_images());
         }
         if let Some([projection, texels, _]) = &self.debug_frame {
             for (t, label) in [
                 (
                     projection,
-                    if self.virtual_state.is_some() {
+                    if self.virtual_state().is_some() {
                         "virtual map pages over the scene, tinted by level (page borders darker; dark red: page not resident)"
                     } else {
                         "map projected onto the scene (depth, tinted per cascade; dark red: outside the map)"

@@ -208,7 +208,7 @@ impl ShadowMapTechnique {
         if let Some(s) = stamps {
             s.stamp(encoder, si as u32, false);
         }
-        if let Some(chain) = &self.chain {
+        if let Some(chain) = self.chain() {
             if let Some(s) = chain_stamps {
                 s.stamp(encoder, si as u32, false);
             }

@@ -27,7 +27,7 @@ use atlas::Atlas;
 use super::gpu::pipelines::LookupKey;
 use super::gpu::uniform::{MAX_FACES, STRIDE, ShadowMapUniform};
 use super::projection::FrustumParams;
-use super::{CullFace, ShadowMapConfig, ShadowMapTechnique};
+use super::{CullFace, MapState, ShadowMapConfig, ShadowMapTechnique};
 use crate::gpu::{FrameFeedback, GpuContext, SectionTimer};
 use crate::scene::Aabb;
 use crate::technique::light_space::outside_clip_volume;
@@ -292,12 +292,13 @@ impl ShadowMapTechnique {
                 clipmap_levels: p.clipmap_levels,
             },
         );
-        let mut state = self
-            .virtual_state
-            .take()
-            .unwrap_or_else(|| VirtualState::new(gpu, p.pool));
+        // A dense map's textures are freed before the pool is made.
+        let mut state = match std::mem::replace(&mut self.state, MapState::Empty) {
+            MapState::Virtual(state) => state,
+            _ => Box::new(VirtualState::new(gpu, p.pool)),
+        };
         let done = self.render_pages(ctx, encoder, &mut state, layout);
-        self.virtual_state = Some(state);
+        self.state = MapState::Virtual(state);
         done
     }
 
