@@ -9,36 +9,10 @@ use super::binding as B;
 use super::{LOOKUP_FORMAT, MOMENT_FORMAT, PART_FORMAT, placeholder};
 use crate::frame::MASK_FORMAT;
 use crate::gpu::GpuContext;
-use crate::technique::params::{Choice, choice_enum};
+use crate::technique::params::Choice;
 use crate::technique::shadow_map::config::Filter;
 use crate::technique::shadow_map::projection::setup::LightSetup;
-
-choice_enum! {
-    /// How a light's map faces project (`PROJECTION_*` in the shaders):
-    /// one perspective face (spot), six (point, cube), two dual-paraboloid
-    /// hemispheres, or orthographic (directional: one map or cascades).
-    pub enum MapProjection {
-        Perspective = "perspective",
-        Cube = "cube",
-        Paraboloid = "paraboloid",
-        Orthographic = "orthographic",
-    }
-}
-
-impl MapProjection {
-    /// The projection of `faces` map faces, orthographic or a dual paraboloid or neither.
-    pub fn of(faces: usize, orthographic: bool, paraboloid: bool) -> MapProjection {
-        if paraboloid {
-            MapProjection::Paraboloid
-        } else if orthographic {
-            MapProjection::Orthographic
-        } else if faces == 6 {
-            MapProjection::Cube
-        } else {
-            MapProjection::Perspective
-        }
-    }
-}
+pub use crate::technique::shadow_map::projection::setup::MapProjection;
 
 /// The shape of a light's maps, a constant of every pipeline that reads
 /// them: SIMD rasterisers such as llvmpipe run both sides of a branch on a
@@ -58,7 +32,7 @@ impl MapShape {
     /// The shape of the maps `setup` describes.
     pub fn of(setup: &LightSetup) -> MapShape {
         MapShape {
-            projection: MapProjection::of(setup.faces.len(), setup.orthographic, setup.paraboloid),
+            projection: setup.projection,
             cascaded: setup.cascades.is_some(),
             warped: setup.warp_depth.is_some(),
         }

@@ -12,6 +12,7 @@ use super::gpu::pipelines::LookupKey;
 use super::gpu::uniform::slot_offset;
 use super::projection::bias_cap::bias_clamp;
 use super::projection::caster_cull::CasterCull;
+use super::projection::setup::MapProjection;
 use super::{LightSetup, ShadowMapTechnique, clear_op};
 use crate::gpu::Stamps;
 use crate::scene::{Light, LightType};
@@ -138,7 +139,7 @@ impl ShadowMapTechnique {
             // Casters outside this face's (or cascade's) view are not
             // drawn; paraboloid faces are view matrices, not frusta.
             let view_proj = setup.faces[f];
-            let paraboloid = setup.paraboloid;
+            let paraboloid = setup.projection == MapProjection::Paraboloid;
             for draw in self.depth_draws(ctx, p, setup, f) {
                 pass.set_pipeline(&draw.pipeline);
                 triangles += ctx.scene_gpu.draw_visible(

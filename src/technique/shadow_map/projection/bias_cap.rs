@@ -2,11 +2,12 @@
 //! many texel widths of depth, per map, cascade or clipmap level.
 
 use super::setup::LightSetup;
+use super::setup::MapProjection;
 
 /// The depth bias's cap for `face` of `setup` in the map's depth units
 /// ([`texel_bias_clamp`]); 0 (no cap) for perspective and warped maps.
 pub fn bias_clamp(setup: &LightSetup, face: usize, size: u32, texels: f32) -> f32 {
-    if !setup.orthographic || setup.warp_depth.is_some() {
+    if setup.projection != MapProjection::Orthographic || setup.warp_depth.is_some() {
         return 0.0;
     }
     let scale = setup
@@ -40,8 +41,7 @@ mod tests {
             faces: vec![Mat4::IDENTITY; cascades.as_ref().map_or(1, |c| c.len())],
             near: 0.0,
             far: 1024.0,
-            orthographic: true,
-            paraboloid: false,
+            projection: MapProjection::Orthographic,
             texel_scale,
             cascades: cascades.map(|texel_scales| CascadeSplit {
                 near: 0.1,
@@ -69,7 +69,7 @@ mod tests {
         assert_eq!(bias_clamp(&cascaded, 0, 2048, 4.0), 2f32.powi(-9));
         // None for perspective or warped maps, or a cap of 0.
         let spot = LightSetup {
-            orthographic: false,
+            projection: MapProjection::Perspective,
             ..ortho(2048.0, None)
         };
         assert_eq!(bias_clamp(&spot, 0, 2048, 4.0), 0.0);

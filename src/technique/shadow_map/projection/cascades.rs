@@ -8,6 +8,7 @@
 //! extent, as fixed as the sphere.
 
 use super::depth_bounds::SeenBounds;
+use super::setup::MapProjection;
 use super::setup::{CascadeSplit, LightSetup, light_view_of_scene, slice_corners, view_reach};
 use super::stable_window::{Window, quantize_down, quantize_up, widen_for_kernels, xy_box};
 use crate::scene::{Aabb, Camera};
@@ -164,8 +165,7 @@ pub fn cascade_setup(
         faces,
         near: n,
         far: f,
-        orthographic: true,
-        paraboloid: false,
+        projection: MapProjection::Orthographic,
         cascades: Some(CascadeSplit {
             near,
             far: splits[1..].to_vec(),

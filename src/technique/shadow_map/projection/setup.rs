@@ -8,7 +8,20 @@ use super::stable_window::{Hold, Window, stabilized, widen_for_kernels, xy_box};
 use super::{FrustumParams, spot_focus};
 use crate::scene::{Aabb, Camera, Light, LightType};
 use crate::technique::light_space::up_for;
+use crate::technique::params::choice_enum;
 use glam::{Mat4, Vec2, Vec3, Vec4};
+
+choice_enum! {
+    /// How a light's map faces project (`PROJECTION_*` in the shaders):
+    /// one perspective face (spot), six (point, cube), two dual-paraboloid
+    /// hemispheres, or orthographic (directional: one map or cascades).
+    pub enum MapProjection {
+        Perspective = "perspective",
+        Cube = "cube",
+        Paraboloid = "paraboloid",
+        Orthographic = "orthographic",
+    }
+}
 
 /// The light's matrices for one frame.
 #[derive(Clone, Debug)]
@@ -16,9 +29,9 @@ pub struct LightSetup {
     pub faces: Vec<Mat4>,
     pub near: f32,
     pub far: f32,
-    pub orthographic: bool,
-    /// `faces` are the two hemispheres' view matrices of a dual paraboloid.
-    pub paraboloid: bool,
+    /// How the faces project; `Paraboloid`: `faces` are the two
+    /// hemispheres' view matrices.
+    pub projection: MapProjection,
     /// World size of a texel at unit distance (perspective) or anywhere
     /// (orthographic), for a 1-texel map (cascades: of the first).
     pub texel_scale: f32,
@@ -302,8 +315,7 @@ pub fn light_setup(
                 faces: vec![v(Vec3::NEG_Y), v(Vec3::Y)],
                 near: n,
                 far: f,
-                orthographic: false,
-                paraboloid: true,
+                projection: MapProjection::Paraboloid,
                 // At the centre of a hemisphere, uv changes by 1/2 per radian.
                 texel_scale: 4.0,
                 cascades: None,
@@ -321,8 +333,7 @@ pub fn light_setup(
                     .collect(),
                 near: n,
                 far: f,
-                orthographic: false,
-                paraboloid: false,
+                projection: MapProjection::Cube,
                 texel_scale: 2.0,
                 cascades: None,
                 warp_depth: None,
@@ -370,8 +381,7 @@ pub fn spot_setup(light: &Light, scene_bounds: &Aabb, fp: &FrustumParams) -> (Li
         faces: vec![spot_focus::image_window(full, window) * perspective(fov, 1.0, n, f) * view],
         near: n,
         far: f,
-        orthographic: false,
-        paraboloid: false,
+        projection: MapProjection::Perspective,
         texel_scale: 2.0 * window.half.max_element(),
         cascades: None,
         warp_depth: None,
@@ -453,8 +463,7 @@ pub fn directional_setup(
         faces: vec![orthographic(lo.x, hi.x, lo.y, hi.y, n.max(0.0), f) * view],
         near: n.max(0.0),
         far: f,
-        orthographic: true,
-        paraboloid: false,
+        projection: MapProjection::Orthographic,
         texel_scale: 2.0 * half.max_element(),
         cascades: None,
         warp_depth: None,

@@ -211,7 +211,14 @@ impl VirtualLayout {
     /// warped.
     pub fn shape(&self) -> MapShape {
         MapShape {
-            projection: MapProjection::of(self.views.len(), self.orthographic, false),
+            // A point light's pages are its six cube faces' (never paraboloid).
+            projection: if self.orthographic {
+                MapProjection::Orthographic
+            } else if self.views.len() == 6 {
+                MapProjection::Cube
+            } else {
+                MapProjection::Perspective
+            },
             cascaded: false,
             warped: false,
         }
