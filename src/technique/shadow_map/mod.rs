@@ -21,15 +21,13 @@ pub use projection::FrustumParams;
 pub use projection::setup::{CascadeSplit, LightSetup, cube_views, light_setup};
 
 use crate::gpu::{GpuContext, SectionTimer};
-use crate::scene::area::area_samples;
 use crate::technique::{Family, MaskContext, ParamValues, ShadowTechnique};
 use anyhow::Result;
 use glam::{Mat4, Vec2};
 use gpu::binding as B;
-use gpu::depth_pass::DepthPassKey;
 use gpu::edge_mask::BoundsChain;
 use gpu::maps::Maps;
-use gpu::pipelines::{LookupKey, MapProjection, MapShape, ShadowMapShared};
+use gpu::pipelines::{MapProjection, MapShape, ShadowMapShared};
 use gpu::uniform::{FrameTerms, SLOTS, STRIDE, ShadowMapUniform, slot_data, slot_offset};
 use projection::depth_bounds::{DepthReduction, SeenBounds};
 use std::sync::Arc;
@@ -318,68 +316,6 @@ impl ShadowMapTechnique {
     }
 }
 
-/// The depth pass's and the lookup's pipeline keys of a map that is not
-/// paged.
-fn dense_keys(
-    c: &ShadowMapConfig,
-    cull: CullFace,
-    shape: MapShape,
-    parts: bool,
-    edge_mask: bool,
-) -> (DepthPassKey, LookupKey) {
-    let (format, moments) = (c.format, c.filter.is_moment());
-    let depth_key = DepthPassKey {
-        format,
-        cull,
-        bias: c.depth_bias,
-        slope_bits: c.slope_bias.to_bits(),
-        clamp_bits: 0,
-        moments: moments.then_some(c.filter),
-        shape,
-        virtual_map: false,
-        parts,
-        cutout: false,
-        hashed: false,
-    };
-    let lookup_key = LookupKey {
-        filter: c.filter,
-        taps: if c.filter.uses_taps() { c.samples } else { 0 },
-        byte_map: format == DepthFormat::R8,
-        receiver_plane: c.receiver_plane,
-        accumulate: false,
-        edge_mask,
-        virtual_map: false,
-        marked_resident: false,
-        wide_kernel: false,
-        parts,
-        shape,
-    };
-    (depth_key, lookup_key)
-}
-
-/// The point lights a map is rendered from: an area light with `area` on
-/// becomes several samples; one light keeps its area's radius for PCSS.
-fn light_samples(c: &ShadowMapConfig, ctx: &MaskContext) -> (Vec<crate::scene::Light>, f32) {
-    // An area light with `area` on becomes several point samples.
-    let lights = if c.area && ctx.light.area.is_some() {
-        area_samples(
-            ctx.light,
-            c.area_maps as usize,
-            ctx.scene_gpu.bounds.center(),
-        )
-    } else {
-        vec![*ctx.light]
-    };
-    let area_radius = match ctx.light.area {
-        Some(crate::scene::LightArea::Sphere { radius }) if lights.len() == 1 => radius,
-        Some(crate::scene::LightArea::Rect { width, height }) if lights.len() == 1 => {
-            width.max(height) * 0.5
-        }
-        _ => 0.0,
-    };
-    (lights, area_radius)
-}
-
 fn clear_op(color: wgpu::Color) -> wgpu::Operations<wgpu::Color> {
     wgpu::Operations {
         load: wgpu::LoadOp::Clear(color),
@@ -404,7 +340,7 @@ impl ShadowTechnique for ShadowMapTechnique {
         let moments = c.filter.is_moment();
         let blur = c.moment_blur();
         let normal_offset = c.normal_offset(ctx.light.kind);
-        let (lights, area_radius) = light_samples(&c, ctx);
+        let (lights, area_radius) = projection::light_samples(&c, ctx);
         let setups = self.light_setups(ctx, encoder, &lights, aspect)?;
         let layers = setups[0].faces.len() as u32;
         // Every sample of an area light has the first one's shape.
@@ -438,7 +374,7 @@ impl ShadowTechnique for ShadowMapTechnique {
         );
         ctx.gpu.queue.write_buffer(&self.uniforms, 0, &data);
         let floor = c.stage == Stage::Floor;
-        let (depth_key, lookup_key) = dense_keys(&c, cull, shape, parts, edge_mask);
+        let (depth_key, lookup_key) = passes::dense_keys(&c, cull, shape, parts, edge_mask);
         let (stamps, chain_stamps) = self.begin_lookup_timers(gpu, lights.len() as u32);
         let maps = self.maps().expect("ensured above");
         // Bind groups: none of the maps while they are rendered; the moment

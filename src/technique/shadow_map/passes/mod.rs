@@ -8,12 +8,12 @@ mod debug;
 use super::gpu::depth_pass::{Casters, DepthDraw, DepthPassKey, Surfaces};
 use super::gpu::edge_mask::{ChainInput, ChainSource};
 use super::gpu::maps::Maps;
-use super::gpu::pipelines::LookupKey;
+use super::gpu::pipelines::{LookupKey, MapShape};
 use super::gpu::uniform::slot_offset;
 use super::projection::bias_cap::bias_clamp;
 use super::projection::caster_cull::CasterCull;
 use super::projection::setup::MapProjection;
-use super::{LightSetup, ShadowMapTechnique, clear_op};
+use super::{CullFace, DepthFormat, LightSetup, ShadowMapConfig, ShadowMapTechnique, clear_op};
 use crate::gpu::Stamps;
 use crate::scene::{Light, LightType};
 use crate::technique::MaskContext;
@@ -258,4 +258,43 @@ impl ShadowMapTechnique {
             s.stamp(encoder, si as u32, true);
         }
     }
+}
+
+/// The depth pass's and the lookup's pipeline keys of a map that is not
+/// paged.
+pub(super) fn dense_keys(
+    c: &ShadowMapConfig,
+    cull: CullFace,
+    shape: MapShape,
+    parts: bool,
+    edge_mask: bool,
+) -> (DepthPassKey, LookupKey) {
+    let (format, moments) = (c.format, c.filter.is_moment());
+    let depth_key = DepthPassKey {
+        format,
+        cull,
+        bias: c.depth_bias,
+        slope_bits: c.slope_bias.to_bits(),
+        clamp_bits: 0,
+        moments: moments.then_some(c.filter),
+        shape,
+        virtual_map: false,
+        parts,
+        cutout: false,
+        hashed: false,
+    };
+    let lookup_key = LookupKey {
+        filter: c.filter,
+        taps: if c.filter.uses_taps() { c.samples } else { 0 },
+        byte_map: format == DepthFormat::R8,
+        receiver_plane: c.receiver_plane,
+        accumulate: false,
+        edge_mask,
+        virtual_map: false,
+        marked_resident: false,
+        wide_kernel: false,
+        parts,
+        shape,
+    };
+    (depth_key, lookup_key)
 }

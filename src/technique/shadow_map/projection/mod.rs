@@ -20,6 +20,7 @@ use self::setup::Turn;
 use self::setup::ViewFit;
 use self::setup::{LightSetup, light_setup};
 use super::{Cascades, Fit, Omni, Roll, ShadowMapConfig, ShadowMapTechnique, Warp};
+use crate::scene::area::area_samples;
 use crate::scene::{Light, LightType};
 use crate::technique::MaskContext;
 use anyhow::Result;
@@ -256,4 +257,30 @@ impl FrustumParams {
             ..*self
         }
     }
+}
+
+/// The point lights a map is rendered from: an area light with `area` on
+/// becomes several samples; one light keeps its area's radius for PCSS.
+pub(super) fn light_samples(
+    c: &ShadowMapConfig,
+    ctx: &MaskContext,
+) -> (Vec<crate::scene::Light>, f32) {
+    // An area light with `area` on becomes several point samples.
+    let lights = if c.area && ctx.light.area.is_some() {
+        area_samples(
+            ctx.light,
+            c.area_maps as usize,
+            ctx.scene_gpu.bounds.center(),
+        )
+    } else {
+        vec![*ctx.light]
+    };
+    let area_radius = match ctx.light.area {
+        Some(crate::scene::LightArea::Sphere { radius }) if lights.len() == 1 => radius,
+        Some(crate::scene::LightArea::Rect { width, height }) if lights.len() == 1 => {
+            width.max(height) * 0.5
+        }
+        _ => 0.0,
+    };
+    (lights, area_radius)
 }
