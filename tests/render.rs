@@ -46,35 +46,69 @@ fn every_builtin_scene_renders_a_non_trivial_image() {
     }
 }
 
-/// Compares against `tests/golden/NAME.png`. With SHADOWLAB_BLESS=1 it
-/// rewrites the golden file and then fails, so that a blessing run never
-/// counts as a pass.
-fn check_golden(name: &str, rgba: &[u8], w: u32, h: u32) {
+/// `tests/golden/NAME.png`; with SHADOWLAB_BLESS=1, `blessed` (its RGBA
+/// bytes, width, height, colour type) is written there instead and the
+/// test fails, so that a blessing run never counts as a pass.
+fn golden_file(
+    name: &str,
+    blessed: (&[u8], u32, u32, image::ExtendedColorType),
+) -> image::DynamicImage {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/golden/{name}.png"));
     if std::env::var_os("SHADOWLAB_BLESS").is_some() {
+        let (bytes, w, h, kind) = blessed;
         std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-        image::save_buffer(&path, rgba, w, h, image::ExtendedColorType::Rgba8).unwrap();
+        image::save_buffer(&path, bytes, w, h, kind).unwrap();
         panic!(
             "blessed {}; run again without SHADOWLAB_BLESS to test",
             path.display()
         );
     }
-    let golden = image::open(&path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-        .to_rgba8();
+    image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The frame's colour against its golden image, over the RGB channels
+/// (alpha is always opaque): mean difference under 0.75 of 255 and at
+/// most 0.2 % of the channels more than 24 apart.
+fn check_golden(name: &str, rgba: &[u8], w: u32, h: u32) {
+    let golden = golden_file(name, (rgba, w, h, image::ExtendedColorType::Rgba8)).to_rgba8();
     assert_eq!(golden.dimensions(), (w, h));
     let diffs: Vec<u8> = golden
         .as_raw()
-        .iter()
-        .zip(rgba)
-        .map(|(&a, &b)| a.abs_diff(b))
+        .chunks(4)
+        .zip(rgba.chunks(4))
+        .flat_map(|(a, b)| (0..3).map(move |c| a[c].abs_diff(b[c])))
         .collect();
     let mean = diffs.iter().map(|&d| d as f64).sum::<f64>() / diffs.len() as f64;
     let large = diffs.iter().filter(|&&d| d > 24).count() as f64 / diffs.len() as f64;
     assert!(
-        mean < 1.5 && large < 0.005,
-        "{name}: mean channel difference {mean:.3}, {:.3}% over 24",
+        mean < 0.75 && large < 0.002,
+        "{name}: mean RGB difference {mean:.3}, {:.3}% over 24",
+        large * 100.0
+    );
+}
+
+/// A light's visibility mask against its golden mask (8-bit grey, 255
+/// lit): mean difference under 0.004 and at most 0.2 % of the pixels more
+/// than 0.1 apart.
+fn check_golden_mask(name: &str, mask: &[f32], w: u32, h: u32) {
+    let grey: Vec<u8> = mask
+        .iter()
+        .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+        .collect();
+    let golden = golden_file(name, (&grey, w, h, image::ExtendedColorType::L8)).to_luma8();
+    assert_eq!(golden.dimensions(), (w, h));
+    let diffs: Vec<f64> = golden
+        .as_raw()
+        .iter()
+        .zip(mask)
+        .map(|(&g, &v)| (g as f64 / 255.0 - v as f64).abs())
+        .collect();
+    let mean = diffs.iter().sum::<f64>() / diffs.len() as f64;
+    let large = diffs.iter().filter(|&&d| d > 0.1).count() as f64 / diffs.len() as f64;
+    assert!(
+        mean < 0.004 && large < 0.002,
+        "{name}: mean mask difference {mean:.4}, {:.3}% over 0.1",
         large * 100.0
     );
 }
@@ -121,8 +155,9 @@ fn golden_images_of_the_shading_variants_match() {
     }
 }
 
-/// One golden image per technique family (its default preset) on `room`
-/// under the spot light, where every family draws a visible shadow.
+/// One golden image and one golden mask per technique family (its default
+/// preset) on `room` under the spot light, where every family draws a
+/// visible shadow.
 #[test]
 fn golden_images_of_every_family_match() {
     let mut scene = builtin::by_name("room").unwrap().unwrap();
@@ -140,7 +175,11 @@ fn golden_images_of_every_family_match() {
         }
         let name = format!("room-spot-{}", family.id);
         if std::panic::catch_unwind(|| check_golden(&name, &img.color, 256, 144)).is_err() {
-            blessed.push(name);
+            blessed.push(name.clone());
+        }
+        let mask = format!("{name}-mask");
+        if std::panic::catch_unwind(|| check_golden_mask(&mask, &img.masks[0], 256, 144)).is_err() {
+            blessed.push(mask);
         }
     }
     assert!(blessed.is_empty(), "golden images differ: {blessed:?}");
