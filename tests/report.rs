@@ -112,6 +112,48 @@ fn the_report_covers_every_preset_shows_the_csv_and_resumes() {
         report::criteria::pct(total)
     )));
 
+    // Every preset is bounded relative to the shadow `none` misses: the
+    // reference exact, shadow volumes within 5 % of it, the other families
+    // within a quarter, and the failure demonstrations that fail on this
+    // view beyond a share of it: 8-bit depth, the far plane clipping
+    // z-fail's volumes and the darkening composition (a lit image cannot
+    // show it) over half; silhouette volumes of the open teapot (what
+    // per-triangle volumes fix) over 2 %.
+    const FAILING_HERE: [(&str, f64); 5] = [
+        ("shadow-map:8bit", 0.5),
+        ("shadow-volume:zfail-far-clip", 0.5),
+        ("planar:darken", 0.5),
+        ("shadow-volume:darken", 0.5),
+        ("shadow-volume:edges", 0.02),
+    ];
+    let mut out_of_bounds = vec![];
+    for row in &csv {
+        let (label, t): (&str, f64) = (&row[3], row[5].parse().unwrap());
+        let share = t / total;
+        let failing = FAILING_HERE.iter().find(|(l, _)| *l == label);
+        let ok = if let Some((_, least)) = failing {
+            share > *least
+        } else if label.starts_with("raytraced:") {
+            t == 0.0
+        } else if label.starts_with("shadow-volume:") {
+            share <= 0.05
+        } else if label.starts_with("none:") {
+            true
+        } else {
+            share <= 0.25
+        };
+        if !ok {
+            out_of_bounds.push(format!(
+                "{label}: {t:.3} % ({:.1} % of none's)",
+                share * 100.0
+            ));
+        }
+    }
+    assert!(
+        out_of_bounds.is_empty(),
+        "out of bounds: {out_of_bounds:#?}"
+    );
+
     // A second run measures nothing.
     let second = report::run(gpu(), &matrix, &out, false).unwrap();
     assert_eq!((second.computed, second.reused), (0, every.len()));
