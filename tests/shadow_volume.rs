@@ -184,6 +184,11 @@ fn statistics_and_debug_views() {
         // (NVIDIA's driver: 0 was left out); a CPU rasteriser counts them.
         if gpu.pipeline_statistics && gpu.is_cpu_adapter() {
             assert!(c["volume_fragments"] > 0.0, "{c:?}");
+        } else {
+            eprintln!(
+                "skipped: {} counts no volume fragments (no pipeline statistics, or a GPU that may skip the empty stage)",
+                gpu.adapter_summary()
+            );
         }
         assert!(c.get("volume_fragments").is_none_or(|&f| f > 0.0), "{c:?}");
         let views = t.debug_views(gpu).unwrap();
@@ -281,5 +286,31 @@ fn zfail_fails_without_caps_and_with_a_clipping_far_plane() {
     for id in ["shadow-volume:zfail-open", "shadow-volume:zfail-far-clip"] {
         let m = compare(&scene, id, (320, 180)).mask;
         assert!(m.all.total_pct > 10.0, "{id} should fail here: {m:?}");
+    }
+}
+
+/// `far_plane=depth-clamp` draws the volumes with unclipped depth wherever
+/// the adapter has depth clamping (lavapipe does), and says when it fell
+/// back to the far plane at infinity; the default never clamps.
+#[test]
+fn depth_clamp_is_used_where_the_adapter_has_it() {
+    let gpu = gpu();
+    let scene = preset("columns", "default", "point");
+    let clamped = |id: &str| {
+        let mut hf = frame_with_debug_views(&scene, id, 64, 36);
+        render_again(&mut hf, &scene);
+        let c: std::collections::HashMap<&str, f64> =
+            hf.techniques[0].technique.counters().into_iter().collect();
+        c["depth_clamped"]
+    };
+    assert_eq!(clamped("shadow-volume:zfail"), 0.0);
+    if gpu.depth_clamp {
+        assert_eq!(clamped("shadow-volume:zfail[far_plane=depth-clamp]"), 1.0);
+    } else {
+        assert_eq!(clamped("shadow-volume:zfail[far_plane=depth-clamp]"), 0.0);
+        eprintln!(
+            "skipped: {} has no depth clamp; the fallback to the far plane at infinity was checked",
+            gpu.adapter_summary()
+        );
     }
 }

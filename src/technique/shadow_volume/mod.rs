@@ -123,6 +123,9 @@ struct Stats {
     zpass: usize,
     zfail: usize,
     per_triangle: usize,
+    /// The volumes were drawn with unclipped depth (`far_plane=depth-clamp`
+    /// on an adapter that has it), not with the infinite far plane.
+    depth_clamped: bool,
 }
 
 pub struct ShadowVolumeRenderer {
@@ -380,7 +383,10 @@ impl ShadowTechnique for ShadowVolumeRenderer {
             dark_cap,
             config.extrusion == Extrusion::Gpu,
         )?;
-        self.stats = Stats::of(&plans);
+        self.stats = Stats {
+            depth_clamped: unclipped,
+            ..Stats::of(&plans)
+        };
         let geometry = self.geometry.as_ref().expect("ensured");
         let vm = &geometry.mesh;
         if self.want_debug {
@@ -493,6 +499,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
             ("casters_zfail", s.zfail as f64),
             ("casters_per_triangle", s.per_triangle as f64),
             ("casters_culled", s.skipped as f64),
+            ("depth_clamped", s.depth_clamped as u32 as f64),
         ];
         if let Some(f) = s.fragments {
             c.push(("volume_fragments", f as f64));
