@@ -115,30 +115,40 @@ fn cube_faces_cover_every_direction() {
 
 #[test]
 fn filters_match_the_reference_on_a_square_over_a_plane() {
+    // Bounds as shares of the reference's shadow: the hard-edged filters
+    // within 1 % of it and exact away from its edges; the soft and moment
+    // filters, whose penumbrae and light bleeding widen the edge, within
+    // 8 % and 2 % away from it.
     for light in lights_over_squares() {
         let scene = squares_over_floor(&[(Vec3::new(0.0, 1.0, 0.0), 0.7)], light, false);
-        for (id, interior_tol) in [
-            ("shadow-map:hard", 0.0),
-            ("shadow-map:pcf2x2", 0.0),
-            ("shadow-map:pcf", 0.0),
-            ("shadow-map:pcf-disk", 0.0),
-            ("shadow-map:pcss", 0.5),
-            ("shadow-map:varwidth", 0.5),
-            ("shadow-map:vsm", 0.5),
-            ("shadow-map:esm", 0.5),
-            ("shadow-map:evsm2", 0.5),
-            ("shadow-map:evsm4", 0.5),
-            ("shadow-map:msm", 0.5),
+        for (id, total_share, interior_share) in [
+            ("shadow-map:hard", 0.01, 0.0),
+            ("shadow-map:pcf2x2", 0.01, 0.0),
+            ("shadow-map:pcf", 0.01, 0.0),
+            ("shadow-map:pcf-disk", 0.01, 0.0),
+            ("shadow-map:pcss", 0.08, 0.02),
+            ("shadow-map:varwidth", 0.08, 0.02),
+            ("shadow-map:vsm", 0.08, 0.02),
+            ("shadow-map:esm", 0.08, 0.02),
+            ("shadow-map:evsm2", 0.08, 0.02),
+            ("shadow-map:evsm4", 0.08, 0.02),
+            ("shadow-map:msm", 0.08, 0.02),
         ] {
             let row = compare(&scene, id, (200, 200));
             let m = &row.mask;
-            assert!(m.reference_shadowed_pct > 2.0);
+            let shadow = m.reference_shadowed_pct;
+            assert!(shadow > 2.0);
             assert!(
-                m.interior.total_pct <= interior_tol,
+                m.interior.total_pct <= interior_share * shadow,
                 "{id} {:?}: {m:?}",
                 light.kind
             );
-            assert!(m.all.total_pct <= 1.5, "{id} {:?}: {m:?}", light.kind);
+            assert!(
+                m.all.total_pct <= total_share * shadow,
+                "{id} {:?}: {:.4} % of a {shadow:.3} % shadow: {m:?}",
+                light.kind,
+                m.all.total_pct
+            );
         }
     }
 }
