@@ -66,6 +66,17 @@ impl ShadowMapTechnique {
             .iter()
             .enumerate()
             .map(|(i, l)| {
+                // Last frame's window kept while it fits; one directional
+                // or focused spot map is also fitted and turned.
+                let kept = FrustumParams {
+                    previous_half: self.stable_halves.get(i).copied(),
+                    ..frustum_params
+                };
+                let fitted = FrustumParams {
+                    view_fit: self.single_map_fit(ctx),
+                    turn: fitted_turn,
+                    ..kept
+                };
                 let mut setup = if cascaded {
                     cascades::cascade_setup(
                         l.direction,
@@ -85,39 +96,16 @@ impl ShadowMapTechnique {
                         &ctx.scene_gpu.bounds,
                         ctx.fit_camera,
                         aspect,
-                        &FrustumParams {
-                            previous_half: self.stable_halves.get(i).copied(),
-                            view_fit: self.single_map_fit(ctx),
-                            turn: fitted_turn,
-                            ..frustum_params
-                        },
+                        &fitted,
                     );
                     fits.push(fit);
                     setup
                 } else if spot.is_some() {
-                    let (setup, fit) = setup::spot_setup(
-                        l,
-                        &ctx.scene_gpu.bounds,
-                        &FrustumParams {
-                            previous_half: self.stable_halves.get(i).copied(),
-                            view_fit: self.single_map_fit(ctx),
-                            turn: fitted_turn,
-                            ..frustum_params
-                        },
-                    );
+                    let (setup, fit) = setup::spot_setup(l, &ctx.scene_gpu.bounds, &fitted);
                     fits.push(fit);
                     setup
                 } else {
-                    light_setup(
-                        l,
-                        &ctx.scene_gpu.bounds,
-                        ctx.fit_camera,
-                        aspect,
-                        &FrustumParams {
-                            previous_half: self.stable_halves.get(i).copied(),
-                            ..frustum_params
-                        },
-                    )
+                    light_setup(l, &ctx.scene_gpu.bounds, ctx.fit_camera, aspect, &kept)
                 };
                 if l.kind == LightType::Directional && c.warp.kind != Warp::None {
                     warp::warp_setup(
