@@ -60,12 +60,15 @@ pub static FAMILY: Family = Family {
         Preset {
             name: "no-stencil",
             summary: "no stencil: double darkening where flattened triangles overlap, shadows spill off the plane",
-            values: &[("stencil", "false"), ("darkening", "0.6")],
+            values: &[(STENCIL.name, "false"), (ParamSpec::DARKENING.name, "0.6")],
         },
         Preset {
             name: "darken",
             summary: "the documents' look: a half-transparent shadow colour blended over the lit image",
-            values: &[("darkening", "0.5"), ("compose", "darken")],
+            values: &[
+                (ParamSpec::DARKENING.name, "0.5"),
+                (ParamSpec::COMPOSE.name, "darken"),
+            ],
         },
     ],
     create: |gpu, params| {

@@ -84,7 +84,7 @@ pub static FAMILY: Family = Family {
         Preset {
             name: "alpha-depth",
             summary: "caster depth in 8 bits, compared per receiver: shows false self-shadowing",
-            values: &[("depth_in_alpha", "true")],
+            values: &[(DEPTH_IN_ALPHA.name, "true")],
         },
     ],
     create: |gpu, params| {

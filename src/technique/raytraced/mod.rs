@@ -68,7 +68,7 @@ pub static FAMILY: Family = Family {
         Preset {
             name: "reference",
             summary: "1024 samples for area lights (soft-shadow reference)",
-            values: &[("samples", "1024")],
+            values: &[(SAMPLES.name, "1024")],
         },
     ],
     create: |_, params| {

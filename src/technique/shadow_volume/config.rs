@@ -140,41 +140,44 @@ pub const PRESETS: &[Preset] = &[
     Preset {
         name: "zpass",
         summary: "z-pass counting (fails with the camera inside a shadow)",
-        values: &[("method", "zpass")],
+        values: &[(METHOD.name, "zpass")],
     },
     Preset {
         name: "zfail",
         summary: "z-fail counting (Carmack's reverse) with caps",
-        values: &[("method", "zfail")],
+        values: &[(METHOD.name, "zfail")],
     },
     Preset {
         name: "zfail-open",
         summary: "z-fail without caps: the documents' failure case for open volumes",
-        values: &[("method", "zfail"), ("caps", "false")],
+        values: &[(METHOD.name, "zfail"), (CAPS.name, "false")],
     },
     Preset {
         name: "zfail-far-clip",
         summary: "z-fail with the camera's far plane clipping the volumes: the documents' failure case for a finite far plane",
-        values: &[("method", "zfail"), ("far_plane", "clip")],
+        values: &[(METHOD.name, "zfail"), (FAR_PLANE.name, "clip")],
     },
     Preset {
         name: "edges",
         summary: "silhouette volumes for every mesh, closed or not (z-fail): shows what open meshes get wrong",
-        values: &[("method", "zfail"), ("silhouette", "edges")],
+        values: &[(METHOD.name, "zfail"), (SILHOUETTE.name, "edges")],
     },
     Preset {
         name: "triangles",
         summary: "every triangle extrudes its own volume: exact for open and non-manifold meshes",
-        values: &[("silhouette", "triangles")],
+        values: &[(SILHOUETTE.name, "triangles")],
     },
     Preset {
         name: "cpu",
         summary: "auto with CPU silhouettes and extrusion",
-        values: &[("extrusion", "cpu")],
+        values: &[(EXTRUSION.name, "cpu")],
     },
     Preset {
         name: "darken",
         summary: "the documents' look: one lit pass, shadows darkened to half",
-        values: &[("compose", "darken"), ("darkening", "0.5")],
+        values: &[
+            (ParamSpec::COMPOSE.name, "darken"),
+            (ParamSpec::DARKENING.name, "0.5"),
+        ],
     },
 ];

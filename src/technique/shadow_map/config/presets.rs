@@ -1,6 +1,11 @@
 //! The shadow-map family's presets: named sets of parameter values (the
-//! table in [`crate::technique::shadow_map::config`]), each with the measurement that chose it.
+//! table in [`crate::technique::shadow_map::config`]). Each value names its
+//! parameter through the table's own constant, so a misspelt parameter
+//! does not compile; the values are checked by `every_preset_is_valid_for_its_table`.
 
+use super::paging::PAGING;
+use super::partition::{BLEND, CASCADES, FIT, SELECT, SPLIT_LAMBDA, STABILIZE, WARP};
+use super::{AREA, FILTER, FORMAT, NORMAL_OFFSET_DIRECTIONAL, RADIUS, SAMPLES, SIZE};
 use crate::technique::Preset;
 
 pub const PRESETS: &[Preset] = &[
@@ -12,123 +17,134 @@ pub const PRESETS: &[Preset] = &[
     Preset {
         name: "hard",
         summary: "nearest texel, no filtering; normal offset ½ texel (no kernel averages its acne away: ¼ left 0.10 % interior false shadow on teapot/sun at 640×360, ½ 0.006 %)",
-        values: &[("filter", "hard"), ("normal_offset_directional", "0.5")],
+        values: &[
+            (FILTER.name, "hard"),
+            (NORMAL_OFFSET_DIRECTIONAL.name, "0.5"),
+        ],
     },
     Preset {
         name: "pcf2x2",
         summary: "one hardware bilinear comparison",
-        values: &[("filter", "pcf2x2")],
+        values: &[(FILTER.name, "pcf2x2")],
     },
     Preset {
         name: "pcf-disk",
         summary: "16 taps on a per-pixel rotated Vogel disk of radius 2.5 texels",
-        values: &[("filter", "disk"), ("samples", "4"), ("radius", "2.5")],
+        values: &[
+            (FILTER.name, "disk"),
+            (SAMPLES.name, "4"),
+            (RADIUS.name, "2.5"),
+        ],
     },
     Preset {
         name: "pcss",
         summary: "percentage-closer soft shadows",
-        values: &[("filter", "pcss"), ("samples", "5")],
+        values: &[(FILTER.name, "pcss"), (SAMPLES.name, "5")],
     },
     Preset {
         name: "varwidth",
         summary: "the documents' variable-width PCF",
-        values: &[("filter", "varwidth"), ("samples", "4")],
+        values: &[(FILTER.name, "varwidth"), (SAMPLES.name, "4")],
     },
     Preset {
         name: "vsm",
         summary: "variance shadow map, 1024², blurred",
-        values: &[("filter", "vsm"), ("size", "1024")],
+        values: &[(FILTER.name, "vsm"), (SIZE.name, "1024")],
     },
     Preset {
         name: "esm",
         summary: "exponential shadow map, 1024², blurred",
-        values: &[("filter", "esm"), ("size", "1024")],
+        values: &[(FILTER.name, "esm"), (SIZE.name, "1024")],
     },
     Preset {
         name: "evsm2",
         summary: "exponential variance shadow map, positive warp only",
-        values: &[("filter", "evsm2"), ("size", "1024")],
+        values: &[(FILTER.name, "evsm2"), (SIZE.name, "1024")],
     },
     Preset {
         name: "evsm4",
         summary: "exponential variance shadow map, both warps",
-        values: &[("filter", "evsm4"), ("size", "1024")],
+        values: &[(FILTER.name, "evsm4"), (SIZE.name, "1024")],
     },
     Preset {
         name: "msm",
         summary: "4-moment Hamburger shadow map",
-        values: &[("filter", "msm"), ("size", "1024")],
+        values: &[(FILTER.name, "msm"), (SIZE.name, "1024")],
     },
     Preset {
         name: "area",
         summary: "soft shadows: 16 maps from stratified points of the light's area, averaged",
-        values: &[("area", "true"), ("filter", "pcf2x2"), ("size", "1024")],
+        values: &[
+            (AREA.name, "true"),
+            (FILTER.name, "pcf2x2"),
+            (SIZE.name, "1024"),
+        ],
     },
     Preset {
         name: "csm",
         summary: "4 stabilised cascades of 1024² fitted to the view frustum (the memory of one 2048² map), λ 0.95 (Sascha Willems' sample), each pixel in the finest map that holds it (select=map: dolly flicker on city/default/sun at 640×360 0.0128 → 0.0015 %), 5 % blended (a pixel whose cascades disagree flips where the blend crosses ½, and the band moves with the camera: 10 % → 5 % took dolly flicker on landscape/flyover/sun at 640×360 over 16 frames from 0.0084 to 0.0064 %, seams unchanged), normal offset ½ texel of each cascade (1 pushed lookups at building corners into the next wall's shadow: 0.12 % interior false shadow on city/street/sun at 640×360, ½: 0.004 %)",
         values: &[
-            ("cascades", "4"),
-            ("size", "1024"),
-            ("split_lambda", "0.95"),
-            ("blend", "0.05"),
-            ("select", "map"),
-            ("fit", "frustum"),
-            ("normal_offset_directional", "0.5"),
+            (CASCADES.name, "4"),
+            (SIZE.name, "1024"),
+            (SPLIT_LAMBDA.name, "0.95"),
+            (BLEND.name, "0.05"),
+            (SELECT.name, "map"),
+            (FIT.name, "frustum"),
+            (NORMAL_OFFSET_DIRECTIONAL.name, "0.5"),
         ],
     },
     Preset {
         name: "psm",
         summary: "one 2048² map in the camera's post-perspective space (PSM, virtual camera behind the casters), normal offset 1 texel (warped maps have no bias cap)",
-        values: &[("warp", "psm"), ("normal_offset_directional", "1")],
+        values: &[(WARP.name, "psm"), (NORMAL_OFFSET_DIRECTIONAL.name, "1")],
     },
     Preset {
         name: "lispsm",
         summary: "one 2048² map warped by a light-space perspective (LiSPSM, n_opt), normal offset 1 texel",
-        values: &[("warp", "lispsm"), ("normal_offset_directional", "1")],
+        values: &[(WARP.name, "lispsm"), (NORMAL_OFFSET_DIRECTIONAL.name, "1")],
     },
     Preset {
         name: "tsm",
         summary: "one 2048² map warped by the trapezoid around the view (TSM, the 80 % rule, focus up to √(z_n·z_f)), normal offset 1 texel",
-        values: &[("warp", "tsm"), ("normal_offset_directional", "1")],
+        values: &[(WARP.name, "tsm"), (NORMAL_OFFSET_DIRECTIONAL.name, "1")],
     },
     Preset {
         name: "pssm",
         summary: "parallel-split maps: 4 cascades of 1024² fitted to their slices, λ 0.6 (bgfx), normal offset ½ texel",
         values: &[
-            ("cascades", "4"),
-            ("size", "1024"),
-            ("split_lambda", "0.6"),
-            ("stabilize", "false"),
-            ("fit", "frustum"),
-            ("normal_offset_directional", "0.5"),
+            (CASCADES.name, "4"),
+            (SIZE.name, "1024"),
+            (SPLIT_LAMBDA.name, "0.6"),
+            (STABILIZE.name, "false"),
+            (FIT.name, "frustum"),
+            (NORMAL_OFFSET_DIRECTIONAL.name, "0.5"),
         ],
     },
     Preset {
         name: "sdsm",
         summary: "sample distribution shadow maps: 4 cascades of 1024² split over the depths the camera sees and fitted to the pixels each shades (GPU reduction of the prepass), λ 0.95, 10 % blended, normal offset ½ texel",
         values: &[
-            ("cascades", "4"),
-            ("size", "1024"),
-            ("split_lambda", "0.95"),
-            ("blend", "0.1"),
-            ("fit", "samples"),
-            ("normal_offset_directional", "0.5"),
+            (CASCADES.name, "4"),
+            (SIZE.name, "1024"),
+            (SPLIT_LAMBDA.name, "0.95"),
+            (BLEND.name, "0.1"),
+            (FIT.name, "samples"),
+            (NORMAL_OFFSET_DIRECTIONAL.name, "0.5"),
         ],
     },
     Preset {
         name: "virtual",
         summary: "virtual shadow map: 16384² per clipmap level (directional) or view, 128² pages from a pool of 4096, cached across frames, 3×3 PCF grid, the family's slope bias (a smaller one leaves the outer taps of the kernel comparing a lit surface against its own depth: graded acne across lit floors)",
-        values: &[("paging", "virtual")],
+        values: &[(PAGING.name, "virtual")],
     },
     Preset {
         name: "adaptive",
         summary: "adaptive shadow map (Fernando et al. 2001) on the virtual map's pages: each pixel starts at its view's coarsest level and is refined a level at a time, up to the level the virtual map reads (`texels_per_pixel`), only where its kernel sees a shadow edge; 3×3 PCF grid, the family's slope bias",
-        values: &[("paging", "adaptive")],
+        values: &[(PAGING.name, "adaptive")],
     },
     Preset {
         name: "8bit",
         summary: "depth stored in 8 bits: acne everywhere",
-        values: &[("format", "r8"), ("filter", "hard")],
+        values: &[(FORMAT.name, "r8"), (FILTER.name, "hard")],
     },
 ];
