@@ -220,6 +220,20 @@ fn object_gpu(
     }
 }
 
+/// A buffer made with `contents`.
+fn buffer_init(
+    device: &wgpu::Device,
+    label: &str,
+    contents: &[u8],
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents,
+        usage,
+    })
+}
+
 /// Material `m`'s bind group: its uniform, its diffuse texture and normal
 /// map (`[white, flat normal]` where it has none).
 fn material_group(
@@ -247,11 +261,12 @@ fn material_group(
             0.0,
         ),
     };
-    let buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("material"),
-        contents: bytemuck::bytes_of(&data),
-        usage: gpu.uniform_space.usage(),
-    });
+    let buf = buffer_init(
+        device,
+        "material",
+        bytemuck::bytes_of(&data),
+        gpu.uniform_space.usage(),
+    );
     let diffuse = m.diffuse_texture.map_or(white, |t| &gpu_textures[t]);
     let normal = m.normal_map.map_or(flat_normal, |t| &gpu_textures[t]);
     device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -327,13 +342,8 @@ impl SceneGpu {
             })
             .collect();
         let (draws, parts) = draw_calls(scene, &ranges, &clustered, &solidity);
-        let init = |label: &str, contents: &[u8], usage| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
+        let init =
+            |label: &str, contents: &[u8], usage| buffer_init(device, label, contents, usage);
         let storage_ro = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         let vertex_buffer = init(
             "vertices",

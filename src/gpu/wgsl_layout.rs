@@ -3,11 +3,16 @@
 //! [`assert_struct_matches`] compares them with the `#[repr(C)]` Rust struct
 //! that fills it, so the two cannot drift apart unnoticed.
 
+/// `source` as a naga module; a parse error is the test's failure.
+fn parse(source: &str) -> naga::Module {
+    naga::front::wgsl::parse_str(source)
+        .unwrap_or_else(|e| panic!("WGSL does not parse: {}", e.emit_to_string(source)))
+}
+
 /// The members (name, byte offset) and the size of the WGSL struct `name`
 /// in `source`.
 pub fn wgsl_struct(source: &str, name: &str) -> (Vec<(String, u32)>, u32) {
-    let module = naga::front::wgsl::parse_str(source)
-        .unwrap_or_else(|e| panic!("WGSL does not parse: {}", e.emit_to_string(source)));
+    let module = parse(source);
     let mut layouter = naga::proc::Layouter::default();
     layouter.update(module.to_ctx()).unwrap();
     let (handle, ty) = module
@@ -27,8 +32,7 @@ pub fn wgsl_struct(source: &str, name: &str) -> (Vec<(String, u32)>, u32) {
 
 /// The global variables of bind group `group` in `source`: (name, binding).
 pub fn wgsl_bindings(source: &str, group: u32) -> Vec<(String, u32)> {
-    let module = naga::front::wgsl::parse_str(source)
-        .unwrap_or_else(|e| panic!("WGSL does not parse: {}", e.emit_to_string(source)));
+    let module = parse(source);
     module
         .global_variables
         .iter()

@@ -164,16 +164,22 @@ pub fn slot_data(
 mod wgsl_tests {
     use super::*;
 
-    /// `ShadowMap` of shadow_map.wgsl is laid out as `ShadowMapUniform`
-    /// (every member's offset, the face count, the size).
-    #[test]
-    fn the_uniform_matches_its_wgsl_struct() {
-        let source = [
+    /// The family's shader as the device gets it, after the frame's shared
+    /// declarations.
+    fn shadow_map_wgsl() -> String {
+        [
             crate::frame::COMMON_WGSL,
             crate::frame::GBUFFER_WGSL,
             &super::super::pipelines::module_source(),
         ]
-        .join("\n");
+        .join("\n")
+    }
+
+    /// `ShadowMap` of shadow_map.wgsl is laid out as `ShadowMapUniform`
+    /// (every member's offset, the face count, the size).
+    #[test]
+    fn the_uniform_matches_its_wgsl_struct() {
+        let source = shadow_map_wgsl();
         crate::gpu::wgsl_layout::assert_struct_matches(
             &source,
             "ShadowMap",
@@ -187,12 +193,7 @@ mod wgsl_tests {
     /// [`super::super::binding`] says, and every binding declared is used.
     #[test]
     fn the_bindings_match_their_wgsl_variables() {
-        let source = [
-            crate::frame::COMMON_WGSL,
-            crate::frame::GBUFFER_WGSL,
-            &super::super::pipelines::module_source(),
-        ]
-        .join("\n");
+        let source = shadow_map_wgsl();
         let mut wgsl = crate::gpu::wgsl_layout::wgsl_bindings(&source, 2);
         let mut rust: Vec<(String, u32)> = super::super::binding::NAMED
             .iter()
