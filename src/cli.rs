@@ -465,14 +465,9 @@ fn report(a: ReportArgs) -> Result<()> {
         crate::report::matrix::Matrix::of(a.preset, a.scenes.as_deref(), a.techniques.as_deref())?;
     let gpu = crate::gpu::GpuContext::new(a.backend.as_deref())?;
     let stats = crate::report::run(&gpu, &matrix, &a.out, true)?;
-    let kept = match stats.quality_kept {
-        0 => String::new(),
-        n => format!(" ({n} from the compare rows a stopped run kept)"),
-    };
     println!(
-        "{} cells measured{kept}, {} reused, in {:.0} s; wrote {}",
-        stats.computed,
-        stats.reused,
+        "{}, in {:.0} s; wrote {}",
+        stats.counts(),
         started.elapsed().as_secs_f64(),
         a.out.join("index.html").display()
     );

@@ -36,6 +36,21 @@ pub struct RunStats {
     pub quality_kept: usize,
 }
 
+impl RunStats {
+    /// `N cells measured (K from the compare rows a stopped run kept), R
+    /// reused`, the kept part only when there are some.
+    pub fn counts(&self) -> String {
+        let kept = match self.quality_kept {
+            0 => String::new(),
+            n => format!(" ({n} from the compare rows a stopped run kept)"),
+        };
+        format!(
+            "{} cells measured{kept}, {} reused",
+            self.computed, self.reused
+        )
+    }
+}
+
 /// Measures what `matrix` asks that `out` does not hold yet, then writes
 /// the report from every cell.
 pub fn run(gpu: &GpuContext, matrix: &Matrix, out: &Path, progress: bool) -> Result<RunStats> {
@@ -93,10 +108,8 @@ pub fn run(gpu: &GpuContext, matrix: &Matrix, out: &Path, progress: bool) -> Res
     std::fs::write(out.join("report.md"), markdown::write(&report))?;
     std::fs::write(out.join("index.html"), html::write(&report, out)?)?;
     log::info!(
-        "report: {} cells measured ({} from compare rows a stopped run kept), {} reused, {:.0} s",
-        stats.computed,
-        stats.quality_kept,
-        stats.reused,
+        "report: {}, {:.0} s",
+        stats.counts(),
         started.elapsed().as_secs_f64()
     );
     Ok(stats)
