@@ -310,19 +310,15 @@ fn compare(a: CompareArgs) -> Result<()> {
         bail!("--reference takes one technique, got '{}'", a.reference);
     };
     let gpu = a.view.gpu()?;
+    let view = measure::FrameRequest {
+        scene: &scene,
+        camera: &camera,
+        lights: &lights,
+        size: a.view.size,
+    };
     if let Some(path) = a.path {
-        let rows = measure::flicker::run(
-            &gpu,
-            &scene,
-            &camera,
-            &lights,
-            a.view.size,
-            &techniques,
-            reference,
-            path,
-            a.frames,
-            &a.out,
-        )?;
+        let rows =
+            measure::flicker::run(&gpu, view, &techniques, reference, path, a.frames, &a.out)?;
         println!(
             "{:<44} {:>5} {:>10} {:>10}",
             "technique", "light", "flicker%", "edge%"
@@ -336,16 +332,7 @@ fn compare(a: CompareArgs) -> Result<()> {
         println!("wrote {}", a.out.join("flicker.md").display());
         return Ok(());
     }
-    let rows = measure::compare::run(
-        &gpu,
-        &scene,
-        &camera,
-        &lights,
-        a.view.size,
-        &techniques,
-        reference,
-        &a.out,
-    )?;
+    let rows = measure::compare::run(&gpu, view, &techniques, reference, &a.out)?;
     println!(
         "{:<36} {:>5} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8}",
         "technique",
@@ -385,15 +372,18 @@ fn bench(a: BenchArgs) -> Result<()> {
     let techniques = measure::parse_technique_list(&a.techniques)?;
     let gpu = a.view.gpu()?;
     println!("adapter: {}", gpu.adapter_summary());
+    let view = measure::FrameRequest {
+        scene: &scene,
+        camera: &camera,
+        lights: &lights,
+        size: a.view.size,
+    };
     if let Some(seconds) = a.soak {
-        return soak(&a, &gpu, (&scene, &camera, &lights), &techniques, seconds);
+        return soak(&a, &gpu, view, &techniques, seconds);
     }
     let rows = measure::bench::run(
         &gpu,
-        &scene,
-        &camera,
-        &lights,
-        a.view.size,
+        view,
         &a.view.settings(),
         &techniques,
         measure::bench::BenchFrames {
@@ -429,11 +419,7 @@ fn bench(a: BenchArgs) -> Result<()> {
 fn soak(
     a: &BenchArgs,
     gpu: &crate::gpu::GpuContext,
-    (scene, camera, lights): (
-        &crate::scene::Scene,
-        &crate::scene::Camera,
-        &[crate::scene::Light],
-    ),
+    view: measure::FrameRequest,
     techniques: &[crate::technique::TechniqueChoice],
     seconds: f64,
 ) -> Result<()> {
@@ -442,16 +428,7 @@ fn soak(
         min_frames: a.frames,
         seconds,
     };
-    let rows = measure::soak::run(
-        gpu,
-        scene,
-        camera,
-        lights,
-        a.view.size,
-        &a.view.settings(),
-        techniques,
-        length,
-    )?;
+    let rows = measure::soak::run(gpu, view, &a.view.settings(), techniques, length)?;
     let adapter = gpu.adapter_summary();
     print!("{}", measure::soak::markdown(&rows, &adapter));
     measure::soak::write(&a.out, &rows, &adapter, length)?;

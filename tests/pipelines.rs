@@ -190,10 +190,12 @@ fn bench_ratios_do_not_depend_on_the_order() {
         let out = std::env::temp_dir().join(format!("shadowlab-bench-order-{}", spec.len()));
         bench::run(
             &gpu,
-            &scene,
-            &scene.camera,
-            &scene.lights,
-            (320, 180),
+            shadowlab::measure::FrameRequest {
+                scene: &scene,
+                camera: &scene.camera,
+                lights: &scene.lights,
+                size: (320, 180),
+            },
             &RenderSettings::default(),
             &list,
             frames,

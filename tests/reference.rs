@@ -229,10 +229,12 @@ fn compare_none_reports_the_reference_shadow_as_false_lit() {
     let reference = technique::resolve("raytraced").unwrap();
     let rows = measure::compare::run(
         gpu(),
-        &scene,
-        &scene.camera,
-        &scene.lights,
-        (160, 90),
+        shadowlab::measure::FrameRequest {
+            scene: &scene,
+            camera: &scene.camera,
+            lights: &scene.lights,
+            size: (160, 90),
+        },
         &list,
         &reference,
         &out,
@@ -306,10 +308,12 @@ fn bench_writes_ratios_to_none() {
     let bench = |counts: measure::bench::BenchFrames, out: &std::path::Path| {
         measure::bench::run(
             gpu(),
-            &scene,
-            &scene.camera,
-            &scene.lights,
-            (96, 54),
+            shadowlab::measure::FrameRequest {
+                scene: &scene,
+                camera: &scene.camera,
+                lights: &scene.lights,
+                size: (96, 54),
+            },
             &Default::default(),
             &list,
             counts,
@@ -424,10 +428,12 @@ fn bench_counts_the_work_of_each_stage() {
     let run = |out: &std::path::Path| {
         measure::bench::run(
             gpu(),
-            &scene,
-            &scene.camera,
-            &scene.lights,
-            (w as u32, h as u32),
+            shadowlab::measure::FrameRequest {
+                scene: &scene,
+                camera: &scene.camera,
+                lights: &scene.lights,
+                size: (w as u32, h as u32),
+            },
             &Default::default(),
             &list,
             frames,

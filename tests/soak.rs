@@ -41,10 +41,12 @@ fn soaked(gpu: &GpuContext, scene: &str, light: &str, ids: &[String]) -> Vec<Soa
     };
     soak::run(
         gpu,
-        &s,
-        &s.camera,
-        &s.lights,
-        (48, 32),
+        shadowlab::measure::FrameRequest {
+            scene: &s,
+            camera: &s.camera,
+            lights: &s.lights,
+            size: (48, 32),
+        },
         &settings,
         &choices,
         LENGTH,

@@ -243,6 +243,12 @@ pub fn technique_shader(gpu: &GpuContext, label: &str, sources: &[&str]) -> wgpu
     )
 }
 
+/// Test support: the WGSL source [`technique_shader`] composes.
+#[cfg(test)]
+pub fn technique_source(sources: &[&str]) -> String {
+    [&[COMMON_WGSL, GBUFFER_WGSL], sources].concat().join("\n")
+}
+
 /// The frame uniform for a camera and lights at a frame size;
 /// `infinite_far_plane` for shadow volumes.
 pub fn frame_uniform(

@@ -458,7 +458,9 @@ mod wgsl_tests {
     use super::*;
 
     /// The frame uniform, its lights and the object table are laid out as
-    /// `Frame`, `LightGpu` and `ObjectGpu` of common.wgsl.
+    /// `Frame`, `LightGpu` and `ObjectGpu` of common.wgsl, its alpha modes
+    /// are `AlphaMode`'s, and the material uniform is `MaterialGpu` of
+    /// scene.wgsl.
     #[test]
     fn the_shared_structs_match_common_wgsl() {
         use crate::gpu::wgsl_layout::assert_struct_matches;
@@ -476,6 +478,26 @@ mod wgsl_tests {
             "LightGpu",
             crate::field_offsets!(crate::frame::LightGpu; position, direction, color),
             size_of::<crate::frame::LightGpu>(),
+        );
+        let lighting = [
+            source,
+            include_str!("../renderer/procedural.wgsl"),
+            include_str!("../renderer/scene.wgsl"),
+        ]
+        .join("\n");
+        assert_struct_matches(
+            &lighting,
+            "MaterialGpu",
+            crate::field_offsets!(MaterialGpu; ka, kd, ks, proc_a, proc_b, flags),
+            size_of::<MaterialGpu>(),
+        );
+        crate::gpu::wgsl_layout::assert_consts_match(
+            source,
+            &[
+                ("ALPHA_OPAQUE", AlphaMode::Opaque as u32),
+                ("ALPHA_MASK", AlphaMode::Mask as u32),
+                ("ALPHA_BLEND", AlphaMode::Blend as u32),
+            ],
         );
         assert_struct_matches(
             source,

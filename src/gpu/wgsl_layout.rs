@@ -68,3 +68,32 @@ macro_rules! field_offsets {
         &[$((stringify!($f), std::mem::offset_of!($t, $f))),+]
     };
 }
+
+/// The value of the integer `const` `name` of `source` (after naga's
+/// constant evaluation, so `1u << K` is folded).
+pub fn wgsl_const_u32(source: &str, name: &str) -> u32 {
+    let module = parse(source);
+    let (_, constant) = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no const {name} in the WGSL"));
+    match module.global_expressions[constant.init] {
+        naga::Expression::Literal(naga::Literal::U32(v)) => v,
+        naga::Expression::Literal(naga::Literal::I32(v)) => v as u32,
+        naga::Expression::Literal(naga::Literal::AbstractInt(v)) => v as u32,
+        ref e => panic!("const {name} is not an integer literal: {e:?}"),
+    }
+}
+
+/// Asserts that each WGSL `const` (name, the Rust value) of `source` has the
+/// value its Rust declaration gives.
+pub fn assert_consts_match(source: &str, rust: &[(&str, u32)]) {
+    for &(name, value) in rust {
+        assert_eq!(
+            wgsl_const_u32(source, name),
+            value,
+            "const {name}: WGSL (left) against Rust (right)"
+        );
+    }
+}

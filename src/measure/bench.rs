@@ -6,7 +6,7 @@
 //! the measured frames taken round-robin so that no technique pays for its
 //! place in the order.
 
-use super::choice_label;
+use super::{FrameRequest, choice_label};
 use crate::gpu::{FrameWork, GpuContext, StageWork};
 use crate::headless::HeadlessFrame;
 use crate::renderer::{FrameTimings, RenderSettings};
@@ -86,18 +86,20 @@ pub struct BenchFrames {
 /// Benchmarks `techniques` (with `none` added first when missing) with the
 /// render settings `base` (shading, specular model, culling), each stage
 /// waited for, GPU timestamps on and light icons off.
-#[allow(clippy::too_many_arguments)]
 pub fn run(
     gpu: &GpuContext,
-    scene: &Scene,
-    camera: &Camera,
-    lights: &[Light],
-    size: (u32, u32),
+    view: FrameRequest,
     base: &RenderSettings,
     techniques: &[TechniqueChoice],
     counts: BenchFrames,
     out: &Path,
 ) -> Result<Vec<BenchRow>> {
+    let FrameRequest {
+        scene,
+        camera,
+        lights,
+        size,
+    } = view;
     let BenchFrames {
         warmup,
         measured: frames,

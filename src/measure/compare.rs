@@ -3,11 +3,11 @@
 //! facing the light (N·L > 0).
 
 use super::quality::{self, FlipStats, FootprintStats, MaskMetrics, SeamStats};
-use super::{choice_label, file_stem};
+use super::{FrameRequest, choice_label, file_stem};
 use crate::gpu::GpuContext;
 use crate::headless::{self, FrameImages, HeadlessFrame};
 use crate::renderer::RenderSettings;
-use crate::scene::{Camera, Light, Scene};
+use crate::scene::{Light, Scene};
 use crate::technique::TechniqueInstance;
 use crate::technique::{MapLookup, TechniqueChoice};
 use anyhow::{Context, Result};
@@ -109,19 +109,22 @@ struct Rendered {
     lookups: Vec<Option<MapLookup>>,
 }
 
-/// Renders one frame with `choice` for every light; `debug` turns the
-/// techniques' debug views on (they carry the map lookups).
-#[allow(clippy::too_many_arguments)]
+/// Renders one frame of `view` with `choice` for every light; `debug` turns
+/// the techniques' debug views on (they carry the map lookups).
 fn render_with(
     gpu: &GpuContext,
     hf: &mut HeadlessFrame,
-    scene: &Scene,
-    camera: &Camera,
-    lights: &[Light],
+    view: FrameRequest,
     settings: &RenderSettings,
     choice: &TechniqueChoice,
     debug: bool,
 ) -> Result<Rendered> {
+    let FrameRequest {
+        scene,
+        camera,
+        lights,
+        ..
+    } = view;
     hf.techniques = TechniqueInstance::per_light(gpu, choice, lights.len())?;
     for t in &mut hf.techniques {
         t.technique.enable_debug(debug);
@@ -140,23 +143,13 @@ fn render_with(
 
 /// Renders the reference and every technique, writes images, heatmaps and
 /// `quality.{md,csv,json}` into `out`, and returns the rows.
-#[allow(clippy::too_many_arguments)]
 pub fn run(
     gpu: &GpuContext,
-    scene: &Scene,
-    camera: &Camera,
-    lights: &[Light],
-    size: (u32, u32),
+    view: FrameRequest,
     techniques: &[TechniqueChoice],
     reference: &TechniqueChoice,
     out: &Path,
 ) -> Result<Vec<QualityRow>> {
-    let view = FrameRequest {
-        scene,
-        camera,
-        lights,
-        size,
-    };
     let mut comparison = Comparison::new(gpu, view, reference, out)?;
     let mut rows = vec![];
     for choice in techniques {
@@ -164,15 +157,6 @@ pub fn run(
     }
     comparison.write_tables(&rows)?;
     Ok(rows)
-}
-
-/// One frame to render: the scene, the camera, the lights and the size.
-#[derive(Clone, Copy)]
-pub struct FrameRequest<'a> {
-    pub scene: &'a Scene,
-    pub camera: &'a Camera,
-    pub lights: &'a [Light],
-    pub size: (u32, u32),
 }
 
 /// One frame's reference, rendered once, against which techniques are
@@ -212,15 +196,8 @@ impl<'a> Comparison<'a> {
         };
         let (w, h) = view.size;
         let mut hf = HeadlessFrame::new(gpu, view.scene, std::slice::from_ref(reference), w, h)?;
-        let FrameRequest {
-            scene,
-            camera,
-            lights,
-            ..
-        } = view;
-        let reference_render = render_with(
-            gpu, &mut hf, scene, camera, lights, &settings, reference, false,
-        )?;
+        let (scene, lights) = (view.scene, view.lights);
+        let reference_render = render_with(gpu, &mut hf, view, &settings, reference, false)?;
         headless::write_images(&out.join("reference"), &reference_render.images)?;
         let considered = considered_pixels(gpu, &hf, lights)?;
         let edges = considered
@@ -250,19 +227,16 @@ impl<'a> Comparison<'a> {
     /// (one per light).
     pub fn measure(&mut self, choice: &TechniqueChoice) -> Result<Vec<QualityRow>> {
         let FrameRequest {
-            scene,
-            camera,
             lights,
             size: (w, h),
+            ..
         } = self.view;
         let label = choice_label(choice);
         let stem = file_stem(&label);
         let rendered = render_with(
             self.gpu,
             &mut self.hf,
-            scene,
-            camera,
-            lights,
+            self.view,
             &self.settings,
             choice,
             true,

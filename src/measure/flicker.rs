@@ -15,11 +15,11 @@
 
 use super::compare::{considered_at, gbuffer_positions};
 use super::quality::{EDGE_RADIUS, edge_band};
-use super::{choice_label, percent, write_csv};
+use super::{FrameRequest, choice_label, percent, write_csv};
 use crate::gpu::GpuContext;
 use crate::headless::{self, HeadlessFrame};
 use crate::renderer::{FrameCameras, RenderSettings};
-use crate::scene::{Camera, Light, Scene};
+use crate::scene::Camera;
 use crate::technique::TechniqueChoice;
 use anyhow::{Context, Result, bail};
 use glam::{Quat, Vec3, Vec4Swizzles};
@@ -174,19 +174,22 @@ pub fn step_flicker(
 
 /// Follows `frames` frames of `path` with the reference and every
 /// technique, writes `flicker.{md,csv,json}` into `out` and returns the rows.
-#[allow(clippy::too_many_arguments)]
+/// The path starts at `view`'s camera.
 pub fn run(
     gpu: &GpuContext,
-    scene: &Scene,
-    start: &Camera,
-    lights: &[Light],
-    size: (u32, u32),
+    view: FrameRequest,
     techniques: &[TechniqueChoice],
     reference: &TechniqueChoice,
     path: CameraPath,
     frames: u32,
     out: &Path,
 ) -> Result<Vec<FlickerRow>> {
+    let FrameRequest {
+        scene,
+        camera: start,
+        lights,
+        size,
+    } = view;
     if !(2..=1000).contains(&frames) {
         bail!("--frames {frames}: a path needs 2 to 1000 frames");
     }

@@ -8,8 +8,18 @@ pub mod flicker;
 pub mod quality;
 pub mod soak;
 
+use crate::scene::{Camera, Light, Scene};
 use crate::technique::{self, TechniqueChoice};
 use anyhow::{Result, bail};
+
+/// One frame to render: the scene, the camera, the lights and the size.
+#[derive(Clone, Copy)]
+pub struct FrameRequest<'a> {
+    pub scene: &'a Scene,
+    pub camera: &'a Camera,
+    pub lights: &'a [Light],
+    pub size: (u32, u32),
+}
 
 /// `part` as a percentage of `whole` (0 when `whole` is 0).
 pub fn percent(part: usize, whole: usize) -> f64 {

@@ -6,12 +6,11 @@
 //! frame count; a cache that grows without bound, as frames that slow.
 
 use super::bench::Stat;
-use super::choice_label;
 use super::flicker::{CameraPath, path_camera};
+use super::{FrameRequest, choice_label};
 use crate::gpu::{GpuContext, LiveResources, PIPELINE_CACHE_BOUND};
 use crate::headless::HeadlessFrame;
 use crate::renderer::RenderSettings;
-use crate::scene::{Camera, Light, Scene};
 use crate::technique::{TechniqueChoice, TechniqueInstance};
 use anyhow::{Context, Result};
 use serde::Serialize;
@@ -92,17 +91,19 @@ impl SoakRow {
 
 /// Soaks each technique in turn on one frame (fresh instances per
 /// technique), the camera orbiting the start view's target.
-#[allow(clippy::too_many_arguments)]
 pub fn run(
     gpu: &GpuContext,
-    scene: &Scene,
-    camera: &Camera,
-    lights: &[Light],
-    size: (u32, u32),
+    view: FrameRequest,
     settings: &RenderSettings,
     techniques: &[TechniqueChoice],
     length: SoakLength,
 ) -> Result<Vec<SoakRow>> {
+    let FrameRequest {
+        scene,
+        camera,
+        lights,
+        size,
+    } = view;
     let mut hf = HeadlessFrame::new(gpu, scene, &techniques[..1], size.0, size.1)?;
     let mut rows = vec![];
     for choice in techniques {

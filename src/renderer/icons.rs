@@ -214,3 +214,19 @@ impl LightIcons {
         }
     }
 }
+
+#[cfg(test)]
+mod wgsl_tests {
+    /// `IconUniform` of icons.wgsl is laid out as the Rust struct (up to its
+    /// padding to the uniform stride).
+    #[test]
+    fn the_uniform_matches_its_wgsl_struct() {
+        let source = [crate::frame::COMMON_WGSL, include_str!("icons.wgsl")].join("\n");
+        crate::gpu::wgsl_layout::assert_struct_matches(
+            &source,
+            "IconUniform",
+            crate::field_offsets!(super::IconUniform; model, color),
+            std::mem::offset_of!(super::IconUniform, _pad),
+        );
+    }
+}

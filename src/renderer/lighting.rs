@@ -13,6 +13,14 @@ use crate::frame::{
 use crate::gpu::GpuContext;
 use crate::scene::{AlphaMode, Light, LightType};
 
+/// The light kinds of common.wgsl (`LIGHT_*`) and the flags of scene.wgsl's
+/// `LIGHT_SPECS` (`SPEC_*`), checked against the WGSL by a test.
+const LIGHT_POINT: u32 = 0;
+const LIGHT_SPOT: u32 = 1;
+const LIGHT_DIRECTIONAL: u32 = 2;
+const SPEC_WINDOWED: u32 = 4;
+const SPEC_DARKEN: u32 = 8;
+
 /// The lighting pass's own groups: the material's, and the masks with the
 /// material sampler.
 const MATERIAL_GROUP: u32 = frame::OWN_GROUP;
@@ -41,11 +49,17 @@ impl LitLight {
     /// 4 if windowed, 8 if the mask darkens.
     fn spec_bits(&self) -> u32 {
         let kind = match self.kind {
-            LightType::Point => 0,
-            LightType::Spot => 1,
-            LightType::Directional => 2,
+            LightType::Point => LIGHT_POINT,
+            LightType::Spot => LIGHT_SPOT,
+            LightType::Directional => LIGHT_DIRECTIONAL,
         };
-        kind | (self.windowed as u32) << 2 | ((self.compose == Compose::Darken) as u32) << 3
+        let windowed = if self.windowed { SPEC_WINDOWED } else { 0 };
+        let darken = if self.compose == Compose::Darken {
+            SPEC_DARKEN
+        } else {
+            0
+        };
+        kind | windowed | darken
     }
 }
 
@@ -345,6 +359,29 @@ impl Lighting {
 mod tests {
     use super::*;
     use glam::Vec3;
+
+    /// The light kinds and spec flags the lighting pass packs are the ones
+    /// its WGSL tests.
+    #[test]
+    fn light_spec_constants_match_the_wgsl() {
+        let source = [
+            crate::frame::COMMON_WGSL,
+            include_str!("procedural.wgsl"),
+            include_str!("scene.wgsl"),
+        ]
+        .join("\n");
+        crate::gpu::wgsl_layout::assert_consts_match(
+            &source,
+            &[
+                ("LIGHT_POINT", LIGHT_POINT),
+                ("LIGHT_SPOT", LIGHT_SPOT),
+                ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
+                ("SPEC_WINDOWED", SPEC_WINDOWED),
+                ("SPEC_DARKEN", SPEC_DARKEN),
+                ("MAX_LIGHTS", crate::frame::MAX_LIGHTS as u32),
+            ],
+        );
+    }
 
     #[test]
     fn light_specs_pack_four_bits_per_light() {

@@ -132,7 +132,7 @@ fn measure_view(
     let lights = scene.light_preset(&view.light)?;
     let rel = cells::view_dir(view);
     let dir = out.join(&rel);
-    let request = measure::compare::FrameRequest {
+    let request = measure::FrameRequest {
         scene,
         camera: &camera,
         lights: &lights,
@@ -164,10 +164,7 @@ fn measure_view(
     }
     let bench = measure::bench::run(
         gpu,
-        scene,
-        &camera,
-        &lights,
-        matrix.size,
+        request,
         &RenderSettings::default(),
         techniques,
         matrix.bench,
@@ -176,10 +173,7 @@ fn measure_view(
     let flicker = match matrix.flicker {
         Some((path, frames)) => measure::flicker::run(
             gpu,
-            scene,
-            &camera,
-            &lights,
-            matrix.size,
+            request,
             techniques,
             &matrix.reference,
             path,

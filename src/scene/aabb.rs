@@ -39,6 +39,17 @@ impl Aabb {
     pub fn size(&self) -> Vec3 {
         self.max - self.min
     }
+    /// A length small against the box (10⁻⁴ of its diagonal): how far a
+    /// depth range or a bounding sphere is widened so that surfaces lying
+    /// on the bounds stay inside it after rounding, whatever the scene's
+    /// scale (the built-ins span 1 m to 2 km).
+    pub fn margin(&self) -> f32 {
+        self.size().length() * 1e-4
+    }
+    /// The radius of the sphere around the box, widened by [`Aabb::margin`].
+    pub fn bounding_radius(&self) -> f32 {
+        self.size().length() * 0.5 + self.margin()
+    }
     pub fn corners(&self) -> [Vec3; 8] {
         std::array::from_fn(|i| {
             Vec3::new(

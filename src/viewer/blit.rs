@@ -386,6 +386,17 @@ mod tests {
     use super::*;
     use egui::{Color32, Pos2, Rect, epaint::Mesh};
 
+    /// `Blit` of blit.wgsl is laid out as `BlitUniform`.
+    #[test]
+    fn the_uniform_matches_its_wgsl_struct() {
+        crate::gpu::wgsl_layout::assert_struct_matches(
+            include_str!("blit.wgsl"),
+            "Blit",
+            crate::field_offsets!(BlitUniform; mode),
+            std::mem::size_of::<BlitUniform>(),
+        );
+    }
+
     fn quad(min: Pos2, max: Pos2, color: Color32, clip: Rect) -> ClippedPrimitive {
         let mut mesh = Mesh::default();
         mesh.add_colored_rect(Rect::from_min_max(min, max), color);

@@ -233,10 +233,12 @@ pub fn compare_with(
     let reference = technique::resolve("raytraced").unwrap();
     measure::compare::run(
         gpu(),
-        scene,
-        camera,
-        &scene.lights,
-        size,
+        shadowlab::measure::FrameRequest {
+            scene: scene,
+            camera: camera,
+            lights: &scene.lights,
+            size: size,
+        },
         &list,
         &reference,
         &out,

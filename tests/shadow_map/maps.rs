@@ -312,10 +312,12 @@ fn soft_shadows_from_an_area_light_match_the_reference() {
         .remove(0);
     let rows = shadowlab::measure::compare::run(
         gpu(),
-        &scene,
-        &scene.camera,
-        &scene.lights,
-        (320, 180),
+        shadowlab::measure::FrameRequest {
+            scene: &scene,
+            camera: &scene.camera,
+            lights: &scene.lights,
+            size: (320, 180),
+        },
         &list,
         &reference,
         &out,

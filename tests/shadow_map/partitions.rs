@@ -91,10 +91,12 @@ fn flicker_over_squares(
     let reference = shadowlab::technique::resolve("raytraced").unwrap();
     shadowlab::measure::flicker::run(
         gpu(),
-        &scene,
-        &scene.camera,
-        &scene.lights,
-        size,
+        shadowlab::measure::FrameRequest {
+            scene: &scene,
+            camera: &scene.camera,
+            lights: &scene.lights,
+            size: size,
+        },
         &list,
         &reference,
         path,

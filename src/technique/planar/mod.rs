@@ -338,3 +338,19 @@ impl ShadowTechnique for PlanarShadows {
         self.uniforms.size()
     }
 }
+
+#[cfg(test)]
+mod wgsl_tests {
+    /// `PlanarUniform` of planar.wgsl is laid out as the Rust struct (up to
+    /// its padding to the uniform stride).
+    #[test]
+    fn the_uniform_matches_its_wgsl_struct() {
+        let source = crate::frame::technique_source(&[include_str!("planar.wgsl")]);
+        crate::gpu::wgsl_layout::assert_struct_matches(
+            &source,
+            "PlanarUniform",
+            crate::field_offsets!(super::PlanarUniform; shadow, plane, params),
+            std::mem::offset_of!(super::PlanarUniform, _pad),
+        );
+    }
+}

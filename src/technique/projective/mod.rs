@@ -425,3 +425,19 @@ impl ShadowTechnique for ProjectiveShadows {
         self.bytes
     }
 }
+
+#[cfg(test)]
+mod wgsl_tests {
+    /// `Projector` of projective.wgsl is laid out as `ProjectorUniform` (up
+    /// to its padding to the uniform stride).
+    #[test]
+    fn the_uniform_matches_its_wgsl_struct() {
+        let source = crate::frame::technique_source(&[include_str!("projective.wgsl")]);
+        crate::gpu::wgsl_layout::assert_struct_matches(
+            &source,
+            "Projector",
+            crate::field_offsets!(super::ProjectorUniform; view_proj, view, texture, params, info),
+            std::mem::offset_of!(super::ProjectorUniform, _pad),
+        );
+    }
+}

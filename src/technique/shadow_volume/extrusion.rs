@@ -293,3 +293,38 @@ impl ShadowVolumeRenderer {
         })
     }
 }
+
+/// Test support: `Face`, `Edge` (its two faces flattened to `f0`, `f1`) and
+/// `Caster` of extrude.wgsl are laid out as the Rust structs the extrusion
+/// uploads.
+#[cfg(test)]
+pub fn assert_buffers_match_wgsl(source: &str) {
+    use super::adjacency::Edge;
+    use super::silhouette::Face;
+    use crate::gpu::wgsl_layout::assert_struct_matches;
+    use std::mem::{offset_of, size_of};
+    assert_struct_matches(
+        source,
+        "Face",
+        crate::field_offsets!(Face; v, caster, plane),
+        size_of::<Face>(),
+    );
+    let faces = offset_of!(Edge, faces);
+    assert_struct_matches(
+        source,
+        "Edge",
+        &[
+            ("a", offset_of!(Edge, a)),
+            ("b", offset_of!(Edge, b)),
+            ("f0", faces),
+            ("f1", faces + size_of::<u32>()),
+        ],
+        size_of::<Edge>(),
+    );
+    assert_struct_matches(
+        source,
+        "Caster",
+        crate::field_offsets!(CasterGpu; light, kind, zfail, caps, _pad),
+        size_of::<CasterGpu>(),
+    );
+}

@@ -536,3 +536,64 @@ impl ShadowTechnique for ShadowVolumeRenderer {
         Ok(views)
     }
 }
+
+#[cfg(test)]
+mod wgsl_tests {
+    use super::{Args, ExtrudeParams, IndirectArgs, VolumeUniform};
+    use crate::gpu::wgsl_layout::assert_struct_matches;
+    use std::mem::{offset_of, size_of};
+
+    /// `Volume` of volume.wgsl is laid out as `VolumeUniform`.
+    #[test]
+    fn the_volume_uniform_matches_its_wgsl_struct() {
+        let source = crate::frame::technique_source(&[include_str!("volume.wgsl")]);
+        assert_struct_matches(
+            &source,
+            "Volume",
+            crate::field_offsets!(VolumeUniform; light, extrusion),
+            size_of::<VolumeUniform>(),
+        );
+    }
+
+    /// The extrusion's `Params` and `Args` (two flattened indirect draws and
+    /// the silhouette counter) of extrude.wgsl are laid out as
+    /// `ExtrudeParams` and `Args`.
+    #[test]
+    fn the_extrusion_structs_match_extrude_wgsl() {
+        let source = include_str!("extrude.wgsl");
+        assert_struct_matches(
+            source,
+            "Params",
+            crate::field_offsets!(ExtrudeParams; edge_count, face_count, dark_cap, _pad),
+            size_of::<ExtrudeParams>(),
+        );
+        let list = |i: usize| i * size_of::<IndirectArgs>();
+        let arg = |i: usize, field: usize| offset_of!(Args, lists) + list(i) + field;
+        let fields = |i| {
+            [
+                arg(i, offset_of!(IndirectArgs, index_count)),
+                arg(i, offset_of!(IndirectArgs, instance_count)),
+                arg(i, offset_of!(IndirectArgs, first_index)),
+                arg(i, offset_of!(IndirectArgs, base_vertex)),
+                arg(i, offset_of!(IndirectArgs, first_instance)),
+            ]
+        };
+        let names = ["count", "instances", "first", "base", "first_instance"];
+        let names: Vec<String> = ["zpass", "zfail"]
+            .iter()
+            .flat_map(|l| names.iter().map(move |n| format!("{l}_{n}")))
+            .collect();
+        let mut rust: Vec<(&str, usize)> = names
+            .iter()
+            .map(String::as_str)
+            .zip(fields(0).into_iter().chain(fields(1)))
+            .collect();
+        rust.push(("silhouette_edges", offset_of!(Args, silhouette_edges)));
+        assert_struct_matches(source, "Args", &rust, size_of::<Args>());
+        crate::gpu::wgsl_layout::assert_consts_match(
+            source,
+            &[("NO_FACE", super::adjacency::NO_FACE)],
+        );
+        super::extrusion::assert_buffers_match_wgsl(source);
+    }
+}

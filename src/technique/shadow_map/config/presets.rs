@@ -16,7 +16,7 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "hard",
-        summary: "nearest texel, no filtering; normal offset ½ texel (no kernel averages its acne away: ¼ left 0.10 % interior false shadow on teapot/sun at 640×360, ½ 0.006 %)",
+        summary: "nearest texel, no filtering; normal offset ½ texel (no kernel averages its acne away)",
         values: &[
             (FILTER.name, "hard"),
             (NORMAL_OFFSET_DIRECTIONAL.name, "0.5"),
@@ -82,7 +82,7 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "csm",
-        summary: "4 stabilised cascades of 1024² fitted to the view frustum (the memory of one 2048² map), λ 0.95 (Sascha Willems' sample), each pixel in the finest map that holds it (select=map: dolly flicker on city/default/sun at 640×360 0.0128 → 0.0015 %), 5 % blended (a pixel whose cascades disagree flips where the blend crosses ½, and the band moves with the camera: 10 % → 5 % took dolly flicker on landscape/flyover/sun at 640×360 over 16 frames from 0.0084 to 0.0064 %, seams unchanged), normal offset ½ texel of each cascade (1 pushed lookups at building corners into the next wall's shadow: 0.12 % interior false shadow on city/street/sun at 640×360, ½: 0.004 %)",
+        summary: "4 stabilised cascades of 1024² fitted to the view frustum (the memory of one 2048² map), λ 0.95 (Sascha Willems' sample), each pixel in the finest map that holds it (select=map), 5 % blended, normal offset ½ texel of each cascade",
         values: &[
             (CASCADES.name, "4"),
             (SIZE.name, "1024"),
@@ -134,7 +134,7 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "virtual",
-        summary: "virtual shadow map: 16384² per clipmap level (directional) or view, 128² pages from a pool of 4096, cached across frames, 3×3 PCF grid, the family's slope bias (a smaller one leaves the outer taps of the kernel comparing a lit surface against its own depth: graded acne across lit floors)",
+        summary: "virtual shadow map: 16384² per clipmap level (directional) or view, 128² pages from a pool of 4096, cached across frames, 3×3 PCF grid, the family's slope bias",
         values: &[(PAGING.name, "virtual")],
     },
     Preset {

@@ -167,12 +167,7 @@ mod wgsl_tests {
     /// The family's shader as the device gets it, after the frame's shared
     /// declarations.
     fn shadow_map_wgsl() -> String {
-        [
-            crate::frame::COMMON_WGSL,
-            crate::frame::GBUFFER_WGSL,
-            &super::super::pipelines::module_source(),
-        ]
-        .join("\n")
+        crate::frame::technique_source(&[&super::super::pipelines::module_source()])
     }
 
     /// `ShadowMap` of shadow_map.wgsl is laid out as `ShadowMapUniform`

@@ -132,7 +132,8 @@ pub fn cascade_setup(
         .unwrap_or_default();
     // View space looks down −z: depth range from the scene's z extent, so
     // that every caster is in every cascade's depth range.
-    let (n, f) = ((-scene_ls.max.z - 1e-3).max(0.0), -scene_ls.min.z + 1e-3);
+    let pad = scene_ls.margin();
+    let (n, f) = ((-scene_ls.max.z - pad).max(0.0), -scene_ls.min.z + pad);
     let mut faces = vec![];
     let mut texel_scales = vec![];
     for (i, w) in splits.windows(2).enumerate() {

@@ -392,6 +392,31 @@ fn decode(bytes: &[u8], cascades: usize, samples: bool, supports: bool) -> Optio
 mod tests {
     use super::*;
 
+    /// `ReduceParams`, the block record and the word layout of
+    /// depth_bounds.wgsl are the ones declared here.
+    #[test]
+    fn the_reduction_interface_matches_its_wgsl() {
+        use crate::gpu::wgsl_layout::{assert_consts_match, assert_struct_matches, wgsl_struct};
+        let source = include_str!("depth_bounds.wgsl");
+        assert_struct_matches(
+            source,
+            "ReduceParams",
+            crate::field_offsets!(ReduceParams; view_z, light_view, split, blocks, spot),
+            std::mem::size_of::<ReduceParams>(),
+        );
+        let (fields, size) = wgsl_struct(source, "BlockBounds");
+        assert_eq!(fields.iter().map(|f| f.1).collect::<Vec<_>>(), [0, 16]);
+        assert_eq!(size as u64, BLOCK_RECORD_BYTES);
+        assert_consts_match(
+            source,
+            &[
+                ("MAX_CASCADES", MAX_CASCADES as u32),
+                ("SUPPORT_WORD", SUPPORT_WORD as u32),
+                ("TILE", TILE),
+            ],
+        );
+    }
+
     /// The WGSL's `ordered` mapping, for the test.
     fn ordered(f: f32) -> u32 {
         let b = f.to_bits();

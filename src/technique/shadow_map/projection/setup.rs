@@ -59,7 +59,7 @@ pub struct CascadeSplit {
 pub fn light_view_of_scene(dir: Vec3, scene_bounds: &Aabb) -> (Mat4, Aabb) {
     let dir = dir.normalize();
     let c = scene_bounds.center();
-    let r = scene_bounds.size().length() * 0.5 + 1e-3;
+    let r = scene_bounds.bounding_radius();
     let view = glam::camera::rh::view::look_to_mat4(c - dir * (2.0 * r), dir, up_for(dir));
     (view, scene_bounds.transformed(view))
 }
@@ -258,9 +258,10 @@ pub fn clip_to_bounds(corners: &[Vec3; 8], bounds: &Aabb) -> Vec<Vec3> {
 
 /// The row over light-view (x, y, z, 1) that gives a warped map's stored
 /// depth: linear along the light, 0 nearest it and 1 farthest over the
-/// scene's light-view bounds `scene_ls` (widened by 1 mm each way).
+/// scene's light-view bounds `scene_ls` (widened by their margin each way).
 pub fn linear_depth_row(scene_ls: &Aabb) -> Vec4 {
-    let (z_min, z_max) = (scene_ls.min.z - 1e-3, scene_ls.max.z + 1e-3);
+    let pad = scene_ls.margin();
+    let (z_min, z_max) = (scene_ls.min.z - pad, scene_ls.max.z + pad);
     (Vec4::W * z_max - Vec4::Z) / (z_max - z_min)
 }
 
@@ -284,7 +285,7 @@ pub struct MapFit {
 /// How far from the camera its view of the scene can reach: to the far
 /// side of the scene's bounding sphere, at most the far plane.
 pub fn view_reach(camera: &Camera, scene_bounds: &Aabb) -> f32 {
-    let r = scene_bounds.size().length() * 0.5 + 1e-3;
+    let r = scene_bounds.bounding_radius();
     (camera.eye.distance(scene_bounds.center()) + r).min(camera.far)
 }
 
@@ -457,7 +458,8 @@ pub fn directional_setup(
     });
     let Window { half, centre: c } = stabilized(fitted.need, &kept, fitted.hold);
     // View space looks down −z: depth range from the scene's z extent.
-    let (n, f) = (-scene_ls.max.z - 1e-3, -scene_ls.min.z + 1e-3);
+    let pad = scene_ls.margin();
+    let (n, f) = (-scene_ls.max.z - pad, -scene_ls.min.z + pad);
     let (lo, hi) = (c - half, c + half);
     let setup = LightSetup {
         faces: vec![orthographic(lo.x, hi.x, lo.y, hi.y, n.max(0.0), f) * view],

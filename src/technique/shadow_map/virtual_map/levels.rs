@@ -144,8 +144,9 @@ impl VirtualLayout {
     ) -> VirtualLayout {
         let (view, scene_ls) = setup::light_view_of_scene(dir, scene_bounds);
         let (centre, size) = (scene_ls.center(), scene_ls.max - scene_ls.min);
-        let half = 0.5 * size.x.max(size.y) as f64 + 1e-3;
-        let (near, far) = (-scene_ls.max.z - 1e-3, -scene_ls.min.z + 1e-3);
+        let pad = scene_ls.margin();
+        let half = 0.5 * size.x.max(size.y) as f64 + pad as f64;
+        let (near, far) = (-scene_ls.max.z - pad, -scene_ls.min.z + pad);
         let (cx, cy) = (centre.x as f64, centre.y as f64);
         let proj = glam::dcamera::rh::proj::directx::orthographic(
             cx - half,

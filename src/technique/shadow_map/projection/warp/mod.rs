@@ -50,7 +50,7 @@ pub fn warp_light_view(camera: &Camera, light_dir: Vec3, scene: &Aabb) -> Mat4 {
     let l = light_dir.normalize();
     let v = (camera.target - camera.eye).normalize();
     let up = (v - l * l.dot(v)).normalize();
-    let r = scene.size().length() * 0.5 + 1e-3;
+    let r = scene.bounding_radius();
     glam::camera::rh::view::look_to_mat4(scene.center() - l * (2.0 * r), l, up)
 }
 
@@ -271,11 +271,8 @@ pub(super) mod tests {
         // The stored depth is linear along the light: 3 m towards the light
         // is 3 / (the scene's extent along the light) less, anywhere.
         let lin = |p: Vec3| w.depth_row.dot(p.extend(1.0));
-        let extent = scene
-            .transformed(warp_light_view(&cam, light, &scene))
-            .size()
-            .z
-            + 2e-3;
+        let ls = scene.transformed(warp_light_view(&cam, light, &scene));
+        let extent = ls.size().z + 2.0 * ls.margin();
         for ground in [Vec3::new(5.0, 0.0, 10.0), Vec3::new(-30.0, 4.0, -40.0)] {
             let step = lin(ground) - lin(ground - light.normalize() * 3.0);
             assert!(

@@ -170,7 +170,8 @@ mod tests {
                 < 1e-4
         );
         let step = lin(ground) - lin(up);
-        let extent = scene.transformed(view).size().z + 2e-3;
+        let ls = scene.transformed(view);
+        let extent = ls.size().z + 2.0 * ls.margin();
         assert!((step - 3.0 / extent).abs() < 1e-4, "{step}");
         // The light along the view: no trapezoid.
         let (view_along, _) = light_view_of_scene(cam.target - cam.eye, &scene);
