@@ -11,9 +11,16 @@ pub const LIGHT_SIZE: ParamSpec = ParamSpec::float(
     0.0,
     400.0,
     1.0,
-    "pcss: light size, as the penumbra width in texels per unit of (d_receiver − d_blocker)/d_blocker",
+    "pcss under a light without an area, with hard_light_penumbra: the pretended light size, as the penumbra width in texels per unit of (d_receiver − d_blocker)/d_blocker",
 )
 .when(Condition::Is("filter", &["pcss"]));
+
+pub const HARD_LIGHT_PENUMBRA: ParamSpec = ParamSpec::boolean(
+    "hard_light_penumbra",
+    false,
+    "pcss and varwidth under a light without an area: false keeps the shadow as hard as that light casts it (a kernel of ½ texel, as the ray-traced truth has no penumbra there); true draws the filter's penumbra anyway, as if the light had the size light_size (pcss) or varwidth_scale (varwidth) gives; a light with an area always sets the penumbra itself (pcss) or lets the filter draw it (varwidth)",
+)
+.when(Condition::Is("filter", &["pcss", "varwidth"]));
 
 pub const BLOCKER_SEARCH: ParamSpec = ParamSpec::float(
     "blocker_search",

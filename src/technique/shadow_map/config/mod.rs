@@ -8,14 +8,14 @@ pub mod paging;
 pub mod partition;
 pub(super) mod presets;
 
-use crate::scene::LightType;
+use crate::scene::{Light, LightType};
 use crate::technique::params::{CasterAlpha, Condition, LightKinds, choice_enum};
 use crate::technique::{ParamSpec, ParamValues};
 use anyhow::Result;
 
 use self::filter::{
-    BLEEDING_REDUCTION, BLOCKER_SEARCH, BLUR, EXPONENT, EXPONENT_NEGATIVE, LIGHT_SIZE, MOMENT_BIAS,
-    VARWIDTH_EXPONENT, VARWIDTH_SCALE,
+    BLEEDING_REDUCTION, BLOCKER_SEARCH, BLUR, EXPONENT, EXPONENT_NEGATIVE, HARD_LIGHT_PENUMBRA,
+    LIGHT_SIZE, MOMENT_BIAS, VARWIDTH_EXPONENT, VARWIDTH_SCALE,
 };
 use self::paging::{
     CLIPMAP_LEVELS, PAGE_SIZE, PAGING, POOL, REFINE_STEPS, TEXELS_PER_PIXEL, VIRTUAL_SIZE,
@@ -157,7 +157,7 @@ pub const SIZE: ParamSpec = ParamSpec::int(
     2048,
     64,
     16384,
-    "map side in texels (per cube face for point lights)",
+    "map side in texels (per cube face for point lights, per cascade for directional ones, per sample of an area light); where cascades or area maps do not apply (cascades under a point or spot light, area maps under a light without an area), the light's one map takes their texels: side × √count",
 );
 
 pub const FORMAT: ParamSpec = ParamSpec::choice_of::<DepthFormat>(
@@ -344,6 +344,7 @@ pub const PARAMS: &[ParamSpec] = &[
     FAR,
     FOV,
     LIGHT_SIZE,
+    HARD_LIGHT_PENUMBRA,
     BLOCKER_SEARCH,
     VARWIDTH_SCALE,
     VARWIDTH_EXPONENT,
@@ -409,6 +410,8 @@ pub struct ShadowMapConfig {
     pub far: f32,
     pub fov_deg: f32,
     pub light_size: f32,
+    /// Whether pcss and varwidth draw a penumbra under a light without an area.
+    pub hard_light_penumbra: bool,
     pub blocker_search: f32,
     pub varwidth_scale: f32,
     pub varwidth_exponent: f32,
@@ -475,6 +478,7 @@ impl ShadowMapConfig {
             far: p.float(&FAR)?,
             fov_deg: p.float(&FOV)?,
             light_size: p.float(&LIGHT_SIZE)?,
+            hard_light_penumbra: p.flag(&HARD_LIGHT_PENUMBRA)?,
             blocker_search: p.float(&BLOCKER_SEARCH)?,
             varwidth_scale: p.float(&VARWIDTH_SCALE)?,
             varwidth_exponent: p.float(&VARWIDTH_EXPONENT)?,
@@ -511,6 +515,26 @@ impl ShadowMapConfig {
         }
     }
 
+    /// The side of the maps rendered for `light`, at most `max` (the
+    /// device's largest texture): `size`, except where a partition does not
+    /// apply to the light and its one map takes the partition's texels:
+    /// cascades split only a directional light's view, so a local light gets
+    /// one map of the cascades' memory, side × √cascades (4 cascades of
+    /// 1024²: one 2048² map per face); `area` maps sample only a light with
+    /// an area, so a light without one gets the samples' texels in one map,
+    /// side × √area_maps (16 of 1024²: one 4096² map).
+    pub fn map_side(&self, light: &Light, max: u32) -> u32 {
+        let count = if self.area && light.area.is_none() {
+            self.area_maps
+        } else if light.kind != LightType::Directional {
+            self.cascades.count
+        } else {
+            1
+        };
+        let side = (self.size as f32 * (count.max(1) as f32).sqrt()) as u32;
+        side.min(max).max(self.size)
+    }
+
     /// Whether the lookup is edge-masked: asked for, with a filter of taps.
     pub fn edge_masked(&self) -> bool {
         self.edge_mask && self.filter.uses_taps()
@@ -542,13 +566,45 @@ impl ShadowMapConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
 
     fn reach(settings: &[(&str, &str)]) -> f32 {
+        config(settings).kernel_reach()
+    }
+
+    fn config(settings: &[(&str, &str)]) -> ShadowMapConfig {
         let mut p = ParamValues::defaults(PARAMS);
         for (k, v) in settings {
             p.set(k, v).unwrap();
         }
-        ShadowMapConfig::parse(&p).unwrap().kernel_reach()
+        ShadowMapConfig::parse(&p).unwrap()
+    }
+
+    /// Cascades keep their side under the sun; a local light gets one map
+    /// of their memory (4 × 1024² = 2048², 2 × 1024² ≈ 1448²), at most the
+    /// device's side; one cascade changes nothing; area maps under a light
+    /// without an area become one map of their texels (16 × 1024² = 4096²).
+    #[test]
+    fn a_partition_that_does_not_apply_gives_its_texels_to_one_map() {
+        let sun = Light::directional(Vec3::NEG_Y, 1.0);
+        let spot = Light::spot(Vec3::Y, Vec3::ZERO, 1.0, 20.0, 30.0);
+        let point = Light::point(Vec3::Y, 1.0);
+        let csm = config(&[("cascades", "4"), ("size", "1024")]);
+        assert_eq!(csm.map_side(&sun, 16384), 1024);
+        assert_eq!(csm.map_side(&spot, 16384), 2048);
+        assert_eq!(csm.map_side(&point, 16384), 2048);
+        assert_eq!(csm.map_side(&point, 1536), 1536);
+        let two = config(&[("cascades", "2"), ("size", "1024")]);
+        assert_eq!(two.map_side(&spot, 16384), 1448);
+        let one = config(&[("size", "1024")]);
+        assert_eq!(one.map_side(&spot, 16384), 1024);
+        let area = config(&[("area", "true"), ("size", "1024")]);
+        assert_eq!(area.map_side(&spot, 16384), 4096);
+        let soft = Light {
+            area: Some(crate::scene::LightArea::Sphere { radius: 0.2 }),
+            ..spot
+        };
+        assert_eq!(area.map_side(&soft, 16384), 1024);
     }
 
     /// The reach is the farthest tap plus a 2×2 tap's half texel, by hand:

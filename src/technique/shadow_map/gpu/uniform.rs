@@ -5,7 +5,7 @@ use crate::scene::Light;
 use crate::technique::shadow_map::config::{CullFace, DepthFormat, Select, ShadowMapConfig};
 use crate::technique::shadow_map::projection::setup::LightSetup;
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, UVec4, Vec3, Vec4};
+use glam::{Mat4, UVec4, Vec4};
 
 /// The most faces (cube) or cascades one light's maps have.
 pub const MAX_FACES: usize = 8;
@@ -41,17 +41,25 @@ pub struct ShadowMapUniform {
 }
 
 impl ShadowMapUniform {
-    /// The fields the parameters, the light's position and the maps' culling
+    /// The fields the parameters, the light and the maps' culling
     /// (`CullFace::for_shape`) fix: light, kernel, soft-shadow and moment
-    /// terms; the rest zero.
+    /// terms; the rest zero. Under a light without an area the soft filters
+    /// get no penumbra unless `hard_light_penumbra` pretends one.
     pub fn with_filter(
         c: &ShadowMapConfig,
         normal_offset: f32,
-        light_position: Vec3,
+        light: &Light,
         cull: CullFace,
     ) -> ShadowMapUniform {
+        let penumbra = if light.area.is_some() || c.hard_light_penumbra {
+            1.0
+        } else {
+            0.0
+        };
         ShadowMapUniform {
-            light: light_position.extend((cull == CullFace::Solids) as u32 as f32),
+            light: light
+                .position
+                .extend((cull == CullFace::Solids) as u32 as f32),
             kernel: Vec4::new(
                 c.radius,
                 normal_offset,
@@ -59,8 +67,8 @@ impl ShadowMapUniform {
                 c.normal_offset_slope as u32 as f32,
             ),
             soft: Vec4::new(
-                c.light_size,
-                c.varwidth_scale,
+                c.light_size * penumbra,
+                c.varwidth_scale * penumbra,
                 c.varwidth_exponent,
                 c.blocker_search,
             ),
@@ -143,7 +151,7 @@ pub fn slot_data(
             cascade_view_z: t.fit_view.row(2),
             warp: light.direction.normalize_or_zero().extend(0.0),
             warp_depth: setup.warp_depth.unwrap_or(Vec4::ZERO),
-            ..ShadowMapUniform::with_filter(c, t.normal_offset, light.position, t.cull)
+            ..ShadowMapUniform::with_filter(c, t.normal_offset, light, t.cull)
         };
         for f in 0..MAX_FACES as u32 {
             for k in 0..3u32 {

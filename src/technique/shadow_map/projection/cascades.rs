@@ -65,12 +65,14 @@ fn within_scene(square: Window, scene_ls: &Aabb, size: u32) -> Window {
     .snapped(size)
 }
 
-/// The view depths the cascades partition: the camera's near plane to the
+/// The view depths the cascades partition (seen with `aspect`): from the
+/// camera's near plane, or the scene's box when the camera is outside it, to the
 /// last split of `cascades` (its `max_distance`, else the camera's view of
 /// the scene), or with SDSM what the camera saw within the same limit
 /// (stabilised: rounded outwards to eighths of an octave).
 pub fn partitioned_depths(
     camera: &Camera,
+    aspect: f32,
     scene_bounds: &Aabb,
     cascades: &Cascades,
     seen: Option<&SeenBounds>,
@@ -104,10 +106,35 @@ pub fn partitioned_depths(
             } else {
                 reach
             };
-            (camera.near, far)
+            // From a camera outside the scene's box, the depths before the
+            // box hold nothing to shadow: the splits start at the least
+            // view depth a point of the box can have inside the frustum,
+            // its distance times the cosine of the frustum's corner ray
+            // (stabilised: rounded down, as the reach is up). Neither turns
+            // with the camera, so no cascade is spent on empty space.
+            let closest = camera
+                .eye
+                .clamp(scene_bounds.min, scene_bounds.max)
+                .distance(camera.eye);
+            let gap = closest * frustum_corner_cos(camera, aspect) - scene_bounds.margin();
+            let near = if cascades.stabilize {
+                quantize_down(gap.max(camera.near)).max(camera.near)
+            } else {
+                gap.max(camera.near)
+            };
+            (near.min(far), far)
         }
     };
     (near, far.max(near * 1.01))
+}
+
+/// The cosine of the angle between a camera's axis and the rays through
+/// its frame's corners: a point at distance d inside the frustum lies at a
+/// view depth of at least d times this.
+fn frustum_corner_cos(camera: &Camera, aspect: f32) -> f32 {
+    let tan_y = (camera.fov_y_deg.to_radians() * 0.5).tan();
+    let tan_diagonal = tan_y * (1.0 + aspect * aspect).sqrt();
+    1.0 / (1.0 + tan_diagonal * tan_diagonal).sqrt()
 }
 
 /// The light setup of a directional light travelling along `dir` with
@@ -124,7 +151,7 @@ pub fn cascade_setup(
 ) -> LightSetup {
     use glam::camera::rh::proj::directx::orthographic;
     let (view, scene_ls) = light_view_of_scene(dir, scene_bounds);
-    let (near, far) = partitioned_depths(camera, scene_bounds, cascades, seen);
+    let (near, far) = partitioned_depths(camera, aspect, scene_bounds, cascades, seen);
     let splits = split_distances(near, far, cascades.count, cascades.split_lambda);
     let samples = seen
         .filter(|_| cascades.fit == Fit::Samples)

@@ -185,6 +185,7 @@ impl ShadowMapTechnique {
             (Fit::Depth, Some(seen)) => {
                 let (near, far) = cascades::partitioned_depths(
                     ctx.fit_camera,
+                    ctx.fit_frame.width() as f32 / ctx.fit_frame.height() as f32,
                     &ctx.scene_gpu.bounds,
                     c,
                     Some(seen),

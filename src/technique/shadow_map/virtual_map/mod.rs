@@ -474,7 +474,7 @@ fn page_terms(
         ..ShadowMapUniform::with_filter(
             c,
             normal_offset,
-            ctx.light.position,
+            ctx.light,
             c.cull.for_shape(layout.shape()),
         )
     };
