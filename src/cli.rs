@@ -1,7 +1,7 @@
 //! The command line (clap): `scenes`, `techniques`, `export`, `render`,
 //! `compare`, `bench`, `report`, `view` and the hidden `cli-markdown` (the
-//! guide's CLI reference); each command parses its arguments and calls the
-//! library.
+//! guide's CLI reference) and `guide-figures` (its failure figures); each
+//! command parses its arguments and calls the library.
 
 use crate::args::ViewArgs;
 use crate::headless::{self, FrameRecord, HeadlessFrame};
@@ -55,6 +55,13 @@ pub enum Command {
     /// The command-line reference as Markdown (the guide's CLI page).
     #[command(hide = true)]
     CliMarkdown,
+    /// Renders the guide's failure figures and their captions into DIR
+    /// (images/failure-*.png, generated/failure-*.md).
+    #[command(hide = true)]
+    GuideFigures {
+        #[arg(long, default_value = "docs/book/src")]
+        out: std::path::PathBuf,
+    },
 }
 
 #[derive(Args)]
@@ -228,6 +235,9 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::CliMarkdown => {
             print!("{}", clap_markdown::help_markdown::<Cli>());
             Ok(())
+        }
+        Command::GuideFigures { out } => {
+            crate::guide::write_figures(&crate::gpu::GpuContext::new(None)?, &out)
         }
         Command::Export(a) => {
             let s = scene::load(&a.scene)?;

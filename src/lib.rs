@@ -9,6 +9,7 @@ pub mod cli;
 pub mod frame;
 pub mod fuzz_input;
 pub mod gpu;
+pub mod guide;
 pub mod headless;
 pub mod measure;
 pub mod renderer;

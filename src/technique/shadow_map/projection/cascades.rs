@@ -110,15 +110,18 @@ pub fn partitioned_depths(
             // box hold nothing to shadow: the splits start at the least
             // view depth a point of the box can have inside the frustum,
             // its distance times the cosine of the frustum's corner ray
-            // (stabilised: rounded down, as the reach is up). Neither turns
-            // with the camera, so no cascade is spent on empty space.
+            // (stabilised: rounded down to a power of two, so that the
+            // splits stay put while the camera moves, as the reach's
+            // rounding up keeps them). Neither turns with the camera, so
+            // no cascade is spent on empty space.
             let closest = camera
                 .eye
                 .clamp(scene_bounds.min, scene_bounds.max)
                 .distance(camera.eye);
             let gap = closest * frustum_corner_cos(camera, aspect) - scene_bounds.margin();
             let near = if cascades.stabilize {
-                quantize_down(gap.max(camera.near)).max(camera.near)
+                let octave = 2f32.powf(gap.max(camera.near).log2().floor());
+                octave.max(camera.near)
             } else {
                 gap.max(camera.near)
             };
