@@ -141,8 +141,17 @@ impl FrameLayouts {
                     entries,
                 })
             };
-            let gbuffer_texture =
-                |binding| texture_entry(binding, wgpu::TextureViewDimension::D2, false);
+            // The G-buffer and the opacity maps are read by fragment and
+            // compute passes (the irregular z-buffer's sample tests).
+            let fc = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
+            let gbuffer_texture = |binding| {
+                crate::gpu::sampled_texture_entry(
+                    binding,
+                    fc,
+                    wgpu::TextureSampleType::Float { filterable: false },
+                    wgpu::TextureViewDimension::D2,
+                )
+            };
             FrameLayouts {
                 frame: layout(
                     "frame",
@@ -152,7 +161,7 @@ impl FrameLayouts {
                     "objects",
                     &[
                         storage_entry(0, vf | wgpu::ShaderStages::COMPUTE, true),
-                        storage_entry(1, wgpu::ShaderStages::FRAGMENT, true),
+                        storage_entry(1, fc, true),
                     ],
                 ),
                 gbuffer: layout(
@@ -162,7 +171,7 @@ impl FrameLayouts {
                         gbuffer_texture(1),
                         crate::gpu::sampled_texture_entry(
                             2,
-                            wgpu::ShaderStages::FRAGMENT,
+                            fc,
                             wgpu::TextureSampleType::Uint,
                             wgpu::TextureViewDimension::D2,
                         ),

@@ -4,6 +4,7 @@
 //! light that reaches the surface seen in each pixel) that the lighting pass
 //! composes as `ambient + visibility × (diffuse + specular)`.
 
+pub mod irregular;
 pub mod light_space;
 pub mod listing;
 pub mod none;
@@ -255,6 +256,7 @@ pub static FAMILIES: &[&Family] = &[
     &projective::FAMILY,
     &shadow_map::FAMILY,
     &shadow_volume::FAMILY,
+    &irregular::FAMILY,
 ];
 
 /// Pipeline layout of a technique pass: frame uniform (group 0), object

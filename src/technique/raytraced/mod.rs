@@ -25,7 +25,7 @@ const SAMPLES: ParamSpec = ParamSpec::int(
     4096,
     "shadow rays per pixel for area lights (stratified); hard lights use one",
 );
-const OFFSET_ULPS: ParamSpec = ParamSpec::float(
+pub const OFFSET_ULPS: ParamSpec = ParamSpec::float(
     "offset_ulps",
     64.0,
     1.0,

@@ -1,0 +1,90 @@
+//! The caster triangles the irregular z-buffer tests its samples against:
+//! every shadow-casting object's triangles in world space, with their
+//! texture coordinates and object (for cut-outs), listed once per scene.
+
+use crate::scene::Scene;
+use bytemuck::{Pod, Zeroable};
+use glam::Vec4;
+
+/// One caster triangle as `CasterTriangle` of irregular.wgsl reads it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct CasterTriangle {
+    /// World positions; w the vertex's u.
+    pub a: Vec4,
+    pub b: Vec4,
+    pub c: Vec4,
+    /// The vertices' v; w the object index (bits).
+    pub v: Vec4,
+}
+
+/// The triangles of `scene`'s shadow casters. The back faces a
+/// double-sided material added are left out: the exact test does not
+/// depend on a triangle's winding, so they would test every sample twice.
+pub fn caster_triangles(scene: &Scene) -> Vec<CasterTriangle> {
+    let mut out = vec![];
+    for (index, o) in scene.objects.iter().enumerate() {
+        if !o.casts_shadow || o.shadow_plane {
+            continue;
+        }
+        let m = &scene.meshes[o.mesh];
+        let front_faces = if m.sides_doubled {
+            m.triangle_count() / 2
+        } else {
+            m.triangle_count()
+        };
+        let object = f32::from_bits(index as u32);
+        for t in m.indices.chunks_exact(3).take(front_faces) {
+            let corner = |k: usize| {
+                let i = t[k] as usize;
+                let uv = m.uvs.get(i).copied().unwrap_or_default();
+                (
+                    o.transform.transform_point3(m.positions[i]).extend(uv.x),
+                    uv.y,
+                )
+            };
+            let ((a, va), (b, vb), (c, vc)) = (corner(0), corner(1), corner(2));
+            out.push(CasterTriangle {
+                a,
+                b,
+                c,
+                v: Vec4::new(va, vb, vc, object),
+            });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin;
+
+    /// Every caster triangle is listed once, in world space, with its
+    /// object; a double-sided material's added back faces are not.
+    #[test]
+    fn casters_are_listed_once_in_world_space() {
+        let scene = builtin::by_name("foliage").unwrap().unwrap();
+        let triangles = caster_triangles(&scene);
+        let expected: usize = scene
+            .objects
+            .iter()
+            .filter(|o| o.casts_shadow && !o.shadow_plane)
+            .map(|o| {
+                let m = &scene.meshes[o.mesh];
+                m.triangle_count() / if m.sides_doubled { 2 } else { 1 }
+            })
+            .sum();
+        assert_eq!(triangles.len(), expected);
+        assert!(scene.meshes.iter().any(|m| m.sides_doubled));
+        let t = &triangles[0];
+        let object = t.v.w.to_bits() as usize;
+        let o = &scene.objects[object];
+        let m = &scene.meshes[o.mesh];
+        let first = o
+            .transform
+            .transform_point3(m.positions[m.indices[0] as usize]);
+        assert!((t.a.truncate() - first).length() < 1e-5);
+        assert!(o.casts_shadow);
+    }
+}

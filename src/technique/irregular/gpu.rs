@@ -1,0 +1,173 @@
+//! The irregular z-buffer's GPU side: its uniform, bind-group layout and
+//! pipelines (shared per device), and the buffers one instance owns.
+
+use crate::frame::MASK_FORMAT;
+use crate::gpu::GpuContext;
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, UVec4, Vec4};
+
+/// Cube faces of a local light's grid; a directional light has one face.
+pub const MAX_FACES: usize = 6;
+/// Words of the `aux` buffer's header (`AUX_LARGE_LIST` of irregular.wgsl):
+/// counters, the list-length histogram and the per-face bounds.
+pub const AUX_HEADER_WORDS: u64 = 64;
+/// The header's counters and histogram (`AUX_*` of irregular.wgsl).
+pub const AUX_SAMPLES: usize = 0;
+pub const AUX_PAIRS: usize = 1;
+pub const AUX_TESTS: usize = 2;
+pub const AUX_LARGE: usize = 3;
+pub const AUX_HISTOGRAM: usize = 8;
+pub const HISTOGRAM_BINS: usize = 32;
+/// Workgroups of the large-triangle pass (`irr.work.z`).
+pub const LARGE_WORKGROUPS: u32 = 256;
+/// Threads per workgroup of every compute pass.
+pub const WORKGROUP: u32 = 64;
+
+/// `Irregular` of irregular.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct IrregularUniform {
+    pub views: [Mat4; MAX_FACES],
+    pub light: Vec4,
+    pub grid: UVec4,
+    pub work: UVec4,
+    pub offset: Vec4,
+}
+
+/// The family's layout and pipelines, shared per device.
+pub struct IrregularShared {
+    pub layout: wgpu::BindGroupLayout,
+    pub bounds: wgpu::RenderPipeline,
+    pub bin: wgpu::RenderPipeline,
+    pub mask: wgpu::RenderPipeline,
+    pub histogram: wgpu::ComputePipeline,
+    pub triangles: wgpu::ComputePipeline,
+    pub large: wgpu::ComputePipeline,
+}
+
+impl IrregularShared {
+    pub fn new(gpu: &GpuContext) -> IrregularShared {
+        let device = &gpu.device;
+        let stages = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
+        let storage = |binding, read_only| crate::gpu::storage_entry(binding, stages, read_only);
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("irregular"),
+            entries: &[
+                crate::gpu::uniform_entry(gpu, 0, stages, false),
+                storage(1, false),
+                storage(2, false),
+                storage(3, false),
+                storage(4, true),
+                storage(5, false),
+            ],
+        });
+        let module =
+            crate::frame::technique_shader(gpu, "irregular", &[include_str!("irregular.wgsl")]);
+        let pipeline_layout = super::super::pipeline_layout(gpu, "irregular", &layout);
+        let fullscreen = |fs: &str, write_mask| {
+            super::super::fullscreen_pipeline(
+                gpu,
+                fs,
+                &pipeline_layout,
+                &module,
+                fs,
+                &[Some(wgpu::ColorTargetState {
+                    format: MASK_FORMAT,
+                    blend: None,
+                    write_mask,
+                })],
+                Some(super::super::frame_depth_read(Default::default())),
+            )
+        };
+        let compute = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        IrregularShared {
+            bounds: fullscreen("fs_bounds", wgpu::ColorWrites::empty()),
+            bin: fullscreen("fs_bin", wgpu::ColorWrites::empty()),
+            mask: fullscreen("fs_mask", wgpu::ColorWrites::RED),
+            histogram: compute("cs_histogram"),
+            triangles: compute("cs_triangles"),
+            large: compute("cs_large"),
+            layout,
+        }
+    }
+}
+
+/// The (x, y) workgroups that cover `n` invocations of [`WORKGROUP`]
+/// threads within the per-dimension limit (the shaders index y·x·64 + x).
+pub fn workgroups_for(n: u64) -> (u32, u32) {
+    let groups = n.div_ceil(WORKGROUP as u64).max(1);
+    let x = groups.min(65535);
+    (x as u32, groups.div_ceil(x) as u32)
+}
+
+/// A storage buffer of `size` bytes (at least 16).
+pub fn storage_buffer(gpu: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16).next_multiple_of(4),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::wgsl_layout::{assert_consts_match, assert_struct_matches};
+
+    fn source() -> String {
+        crate::frame::technique_source(&[include_str!("irregular.wgsl")])
+    }
+
+    /// `Irregular` and `CasterTriangle` of irregular.wgsl are laid out as
+    /// the Rust structs, and the header's words are the ones read back.
+    #[test]
+    fn the_gpu_interface_matches_its_wgsl() {
+        let source = source();
+        assert_struct_matches(
+            &source,
+            "Irregular",
+            crate::field_offsets!(IrregularUniform; views, light, grid, work, offset),
+            std::mem::size_of::<IrregularUniform>(),
+        );
+        assert_struct_matches(
+            &source,
+            "CasterTriangle",
+            crate::field_offsets!(super::super::casters::CasterTriangle; a, b, c, v),
+            std::mem::size_of::<super::super::casters::CasterTriangle>(),
+        );
+        assert_consts_match(
+            &source,
+            &[
+                ("AUX_SAMPLES", AUX_SAMPLES as u32),
+                ("AUX_PAIRS", AUX_PAIRS as u32),
+                ("AUX_TESTS", AUX_TESTS as u32),
+                ("AUX_LARGE", AUX_LARGE as u32),
+                ("AUX_HISTOGRAM", AUX_HISTOGRAM as u32),
+                ("HISTOGRAM_BINS", HISTOGRAM_BINS as u32),
+                ("AUX_LARGE_LIST", AUX_HEADER_WORDS as u32),
+                ("LARGE_THREADS", WORKGROUP),
+            ],
+        );
+    }
+
+    #[test]
+    fn workgroups_cover_every_invocation_within_the_limit() {
+        assert_eq!(workgroups_for(0), (1, 1));
+        assert_eq!(workgroups_for(64), (1, 1));
+        assert_eq!(workgroups_for(65), (2, 1));
+        let (x, y) = workgroups_for(6 * 1024 * 1024);
+        assert!(x <= 65535 && x as u64 * y as u64 * 64 >= 6 * 1024 * 1024);
+    }
+}
