@@ -16,12 +16,20 @@ pub const AUX_SAMPLES: usize = 0;
 pub const AUX_PAIRS: usize = 1;
 pub const AUX_TESTS: usize = 2;
 pub const AUX_LARGE: usize = 3;
+/// The large pass's indirect dispatch arguments.
+pub const AUX_DISPATCH: usize = 4;
+pub const AUX_OVERFLOW: usize = 7;
 pub const AUX_HISTOGRAM: usize = 8;
 pub const HISTOGRAM_BINS: usize = 32;
-/// Workgroups of the large-triangle pass (`irr.work.z`).
-pub const LARGE_WORKGROUPS: u32 = 256;
+/// Cells of one chunk of a large triangle (`CHUNK_CELLS`), checked against
+/// the WGSL.
+#[cfg(test)]
+pub const CHUNK_CELLS: u32 = 1024;
 /// Threads per workgroup of every compute pass.
 pub const WORKGROUP: u32 = 64;
+/// The large list's capacity in chunks: four per caster triangle and face,
+/// within these bounds (2 words each: 0.5 to 64 MiB).
+pub const LARGE_CAPACITY: (u64, u64) = (1 << 16, 1 << 23);
 
 /// `Irregular` of irregular.wgsl.
 #[repr(C)]
@@ -42,6 +50,7 @@ pub struct IrregularShared {
     pub mask: wgpu::RenderPipeline,
     pub histogram: wgpu::ComputePipeline,
     pub triangles: wgpu::ComputePipeline,
+    pub large_dispatch: wgpu::ComputePipeline,
     pub large: wgpu::ComputePipeline,
 }
 
@@ -95,6 +104,7 @@ impl IrregularShared {
             mask: fullscreen("fs_mask", wgpu::ColorWrites::RED),
             histogram: compute("cs_histogram"),
             triangles: compute("cs_triangles"),
+            large_dispatch: compute("cs_large_dispatch"),
             large: compute("cs_large"),
             layout,
         }
@@ -116,7 +126,8 @@ pub fn storage_buffer(gpu: &GpuContext, label: &str, size: u64) -> wgpu::Buffer 
         size: size.max(16).next_multiple_of(4),
         usage: wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_DST
-            | wgpu::BufferUsages::COPY_SRC,
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::INDIRECT,
         mapped_at_creation: false,
     })
 }
@@ -154,6 +165,9 @@ mod tests {
                 ("AUX_PAIRS", AUX_PAIRS as u32),
                 ("AUX_TESTS", AUX_TESTS as u32),
                 ("AUX_LARGE", AUX_LARGE as u32),
+                ("AUX_DISPATCH", AUX_DISPATCH as u32),
+                ("AUX_OVERFLOW", AUX_OVERFLOW as u32),
+                ("CHUNK_CELLS", CHUNK_CELLS),
                 ("AUX_HISTOGRAM", AUX_HISTOGRAM as u32),
                 ("HISTOGRAM_BINS", HISTOGRAM_BINS as u32),
                 ("AUX_LARGE_LIST", AUX_HEADER_WORDS as u32),

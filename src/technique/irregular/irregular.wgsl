@@ -16,7 +16,7 @@ struct Irregular {
     // height
     grid: vec4u,
     // x caster triangles, y cells above which a triangle is left to the
-    // large-triangle pass, z large-pass workgroups, w unused
+    // large-triangle pass, z the large list's capacity in chunks, w unused
     work: vec4u,
     // x ray-origin offset in ULPs (the reference's rule), yzw unused
     offset: vec4f,
@@ -46,14 +46,23 @@ struct CasterTriangle {
 const AUX_SAMPLES: u32 = 0u;
 const AUX_PAIRS: u32 = 1u;
 const AUX_TESTS: u32 = 2u;
+// Chunks asked for by large triangles (some may not have fitted the list).
 const AUX_LARGE: u32 = 3u;
+// The large pass's indirect dispatch (x, y, z workgroups).
+const AUX_DISPATCH: u32 = 4u;
+// Chunks that did not fit the list and were tested by their triangle's thread.
+const AUX_OVERFLOW: u32 = 7u;
 const AUX_HISTOGRAM: u32 = 8u;
 const HISTOGRAM_BINS: u32 = 32u;
 // Per face, 4 words: −least x, −least y (as ~ordered), greatest x, greatest y.
 const AUX_BOUNDS: u32 = 40u;
+// The large triangles' chunks, two words each: triangle · 8 + face, chunk.
 const AUX_LARGE_LIST: u32 = 64u;
-// Threads of a large triangle's workgroup.
+// Threads of a chunk's workgroup, and the cells of one chunk (so that no
+// invocation loops long: llvmpipe ends a shader's loops after 65535
+// iterations in all, and GPUs have watchdogs).
 const LARGE_THREADS: u32 = 64u;
+const CHUNK_CELLS: u32 = 1024u;
 
 // Float bits whose unsigned order is the floats' order (never 0 for a number).
 fn ordered(f: f32) -> u32 {
@@ -272,10 +281,11 @@ fn test_cell(t: CasterTriangle, face: u32, cell: vec2i) {
 }
 
 // The cells' box (x0, y0, x1, y1) of triangle `t`'s image on `face`, empty
-// (x1 < x0) where it misses the face's samples. On a local light's face, a
-// triangle wholly behind the light's plane (−z ≤ 0) blocks no sample there,
-// since every point between a sample and the light lies in front; one that
-// crosses the plane has an unbounded image and takes the face's whole box.
+// (x1 < x0) where it misses the face's samples. On a local light's face
+// the triangle is first clipped to the light's side of the face's plane
+// (−z ≥ a hair of its extent): every point between a sample and the light
+// lies there and projects onto the sample's own image (Sutherland &
+// Hodgman 1974); the clipped polygon's image is clamped to the samples'.
 fn triangle_cells(t: CasterTriangle, face: u32) -> vec4i {
     let f = face_bounds(face);
     if f.empty {
@@ -286,23 +296,28 @@ fn triangle_cells(t: CasterTriangle, face: u32) -> vec4i {
         (m * vec4f(t.c.xyz, 1.0)).xyz);
     var lo = vec2f(3.0e38);
     var hi = vec2f(-3.0e38);
-    var in_front = 0u;
+    var kept = 0u;
+    let eps = 1e-6 * max(max(length(v[0]), length(v[1])), length(v[2]));
     for (var i = 0u; i < 3u; i++) {
-        if !is_local() || v[i].z < 0.0 {
-            let c = image_of(v[i]);
+        let a = v[i];
+        let b = v[(i + 1u) % 3u];
+        let a_in = !is_local() || -a.z >= eps;
+        let b_in = !is_local() || -b.z >= eps;
+        if a_in {
+            let c = clamp(image_of(a), f.lo - 1.0, f.hi + 1.0);
             lo = min(lo, c);
             hi = max(hi, c);
-            in_front++;
+            kept++;
+        }
+        if a_in != b_in {
+            let p = mix(a, b, (-eps - a.z) / (b.z - a.z));
+            let c = clamp(image_of(p), f.lo - 1.0, f.hi + 1.0);
+            lo = min(lo, c);
+            hi = max(hi, c);
+            kept++;
         }
     }
-    if in_front == 0u {
-        return vec4i(0, 0, -1, -1);
-    }
-    if in_front < 3u {
-        lo = f.lo;
-        hi = f.hi;
-    }
-    if any(hi < f.lo) || any(lo > f.hi) {
+    if kept == 0u || any(hi < f.lo) || any(lo > f.hi) {
         return vec4i(0, 0, -1, -1);
     }
     let c0 = clamp_cell(cell_of(f, max(lo, f.lo)));
@@ -310,8 +325,20 @@ fn triangle_cells(t: CasterTriangle, face: u32) -> vec4i {
     return vec4i(c0, c1);
 }
 
+// Cell `k` of the box `box` (row-major).
+fn box_cell(box: vec4i, k: u32) -> vec2i {
+    let width = u32(box.z - box.x + 1);
+    return vec2i(box.x + i32(k % width), box.y + i32(k / width));
+}
+
+fn box_cells(box: vec4i) -> u32 {
+    return u32(box.z - box.x + 1) * u32(box.w - box.y + 1);
+}
+
 // Pass 4, per triangle: every face's cells visited and their samples tested,
-// or the triangle left to the large pass where it covers many cells.
+// or, where the triangle covers more than `irr.work.y` cells, its cells
+// listed in chunks for the large pass. Chunks past the list's capacity are
+// counted (AUX_OVERFLOW) and tested here.
 @compute @workgroup_size(64)
 fn cs_triangles(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
     let index = id.y * groups.x * 64u + id.x;
@@ -324,43 +351,63 @@ fn cs_triangles(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroup
         if box.z < box.x || box.w < box.y {
             continue;
         }
-        let cells = u32(box.z - box.x + 1) * u32(box.w - box.y + 1);
+        let cells = box_cells(box);
+        var first = 0u;
         if cells > irr.work.y {
-            let slot = atomicAdd(&aux[AUX_LARGE], 1u);
-            atomicStore(&aux[AUX_LARGE_LIST + slot], index * 8u + face);
-            continue;
-        }
-        atomicAdd(&aux[AUX_PAIRS], cells);
-        for (var y = box.y; y <= box.w; y++) {
-            for (var x = box.x; x <= box.z; x++) {
-                test_cell(t, face, vec2i(x, y));
+            let chunks = (cells + CHUNK_CELLS - 1u) / CHUNK_CELLS;
+            let slot = atomicAdd(&aux[AUX_LARGE], chunks);
+            let fitted = min(chunks, irr.work.z - min(slot, irr.work.z));
+            for (var c = 0u; c < fitted; c++) {
+                atomicStore(&aux[AUX_LARGE_LIST + 2u * (slot + c)], index * 8u + face);
+                atomicStore(&aux[AUX_LARGE_LIST + 2u * (slot + c) + 1u], c);
             }
+            if fitted == chunks {
+                continue;
+            }
+            atomicAdd(&aux[AUX_OVERFLOW], chunks - fitted);
+            first = fitted * CHUNK_CELLS;
+        }
+        atomicAdd(&aux[AUX_PAIRS], cells - first);
+        for (var k = first; k < cells; k++) {
+            test_cell(t, face, box_cell(box, k));
         }
     }
 }
 
-// Pass 5: each workgroup takes every `irr.work.z`-th large triangle and its
-// threads share its cells.
+// Pass 5, one invocation: the large pass's workgroups, one per listed chunk.
+@compute @workgroup_size(1)
+fn cs_large_dispatch() {
+    let count = min(atomicLoad(&aux[AUX_LARGE]), irr.work.z);
+    let x = min(count, 65535u);
+    atomicStore(&aux[AUX_DISPATCH], x);
+    atomicStore(&aux[AUX_DISPATCH + 1u], select(0u, (count + x - 1u) / max(x, 1u), x > 0u));
+    atomicStore(&aux[AUX_DISPATCH + 2u], 1u);
+}
+
+// Pass 6, a workgroup per chunk: its threads share the chunk's cells.
 @compute @workgroup_size(64)
-fn cs_large(@builtin(workgroup_id) group: vec3u, @builtin(local_invocation_index) lane: u32) {
-    let count = atomicLoad(&aux[AUX_LARGE]);
-    for (var e = group.x; e < count; e += irr.work.z) {
-        let entry = atomicLoad(&aux[AUX_LARGE_LIST + e]);
-        let t = triangles[entry / 8u];
-        let face = entry % 8u;
-        let box = triangle_cells(t, face);
-        let width = u32(box.z - box.x + 1);
-        let cells = width * u32(box.w - box.y + 1);
-        if lane == 0u {
-            atomicAdd(&aux[AUX_PAIRS], cells);
-        }
-        for (var k = lane; k < cells; k += LARGE_THREADS) {
-            test_cell(t, face, vec2i(box.x + i32(k % width), box.y + i32(k / width)));
-        }
+fn cs_large(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
+        @builtin(local_invocation_index) lane: u32) {
+    let e = group.y * groups.x + group.x;
+    if e >= min(atomicLoad(&aux[AUX_LARGE]), irr.work.z) {
+        return;
+    }
+    let entry = atomicLoad(&aux[AUX_LARGE_LIST + 2u * e]);
+    let chunk = atomicLoad(&aux[AUX_LARGE_LIST + 2u * e + 1u]);
+    let t = triangles[entry / 8u];
+    let face = entry % 8u;
+    let box = triangle_cells(t, face);
+    let end = min(box_cells(box), (chunk + 1u) * CHUNK_CELLS);
+    let first = chunk * CHUNK_CELLS;
+    if lane == 0u {
+        atomicAdd(&aux[AUX_PAIRS], end - first);
+    }
+    for (var k = first + lane; k < end; k += LARGE_THREADS) {
+        test_cell(t, face, box_cell(box, k));
     }
 }
 
-// Pass 6, per pixel: the mask, 0 where a caster blocks the sample.
+// Pass 7, per pixel: the mask, 0 where a caster blocks the sample.
 @fragment
 fn fs_mask(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let px = vec2u(frag.xy);

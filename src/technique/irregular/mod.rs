@@ -12,8 +12,10 @@
 //! directional light, six cube faces for point and spot lights), the
 //! samples pushed onto per-cell linked lists (one node per pixel, so the
 //! lists cannot overflow), a triangle pass in which each triangle visits its
-//! cells (triangles covering more than `large_cells` cells are handed to a
-//! pass that spreads their cells over a workgroup), and the mask.
+//! cells (triangles covering more than `large_cells` cells are listed in
+//! chunks of 1024 cells, each shared by a workgroup of an indirect
+//! dispatch; chunks past the list's capacity are counted and tested by their
+//! triangle's thread), and the mask.
 
 mod casters;
 mod gpu;
@@ -24,8 +26,9 @@ use crate::scene::{LightType, scene_fingerprint};
 use anyhow::{Result, bail};
 use glam::{Mat4, UVec4, Vec3, Vec4};
 use gpu::{
-    AUX_HEADER_WORDS, AUX_HISTOGRAM, AUX_LARGE, AUX_PAIRS, AUX_SAMPLES, AUX_TESTS, HISTOGRAM_BINS,
-    IrregularShared, IrregularUniform, LARGE_WORKGROUPS, MAX_FACES, storage_buffer, workgroups_for,
+    AUX_DISPATCH, AUX_HEADER_WORDS, AUX_HISTOGRAM, AUX_LARGE, AUX_OVERFLOW, AUX_PAIRS, AUX_SAMPLES,
+    AUX_TESTS, HISTOGRAM_BINS, IrregularShared, IrregularUniform, LARGE_CAPACITY, MAX_FACES,
+    storage_buffer, workgroups_for,
 };
 use std::sync::Arc;
 
@@ -40,8 +43,8 @@ const LARGE_CELLS: ParamSpec = ParamSpec::int(
     "large_cells",
     256,
     1,
-    1 << 20,
-    "a triangle whose image covers more cells than this is tested by a workgroup of 64 threads sharing its cells, not by one thread",
+    4096,
+    "a triangle whose image covers more cells than this is split into chunks of 1024 cells, each tested by a workgroup of 64 threads, not by the triangle's one thread (one invocation looping over many cells runs long: llvmpipe ends a shader's loops after 65535 iterations, GPUs have watchdogs)",
 );
 
 pub static FAMILY: Family = Family {
@@ -96,6 +99,7 @@ struct ListStats {
     pairs: u32,
     tests: u32,
     large: u32,
+    overflow: u32,
     /// Cells holding n samples (n from 1; the last bin: that many or more).
     histogram: [u32; HISTOGRAM_BINS],
 }
@@ -109,6 +113,7 @@ impl ListStats {
             pairs: w[AUX_PAIRS],
             tests: w[AUX_TESTS],
             large: w[AUX_LARGE],
+            overflow: w[AUX_OVERFLOW],
             histogram,
         }
     }
@@ -136,7 +141,11 @@ struct Buffers {
     marks: wgpu::Buffer,
     triangles: wgpu::Buffer,
     triangle_count: u32,
+    /// Chunks the large list holds.
+    large_capacity: u32,
     aux: wgpu::Buffer,
+    /// The large pass's indirect arguments, copied from `aux`.
+    large_args: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
 }
 
@@ -179,13 +188,15 @@ impl IrregularZBuffer {
         let triangles = casters::caster_triangles(ctx.scene);
         let cells = faces as u64 * self.config.grid as u64 * self.config.grid as u64;
         let pixels = w as u64 * h as u64;
+        let large_capacity =
+            (4 * triangles.len() as u64 * faces as u64).clamp(LARGE_CAPACITY.0, LARGE_CAPACITY.1);
         let sizes = [
             ("cell lists (grid)", cells * 4),
             ("sample lists", pixels * 4),
             ("caster triangles", triangles.len() as u64 * 64),
             (
                 "large-triangle list",
-                (AUX_HEADER_WORDS + triangles.len() as u64 * faces as u64) * 4,
+                (AUX_HEADER_WORDS + 2 * large_capacity) * 4,
             ),
         ];
         let limit = gpu.device.limits().max_storage_buffer_binding_size as u64;
@@ -239,7 +250,9 @@ impl IrregularZBuffer {
             marks,
             triangles: triangle_buffer,
             triangle_count: triangles.len() as u32,
+            large_capacity: large_capacity as u32,
             aux,
+            large_args: storage_buffer(gpu, "irregular large dispatch", 12),
             bind_group,
         }))
     }
@@ -292,7 +305,7 @@ impl ShadowTechnique for IrregularZBuffer {
                 ctx.frame.width(),
                 ctx.frame.height(),
             ),
-            work: UVec4::new(b.triangle_count, config.large_cells, LARGE_WORKGROUPS, 0),
+            work: UVec4::new(b.triangle_count, config.large_cells, b.large_capacity, 0),
             offset: Vec4::new(config.offset_ulps, 0.0, 0.0, 0.0),
         };
         uniform.views[..faces].copy_from_slice(&views);
@@ -317,20 +330,30 @@ impl ShadowTechnique for IrregularZBuffer {
             (
                 "irregular list lengths",
                 &shared.histogram,
-                workgroups_for(cells),
+                Some(workgroups_for(cells)),
             ),
             (
                 "irregular triangles",
                 &shared.triangles,
-                workgroups_for(b.triangle_count as u64),
+                Some(workgroups_for(b.triangle_count as u64)),
             ),
             (
-                "irregular large triangles",
-                &shared.large,
-                (LARGE_WORKGROUPS, 1),
+                "irregular large dispatch",
+                &shared.large_dispatch,
+                Some((1, 1)),
             ),
+            ("irregular large triangles", &shared.large, None),
         ];
-        for (label, pipeline, (x, y)) in dispatches {
+        for (label, pipeline, groups) in dispatches {
+            if groups.is_none() {
+                encoder.copy_buffer_to_buffer(
+                    &b.aux,
+                    AUX_DISPATCH as u64 * 4,
+                    &b.large_args,
+                    0,
+                    12,
+                );
+            }
             let mut pass = ctx.gpu.compute_pass(
                 encoder,
                 &wgpu::ComputePassDescriptor {
@@ -340,7 +363,10 @@ impl ShadowTechnique for IrregularZBuffer {
             );
             bind_compute_groups(ctx, &mut pass, &b.bind_group);
             pass.set_pipeline(pipeline);
-            pass.dispatch_workgroups(x, y, 1);
+            match groups {
+                Some((x, y)) => pass.dispatch_workgroups(x, y, 1),
+                None => pass.dispatch_workgroups_indirect(&b.large_args, 0),
+            }
         }
         {
             let mut pass = super::mask_pass(encoder, ctx, "irregular mask");
@@ -375,8 +401,8 @@ impl ShadowTechnique for IrregularZBuffer {
             ("list_length_p99", s.length_quantile(0.99) as f64),
             ("triangle_cell_pairs", s.pairs as f64),
             ("sample_tests", s.tests as f64),
-            ("large_triangles", s.large as f64),
-            ("list_overflows", 0.0),
+            ("large_triangle_chunks", s.large as f64),
+            ("chunk_overflows", s.overflow as f64),
         ]
     }
 
