@@ -51,6 +51,22 @@ const CASES: &[FailureCase] = &[
         contrast: "projective:alpha-depth",
     },
     FailureCase {
+        name: "vsm-bleeding",
+        scene: "foliage",
+        camera: "eye-level",
+        light: "spot",
+        failing: "shadow-map:vsm",
+        contrast: "shadow-map:pcf",
+    },
+    FailureCase {
+        name: "volume-cutouts",
+        scene: "foliage",
+        camera: "eye-level",
+        light: "sun",
+        failing: "shadow-volume:auto",
+        contrast: "irregular:default",
+    },
+    FailureCase {
         name: "zpass",
         scene: "columns",
         camera: "in-shadow",
