@@ -234,10 +234,10 @@ pub fn compare_with(
     measure::compare::run(
         gpu(),
         shadowlab::measure::FrameRequest {
-            scene: scene,
-            camera: camera,
+            scene,
+            camera,
             lights: &scene.lights,
-            size: size,
+            size,
         },
         &list,
         &reference,

@@ -95,7 +95,7 @@ fn flicker_over_squares(
             scene: &scene,
             camera: &scene.camera,
             lights: &scene.lights,
-            size: size,
+            size,
         },
         &list,
         &reference,

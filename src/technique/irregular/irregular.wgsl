@@ -34,8 +34,9 @@ struct CasterTriangle {
 @group(2) @binding(0) var<uniform> irr: Irregular;
 // Per cell (face-major, row-major): the first sample listed there plus 1 (0: none).
 @group(2) @binding(1) var<storage, read_write> heads: array<atomic<u32>>;
-// Per sample (pixel index): the next sample in its cell's list plus 1.
-@group(2) @binding(2) var<storage, read_write> next: array<u32>;
+// Per sample (pixel index): xyz its shadow-ray origin, w the next sample in
+// its cell's list plus 1 (bits), so the tests read one record per sample.
+@group(2) @binding(2) var<storage, read_write> samples: array<vec4f>;
 // Per sample: nonzero once a caster blocks it.
 @group(2) @binding(3) var<storage, read_write> marks: array<atomic<u32>>;
 @group(2) @binding(4) var<storage, read> triangles: array<CasterTriangle>;
@@ -190,7 +191,8 @@ fn fs_bin(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         if !is_local() || v.z < 0.0 {
             let cell = clamp_cell(cell_of(face_bounds(face), image_of(v)));
             let node = px.y * irr.grid.z + px.x;
-            next[node] = atomicExchange(&heads[cell_index(face, cell)], node + 1u);
+            let after = atomicExchange(&heads[cell_index(face, cell)], node + 1u);
+            samples[node] = vec4f(o.xyz, bitcast<f32>(after));
             atomicAdd(&aux[AUX_SAMPLES], 1u);
         }
     }
@@ -212,7 +214,7 @@ fn cs_histogram(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroup
             break;
         }
         n++;
-        node = next[node - 1u];
+        node = bitcast<u32>(samples[node - 1u].w);
     }
     if n > 0u {
         atomicAdd(&aux[AUX_HISTOGRAM + n], 1u);
@@ -268,14 +270,14 @@ fn test_cell(t: CasterTriangle, face: u32, cell: vec2i) {
             break;
         }
         let s = node - 1u;
+        let sample = samples[s];
         if atomicLoad(&marks[s]) == 0u {
-            let px = vec2u(s % irr.grid.z, s / irr.grid.z);
             tests++;
-            if blocks(t, sample_origin(px).xyz) {
+            if blocks(t, sample.xyz) {
                 atomicStore(&marks[s], 1u);
             }
         }
-        node = next[s];
+        node = bitcast<u32>(sample.w);
     }
     atomicAdd(&aux[AUX_TESTS], tests);
 }

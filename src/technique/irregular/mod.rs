@@ -137,7 +137,7 @@ struct Buffers {
     key: (u32, u32, u64, usize, u32),
     uniform: wgpu::Buffer,
     heads: wgpu::Buffer,
-    next: wgpu::Buffer,
+    samples: wgpu::Buffer,
     marks: wgpu::Buffer,
     triangles: wgpu::Buffer,
     triangle_count: u32,
@@ -192,14 +192,14 @@ impl IrregularZBuffer {
             (4 * triangles.len() as u64 * faces as u64).clamp(LARGE_CAPACITY.0, LARGE_CAPACITY.1);
         let sizes = [
             ("cell lists (grid)", cells * 4),
-            ("sample lists", pixels * 4),
+            ("samples and their lists", pixels * 16),
             ("caster triangles", triangles.len() as u64 * 64),
             (
                 "large-triangle list",
                 (AUX_HEADER_WORDS + 2 * large_capacity) * 4,
             ),
         ];
-        let limit = gpu.device.limits().max_storage_buffer_binding_size as u64;
+        let limit = gpu.device.limits().max_storage_buffer_binding_size;
         for (what, bytes) in sizes {
             if bytes > limit {
                 bail!(
@@ -218,7 +218,7 @@ impl IrregularZBuffer {
             mapped_at_creation: false,
         });
         let heads = storage_buffer(gpu, "irregular cell lists", sizes[0].1);
-        let next = storage_buffer(gpu, "irregular sample lists", pixels * 4);
+        let samples = storage_buffer(gpu, "irregular samples", pixels * 16);
         let marks = storage_buffer(gpu, "irregular marks", pixels * 4);
         let triangle_buffer = storage_buffer(gpu, "irregular casters", sizes[2].1);
         gpu.queue
@@ -236,7 +236,7 @@ impl IrregularZBuffer {
             entries: &[
                 entry(0, &uniform),
                 entry(1, &heads),
-                entry(2, &next),
+                entry(2, &samples),
                 entry(3, &marks),
                 entry(4, &triangle_buffer),
                 entry(5, &aux),
@@ -246,7 +246,7 @@ impl IrregularZBuffer {
             key,
             uniform,
             heads,
-            next,
+            samples,
             marks,
             triangles: triangle_buffer,
             triangle_count: triangles.len() as u32,
@@ -411,7 +411,7 @@ impl ShadowTechnique for IrregularZBuffer {
             [
                 &b.uniform,
                 &b.heads,
-                &b.next,
+                &b.samples,
                 &b.marks,
                 &b.triangles,
                 &b.aux,

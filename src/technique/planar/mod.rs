@@ -272,7 +272,13 @@ impl ShadowTechnique for PlanarShadows {
         let config = self.config;
         let key = crate::scene::scene_fingerprint(ctx.scene);
         if self.planes.as_ref().is_none_or(|(k, _)| *k != key) {
-            self.planes = Some((key, receiver_planes(ctx.scene)));
+            let planes = receiver_planes(ctx.scene);
+            if planes.is_empty() {
+                log::warn!(
+                    "planar: the scene has no ShadowPlane object and no planar receiver; no shadows"
+                );
+            }
+            self.planes = Some((key, planes));
         }
         let planes = &self.planes.as_ref().expect("set above").1;
         let l = ctx.light.homogeneous();
