@@ -140,6 +140,19 @@ fn caster_is_solid(object: u32, see_through: bool, uv: vec2f, duv_dx: vec2f, duv
     return is_solid_at(object, uv, opacity_lod(object, duv_dx, duv_dy), 0.5);
 }
 
+// The cube face a direction `d` from a light falls in: +x, −x, +y, −y, +z,
+// −z (the major axis, as cube-map lookups choose it).
+fn cube_face(d: vec3f) -> u32 {
+    let a = abs(d);
+    if a.x >= a.y && a.x >= a.z {
+        return select(1u, 0u, d.x > 0.0);
+    }
+    if a.y >= a.z {
+        return select(3u, 2u, d.y > 0.0);
+    }
+    return select(5u, 4u, d.z > 0.0);
+}
+
 // A triangle covering the whole target (for screen-space passes).
 @vertex
 fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {

@@ -188,13 +188,26 @@ pub fn run(
     let none = series.iter().position(|s| s.label.starts_with("none:"));
     let mut rows: Vec<BenchRow> = series.into_iter().map(|s| s.row(&hf)).collect();
     set_ratios_to_none(&mut rows, &per_round, none);
+    write_tables(gpu, view, (warmup, frames), &rows, out)?;
+    Ok(rows)
+}
+
+/// `bench.{json,csv,md}` of `rows` measured on `view` with `warmup` and
+/// `measured` frames per technique.
+fn write_tables(
+    gpu: &GpuContext,
+    view: FrameRequest,
+    (warmup, measured): (u32, u32),
+    rows: &[BenchRow],
+    out: &Path,
+) -> Result<()> {
     let meta = serde_json::json!({
-        "scene": scene.name,
-        "size": {"width": size.0, "height": size.1},
-        "camera": camera,
-        "lights": lights,
+        "scene": view.scene.name,
+        "size": {"width": view.size.0, "height": view.size.1},
+        "camera": view.camera,
+        "lights": view.lights,
         "warmup_frames": warmup,
-        "measured_frames": frames,
+        "measured_frames": measured,
         "adapter": gpu.adapter_summary(),
         "cpu_adapter": gpu.is_cpu_adapter(),
         "gpu_timestamps": gpu.timestamps,
@@ -204,9 +217,9 @@ pub fn run(
         out.join("bench.json"),
         serde_json::to_string_pretty(&serde_json::json!({"meta": meta, "rows": rows}))?,
     )?;
-    write_csv(&out.join("bench.csv"), &rows)?;
-    std::fs::write(out.join("bench.md"), markdown(scene, &meta, &rows))?;
-    Ok(rows)
+    write_csv(&out.join("bench.csv"), rows)?;
+    std::fs::write(out.join("bench.md"), markdown(view.scene, &meta, rows))?;
+    Ok(())
 }
 
 /// Each row's median frame over `none`'s (row `none`), and the 5th–95th

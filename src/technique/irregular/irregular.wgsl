@@ -109,15 +109,7 @@ fn face_of(p: vec3f) -> u32 {
     if !is_local() {
         return 0u;
     }
-    let d = p - irr.light.xyz;
-    let a = abs(d);
-    if a.x >= a.y && a.x >= a.z {
-        return select(1u, 0u, d.x > 0.0);
-    }
-    if a.y >= a.z {
-        return select(3u, 2u, d.y > 0.0);
-    }
-    return select(5u, 4u, d.z > 0.0);
+    return cube_face(p - irr.light.xyz);
 }
 
 // Where a light-view point lands in its face's image: (x, y) of an

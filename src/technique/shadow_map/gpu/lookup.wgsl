@@ -83,15 +83,7 @@ fn face_of(p: vec3f) -> u32 {
     if PROJECTION != PROJECTION_CUBE {
         return 0u;
     }
-    let d = p - sm.light.xyz;
-    let a = abs(d);
-    if a.x >= a.y && a.x >= a.z {
-        return select(1u, 0u, d.x > 0.0);
-    }
-    if a.y >= a.z {
-        return select(3u, 2u, d.y > 0.0);
-    }
-    return select(5u, 4u, d.z > 0.0);
+    return cube_face(p - sm.light.xyz);
 }
 
 fn linear_depth(z: f32) -> f32 {
