@@ -333,10 +333,10 @@ impl ShadowTechnique for ShadowMapTechnique {
         if self.config.paging.is_paged() {
             return self.render_virtual(ctx, encoder);
         }
-        let c = self.config;
         let gpu = ctx.gpu;
+        let c = self.config.for_light(ctx.light, gpu.max_texture_size());
         let aspect = ctx.frame.width() as f32 / ctx.frame.height() as f32;
-        let (size, format) = (c.map_side(ctx.light, gpu.max_texture_size()), c.format);
+        let (size, format) = (c.size, c.format);
         let moments = c.filter.is_moment();
         let blur = c.moment_blur();
         let normal_offset = c.normal_offset(ctx.light.kind);

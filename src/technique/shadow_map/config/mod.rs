@@ -535,6 +535,16 @@ impl ShadowMapConfig {
         side.min(max).max(self.size)
     }
 
+    /// These parameters as a frame for `light` renders them: `size` is
+    /// [`Self::map_side`], so the fit, the stabilisation, the bias cap and
+    /// the maps all take the side the map has.
+    pub fn for_light(&self, light: &Light, max: u32) -> ShadowMapConfig {
+        ShadowMapConfig {
+            size: self.map_side(light, max),
+            ..*self
+        }
+    }
+
     /// Whether the lookup is edge-masked: asked for, with a filter of taps.
     pub fn edge_masked(&self) -> bool {
         self.edge_mask && self.filter.uses_taps()

@@ -67,7 +67,8 @@ impl ShadowMapTechnique {
             }];
         }
         let c = &self.config;
-        let clamp = bias_clamp(setup, face, c.size, c.slope_bias_clamp);
+        let side = c.map_side(ctx.light, ctx.gpu.max_texture_size());
+        let clamp = bias_clamp(setup, face, side, c.slope_bias_clamp);
         let key = DepthPassKey {
             clamp_bits: clamp.to_bits(),
             ..p.depth_key

@@ -36,7 +36,7 @@ impl ShadowMapTechnique {
         lights: &[Light],
         aspect: f32,
     ) -> Result<Vec<LightSetup>> {
-        let c = self.config;
+        let c = self.config.for_light(ctx.light, ctx.gpu.max_texture_size());
         let size = c.size;
         // Warped maps are not stabilised.
         let stabilize = c.cascades.stabilize && c.warp.kind == Warp::None;
@@ -178,7 +178,7 @@ impl ShadowMapTechnique {
             (Fit::Samples, Some(seen)) => match seen.supports {
                 Some(supports) => ViewFit::Samples {
                     supports,
-                    size: self.config.size,
+                    size: self.config.map_side(ctx.light, ctx.gpu.max_texture_size()),
                 },
                 None => ViewFit::Frustum,
             },
