@@ -243,17 +243,13 @@ pub fn shader_module(gpu: &GpuContext, label: &str, sources: &[&str]) -> wgpu::S
     crate::gpu::compose_shader(gpu, label, &[&[COMMON_WGSL], sources].concat())
 }
 
-/// A shader module of a technique: `common.wgsl`, `gbuffer.wgsl`, `sources`.
+/// A shader module of a technique: [`technique_source`] of `sources`.
 pub fn technique_shader(gpu: &GpuContext, label: &str, sources: &[&str]) -> wgpu::ShaderModule {
-    crate::gpu::compose_shader(
-        gpu,
-        label,
-        &[&[COMMON_WGSL, GBUFFER_WGSL], sources].concat(),
-    )
+    crate::gpu::compose_shader(gpu, label, &[&technique_source(sources)])
 }
 
-/// Test support: the WGSL source [`technique_shader`] composes.
-#[cfg(test)]
+/// The WGSL of a technique: `common.wgsl`, `gbuffer.wgsl`, `sources` (the
+/// WGSL tests reflect the same text).
 pub fn technique_source(sources: &[&str]) -> String {
     [&[COMMON_WGSL, GBUFFER_WGSL], sources].concat().join("\n")
 }
