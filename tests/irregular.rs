@@ -65,20 +65,20 @@ fn every_seen_sample_is_binned() {
     assert!(counter(&hf, "list_length_p99") <= 8.0);
 }
 
-/// A triangle's cells are tested the same whether its own thread visits
-/// them or workgroups share them in chunks; no chunk overflows.
+/// A triangle's samples are tested the same whether its own thread tests
+/// them or workgroups share them in jobs; no job overflows.
 #[test]
-fn large_triangles_in_chunks_give_the_same_mask() {
+fn large_triangles_in_jobs_give_the_same_mask() {
     let s = preset("room", "default", "point");
-    let direct = mask_of(&s, "irregular", &["large_cells=4096"], 160, 90);
-    let chunked = mask_of(&s, "irregular", &["large_cells=1"], 160, 90);
+    let direct = mask_of(&s, "irregular", &["large_samples=16384"], 160, 90);
+    let jobs = mask_of(&s, "irregular", &["large_samples=1"], 160, 90);
     assert!(direct.iter().any(|&v| v < 0.5));
-    assert_eq!(pixels_differing(&direct, &chunked), 0);
-    let mut hf = rendered_frame(&s, "irregular", &["large_cells=1"], 160, 90);
+    assert_eq!(pixels_differing(&direct, &jobs), 0);
+    let mut hf = rendered_frame(&s, "irregular", &["large_samples=1"], 160, 90);
     render_again(&mut hf, &s);
     render_again(&mut hf, &s);
-    assert!(counter(&hf, "large_triangle_chunks") > 0.0);
-    assert_eq!(counter(&hf, "chunk_overflows"), 0.0);
+    assert!(counter(&hf, "large_triangle_jobs") > 0.0);
+    assert_eq!(counter(&hf, "job_overflow_samples"), 0.0);
 }
 
 /// A grid whose lists exceed the device's largest storage buffer is a

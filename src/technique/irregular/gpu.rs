@@ -8,28 +8,38 @@ use glam::{Mat4, UVec4, Vec4};
 
 /// Cube faces of a local light's grid; a directional light has one face.
 pub const MAX_FACES: usize = 6;
-/// Words of the `aux` buffer's header (`AUX_LARGE_LIST` of irregular.wgsl):
-/// counters, the list-length histogram and the per-face bounds.
-pub const AUX_HEADER_WORDS: u64 = 64;
+/// Words of the `aux` buffer's header (`AUX_JOB_LIST` of irregular.wgsl):
+/// counters, the list-length histogram, the per-face bounds, the longest list.
+pub const AUX_HEADER_WORDS: u64 = 80;
 /// The header's counters and histogram (`AUX_*` of irregular.wgsl).
 pub const AUX_SAMPLES: usize = 0;
 pub const AUX_PAIRS: usize = 1;
 pub const AUX_TESTS: usize = 2;
-pub const AUX_LARGE: usize = 3;
-/// The large pass's indirect dispatch arguments.
+pub const AUX_JOBS: usize = 3;
+/// The job pass's indirect dispatch arguments.
 pub const AUX_DISPATCH: usize = 4;
 pub const AUX_OVERFLOW: usize = 7;
 pub const AUX_HISTOGRAM: usize = 8;
 pub const HISTOGRAM_BINS: usize = 32;
-/// Cells of one chunk of a large triangle (`CHUNK_CELLS`), checked against
+pub const AUX_LONGEST: usize = 64;
+/// Samples of one job of a large triangle (`JOB_SAMPLES`), checked against
 /// the WGSL.
 #[cfg(test)]
-pub const CHUNK_CELLS: u32 = 1024;
+pub const JOB_SAMPLES: u32 = 1024;
+/// Counts summed by one workgroup of the prefix sum (`SCAN_BLOCK`).
+pub const SCAN_BLOCK: u64 = 1024;
 /// Threads per workgroup of every compute pass.
 pub const WORKGROUP: u32 = 64;
-/// The large list's capacity in chunks: four per caster triangle and face,
-/// within these bounds (2 words each: 0.5 to 64 MiB).
-pub const LARGE_CAPACITY: (u64, u64) = (1 << 16, 1 << 23);
+/// The job list's capacity: four jobs per caster triangle and face, or
+/// twice what the last frame asked for where that overflowed, within these
+/// bounds (2 words each: 0.5 to 64 MiB).
+pub const JOB_CAPACITY: (u64, u64) = (1 << 16, 1 << 23);
+
+/// Words of the binning buffer for `cells` cells: the counts, the
+/// offsets with their total, and the prefix sum's block partials.
+pub fn binning_words(cells: u64) -> u64 {
+    2 * cells + 1 + cells.div_ceil(SCAN_BLOCK)
+}
 
 /// `Irregular` of irregular.wgsl.
 #[repr(C)]
@@ -46,12 +56,15 @@ pub struct IrregularUniform {
 pub struct IrregularShared {
     pub layout: wgpu::BindGroupLayout,
     pub bounds: wgpu::RenderPipeline,
-    pub bin: wgpu::RenderPipeline,
+    pub count: wgpu::RenderPipeline,
+    pub scatter: wgpu::RenderPipeline,
     pub mask: wgpu::RenderPipeline,
-    pub histogram: wgpu::ComputePipeline,
+    pub scan_blocks: wgpu::ComputePipeline,
+    pub scan_partials: wgpu::ComputePipeline,
+    pub scan_add: wgpu::ComputePipeline,
     pub triangles: wgpu::ComputePipeline,
-    pub large_dispatch: wgpu::ComputePipeline,
-    pub large: wgpu::ComputePipeline,
+    pub job_dispatch: wgpu::ComputePipeline,
+    pub jobs: wgpu::ComputePipeline,
 }
 
 impl IrregularShared {
@@ -100,12 +113,15 @@ impl IrregularShared {
         };
         IrregularShared {
             bounds: fullscreen("fs_bounds", wgpu::ColorWrites::empty()),
-            bin: fullscreen("fs_bin", wgpu::ColorWrites::empty()),
+            count: fullscreen("fs_count", wgpu::ColorWrites::empty()),
+            scatter: fullscreen("fs_scatter", wgpu::ColorWrites::empty()),
             mask: fullscreen("fs_mask", wgpu::ColorWrites::RED),
-            histogram: compute("cs_histogram"),
+            scan_blocks: compute("cs_scan_blocks"),
+            scan_partials: compute("cs_scan_partials"),
+            scan_add: compute("cs_scan_add"),
             triangles: compute("cs_triangles"),
-            large_dispatch: compute("cs_large_dispatch"),
-            large: compute("cs_large"),
+            job_dispatch: compute("cs_job_dispatch"),
+            jobs: compute("cs_jobs"),
             layout,
         }
     }
@@ -114,7 +130,13 @@ impl IrregularShared {
 /// The (x, y) workgroups that cover `n` invocations of [`WORKGROUP`]
 /// threads within the per-dimension limit (the shaders index y·x·64 + x).
 pub fn workgroups_for(n: u64) -> (u32, u32) {
-    let groups = n.div_ceil(WORKGROUP as u64).max(1);
+    grid_of_workgroups(n.div_ceil(WORKGROUP as u64))
+}
+
+/// `groups` workgroups as (x, y) within the per-dimension limit, at least
+/// one (the shaders index y·x + x, and skip what lies past their work).
+pub fn grid_of_workgroups(groups: u64) -> (u32, u32) {
+    let groups = groups.max(1);
     let x = groups.min(65535);
     (x as u32, groups.div_ceil(x) as u32)
 }
@@ -164,14 +186,16 @@ mod tests {
                 ("AUX_SAMPLES", AUX_SAMPLES as u32),
                 ("AUX_PAIRS", AUX_PAIRS as u32),
                 ("AUX_TESTS", AUX_TESTS as u32),
-                ("AUX_LARGE", AUX_LARGE as u32),
+                ("AUX_JOBS", AUX_JOBS as u32),
                 ("AUX_DISPATCH", AUX_DISPATCH as u32),
                 ("AUX_OVERFLOW", AUX_OVERFLOW as u32),
-                ("CHUNK_CELLS", CHUNK_CELLS),
                 ("AUX_HISTOGRAM", AUX_HISTOGRAM as u32),
                 ("HISTOGRAM_BINS", HISTOGRAM_BINS as u32),
-                ("AUX_LARGE_LIST", AUX_HEADER_WORDS as u32),
-                ("LARGE_THREADS", WORKGROUP),
+                ("AUX_LONGEST", AUX_LONGEST as u32),
+                ("AUX_JOB_LIST", AUX_HEADER_WORDS as u32),
+                ("WORKGROUP", WORKGROUP),
+                ("JOB_SAMPLES", JOB_SAMPLES),
+                ("SCAN_BLOCK", SCAN_BLOCK as u32),
             ],
         );
     }

@@ -15,8 +15,8 @@ struct Irregular {
     // x faces, y grid side R (cells per face side), z frame width, w frame
     // height
     grid: vec4u,
-    // x caster triangles, y cells above which a triangle is left to the
-    // large-triangle pass, z the large list's capacity in chunks, w unused
+    // x caster triangles, y samples above which a triangle is left to the
+    // job pass, z the job list's capacity, w the cells (faces · R²)
     work: vec4u,
     // x ray-origin offset in ULPs (the reference's rule), yzw unused
     offset: vec4f,
@@ -32,38 +32,45 @@ struct CasterTriangle {
 };
 
 @group(2) @binding(0) var<uniform> irr: Irregular;
-// Per cell (face-major, row-major): the first sample listed there plus 1 (0: none).
-@group(2) @binding(1) var<storage, read_write> heads: array<atomic<u32>>;
-// Per sample (pixel index): xyz its shadow-ray origin, w the next sample in
-// its cell's list plus 1 (bits), so the tests read one record per sample.
+// The binning's words, three arrays in one buffer (N = irr.work.w cells,
+// face-major, row-major): [0, N) each cell's sample count (then the
+// scatter's cursor, back to 0 when it is done); [N, 2N] the exclusive
+// prefix sum of the counts, the first sample of each cell in `samples`
+// (its last word the total); then the prefix sum's per-block partials.
+@group(2) @binding(1) var<storage, read_write> cells: array<atomic<u32>>;
+// The samples sorted by cell: xyz the shadow-ray origin, w its pixel
+// (bits), so a cell's, and a row of cells', samples are contiguous.
 @group(2) @binding(2) var<storage, read_write> samples: array<vec4f>;
-// Per sample: nonzero once a caster blocks it.
+// Per pixel: nonzero once a caster blocks its sample.
 @group(2) @binding(3) var<storage, read_write> marks: array<atomic<u32>>;
 @group(2) @binding(4) var<storage, read> triangles: array<CasterTriangle>;
 // The header (AUX_* words: counters, list-length histogram, per-face bounds)
-// and then the large triangles' list.
+// and then the job list.
 @group(2) @binding(5) var<storage, read_write> aux: array<atomic<u32>>;
 
 const AUX_SAMPLES: u32 = 0u;
 const AUX_PAIRS: u32 = 1u;
 const AUX_TESTS: u32 = 2u;
-// Chunks asked for by large triangles (some may not have fitted the list).
-const AUX_LARGE: u32 = 3u;
-// The large pass's indirect dispatch (x, y, z workgroups).
+// Jobs asked for by large triangles (some may not have fitted the list).
+const AUX_JOBS: u32 = 3u;
+// The job pass's indirect dispatch (x, y, z workgroups).
 const AUX_DISPATCH: u32 = 4u;
-// Chunks that did not fit the list and were tested by their triangle's thread.
+// Samples of jobs that did not fit the list, tested by their triangle's thread.
 const AUX_OVERFLOW: u32 = 7u;
 const AUX_HISTOGRAM: u32 = 8u;
 const HISTOGRAM_BINS: u32 = 32u;
 // Per face, 4 words: −least x, −least y (as ~ordered), greatest x, greatest y.
 const AUX_BOUNDS: u32 = 40u;
-// The large triangles' chunks, two words each: triangle · 8 + face, chunk.
-const AUX_LARGE_LIST: u32 = 64u;
-// Threads of a chunk's workgroup, and the cells of one chunk (so that no
-// invocation loops long: llvmpipe ends a shader's loops after 65535
-// iterations in all, and GPUs have watchdogs).
-const LARGE_THREADS: u32 = 64u;
-const CHUNK_CELLS: u32 = 1024u;
+// The longest list.
+const AUX_LONGEST: u32 = 64u;
+// The jobs, two words each: triangle · 8 + face, job.
+const AUX_JOB_LIST: u32 = 80u;
+// Threads of every workgroup; samples of one job (so that no invocation
+// loops long: llvmpipe ends a shader's loops after 65535 iterations in
+// all, and GPUs have watchdogs); counts summed by one prefix-sum block.
+const WORKGROUP: u32 = 64u;
+const JOB_SAMPLES: u32 = 1024u;
+const SCAN_BLOCK: u32 = 1024u;
 
 // Float bits whose unsigned order is the floats' order (never 0 for a number).
 fn ordered(f: f32) -> u32 {
@@ -172,45 +179,134 @@ fn fs_bounds(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     return vec4f(1.0);
 }
 
-// Pass 2, per pixel: the sample pushed onto its cell's list.
-@fragment
-fn fs_bin(@builtin(position) frag: vec4f) -> @location(0) vec4f {
-    let px = vec2u(frag.xy);
+// The cell a seen sample is binned in, or N (irr.work.w) where the pixel
+// shows no surface or lies behind a local light's face.
+struct Binned {
+    origin: vec3f,
+    cell: u32,
+};
+
+fn binned(px: vec2u) -> Binned {
+    var b: Binned;
+    b.cell = irr.work.w;
     let o = sample_origin(px);
     if o.w > 0.0 {
         let face = face_of(o.xyz);
         let v = (irr.views[face] * vec4f(o.xyz, 1.0)).xyz;
         if !is_local() || v.z < 0.0 {
-            let cell = clamp_cell(cell_of(face_bounds(face), image_of(v)));
-            let node = px.y * irr.grid.z + px.x;
-            let after = atomicExchange(&heads[cell_index(face, cell)], node + 1u);
-            samples[node] = vec4f(o.xyz, bitcast<f32>(after));
-            atomicAdd(&aux[AUX_SAMPLES], 1u);
+            b.origin = o.xyz;
+            b.cell = cell_index(face, clamp_cell(cell_of(face_bounds(face), image_of(v))));
         }
+    }
+    return b;
+}
+
+// Pass 2, per pixel: each cell's samples counted.
+@fragment
+fn fs_count(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    let b = binned(vec2u(frag.xy));
+    if b.cell < irr.work.w {
+        atomicAdd(&cells[b.cell], 1u);
+        atomicAdd(&aux[AUX_SAMPLES], 1u);
     }
     return vec4f(1.0);
 }
 
-// Pass 3, per cell: the histogram of list lengths.
+// Pass 3a, a workgroup per block of SCAN_BLOCK counts: their exclusive
+// prefix sum (each thread sums 16 serially, then adds the threads before
+// it), the block's total kept for pass 3b.
+var<workgroup> thread_sums: array<u32, 64>;
+
 @compute @workgroup_size(64)
-fn cs_histogram(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
-    let r = irr.grid.y;
-    let cell = id.y * groups.x * 64u + id.x;
-    if cell >= irr.grid.x * r * r {
+fn cs_scan_blocks(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
+        @builtin(local_invocation_index) lane: u32) {
+    let n = irr.work.w;
+    let block = group.y * groups.x + group.x;
+    let per = SCAN_BLOCK / WORKGROUP;
+    let first = block * SCAN_BLOCK + lane * per;
+    var sum = 0u;
+    for (var k = 0u; k < per; k++) {
+        if first + k < n {
+            sum += atomicLoad(&cells[first + k]);
+        }
+    }
+    thread_sums[lane] = sum;
+    workgroupBarrier();
+    var before = 0u;
+    for (var k = 0u; k < lane; k++) {
+        before += thread_sums[k];
+    }
+    for (var k = 0u; k < per; k++) {
+        if first + k < n {
+            atomicStore(&cells[n + first + k], before);
+            before += atomicLoad(&cells[first + k]);
+        }
+    }
+    if lane == WORKGROUP - 1u && block * SCAN_BLOCK < n {
+        atomicStore(&cells[2u * n + 1u + block], before);
+    }
+}
+
+// Pass 3b, one workgroup: the blocks' totals turned into their exclusive
+// prefix sum (each thread a contiguous run of them), the grand total
+// written after the last cell's offset.
+@compute @workgroup_size(64)
+fn cs_scan_partials(@builtin(local_invocation_index) lane: u32) {
+    let n = irr.work.w;
+    let blocks = (n + SCAN_BLOCK - 1u) / SCAN_BLOCK;
+    let per = (blocks + WORKGROUP - 1u) / WORKGROUP;
+    let base = 2u * n + 1u;
+    let first = lane * per;
+    let last = min(first + per, blocks);
+    var sum = 0u;
+    for (var k = first; k < last; k++) {
+        sum += atomicLoad(&cells[base + k]);
+    }
+    thread_sums[lane] = sum;
+    workgroupBarrier();
+    var before = 0u;
+    for (var k = 0u; k < lane; k++) {
+        before += thread_sums[k];
+    }
+    for (var k = first; k < last; k++) {
+        let total = atomicLoad(&cells[base + k]);
+        atomicStore(&cells[base + k], before);
+        before += total;
+    }
+    if lane == WORKGROUP - 1u {
+        atomicStore(&cells[2u * n], before);
+    }
+}
+
+// Pass 3c, per cell: its block's partial added to its offset, and its list
+// length counted into the histogram.
+@compute @workgroup_size(64)
+fn cs_scan_add(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let n = irr.work.w;
+    let cell = id.y * groups.x * WORKGROUP + id.x;
+    if cell >= n {
         return;
     }
-    var n = 0u;
-    var node = atomicLoad(&heads[cell]);
-    loop {
-        if node == 0u || n >= HISTOGRAM_BINS - 1u {
-            break;
-        }
-        n++;
-        node = bitcast<u32>(samples[node - 1u].w);
+    let partial = atomicLoad(&cells[2u * n + 1u + cell / SCAN_BLOCK]);
+    atomicAdd(&cells[n + cell], partial);
+    let length = atomicLoad(&cells[cell]);
+    if length > 0u {
+        atomicAdd(&aux[AUX_HISTOGRAM + min(length, HISTOGRAM_BINS - 1u)], 1u);
+        atomicMax(&aux[AUX_LONGEST], length);
     }
-    if n > 0u {
-        atomicAdd(&aux[AUX_HISTOGRAM + n], 1u);
+}
+
+// Pass 4, per pixel: the sample written to its cell's run of `samples`.
+@fragment
+fn fs_scatter(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    let px = vec2u(frag.xy);
+    let b = binned(px);
+    if b.cell < irr.work.w {
+        let left = atomicSub(&cells[b.cell], 1u);
+        let slot = atomicLoad(&cells[irr.work.w + b.cell]) + left - 1u;
+        samples[slot] = vec4f(b.origin, bitcast<f32>(px.y * irr.grid.z + px.x));
     }
+    return vec4f(1.0);
 }
 
 // Whether triangle `t` blocks the ray from `o` to the light (Möller &
@@ -253,25 +349,52 @@ fn blocks(t: CasterTriangle, o: vec3f) -> bool {
     return is_solid_at(object, uv, 0.0, 0.5);
 }
 
-// The samples listed in one cell, tested against triangle `t`.
-fn test_cell(t: CasterTriangle, face: u32, cell: vec2i) {
-    var node = atomicLoad(&heads[cell_index(face, cell)]);
-    var tests = 0u;
-    loop {
-        if node == 0u {
-            break;
-        }
-        let s = node - 1u;
-        let sample = samples[s];
-        if atomicLoad(&marks[s]) == 0u {
-            tests++;
-            if blocks(t, sample.xyz) {
-                atomicStore(&marks[s], 1u);
-            }
-        }
-        node = bitcast<u32>(sample.w);
+// Sample `slot` tested against triangle `t`; whether it needed a test.
+fn test_sample(t: CasterTriangle, slot: u32) -> u32 {
+    let sample = samples[slot];
+    let pixel = bitcast<u32>(sample.w);
+    if atomicLoad(&marks[pixel]) != 0u {
+        return 0u;
     }
-    atomicAdd(&aux[AUX_TESTS], tests);
+    if blocks(t, sample.xyz) {
+        atomicStore(&marks[pixel], 1u);
+    }
+    return 1u;
+}
+
+// The run of `samples` of row y of the box's cells.
+fn row_run(face: u32, box: vec4i, y: i32) -> vec2u {
+    let n = irr.work.w;
+    let a = atomicLoad(&cells[n + cell_index(face, vec2i(box.x, y))]);
+    let b = atomicLoad(&cells[n + cell_index(face, vec2i(box.z, y)) + 1u]);
+    return vec2u(a, b);
+}
+
+// The samples binned in the box's cells (the triangle's work on a face).
+fn box_samples(face: u32, box: vec4i) -> u32 {
+    var total = 0u;
+    for (var y = box.y; y <= box.w; y++) {
+        let run = row_run(face, box, y);
+        total += run.y - run.x;
+    }
+    return total;
+}
+
+// The box's samples from the `first`-th to before the `end`-th (in row
+// order), every `step`-th, tested against `t`; the tests made.
+fn test_samples(t: CasterTriangle, face: u32, box: vec4i, first: u32, end: u32, step: u32) -> u32 {
+    var tests = 0u;
+    var seen = 0u;
+    var k = first;
+    for (var y = box.y; y <= box.w && k < end; y++) {
+        let run = row_run(face, box, y);
+        let length = run.y - run.x;
+        for (; k < min(seen + length, end); k += step) {
+            tests += test_sample(t, run.x + k - seen);
+        }
+        seen += length;
+    }
+    return tests;
 }
 
 // The cells' box (x0, y0, x1, y1) of triangle `t`'s image on `face`, empty
@@ -319,93 +442,76 @@ fn triangle_cells(t: CasterTriangle, face: u32) -> vec4i {
     return vec4i(c0, c1);
 }
 
-// Cell `k` of the box `box` (row-major).
-fn box_cell(box: vec4i, k: u32) -> vec2i {
-    let width = u32(box.z - box.x + 1);
-    return vec2i(box.x + i32(k % width), box.y + i32(k / width));
-}
-
-fn box_cells(box: vec4i) -> u32 {
-    return u32(box.z - box.x + 1) * u32(box.w - box.y + 1);
-}
-
-// Pass 4, per triangle: every face's cells visited and their samples tested,
-// or, where the triangle covers more than `irr.work.y` cells, its cells
-// listed in chunks for the large pass. Chunks past the list's capacity are
-// counted (AUX_OVERFLOW) and tested here.
+// Pass 5, per triangle: on every face the samples of the cells its image
+// covers tested, or, where they are more than `irr.work.y`, listed as jobs
+// of JOB_SAMPLES for the job pass. Jobs past the list's capacity are
+// counted (AUX_OVERFLOW, in samples) and tested here.
 @compute @workgroup_size(64)
 fn cs_triangles(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
-    let index = id.y * groups.x * 64u + id.x;
+    let index = id.y * groups.x * WORKGROUP + id.x;
     if index >= irr.work.x {
         return;
     }
     let t = triangles[index];
+    var tests = 0u;
     for (var face = 0u; face < irr.grid.x; face++) {
         let box = triangle_cells(t, face);
         if box.z < box.x || box.w < box.y {
             continue;
         }
-        let cells = box_cells(box);
+        atomicAdd(&aux[AUX_PAIRS], u32(box.z - box.x + 1) * u32(box.w - box.y + 1));
+        let work = box_samples(face, box);
         var first = 0u;
-        if cells > irr.work.y {
-            let chunks = (cells + CHUNK_CELLS - 1u) / CHUNK_CELLS;
-            let slot = atomicAdd(&aux[AUX_LARGE], chunks);
-            let fitted = min(chunks, irr.work.z - min(slot, irr.work.z));
-            for (var c = 0u; c < fitted; c++) {
-                atomicStore(&aux[AUX_LARGE_LIST + 2u * (slot + c)], index * 8u + face);
-                atomicStore(&aux[AUX_LARGE_LIST + 2u * (slot + c) + 1u], c);
+        if work > irr.work.y {
+            let jobs = (work + JOB_SAMPLES - 1u) / JOB_SAMPLES;
+            let slot = atomicAdd(&aux[AUX_JOBS], jobs);
+            let fitted = min(jobs, irr.work.z - min(slot, irr.work.z));
+            for (var j = 0u; j < fitted; j++) {
+                atomicStore(&aux[AUX_JOB_LIST + 2u * (slot + j)], index * 8u + face);
+                atomicStore(&aux[AUX_JOB_LIST + 2u * (slot + j) + 1u], j);
             }
-            if fitted == chunks {
-                continue;
+            first = min(fitted * JOB_SAMPLES, work);
+            if first < work {
+                atomicAdd(&aux[AUX_OVERFLOW], work - first);
             }
-            atomicAdd(&aux[AUX_OVERFLOW], chunks - fitted);
-            first = fitted * CHUNK_CELLS;
         }
-        atomicAdd(&aux[AUX_PAIRS], cells - first);
-        for (var k = first; k < cells; k++) {
-            test_cell(t, face, box_cell(box, k));
-        }
+        tests += test_samples(t, face, box, first, work, 1u);
     }
+    atomicAdd(&aux[AUX_TESTS], tests);
 }
 
-// Pass 5, one invocation: the large pass's workgroups, one per listed chunk.
+// Pass 6, one invocation: the job pass's workgroups, one per listed job.
 @compute @workgroup_size(1)
-fn cs_large_dispatch() {
-    let count = min(atomicLoad(&aux[AUX_LARGE]), irr.work.z);
+fn cs_job_dispatch() {
+    let count = min(atomicLoad(&aux[AUX_JOBS]), irr.work.z);
     let x = min(count, 65535u);
     atomicStore(&aux[AUX_DISPATCH], x);
     atomicStore(&aux[AUX_DISPATCH + 1u], select(0u, (count + x - 1u) / max(x, 1u), x > 0u));
     atomicStore(&aux[AUX_DISPATCH + 2u], 1u);
 }
 
-// Pass 6, a workgroup per chunk: its threads share the chunk's cells.
+// Pass 7, a workgroup per job: its threads share the job's samples.
 @compute @workgroup_size(64)
-fn cs_large(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
+fn cs_jobs(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
         @builtin(local_invocation_index) lane: u32) {
     let e = group.y * groups.x + group.x;
-    if e >= min(atomicLoad(&aux[AUX_LARGE]), irr.work.z) {
+    if e >= min(atomicLoad(&aux[AUX_JOBS]), irr.work.z) {
         return;
     }
-    let entry = atomicLoad(&aux[AUX_LARGE_LIST + 2u * e]);
-    let chunk = atomicLoad(&aux[AUX_LARGE_LIST + 2u * e + 1u]);
+    let entry = atomicLoad(&aux[AUX_JOB_LIST + 2u * e]);
+    let job = atomicLoad(&aux[AUX_JOB_LIST + 2u * e + 1u]);
     let t = triangles[entry / 8u];
     let face = entry % 8u;
     let box = triangle_cells(t, face);
-    let end = min(box_cells(box), (chunk + 1u) * CHUNK_CELLS);
-    let first = chunk * CHUNK_CELLS;
-    if lane == 0u {
-        atomicAdd(&aux[AUX_PAIRS], end - first);
-    }
-    for (var k = first + lane; k < end; k += LARGE_THREADS) {
-        test_cell(t, face, box_cell(box, k));
-    }
+    let first = job * JOB_SAMPLES;
+    let tests = test_samples(t, face, box, first + lane, first + JOB_SAMPLES, WORKGROUP);
+    atomicAdd(&aux[AUX_TESTS], tests);
 }
 
-// Pass 7, per pixel: the mask, 0 where a caster blocks the sample.
+// Pass 8, per pixel: the mask, 0 where a caster blocks the sample.
 @fragment
 fn fs_mask(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let px = vec2u(frag.xy);
-    let node = px.y * irr.grid.z + px.x;
-    let blocked = atomicLoad(&marks[node]) != 0u;
+    let blocked = atomicLoad(&marks[px.y * irr.grid.z + px.x]) != 0u;
     return vec4f(select(1.0, 0.0, blocked));
 }

@@ -10,12 +10,14 @@
 //!
 //! Per frame: the samples' bounds on each face (one orthographic view for a
 //! directional light, six cube faces for point and spot lights), the
-//! samples pushed onto per-cell linked lists (one node per pixel, so the
-//! lists cannot overflow), a triangle pass in which each triangle visits its
-//! cells (triangles covering more than `large_cells` cells are listed in
-//! chunks of 1024 cells, each shared by a workgroup of an indirect
-//! dispatch; chunks past the list's capacity are counted and tested by their
-//! triangle's thread), and the mask.
+//! samples binned by count, prefix sum and scatter (sorted by cell, so a
+//! row of cells' samples is one contiguous run and the lists cannot
+//! overflow), a triangle pass in which each triangle tests the samples of
+//! its cells (triangles whose cells hold more than `large_samples` are
+//! listed as jobs of 1024 samples, each shared by a workgroup of an
+//! indirect dispatch, so that no invocation loops long however dense the
+//! samples; jobs past the list's capacity are counted, tested by their
+//! triangle's thread, and the list grows for the next frame), and the mask.
 
 mod casters;
 mod gpu;
@@ -26,9 +28,9 @@ use crate::scene::{LightType, scene_fingerprint};
 use anyhow::{Result, bail};
 use glam::{Mat4, UVec4, Vec3, Vec4};
 use gpu::{
-    AUX_DISPATCH, AUX_HEADER_WORDS, AUX_HISTOGRAM, AUX_LARGE, AUX_OVERFLOW, AUX_PAIRS, AUX_SAMPLES,
-    AUX_TESTS, HISTOGRAM_BINS, IrregularShared, IrregularUniform, LARGE_CAPACITY, MAX_FACES,
-    storage_buffer, workgroups_for,
+    AUX_DISPATCH, AUX_HEADER_WORDS, AUX_HISTOGRAM, AUX_JOBS, AUX_LONGEST, AUX_OVERFLOW, AUX_PAIRS,
+    AUX_SAMPLES, AUX_TESTS, HISTOGRAM_BINS, IrregularShared, IrregularUniform, JOB_CAPACITY,
+    MAX_FACES, SCAN_BLOCK, binning_words, grid_of_workgroups, storage_buffer, workgroups_for,
 };
 use std::sync::Arc;
 
@@ -39,12 +41,12 @@ const GRID: ParamSpec = ParamSpec::int(
     4096,
     "cells per side of each light-space face the samples are binned into (directional lights: one face; point and spot lights: six cube faces); about one cell per pixel keeps the lists short",
 );
-const LARGE_CELLS: ParamSpec = ParamSpec::int(
-    "large_cells",
+const LARGE_SAMPLES: ParamSpec = ParamSpec::int(
+    "large_samples",
     256,
     1,
-    4096,
-    "a triangle whose image covers more cells than this is split into chunks of 1024 cells, each tested by a workgroup of 64 threads, not by the triangle's one thread (one invocation looping over many cells runs long: llvmpipe ends a shader's loops after 65535 iterations, GPUs have watchdogs)",
+    16384,
+    "a triangle whose cells hold more samples than this is split into jobs of 1024 samples, each tested by a workgroup of 64 threads, not by the triangle's one thread (one invocation looping over many samples runs long: llvmpipe ends a shader's loops after 65535 iterations, GPUs have watchdogs)",
 );
 
 pub static FAMILY: Family = Family {
@@ -60,7 +62,7 @@ pub static FAMILY: Family = Family {
         curved_receivers: true,
         cutout_casters: true,
     },
-    params: &[GRID, LARGE_CELLS, super::raytraced::OFFSET_ULPS],
+    params: &[GRID, LARGE_SAMPLES, super::raytraced::OFFSET_ULPS],
     presets: &[Preset {
         name: "default",
         summary: "1024² cells per face, one sample per pixel, cut-outs alpha-tested at full resolution",
@@ -78,7 +80,7 @@ pub static FAMILY: Family = Family {
 #[derive(Clone, Copy, Debug)]
 struct IrregularConfig {
     grid: u32,
-    large_cells: u32,
+    large_samples: u32,
     offset_ulps: f32,
 }
 
@@ -86,7 +88,7 @@ impl IrregularConfig {
     fn parse(p: &ParamValues) -> Result<IrregularConfig> {
         Ok(IrregularConfig {
             grid: p.int(&GRID)?,
-            large_cells: p.int(&LARGE_CELLS)?,
+            large_samples: p.int(&LARGE_SAMPLES)?,
             offset_ulps: p.float(&super::raytraced::OFFSET_ULPS)?,
         })
     }
@@ -98,10 +100,12 @@ struct ListStats {
     samples: u32,
     pairs: u32,
     tests: u32,
-    large: u32,
+    jobs: u32,
+    /// Samples of the jobs that did not fit the list.
     overflow: u32,
     /// Cells holding n samples (n from 1; the last bin: that many or more).
     histogram: [u32; HISTOGRAM_BINS],
+    longest: u32,
 }
 
 impl ListStats {
@@ -112,9 +116,10 @@ impl ListStats {
             samples: w[AUX_SAMPLES],
             pairs: w[AUX_PAIRS],
             tests: w[AUX_TESTS],
-            large: w[AUX_LARGE],
+            jobs: w[AUX_JOBS],
             overflow: w[AUX_OVERFLOW],
             histogram,
+            longest: w[AUX_LONGEST],
         }
     }
 
@@ -136,16 +141,18 @@ impl ListStats {
 struct Buffers {
     key: (u32, u32, u64, usize, u32),
     uniform: wgpu::Buffer,
-    heads: wgpu::Buffer,
+    /// Counts, offsets and prefix-sum partials (`cells` of irregular.wgsl).
+    binning: wgpu::Buffer,
+    cell_count: u64,
     samples: wgpu::Buffer,
     marks: wgpu::Buffer,
     triangles: wgpu::Buffer,
     triangle_count: u32,
-    /// Chunks the large list holds.
-    large_capacity: u32,
+    /// Jobs the job list holds.
+    job_capacity: u32,
     aux: wgpu::Buffer,
-    /// The large pass's indirect arguments, copied from `aux`.
-    large_args: wgpu::Buffer,
+    /// The job pass's indirect arguments, copied from `aux`.
+    job_args: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
 }
 
@@ -156,6 +163,14 @@ pub struct IrregularZBuffer {
     readback: crate::gpu::AsyncReadback,
     pending: bool,
     stats: ListStats,
+}
+
+/// The job list's capacity: four jobs per caster triangle and face, or twice
+/// the jobs a frame asked for where they overflowed, within [`JOB_CAPACITY`].
+fn job_capacity(triangles: u64, faces: u64, asked: u64) -> u64 {
+    (4 * triangles * faces)
+        .max(2 * asked)
+        .clamp(JOB_CAPACITY.0, JOB_CAPACITY.1)
 }
 
 impl IrregularZBuffer {
@@ -175,29 +190,39 @@ impl IrregularZBuffer {
     }
 
     /// The buffers for this frame, made again where the frame size, the
-    /// scene, the light's face count or the grid changed; sizes past the
-    /// device's storage-buffer limit or the memory budget are an error.
+    /// scene, the light's face count or the grid changed, or where the last
+    /// frame's jobs overflowed the list; sizes past the device's
+    /// storage-buffer limit or the memory budget are an error.
     fn ensure_buffers(&mut self, ctx: &MaskContext, faces: usize) -> Result<&Buffers> {
         let (w, h) = (ctx.frame.width(), ctx.frame.height());
         let key = (w, h, scene_fingerprint(ctx.scene), faces, self.config.grid);
-        if self.buffers.as_ref().is_some_and(|b| b.key == key) {
+        let asked = self.stats.jobs as u64;
+        if self
+            .buffers
+            .as_ref()
+            .is_some_and(|b| b.key == key && asked <= b.job_capacity as u64)
+        {
             return Ok(self.buffers.as_ref().expect("checked"));
         }
+        let asked = if self.buffers.as_ref().is_some_and(|b| b.key == key) {
+            asked
+        } else {
+            0
+        };
         self.buffers = None;
         let gpu = ctx.gpu;
         let triangles = casters::caster_triangles(ctx.scene);
-        let cells = faces as u64 * self.config.grid as u64 * self.config.grid as u64;
+        let cell_count = faces as u64 * self.config.grid as u64 * self.config.grid as u64;
         let pixels = w as u64 * h as u64;
-        let large_capacity =
-            (4 * triangles.len() as u64 * faces as u64).clamp(LARGE_CAPACITY.0, LARGE_CAPACITY.1);
+        let capacity = job_capacity(triangles.len() as u64, faces as u64, asked);
         let sizes = [
-            ("cell lists (grid)", cells * 4),
-            ("samples and their lists", pixels * 16),
-            ("caster triangles", triangles.len() as u64 * 64),
             (
-                "large-triangle list",
-                (AUX_HEADER_WORDS + 2 * large_capacity) * 4,
+                "cell counts and offsets (grid)",
+                binning_words(cell_count) * 4,
             ),
+            ("samples", pixels * 16),
+            ("caster triangles", triangles.len() as u64 * 64),
+            ("job list", (AUX_HEADER_WORDS + 2 * capacity) * 4),
         ];
         let limit = gpu.device.limits().max_storage_buffer_binding_size;
         for (what, bytes) in sizes {
@@ -210,49 +235,45 @@ impl IrregularZBuffer {
             }
         }
         let total = sizes.iter().map(|s| s.1).sum::<u64>() + pixels * 4;
-        gpu.check_allocation("irregular (grid, lists, casters)", (1, 1, 1), total)?;
+        gpu.check_allocation("irregular (grid, samples, casters)", (1, 1, 1), total)?;
         let uniform = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("irregular uniform"),
             size: std::mem::size_of::<IrregularUniform>() as u64,
             usage: crate::gpu::uniform_usage(gpu),
             mapped_at_creation: false,
         });
-        let heads = storage_buffer(gpu, "irregular cell lists", sizes[0].1);
-        let samples = storage_buffer(gpu, "irregular samples", pixels * 16);
+        let binning = storage_buffer(gpu, "irregular cell counts and offsets", sizes[0].1);
+        let samples = storage_buffer(gpu, "irregular samples", sizes[1].1);
         let marks = storage_buffer(gpu, "irregular marks", pixels * 4);
         let triangle_buffer = storage_buffer(gpu, "irregular casters", sizes[2].1);
         gpu.queue
             .write_buffer(&triangle_buffer, 0, bytemuck::cast_slice(&triangles));
-        let aux = storage_buffer(gpu, "irregular header and large list", sizes[3].1);
-        fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-            wgpu::BindGroupEntry {
+        let aux = storage_buffer(gpu, "irregular header and job list", sizes[3].1);
+        let buffers = [&uniform, &binning, &samples, &marks, &triangle_buffer, &aux];
+        let entries: Vec<_> = (0u32..)
+            .zip(buffers)
+            .map(|(binding, buffer)| wgpu::BindGroupEntry {
                 binding,
                 resource: buffer.as_entire_binding(),
-            }
-        }
+            })
+            .collect();
         let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("irregular"),
             layout: &self.shared.layout,
-            entries: &[
-                entry(0, &uniform),
-                entry(1, &heads),
-                entry(2, &samples),
-                entry(3, &marks),
-                entry(4, &triangle_buffer),
-                entry(5, &aux),
-            ],
+            entries: &entries,
         });
         Ok(self.buffers.insert(Buffers {
             key,
             uniform,
-            heads,
+            binning,
+            cell_count,
             samples,
             marks,
             triangles: triangle_buffer,
             triangle_count: triangles.len() as u32,
-            large_capacity: large_capacity as u32,
+            job_capacity: capacity as u32,
             aux,
-            large_args: storage_buffer(gpu, "irregular large dispatch", 12),
+            job_args: storage_buffer(gpu, "irregular job dispatch", 12),
             bind_group,
         }))
     }
@@ -305,55 +326,29 @@ impl ShadowTechnique for IrregularZBuffer {
                 ctx.frame.width(),
                 ctx.frame.height(),
             ),
-            work: UVec4::new(b.triangle_count, config.large_cells, b.large_capacity, 0),
+            work: UVec4::new(
+                b.triangle_count,
+                config.large_samples,
+                b.job_capacity,
+                b.cell_count as u32,
+            ),
             offset: Vec4::new(config.offset_ulps, 0.0, 0.0, 0.0),
         };
         uniform.views[..faces].copy_from_slice(&views);
         ctx.gpu
             .queue
             .write_buffer(&b.uniform, 0, bytemuck::bytes_of(&uniform));
-        encoder.clear_buffer(&b.heads, 0, None);
+        encoder.clear_buffer(&b.binning, 0, Some(b.cell_count * 4));
         encoder.clear_buffer(&b.marks, 0, None);
         encoder.clear_buffer(&b.aux, 0, Some(AUX_HEADER_WORDS * 4));
-        for (label, pipeline) in [
-            ("irregular bounds", &shared.bounds),
-            ("irregular binning", &shared.bin),
-        ] {
+        let fullscreen = |encoder: &mut wgpu::CommandEncoder, label, pipeline| {
             let mut pass = super::mask_pass(encoder, ctx, label);
             ctx.bind_frame_groups(&mut pass);
             pass.set_bind_group(crate::frame::OWN_GROUP, &b.bind_group, &[]);
             pass.set_pipeline(pipeline);
             pass.draw(0..3, 0..1);
-        }
-        let cells = faces as u64 * config.grid as u64 * config.grid as u64;
-        let dispatches = [
-            (
-                "irregular list lengths",
-                &shared.histogram,
-                Some(workgroups_for(cells)),
-            ),
-            (
-                "irregular triangles",
-                &shared.triangles,
-                Some(workgroups_for(b.triangle_count as u64)),
-            ),
-            (
-                "irregular large dispatch",
-                &shared.large_dispatch,
-                Some((1, 1)),
-            ),
-            ("irregular large triangles", &shared.large, None),
-        ];
-        for (label, pipeline, groups) in dispatches {
-            if groups.is_none() {
-                encoder.copy_buffer_to_buffer(
-                    &b.aux,
-                    AUX_DISPATCH as u64 * 4,
-                    &b.large_args,
-                    0,
-                    12,
-                );
-            }
+        };
+        let compute = |encoder: &mut wgpu::CommandEncoder, label, pipeline, groups| {
             let mut pass = ctx.gpu.compute_pass(
                 encoder,
                 &wgpu::ComputePassDescriptor {
@@ -365,16 +360,43 @@ impl ShadowTechnique for IrregularZBuffer {
             pass.set_pipeline(pipeline);
             match groups {
                 Some((x, y)) => pass.dispatch_workgroups(x, y, 1),
-                None => pass.dispatch_workgroups_indirect(&b.large_args, 0),
+                None => pass.dispatch_workgroups_indirect(&b.job_args, 0),
             }
-        }
-        {
-            let mut pass = super::mask_pass(encoder, ctx, "irregular mask");
-            ctx.bind_frame_groups(&mut pass);
-            pass.set_bind_group(crate::frame::OWN_GROUP, &b.bind_group, &[]);
-            pass.set_pipeline(&shared.mask);
-            pass.draw(0..3, 0..1);
-        }
+        };
+        fullscreen(encoder, "irregular bounds", &shared.bounds);
+        fullscreen(encoder, "irregular counts", &shared.count);
+        let blocks = grid_of_workgroups(b.cell_count.div_ceil(SCAN_BLOCK));
+        compute(
+            encoder,
+            "irregular prefix sum",
+            &shared.scan_blocks,
+            Some(blocks),
+        );
+        compute(
+            encoder,
+            "irregular partials",
+            &shared.scan_partials,
+            Some((1, 1)),
+        );
+        let per_cell = Some(workgroups_for(b.cell_count));
+        compute(encoder, "irregular offsets", &shared.scan_add, per_cell);
+        fullscreen(encoder, "irregular scatter", &shared.scatter);
+        let per_triangle = Some(workgroups_for(b.triangle_count as u64));
+        compute(
+            encoder,
+            "irregular triangles",
+            &shared.triangles,
+            per_triangle,
+        );
+        compute(
+            encoder,
+            "irregular job dispatch",
+            &shared.job_dispatch,
+            Some((1, 1)),
+        );
+        encoder.copy_buffer_to_buffer(&b.aux, AUX_DISPATCH as u64 * 4, &b.job_args, 0, 12);
+        compute(encoder, "irregular jobs", &shared.jobs, None);
+        fullscreen(encoder, "irregular mask", &shared.mask);
         if let Some(target) = self.readback.target() {
             let aux = &self.buffers.as_ref().expect("made above").aux;
             encoder.copy_buffer_to_buffer(aux, 0, target, 0, AUX_HEADER_WORDS * 4);
@@ -401,8 +423,9 @@ impl ShadowTechnique for IrregularZBuffer {
             ("list_length_p99", s.length_quantile(0.99) as f64),
             ("triangle_cell_pairs", s.pairs as f64),
             ("sample_tests", s.tests as f64),
-            ("large_triangle_chunks", s.large as f64),
-            ("chunk_overflows", s.overflow as f64),
+            ("list_length_max", s.longest as f64),
+            ("large_triangle_jobs", s.jobs as f64),
+            ("job_overflow_samples", s.overflow as f64),
         ]
     }
 
@@ -410,7 +433,7 @@ impl ShadowTechnique for IrregularZBuffer {
         self.buffers.as_ref().map_or(0, |b| {
             [
                 &b.uniform,
-                &b.heads,
+                &b.binning,
                 &b.samples,
                 &b.marks,
                 &b.triangles,
