@@ -1,6 +1,6 @@
 //! The irregular z-buffer: masks against the ray-traced reference under
 //! every light type, cut-outs, the samples binned, large triangles in
-//! chunks, and a grid past the device's limits.
+//! jobs, crowded cells, and a grid past the device's limits.
 
 mod common;
 use common::*;
@@ -81,6 +81,28 @@ fn large_triangles_in_jobs_give_the_same_mask() {
     assert_eq!(counter(&hf, "job_overflow_samples"), 0.0);
 }
 
+/// Where a coarse grid crowds thousands of a ground camera's samples into
+/// one cell, every one is still tested (jobs of 1024 samples, not one
+/// thread looping past the driver's loop budget): the mask is the
+/// reference's.
+#[test]
+fn crowded_cells_are_tested_in_full() {
+    let s = preset("landscape", "ground", "sun-side");
+    for params in [&["grid=64"][..], &["grid=64", "large_samples=1"][..]] {
+        let mut hf = rendered_frame(&s, "irregular", params, 192, 108);
+        render_again(&mut hf, &s);
+        assert!(counter(&hf, "list_length_max") > 2048.0, "{params:?}");
+        assert!(counter(&hf, "large_triangle_jobs") > 0.0, "{params:?}");
+        let spec = format!("irregular[{}]", params.join(","));
+        let m = compare(&s, &spec, (192, 108)).mask;
+        assert!(m.reference_shadowed_pct > 1.0, "{params:?}: {m:?}");
+        assert!(
+            m.all.total_pct <= 0.02 && m.interior_mae <= 0.002,
+            "{params:?}: {m:?}"
+        );
+    }
+}
+
 /// A grid whose lists exceed the device's largest storage buffer is a
 /// clear error and exit code 2, not a wrong mask.
 #[test]
@@ -104,5 +126,95 @@ fn a_grid_past_the_device_limit_is_an_error() {
         stderr(&o).contains("largest storage buffer"),
         "{}",
         stderr(&o)
+    );
+}
+
+/// Sub-pixel samples converge to the covered fraction: under a sun straight
+/// down, a square turned about the vertical casts a shadow whose edges cross
+/// pixels at an angle; each edge pixel's visibility approaches the share of
+/// its floor footprint outside the shadow (integrated on 32 × 32 points),
+/// while one sample per pixel is 0 or 1 there; the reference with as many
+/// samples agrees.
+#[test]
+fn sub_pixel_samples_converge_to_the_covered_fraction() {
+    use glam::{Mat4, Vec2, Vec3};
+    use shadowlab::scene::{Camera, Light, Material, Scene, shapes};
+    let turn = 0.4f32;
+    let mut s = Scene::new("turned square");
+    let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
+    let floor = s.add_mesh(shapes::plane(20.0, 20.0, 4));
+    s.add_object("Floor", floor, grey, Mat4::IDENTITY);
+    let quad = s.add_mesh(shapes::plane(2.0, 2.0, 1));
+    s.add_object(
+        "Square",
+        quad,
+        grey,
+        Mat4::from_translation(Vec3::new(0.0, 1.0, 0.0))
+            * Mat4::from_rotation_y(turn)
+            * Mat4::from_rotation_x(std::f32::consts::PI),
+    );
+    s.lights = vec![Light::directional(Vec3::NEG_Y, 1.0)];
+    s.camera = Camera {
+        up: Vec3::NEG_Z,
+        ..Camera::new(Vec3::new(0.3, 5.0, 0.2), Vec3::new(0.3, 0.0, 0.2))
+    };
+    s.finalize().unwrap();
+    let (w, h) = (96u32, 96u32);
+    let view_proj = s.camera.projection(1.0) * s.camera.view();
+    let inv = view_proj.inverse();
+    let lit_at = |fx: f32, fy: f32| {
+        let ndc = Vec2::new(fx / w as f32 * 2.0 - 1.0, 1.0 - fy / h as f32 * 2.0);
+        let a = inv.project_point3(ndc.extend(0.0));
+        let b = inv.project_point3(ndc.extend(0.5));
+        let p = a + (b - a) * (a.y / (a.y - b.y));
+        let q = Mat4::from_rotation_y(-turn).transform_point3(p);
+        q.x.abs() > 1.0 || q.z.abs() > 1.0
+    };
+    const SUB: u32 = 32;
+    let covered: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32, (i / w) as f32);
+            let lit = (0..SUB * SUB)
+                .filter(|k| {
+                    let (u, v) = ((k % SUB) as f32 + 0.5, (k / SUB) as f32 + 0.5);
+                    lit_at(x + u / SUB as f32, y + v / SUB as f32)
+                })
+                .count();
+            lit as f32 / (SUB * SUB) as f32
+        })
+        .collect();
+    let edge: Vec<usize> = (0..covered.len())
+        .filter(|&i| covered[i] > 0.02 && covered[i] < 0.98)
+        .collect();
+    assert!(edge.len() > 100, "{} edge pixels", edge.len());
+    let error = |technique: &str, n: u32| {
+        let set = format!("pixel_samples={n}");
+        let mask = mask_of(&s, technique, &[&set], w, h);
+        let interior = (0..mask.len())
+            .filter(|&i| covered[i] == 0.0 || covered[i] == 1.0)
+            .filter(|&i| (mask[i] - covered[i]).abs() > 0.01)
+            .count();
+        assert_eq!(interior, 0, "{n} samples: interior pixels wrong");
+        edge.iter()
+            .map(|&i| (mask[i] - covered[i]).abs())
+            .sum::<f32>()
+            / edge.len() as f32
+    };
+    let errors: Vec<f32> = [1, 4, 16, 32]
+        .into_iter()
+        .map(|n| error("irregular", n))
+        .collect();
+    eprintln!(
+        "edge pixels {}, MAE for 1, 4, 16, 32 samples: {errors:?}",
+        edge.len()
+    );
+    assert!(errors[0] > 0.15, "{errors:?}");
+    assert!(errors[1] < errors[0] && errors[2] < errors[1], "{errors:?}");
+    assert!(errors[2] < 0.06 && errors[3] < 0.04, "{errors:?}");
+    // The supersampled reference samples the same points.
+    let reference = error("raytraced", 32);
+    assert!(
+        (reference - errors[3]).abs() < 0.005,
+        "{reference} {errors:?}"
     );
 }

@@ -50,6 +50,7 @@ pub struct IrregularUniform {
     pub grid: UVec4,
     pub work: UVec4,
     pub offset: Vec4,
+    pub pixel: UVec4,
 }
 
 /// The family's layout and pipelines, shared per device.
@@ -171,7 +172,7 @@ mod tests {
         assert_struct_matches(
             &source,
             "Irregular",
-            crate::field_offsets!(IrregularUniform; views, light, grid, work, offset),
+            crate::field_offsets!(IrregularUniform; views, light, grid, work, offset, pixel),
             std::mem::size_of::<IrregularUniform>(),
         );
         assert_struct_matches(

@@ -20,6 +20,9 @@ struct Irregular {
     work: vec4u,
     // x ray-origin offset in ULPs (the reference's rule), yzw unused
     offset: vec4f,
+    // x samples per pixel (1: its centre; up to 32, one mark bit each), yzw
+    // unused
+    pixel: vec4u,
 };
 
 struct CasterTriangle {
@@ -38,10 +41,11 @@ struct CasterTriangle {
 // prefix sum of the counts, the first sample of each cell in `samples`
 // (its last word the total); then the prefix sum's per-block partials.
 @group(2) @binding(1) var<storage, read_write> cells: array<atomic<u32>>;
-// The samples sorted by cell: xyz the shadow-ray origin, w its pixel
-// (bits), so a cell's, and a row of cells', samples are contiguous.
+// The samples sorted by cell: xyz the shadow-ray origin, w its pixel · 32
+// plus its index within the pixel (bits), so a cell's, and a row of
+// cells', samples are contiguous.
 @group(2) @binding(2) var<storage, read_write> samples: array<vec4f>;
-// Per pixel: nonzero once a caster blocks its sample.
+// Per pixel: bit k set once a caster blocks its sample k.
 @group(2) @binding(3) var<storage, read_write> marks: array<atomic<u32>>;
 @group(2) @binding(4) var<storage, read> triangles: array<CasterTriangle>;
 // The header (AUX_* words: counters, list-length histogram, per-face bounds)
@@ -99,15 +103,56 @@ fn offset_origin(p: vec3f, n: vec3f, ulps: f32) -> vec3f {
     return out;
 }
 
-// The shadow-ray origin of the pixel's surface; w 0 where the pixel shows
-// no surface.
-fn sample_origin(px: vec2u) -> vec4f {
+// The G-buffer's surface at a pixel: position, unit normal, whether there
+// is one.
+struct Surface {
+    p: vec3f,
+    n: vec3f,
+    seen: bool,
+};
+
+fn surface(px: vec2u) -> Surface {
     let pos = textureLoad(gbuffer_position, px, 0);
-    if pos.w < 0.5 {
-        return vec4f(0.0);
+    var s: Surface;
+    s.seen = pos.w >= 0.5;
+    s.p = pos.xyz;
+    s.n = normalize(textureLoad(gbuffer_normal, px, 0).xyz);
+    return s;
+}
+
+// Sub-pixel sample `k` of `count` within a pixel, in [0, 1)²: Hammersley
+// (x stratified, y the base-2 radical inverse), centred in its strata;
+// the twin of the reference's `pixel_sample_offset`.
+fn pixel_sample_offset(k: u32, count: u32) -> vec2f {
+    let n = f32(count);
+    return vec2f((f32(k) + 0.5) / n, f32(reverseBits(k)) * 2.3283064e-10 + 0.5 / n);
+}
+
+// Where sample `k` of pixel `px` lies on the surface's plane: the camera
+// ray through it met with the plane, written relative to the surface point
+// (the twin of the reference's `pixel_sample_point`).
+fn sub_sample_point(px: vec2u, k: u32, s: Surface) -> vec3f {
+    let count = irr.pixel.x;
+    if count <= 1u {
+        return s.p;
     }
-    let n = normalize(textureLoad(gbuffer_normal, px, 0).xyz);
-    return vec4f(offset_origin(pos.xyz, n, irr.offset.x), 1.0);
+    let uv = (vec2f(px) + pixel_sample_offset(k, count)) / frame.size.xy;
+    let ndc = vec2f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
+    let a = frame.inv_view_proj * vec4f(ndc, 0.0, 1.0);
+    let b = frame.inv_view_proj * vec4f(ndc, 0.5, 1.0);
+    let near = a.xyz / a.w;
+    let d = normalize(b.xyz / b.w - near);
+    let along = dot(d, s.n);
+    if abs(along) < 1e-6 {
+        return s.p;
+    }
+    let to_near = near - s.p;
+    return s.p + to_near - d * (dot(to_near, s.n) / along);
+}
+
+// The shadow-ray origin of sample `k` of the pixel's surface.
+fn sample_origin(px: vec2u, k: u32, s: Surface) -> vec3f {
+    return offset_origin(sub_sample_point(px, k, s), s.n, irr.offset.x);
 }
 
 // The cube face a direction from a local light falls in (+x, −x, +y, −y,
@@ -163,10 +208,12 @@ fn cell_index(face: u32, c: vec2i) -> u32 {
 // Pass 1, per pixel: the bounds of the samples' images on each face.
 @fragment
 fn fs_bounds(@builtin(position) frag: vec4f) -> @location(0) vec4f {
-    let o = sample_origin(vec2u(frag.xy));
-    if o.w > 0.0 {
-        let face = face_of(o.xyz);
-        let v = (irr.views[face] * vec4f(o.xyz, 1.0)).xyz;
+    let px = vec2u(frag.xy);
+    let s = surface(px);
+    for (var k = 0u; s.seen && k < irr.pixel.x; k++) {
+        let o = sample_origin(px, k, s);
+        let face = face_of(o);
+        let v = (irr.views[face] * vec4f(o, 1.0)).xyz;
         if !is_local() || v.z < 0.0 {
             let c = image_of(v);
             let b = AUX_BOUNDS + face * 4u;
@@ -179,24 +226,22 @@ fn fs_bounds(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     return vec4f(1.0);
 }
 
-// The cell a seen sample is binned in, or N (irr.work.w) where the pixel
-// shows no surface or lies behind a local light's face.
+// The cell sample `k` of a seen pixel is binned in, or N (irr.work.w)
+// where it lies behind a local light's face.
 struct Binned {
     origin: vec3f,
     cell: u32,
 };
 
-fn binned(px: vec2u) -> Binned {
+fn binned(px: vec2u, k: u32, s: Surface) -> Binned {
     var b: Binned;
     b.cell = irr.work.w;
-    let o = sample_origin(px);
-    if o.w > 0.0 {
-        let face = face_of(o.xyz);
-        let v = (irr.views[face] * vec4f(o.xyz, 1.0)).xyz;
-        if !is_local() || v.z < 0.0 {
-            b.origin = o.xyz;
-            b.cell = cell_index(face, clamp_cell(cell_of(face_bounds(face), image_of(v))));
-        }
+    let o = sample_origin(px, k, s);
+    let face = face_of(o);
+    let v = (irr.views[face] * vec4f(o, 1.0)).xyz;
+    if !is_local() || v.z < 0.0 {
+        b.origin = o;
+        b.cell = cell_index(face, clamp_cell(cell_of(face_bounds(face), image_of(v))));
     }
     return b;
 }
@@ -204,10 +249,14 @@ fn binned(px: vec2u) -> Binned {
 // Pass 2, per pixel: each cell's samples counted.
 @fragment
 fn fs_count(@builtin(position) frag: vec4f) -> @location(0) vec4f {
-    let b = binned(vec2u(frag.xy));
-    if b.cell < irr.work.w {
-        atomicAdd(&cells[b.cell], 1u);
-        atomicAdd(&aux[AUX_SAMPLES], 1u);
+    let px = vec2u(frag.xy);
+    let s = surface(px);
+    for (var k = 0u; s.seen && k < irr.pixel.x; k++) {
+        let b = binned(px, k, s);
+        if b.cell < irr.work.w {
+            atomicAdd(&cells[b.cell], 1u);
+            atomicAdd(&aux[AUX_SAMPLES], 1u);
+        }
     }
     return vec4f(1.0);
 }
@@ -296,15 +345,19 @@ fn cs_scan_add(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups
     }
 }
 
-// Pass 4, per pixel: the sample written to its cell's run of `samples`.
+// Pass 4, per pixel: its samples written to their cells' runs of `samples`.
 @fragment
 fn fs_scatter(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let px = vec2u(frag.xy);
-    let b = binned(px);
-    if b.cell < irr.work.w {
-        let left = atomicSub(&cells[b.cell], 1u);
-        let slot = atomicLoad(&cells[irr.work.w + b.cell]) + left - 1u;
-        samples[slot] = vec4f(b.origin, bitcast<f32>(px.y * irr.grid.z + px.x));
+    let s = surface(px);
+    let pixel = px.y * irr.grid.z + px.x;
+    for (var k = 0u; s.seen && k < irr.pixel.x; k++) {
+        let b = binned(px, k, s);
+        if b.cell < irr.work.w {
+            let left = atomicSub(&cells[b.cell], 1u);
+            let slot = atomicLoad(&cells[irr.work.w + b.cell]) + left - 1u;
+            samples[slot] = vec4f(b.origin, bitcast<f32>(pixel * 32u + k));
+        }
     }
     return vec4f(1.0);
 }
@@ -352,12 +405,14 @@ fn blocks(t: CasterTriangle, o: vec3f) -> bool {
 // Sample `slot` tested against triangle `t`; whether it needed a test.
 fn test_sample(t: CasterTriangle, slot: u32) -> u32 {
     let sample = samples[slot];
-    let pixel = bitcast<u32>(sample.w);
-    if atomicLoad(&marks[pixel]) != 0u {
+    let id = bitcast<u32>(sample.w);
+    let pixel = id / 32u;
+    let bit = 1u << (id % 32u);
+    if (atomicLoad(&marks[pixel]) & bit) != 0u {
         return 0u;
     }
     if blocks(t, sample.xyz) {
-        atomicStore(&marks[pixel], 1u);
+        atomicOr(&marks[pixel], bit);
     }
     return 1u;
 }
@@ -508,10 +563,10 @@ fn cs_jobs(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups:
     atomicAdd(&aux[AUX_TESTS], tests);
 }
 
-// Pass 8, per pixel: the mask, 0 where a caster blocks the sample.
+// Pass 8, per pixel: the mask, the fraction of its samples no caster blocks.
 @fragment
 fn fs_mask(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let px = vec2u(frag.xy);
-    let blocked = atomicLoad(&marks[px.y * irr.grid.z + px.x]) != 0u;
-    return vec4f(select(1.0, 0.0, blocked));
+    let blocked = countOneBits(atomicLoad(&marks[px.y * irr.grid.z + px.x]));
+    return vec4f(1.0 - f32(blocked) / f32(max(irr.pixel.x, 1u)));
 }

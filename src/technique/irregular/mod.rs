@@ -62,12 +62,24 @@ pub static FAMILY: Family = Family {
         curved_receivers: true,
         cutout_casters: true,
     },
-    params: &[GRID, LARGE_SAMPLES, super::raytraced::OFFSET_ULPS],
-    presets: &[Preset {
-        name: "default",
-        summary: "1024² cells per face, one sample per pixel, cut-outs alpha-tested at full resolution",
-        values: &[],
-    }],
+    params: &[
+        GRID,
+        LARGE_SAMPLES,
+        super::raytraced::PIXEL_SAMPLES,
+        super::raytraced::OFFSET_ULPS,
+    ],
+    presets: &[
+        Preset {
+            name: "default",
+            summary: "1024² cells per face, one sample per pixel, cut-outs alpha-tested at full resolution",
+            values: &[],
+        },
+        Preset {
+            name: "subpixel",
+            summary: "16 samples per pixel on its surface plane (frustum-traced raster shadows, Wyman, Hoetzlein & Lefohn 2015): the fraction of the pixel's footprint that sees the light; measure it against `raytraced:subpixel`",
+            values: &[(super::raytraced::PIXEL_SAMPLES.name, "16")],
+        },
+    ],
     create: |gpu, params| {
         Ok(Box::new(IrregularZBuffer::new(
             gpu,
@@ -81,6 +93,7 @@ pub static FAMILY: Family = Family {
 struct IrregularConfig {
     grid: u32,
     large_samples: u32,
+    pixel_samples: u32,
     offset_ulps: f32,
 }
 
@@ -89,6 +102,7 @@ impl IrregularConfig {
         Ok(IrregularConfig {
             grid: p.int(&GRID)?,
             large_samples: p.int(&LARGE_SAMPLES)?,
+            pixel_samples: p.int(&super::raytraced::PIXEL_SAMPLES)?,
             offset_ulps: p.float(&super::raytraced::OFFSET_ULPS)?,
         })
     }
@@ -139,7 +153,7 @@ impl ListStats {
 
 /// The buffers of one frame size, scene and light shape.
 struct Buffers {
-    key: (u32, u32, u64, usize, u32),
+    key: (u32, u32, u64, usize, u32, u32),
     uniform: wgpu::Buffer,
     /// Counts, offsets and prefix-sum partials (`cells` of irregular.wgsl).
     binning: wgpu::Buffer,
@@ -195,7 +209,14 @@ impl IrregularZBuffer {
     /// storage-buffer limit or the memory budget are an error.
     fn ensure_buffers(&mut self, ctx: &MaskContext, faces: usize) -> Result<&Buffers> {
         let (w, h) = (ctx.frame.width(), ctx.frame.height());
-        let key = (w, h, scene_fingerprint(ctx.scene), faces, self.config.grid);
+        let key = (
+            w,
+            h,
+            scene_fingerprint(ctx.scene),
+            faces,
+            self.config.grid,
+            self.config.pixel_samples,
+        );
         let asked = self.stats.jobs as u64;
         if self
             .buffers
@@ -220,7 +241,7 @@ impl IrregularZBuffer {
                 "cell counts and offsets (grid)",
                 binning_words(cell_count) * 4,
             ),
-            ("samples", pixels * 16),
+            ("samples", pixels * self.config.pixel_samples as u64 * 16),
             ("caster triangles", triangles.len() as u64 * 64),
             ("job list", (AUX_HEADER_WORDS + 2 * capacity) * 4),
         ];
@@ -333,6 +354,7 @@ impl ShadowTechnique for IrregularZBuffer {
                 b.cell_count as u32,
             ),
             offset: Vec4::new(config.offset_ulps, 0.0, 0.0, 0.0),
+            pixel: UVec4::new(config.pixel_samples, 0, 0, 0),
         };
         uniform.views[..faces].copy_from_slice(&views);
         ctx.gpu
@@ -495,6 +517,17 @@ mod tests {
         );
         assert_eq!(sun.len(), 1);
         assert!(sun[0].transform_vector3(Vec3::NEG_Y).z < -0.999);
+    }
+
+    /// The job list holds four jobs per triangle and face; after a frame
+    /// whose jobs overflowed it, twice what that frame asked for; always
+    /// within its bounds.
+    #[test]
+    fn the_job_list_grows_after_an_overflow() {
+        assert_eq!(job_capacity(10, 1, 0), JOB_CAPACITY.0);
+        assert_eq!(job_capacity(100_000, 6, 0), 2_400_000);
+        assert_eq!(job_capacity(100_000, 6, 3_000_000), 6_000_000);
+        assert_eq!(job_capacity(100_000, 6, 1 << 30), JOB_CAPACITY.1);
     }
 
     /// The list-length quantiles come from the histogram of non-empty cells.

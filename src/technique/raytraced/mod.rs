@@ -13,7 +13,7 @@ use crate::scene::area::{concentric_disk, stratified_square};
 use crate::scene::bvh::{CasterBvh, TraceKernel};
 use crate::scene::{Light, LightArea, LightType};
 use anyhow::Result;
-use glam::Vec3;
+use glam::{Mat4, UVec2, Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
@@ -24,6 +24,16 @@ const SAMPLES: ParamSpec = ParamSpec::int(
     1,
     4096,
     "shadow rays per pixel for area lights (stratified); hard lights use one",
+);
+/// Sub-pixel samples (shared with `irregular`, whose `subpixel` preset this
+/// reference measures): each pixel's visibility is the mean over points of
+/// its footprint on its surface plane.
+pub const PIXEL_SAMPLES: ParamSpec = ParamSpec::int(
+    "pixel_samples",
+    1,
+    1,
+    32,
+    "visibility samples per pixel, on the pixel's surface plane (where the camera rays through a Hammersley pattern of the pixel meet the plane of its G-buffer surface): 1 samples the pixel's centre; more give the fraction of the pixel's footprint that sees the light (a supersampled reference for sub-pixel techniques)",
 );
 pub const OFFSET_ULPS: ParamSpec = ParamSpec::float(
     "offset_ulps",
@@ -58,7 +68,7 @@ pub static FAMILY: Family = Family {
         curved_receivers: true,
         cutout_casters: true,
     },
-    params: &[SAMPLES, OFFSET_ULPS, KERNEL],
+    params: &[SAMPLES, PIXEL_SAMPLES, OFFSET_ULPS, KERNEL],
     presets: &[
         Preset {
             name: "default",
@@ -69,6 +79,11 @@ pub static FAMILY: Family = Family {
             name: "reference",
             summary: "1024 samples for area lights (soft-shadow reference)",
             values: &[(SAMPLES.name, "1024")],
+        },
+        Preset {
+            name: "subpixel",
+            summary: "32 samples per pixel on its surface plane (the supersampled reference of `irregular:subpixel`)",
+            values: &[(PIXEL_SAMPLES.name, "32")],
         },
     ],
     create: |_, params| {
@@ -88,6 +103,8 @@ pub static FAMILY: Family = Family {
 pub struct ReferenceSettings {
     /// Shadow rays per pixel for area lights.
     pub samples: usize,
+    /// Visibility samples per pixel on its surface plane.
+    pub pixel_samples: u32,
     /// Ray-origin offset in float ULPs of the position.
     pub offset_ulps: f32,
     pub kernel: Kernel,
@@ -97,6 +114,7 @@ impl ReferenceSettings {
     pub fn from_params(p: &ParamValues) -> Result<Self> {
         Ok(ReferenceSettings {
             samples: p.int(&SAMPLES)? as usize,
+            pixel_samples: p.int(&PIXEL_SAMPLES)?,
             offset_ulps: p.float(&OFFSET_ULPS)?,
             kernel: p.choice(&KERNEL)?,
         })
@@ -238,8 +256,61 @@ pub fn visibility(
     light_through / samples as f32
 }
 
+/// How a pixel is sampled: its centre (`count` 1), or `count` points of
+/// its footprint on its surface plane, for a frame of `size` pixels seen
+/// through `inv_view_proj`.
+#[derive(Clone, Copy, Debug)]
+pub struct PixelSampling {
+    pub inv_view_proj: Mat4,
+    pub size: UVec2,
+    pub count: u32,
+}
+
+impl PixelSampling {
+    pub const CENTRE: PixelSampling = PixelSampling {
+        inv_view_proj: Mat4::IDENTITY,
+        size: UVec2::ONE,
+        count: 1,
+    };
+}
+
+/// Sub-pixel sample `k` of `count` within a pixel, in [0, 1)²: a Hammersley
+/// pattern (x stratified, y the base-2 radical inverse), centred in its
+/// strata. `pixel_sample_offset` of irregular.wgsl is its twin.
+pub fn pixel_sample_offset(k: u32, count: u32) -> Vec2 {
+    let n = count as f32;
+    Vec2::new(
+        (k as f32 + 0.5) / n,
+        k.reverse_bits() as f32 * 2.328_306_4e-10 + 0.5 / n,
+    )
+}
+
+/// Where sub-pixel sample `k` of pixel `px` lies on the plane through `p`
+/// with normal `n`: the camera ray through it met with the plane (the
+/// pixel's footprint on its surface); `p` itself for one sample, or where
+/// the ray runs along the plane. Written relative to `p`, so that the point
+/// stays on the plane to the precision of `p` (the ray-origin offset is a
+/// few ULPs of it). `sub_sample_point` of irregular.wgsl is its twin.
+pub fn pixel_sample_point(s: &PixelSampling, px: UVec2, k: u32, p: Vec3, n: Vec3) -> Vec3 {
+    if s.count <= 1 {
+        return p;
+    }
+    let uv = (px.as_vec2() + pixel_sample_offset(k, s.count)) / s.size.as_vec2();
+    let ndc = Vec2::new(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
+    let near = s.inv_view_proj.project_point3(ndc.extend(0.0));
+    let mid = s.inv_view_proj.project_point3(ndc.extend(0.5));
+    let d = (mid - near).normalize_or_zero();
+    let along = d.dot(n);
+    if along.abs() < 1e-6 {
+        return p;
+    }
+    let to_near = near - p;
+    p + to_near - d * (to_near.dot(n) / along)
+}
+
 /// Computes a whole visibility mask on the CPU from G-buffer data
-/// (`positions`: xyzw with w = coverage, `normals`: xyz geometric normal).
+/// (`positions`: xyzw with w = coverage, `normals`: xyz geometric normal),
+/// at the pixels' centres.
 pub fn mask_from_gbuffer(
     bvh: &CasterBvh,
     light: &Light,
@@ -248,24 +319,42 @@ pub fn mask_from_gbuffer(
     samples: usize,
     ulps: f32,
 ) -> Vec<f32> {
+    let centre = PixelSampling::CENTRE;
+    mask_sampled(bvh, light, positions, normals, samples, ulps, &centre)
+}
+
+/// [`mask_from_gbuffer`] with each pixel sampled as `sampling` says: the
+/// mean visibility of its sub-pixel points.
+pub fn mask_sampled(
+    bvh: &CasterBvh,
+    light: &Light,
+    positions: &[[f32; 4]],
+    normals: &[Vec3],
+    samples: usize,
+    ulps: f32,
+    sampling: &PixelSampling,
+) -> Vec<f32> {
+    let width = sampling.size.x.max(1);
+    let pixels = positions.len() as u32;
     positions
         .par_iter()
         .zip(normals.par_iter())
         .enumerate()
         .map(|(i, (p, n))| {
             if p[3] < 0.5 {
-                1.0
-            } else {
-                visibility(
-                    bvh,
-                    light,
-                    Vec3::new(p[0], p[1], p[2]),
-                    *n,
-                    samples,
-                    ulps,
-                    i as u32,
-                )
+                return 1.0;
             }
+            let px = UVec2::new(i as u32 % width, i as u32 / width);
+            let centre = Vec3::new(p[0], p[1], p[2]);
+            let count = sampling.count.max(1);
+            let through: f32 = (0..count)
+                .map(|k| {
+                    let q = pixel_sample_point(sampling, px, k, centre, *n);
+                    let seed = (i as u32).wrapping_add(k.wrapping_mul(pixels));
+                    visibility(bvh, light, q, *n, samples, ulps, seed)
+                })
+                .sum();
+            through / count as f32
         })
         .collect()
 }
@@ -306,16 +395,24 @@ impl ShadowTechnique for RayTraced {
         let settings = self.settings;
         let samples = settings.samples_for(ctx.light);
         let t = Instant::now();
-        let mask = mask_from_gbuffer(
+        let sampling = PixelSampling {
+            inv_view_proj: frame.uniform().inv_view_proj,
+            size: UVec2::new(frame.width(), frame.height()),
+            count: settings.pixel_samples,
+        };
+        let mask = mask_sampled(
             &bvh,
             ctx.light,
             positions,
             &normals,
             samples,
             settings.offset_ulps,
+            &sampling,
         );
         self.trace_ms = t.elapsed().as_secs_f64() * 1e3;
-        self.rays = positions.iter().filter(|p| p[3] >= 0.5).count() as f64 * samples as f64;
+        self.rays = positions.iter().filter(|p| p[3] >= 0.5).count() as f64
+            * samples as f64
+            * settings.pixel_samples as f64;
         crate::frame::write_mask(gpu, frame, ctx.light_index, &mask);
         Ok(())
     }
