@@ -22,6 +22,9 @@ pub const AUX_OVERFLOW: usize = 7;
 pub const AUX_HISTOGRAM: usize = 8;
 pub const HISTOGRAM_BINS: usize = 32;
 pub const AUX_LONGEST: usize = 64;
+/// Per face, the greatest depth of its samples (read by the shaders only).
+#[cfg(test)]
+pub const AUX_DEPTH: usize = 72;
 /// Samples of one job of a large triangle (`JOB_SAMPLES`), checked against
 /// the WGSL.
 #[cfg(test)]
@@ -32,8 +35,8 @@ pub const SCAN_BLOCK: u64 = 1024;
 pub const WORKGROUP: u32 = 64;
 /// The job list's capacity: four jobs per caster triangle and face, or
 /// twice what the last frame asked for where that overflowed, within these
-/// bounds (2 words each: 0.5 to 64 MiB).
-pub const JOB_CAPACITY: (u64, u64) = (1 << 16, 1 << 23);
+/// bounds (4 words each: 1 to 64 MiB).
+pub const JOB_CAPACITY: (u64, u64) = (1 << 16, 1 << 22);
 
 /// Words of the binning buffer for `cells` cells: the counts, the
 /// offsets with their total, and the prefix sum's block partials.
@@ -193,6 +196,7 @@ mod tests {
                 ("AUX_HISTOGRAM", AUX_HISTOGRAM as u32),
                 ("HISTOGRAM_BINS", HISTOGRAM_BINS as u32),
                 ("AUX_LONGEST", AUX_LONGEST as u32),
+                ("AUX_DEPTH", AUX_DEPTH as u32),
                 ("AUX_JOB_LIST", AUX_HEADER_WORDS as u32),
                 ("WORKGROUP", WORKGROUP),
                 ("JOB_SAMPLES", JOB_SAMPLES),

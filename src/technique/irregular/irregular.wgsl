@@ -41,10 +41,13 @@ struct CasterTriangle {
 // prefix sum of the counts, the first sample of each cell in `samples`
 // (its last word the total); then the prefix sum's per-block partials.
 @group(2) @binding(1) var<storage, read_write> cells: array<atomic<u32>>;
-// The samples sorted by cell: xyz the shadow-ray origin, w its pixel · 32
-// plus its index within the pixel (bits), so a cell's, and a row of
-// cells', samples are contiguous.
-@group(2) @binding(2) var<storage, read_write> samples: array<vec4f>;
+// The samples sorted by cell, so a cell's, and a row of cells', samples
+// are contiguous. Each is identified by its pixel · 32 plus its index
+// within the pixel. One sample per pixel: four words, the shadow-ray
+// origin's xyz (bits) and the id. Sub-pixel samples: the id alone, the
+// origin found again from the G-buffer (4 bytes a sample, so that 16 of
+// them for a 1280 × 720 frame fit one storage buffer).
+@group(2) @binding(2) var<storage, read_write> samples: array<u32>;
 // Per pixel: bit k set once a caster blocks its sample k.
 @group(2) @binding(3) var<storage, read_write> marks: array<atomic<u32>>;
 @group(2) @binding(4) var<storage, read> triangles: array<CasterTriangle>;
@@ -67,7 +70,10 @@ const HISTOGRAM_BINS: u32 = 32u;
 const AUX_BOUNDS: u32 = 40u;
 // The longest list.
 const AUX_LONGEST: u32 = 64u;
-// The jobs, two words each: triangle · 8 + face, job.
+// Per face: the greatest depth of its samples from the light (ordered).
+const AUX_DEPTH: u32 = 72u;
+// The jobs, four words each: triangle · 8 + face, job, the box row its
+// first sample lies in, the box's samples before that row.
 const AUX_JOB_LIST: u32 = 80u;
 // Threads of every workgroup; samples of one job (so that no invocation
 // loops long: llvmpipe ends a shader's loops after 65535 iterations in
@@ -173,9 +179,12 @@ fn image_of(v: vec3f) -> vec2f {
     return v.xy;
 }
 
+// A face's samples: their images' bounds and their greatest depth from the
+// light (−z of the face's view).
 struct FaceBounds {
     lo: vec2f,
     hi: vec2f,
+    depth: f32,
     empty: bool,
 };
 
@@ -186,6 +195,33 @@ fn face_bounds(face: u32) -> FaceBounds {
     f.empty = hx == 0u;
     f.lo = vec2f(from_ordered(~atomicLoad(&aux[b])), from_ordered(~atomicLoad(&aux[b + 1u])));
     f.hi = vec2f(from_ordered(hx), from_ordered(atomicLoad(&aux[b + 3u])));
+    f.depth = from_ordered(atomicLoad(&aux[AUX_DEPTH + face]));
+    return f;
+}
+
+// The faces' bounds, loaded once per workgroup of the triangle passes:
+// per face (lo, hi) and (depth, empty, 0, 0).
+var<workgroup> workgroup_faces: array<vec4f, 12>;
+
+// Loads every face's bounds into `workgroup_faces`; call in uniform
+// control flow (it waits at a barrier).
+fn load_faces(lane: u32) {
+    if lane < irr.grid.x {
+        let f = face_bounds(lane);
+        workgroup_faces[2u * lane] = vec4f(f.lo, f.hi);
+        workgroup_faces[2u * lane + 1u] = vec4f(f.depth, select(0.0, 1.0, f.empty), 0.0, 0.0);
+    }
+    workgroupBarrier();
+}
+
+fn loaded_face(face: u32) -> FaceBounds {
+    var f: FaceBounds;
+    let a = workgroup_faces[2u * face];
+    let b = workgroup_faces[2u * face + 1u];
+    f.lo = a.xy;
+    f.hi = a.zw;
+    f.depth = b.x;
+    f.empty = b.y > 0.5;
     return f;
 }
 
@@ -221,6 +257,7 @@ fn fs_bounds(@builtin(position) frag: vec4f) -> @location(0) vec4f {
             atomicMax(&aux[b + 1u], ~ordered(c.y));
             atomicMax(&aux[b + 2u], ordered(c.x));
             atomicMax(&aux[b + 3u], ordered(c.y));
+            atomicMax(&aux[AUX_DEPTH + face], ordered(-v.z));
         }
     }
     return vec4f(1.0);
@@ -356,7 +393,16 @@ fn fs_scatter(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         if b.cell < irr.work.w {
             let left = atomicSub(&cells[b.cell], 1u);
             let slot = atomicLoad(&cells[irr.work.w + b.cell]) + left - 1u;
-            samples[slot] = vec4f(b.origin, bitcast<f32>(pixel * 32u + k));
+            let id = pixel * 32u + k;
+            if irr.pixel.x <= 1u {
+                let o = bitcast<vec3u>(b.origin);
+                samples[4u * slot] = o.x;
+                samples[4u * slot + 1u] = o.y;
+                samples[4u * slot + 2u] = o.z;
+                samples[4u * slot + 3u] = id;
+            } else {
+                samples[slot] = id;
+            }
         }
     }
     return vec4f(1.0);
@@ -402,9 +448,22 @@ fn blocks(t: CasterTriangle, o: vec3f) -> bool {
     return is_solid_at(object, uv, 0.0, 0.5);
 }
 
+// The sample in `slot`: xyz its shadow-ray origin, w its id (bits).
+fn sample_at(slot: u32) -> vec4f {
+    if irr.pixel.x <= 1u {
+        let w = 4u * slot;
+        let o = vec3u(samples[w], samples[w + 1u], samples[w + 2u]);
+        return vec4f(bitcast<vec3f>(o), bitcast<f32>(samples[w + 3u]));
+    }
+    let id = samples[slot];
+    let pixel = id / 32u;
+    let px = vec2u(pixel % irr.grid.z, pixel / irr.grid.z);
+    return vec4f(sample_origin(px, id % 32u, surface(px)), bitcast<f32>(id));
+}
+
 // Sample `slot` tested against triangle `t`; whether it needed a test.
 fn test_sample(t: CasterTriangle, slot: u32) -> u32 {
-    let sample = samples[slot];
+    let sample = sample_at(slot);
     let id = bitcast<u32>(sample.w);
     let pixel = id / 32u;
     let bit = 1u << (id % 32u);
@@ -436,12 +495,14 @@ fn box_samples(face: u32, box: vec4i) -> u32 {
 }
 
 // The box's samples from the `first`-th to before the `end`-th (in row
-// order), every `step`-th, tested against `t`; the tests made.
-fn test_samples(t: CasterTriangle, face: u32, box: vec4i, first: u32, end: u32, step: u32) -> u32 {
+// order), every `step`-th, tested against `t`, starting the walk at row
+// `y0` before which the box holds `seen0` samples; the tests made.
+fn test_samples(t: CasterTriangle, face: u32, box: vec4i, y0: i32, seen0: u32, first: u32,
+        end: u32, step: u32) -> u32 {
     var tests = 0u;
-    var seen = 0u;
+    var seen = seen0;
     var k = first;
-    for (var y = box.y; y <= box.w && k < end; y++) {
+    for (var y = y0; y <= box.w && k < end; y++) {
         let run = row_run(face, box, y);
         let length = run.y - run.x;
         for (; k < min(seen + length, end); k += step) {
@@ -452,20 +513,62 @@ fn test_samples(t: CasterTriangle, face: u32, box: vec4i, first: u32, end: u32, 
     return tests;
 }
 
+// Lists the jobs of a triangle's samples on a face (`fitted` of them, from
+// list slot `slot`), each with the row its first sample lies in, so that a
+// job's threads walk only its own rows.
+fn list_jobs(index: u32, face: u32, box: vec4i, slot: u32, fitted: u32) {
+    var seen = 0u;
+    var job = 0u;
+    for (var y = box.y; y <= box.w && job < fitted; y++) {
+        let run = row_run(face, box, y);
+        let length = run.y - run.x;
+        for (; job < fitted && job * JOB_SAMPLES < seen + length; job++) {
+            let e = AUX_JOB_LIST + 4u * (slot + job);
+            atomicStore(&aux[e], index * 8u + face);
+            atomicStore(&aux[e + 1u], job);
+            atomicStore(&aux[e + 2u], u32(y - box.y));
+            atomicStore(&aux[e + 3u], seen);
+        }
+        seen += length;
+    }
+}
+
+// Whether a triangle (vertices `v` in a face's view) cannot block any of
+// the face's samples: all its vertices lie beyond one side of the samples'
+// pyramid from a local light (their box, for a directional one), every
+// point of it then too, or deeper from the light than every sample.
+fn beyond_the_samples(v: array<vec3f, 3>, f: FaceBounds) -> bool {
+    let margin = 1e-4 * (f.hi - f.lo) + vec2f(1e-30);
+    let lo = f.lo - margin;
+    let hi = f.hi + margin;
+    var below = vec2<bool>(true);
+    var above = vec2<bool>(true);
+    var deeper = true;
+    for (var i = 0u; i < 3u; i++) {
+        let w = select(1.0, -v[i].z, is_local());
+        below = below & (v[i].xy < lo * w);
+        above = above & (v[i].xy > hi * w);
+        deeper = deeper && -v[i].z > f.depth + 1e-5 * abs(f.depth);
+    }
+    return any(below) || any(above) || deeper;
+}
+
 // The cells' box (x0, y0, x1, y1) of triangle `t`'s image on `face`, empty
 // (x1 < x0) where it misses the face's samples. On a local light's face
 // the triangle is first clipped to the light's side of the face's plane
 // (−z ≥ a hair of its extent): every point between a sample and the light
 // lies there and projects onto the sample's own image (Sutherland &
 // Hodgman 1974); the clipped polygon's image is clamped to the samples'.
-fn triangle_cells(t: CasterTriangle, face: u32) -> vec4i {
-    let f = face_bounds(face);
+fn triangle_cells(t: CasterTriangle, face: u32, f: FaceBounds) -> vec4i {
     if f.empty {
         return vec4i(0, 0, -1, -1);
     }
     let m = irr.views[face];
     let v = array<vec3f, 3>((m * vec4f(t.a.xyz, 1.0)).xyz, (m * vec4f(t.b.xyz, 1.0)).xyz,
         (m * vec4f(t.c.xyz, 1.0)).xyz);
+    if beyond_the_samples(v, f) {
+        return vec4i(0, 0, -1, -1);
+    }
     var lo = vec2f(3.0e38);
     var hi = vec2f(-3.0e38);
     var kept = 0u;
@@ -502,37 +605,40 @@ fn triangle_cells(t: CasterTriangle, face: u32) -> vec4i {
 // of JOB_SAMPLES for the job pass. Jobs past the list's capacity are
 // counted (AUX_OVERFLOW, in samples) and tested here.
 @compute @workgroup_size(64)
-fn cs_triangles(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
+fn cs_triangles(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u,
+        @builtin(local_invocation_index) lane: u32) {
+    load_faces(lane);
     let index = id.y * groups.x * WORKGROUP + id.x;
     if index >= irr.work.x {
         return;
     }
     let t = triangles[index];
     var tests = 0u;
+    var pairs = 0u;
     for (var face = 0u; face < irr.grid.x; face++) {
-        let box = triangle_cells(t, face);
+        let box = triangle_cells(t, face, loaded_face(face));
         if box.z < box.x || box.w < box.y {
             continue;
         }
-        atomicAdd(&aux[AUX_PAIRS], u32(box.z - box.x + 1) * u32(box.w - box.y + 1));
+        pairs += u32(box.z - box.x + 1) * u32(box.w - box.y + 1);
         let work = box_samples(face, box);
         var first = 0u;
         if work > irr.work.y {
             let jobs = (work + JOB_SAMPLES - 1u) / JOB_SAMPLES;
             let slot = atomicAdd(&aux[AUX_JOBS], jobs);
             let fitted = min(jobs, irr.work.z - min(slot, irr.work.z));
-            for (var j = 0u; j < fitted; j++) {
-                atomicStore(&aux[AUX_JOB_LIST + 2u * (slot + j)], index * 8u + face);
-                atomicStore(&aux[AUX_JOB_LIST + 2u * (slot + j) + 1u], j);
-            }
+            list_jobs(index, face, box, slot, fitted);
             first = min(fitted * JOB_SAMPLES, work);
             if first < work {
                 atomicAdd(&aux[AUX_OVERFLOW], work - first);
             }
         }
-        tests += test_samples(t, face, box, first, work, 1u);
+        tests += test_samples(t, face, box, box.y, 0u, first, work, 1u);
     }
-    atomicAdd(&aux[AUX_TESTS], tests);
+    if pairs > 0u {
+        atomicAdd(&aux[AUX_PAIRS], pairs);
+        atomicAdd(&aux[AUX_TESTS], tests);
+    }
 }
 
 // Pass 6, one invocation: the job pass's workgroups, one per listed job.
@@ -549,18 +655,23 @@ fn cs_job_dispatch() {
 @compute @workgroup_size(64)
 fn cs_jobs(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
         @builtin(local_invocation_index) lane: u32) {
+    load_faces(lane);
     let e = group.y * groups.x + group.x;
     if e >= min(atomicLoad(&aux[AUX_JOBS]), irr.work.z) {
         return;
     }
-    let entry = atomicLoad(&aux[AUX_JOB_LIST + 2u * e]);
-    let job = atomicLoad(&aux[AUX_JOB_LIST + 2u * e + 1u]);
+    let w = AUX_JOB_LIST + 4u * e;
+    let entry = atomicLoad(&aux[w]);
+    let first = atomicLoad(&aux[w + 1u]) * JOB_SAMPLES;
     let t = triangles[entry / 8u];
     let face = entry % 8u;
-    let box = triangle_cells(t, face);
-    let first = job * JOB_SAMPLES;
-    let tests = test_samples(t, face, box, first + lane, first + JOB_SAMPLES, WORKGROUP);
-    atomicAdd(&aux[AUX_TESTS], tests);
+    let box = triangle_cells(t, face, loaded_face(face));
+    let y0 = box.y + i32(atomicLoad(&aux[w + 2u]));
+    let seen0 = atomicLoad(&aux[w + 3u]);
+    let tests = test_samples(t, face, box, y0, seen0, first + lane, first + JOB_SAMPLES, WORKGROUP);
+    if tests > 0u {
+        atomicAdd(&aux[AUX_TESTS], tests);
+    }
 }
 
 // Pass 8, per pixel: the mask, the fraction of its samples no caster blocks.

@@ -187,6 +187,15 @@ fn job_capacity(triangles: u64, faces: u64, asked: u64) -> u64 {
         .clamp(JOB_CAPACITY.0, JOB_CAPACITY.1)
 }
 
+/// Bytes of the sorted samples: 16 a pixel for one sample per pixel (the
+/// origin kept), 4 a sample for sub-pixel samples (the id alone).
+fn sample_bytes(pixels: u64, pixel_samples: u32) -> u64 {
+    match pixel_samples {
+        0 | 1 => pixels * 16,
+        n => pixels * n as u64 * 4,
+    }
+}
+
 impl IrregularZBuffer {
     fn new(gpu: &GpuContext, config: IrregularConfig) -> IrregularZBuffer {
         IrregularZBuffer {
@@ -241,15 +250,15 @@ impl IrregularZBuffer {
                 "cell counts and offsets (grid)",
                 binning_words(cell_count) * 4,
             ),
-            ("samples", pixels * self.config.pixel_samples as u64 * 16),
+            ("samples", sample_bytes(pixels, self.config.pixel_samples)),
             ("caster triangles", triangles.len() as u64 * 64),
-            ("job list", (AUX_HEADER_WORDS + 2 * capacity) * 4),
+            ("job list", (AUX_HEADER_WORDS + 4 * capacity) * 4),
         ];
         let limit = gpu.device.limits().max_storage_buffer_binding_size;
         for (what, bytes) in sizes {
             if bytes > limit {
                 bail!(
-                    "irregular: the {what} take {:.1} MiB, more than the device's largest storage buffer ({:.1} MiB); choose a smaller grid or frame",
+                    "irregular: the {what} take {:.1} MiB, more than the device's largest storage buffer ({:.1} MiB); choose a smaller grid, frame or pixel_samples",
                     bytes as f64 / (1u64 << 20) as f64,
                     limit as f64 / (1u64 << 20) as f64
                 );
@@ -526,7 +535,7 @@ mod tests {
     fn the_job_list_grows_after_an_overflow() {
         assert_eq!(job_capacity(10, 1, 0), JOB_CAPACITY.0);
         assert_eq!(job_capacity(100_000, 6, 0), 2_400_000);
-        assert_eq!(job_capacity(100_000, 6, 3_000_000), 6_000_000);
+        assert_eq!(job_capacity(100_000, 6, 1_500_000), 3_000_000);
         assert_eq!(job_capacity(100_000, 6, 1 << 30), JOB_CAPACITY.1);
     }
 
