@@ -22,9 +22,6 @@ pub const AUX_OVERFLOW: usize = 7;
 pub const AUX_HISTOGRAM: usize = 8;
 pub const HISTOGRAM_BINS: usize = 32;
 pub const AUX_LONGEST: usize = 64;
-/// Per face, the greatest depth of its samples (read by the shaders only).
-#[cfg(test)]
-pub const AUX_DEPTH: usize = 72;
 /// Samples of one job of a large triangle (`JOB_SAMPLES`), checked against
 /// the WGSL.
 #[cfg(test)]
@@ -196,7 +193,6 @@ mod tests {
                 ("AUX_HISTOGRAM", AUX_HISTOGRAM as u32),
                 ("HISTOGRAM_BINS", HISTOGRAM_BINS as u32),
                 ("AUX_LONGEST", AUX_LONGEST as u32),
-                ("AUX_DEPTH", AUX_DEPTH as u32),
                 ("AUX_JOB_LIST", AUX_HEADER_WORDS as u32),
                 ("WORKGROUP", WORKGROUP),
                 ("JOB_SAMPLES", JOB_SAMPLES),

@@ -70,8 +70,6 @@ const HISTOGRAM_BINS: u32 = 32u;
 const AUX_BOUNDS: u32 = 40u;
 // The longest list.
 const AUX_LONGEST: u32 = 64u;
-// Per face: the greatest depth of its samples from the light (ordered).
-const AUX_DEPTH: u32 = 72u;
 // The jobs, four words each: triangle · 8 + face, job, the box row its
 // first sample lies in, the box's samples before that row.
 const AUX_JOB_LIST: u32 = 80u;
@@ -179,12 +177,10 @@ fn image_of(v: vec3f) -> vec2f {
     return v.xy;
 }
 
-// A face's samples: their images' bounds and their greatest depth from the
-// light (−z of the face's view).
+// A face's samples: their images' bounds.
 struct FaceBounds {
     lo: vec2f,
     hi: vec2f,
-    depth: f32,
     empty: bool,
 };
 
@@ -195,33 +191,6 @@ fn face_bounds(face: u32) -> FaceBounds {
     f.empty = hx == 0u;
     f.lo = vec2f(from_ordered(~atomicLoad(&aux[b])), from_ordered(~atomicLoad(&aux[b + 1u])));
     f.hi = vec2f(from_ordered(hx), from_ordered(atomicLoad(&aux[b + 3u])));
-    f.depth = from_ordered(atomicLoad(&aux[AUX_DEPTH + face]));
-    return f;
-}
-
-// The faces' bounds, loaded once per workgroup of the triangle passes:
-// per face (lo, hi) and (depth, empty, 0, 0).
-var<workgroup> workgroup_faces: array<vec4f, 12>;
-
-// Loads every face's bounds into `workgroup_faces`; call in uniform
-// control flow (it waits at a barrier).
-fn load_faces(lane: u32) {
-    if lane < irr.grid.x {
-        let f = face_bounds(lane);
-        workgroup_faces[2u * lane] = vec4f(f.lo, f.hi);
-        workgroup_faces[2u * lane + 1u] = vec4f(f.depth, select(0.0, 1.0, f.empty), 0.0, 0.0);
-    }
-    workgroupBarrier();
-}
-
-fn loaded_face(face: u32) -> FaceBounds {
-    var f: FaceBounds;
-    let a = workgroup_faces[2u * face];
-    let b = workgroup_faces[2u * face + 1u];
-    f.lo = a.xy;
-    f.hi = a.zw;
-    f.depth = b.x;
-    f.empty = b.y > 0.5;
     return f;
 }
 
@@ -257,7 +226,6 @@ fn fs_bounds(@builtin(position) frag: vec4f) -> @location(0) vec4f {
             atomicMax(&aux[b + 1u], ~ordered(c.y));
             atomicMax(&aux[b + 2u], ordered(c.x));
             atomicMax(&aux[b + 3u], ordered(c.y));
-            atomicMax(&aux[AUX_DEPTH + face], ordered(-v.z));
         }
     }
     return vec4f(1.0);
@@ -533,26 +501,6 @@ fn list_jobs(index: u32, face: u32, box: vec4i, slot: u32, fitted: u32) {
     }
 }
 
-// Whether a triangle (vertices `v` in a face's view) cannot block any of
-// the face's samples: all its vertices lie beyond one side of the samples'
-// pyramid from a local light (their box, for a directional one), every
-// point of it then too, or deeper from the light than every sample.
-fn beyond_the_samples(v: array<vec3f, 3>, f: FaceBounds) -> bool {
-    let margin = 1e-4 * (f.hi - f.lo) + vec2f(1e-30);
-    let lo = f.lo - margin;
-    let hi = f.hi + margin;
-    var below = vec2<bool>(true);
-    var above = vec2<bool>(true);
-    var deeper = true;
-    for (var i = 0u; i < 3u; i++) {
-        let w = select(1.0, -v[i].z, is_local());
-        below = below & (v[i].xy < lo * w);
-        above = above & (v[i].xy > hi * w);
-        deeper = deeper && -v[i].z > f.depth + 1e-5 * abs(f.depth);
-    }
-    return any(below) || any(above) || deeper;
-}
-
 // The cells' box (x0, y0, x1, y1) of triangle `t`'s image on `face`, empty
 // (x1 < x0) where it misses the face's samples. On a local light's face
 // the triangle is first clipped to the light's side of the face's plane
@@ -566,9 +514,6 @@ fn triangle_cells(t: CasterTriangle, face: u32, f: FaceBounds) -> vec4i {
     let m = irr.views[face];
     let v = array<vec3f, 3>((m * vec4f(t.a.xyz, 1.0)).xyz, (m * vec4f(t.b.xyz, 1.0)).xyz,
         (m * vec4f(t.c.xyz, 1.0)).xyz);
-    if beyond_the_samples(v, f) {
-        return vec4i(0, 0, -1, -1);
-    }
     var lo = vec2f(3.0e38);
     var hi = vec2f(-3.0e38);
     var kept = 0u;
@@ -605,9 +550,7 @@ fn triangle_cells(t: CasterTriangle, face: u32, f: FaceBounds) -> vec4i {
 // of JOB_SAMPLES for the job pass. Jobs past the list's capacity are
 // counted (AUX_OVERFLOW, in samples) and tested here.
 @compute @workgroup_size(64)
-fn cs_triangles(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u,
-        @builtin(local_invocation_index) lane: u32) {
-    load_faces(lane);
+fn cs_triangles(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
     let index = id.y * groups.x * WORKGROUP + id.x;
     if index >= irr.work.x {
         return;
@@ -616,7 +559,7 @@ fn cs_triangles(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroup
     var tests = 0u;
     var pairs = 0u;
     for (var face = 0u; face < irr.grid.x; face++) {
-        let box = triangle_cells(t, face, loaded_face(face));
+        let box = triangle_cells(t, face, face_bounds(face));
         if box.z < box.x || box.w < box.y {
             continue;
         }
@@ -655,7 +598,6 @@ fn cs_job_dispatch() {
 @compute @workgroup_size(64)
 fn cs_jobs(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
         @builtin(local_invocation_index) lane: u32) {
-    load_faces(lane);
     let e = group.y * groups.x + group.x;
     if e >= min(atomicLoad(&aux[AUX_JOBS]), irr.work.z) {
         return;
@@ -665,7 +607,7 @@ fn cs_jobs(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups:
     let first = atomicLoad(&aux[w + 1u]) * JOB_SAMPLES;
     let t = triangles[entry / 8u];
     let face = entry % 8u;
-    let box = triangle_cells(t, face, loaded_face(face));
+    let box = triangle_cells(t, face, face_bounds(face));
     let y0 = box.y + i32(atomicLoad(&aux[w + 2u]));
     let seen0 = atomicLoad(&aux[w + 3u]);
     let tests = test_samples(t, face, box, y0, seen0, first + lane, first + JOB_SAMPLES, WORKGROUP);
