@@ -332,6 +332,15 @@ fn cs_scan_partials(@builtin(local_invocation_index) lane: u32) {
     }
 }
 
+// The histogram's bin of a list length n ≥ 1: n itself below 16, then one
+// bin per octave ([16, 32) is bin 16), the last one open.
+fn histogram_bin(n: u32) -> u32 {
+    if n < 16u {
+        return n;
+    }
+    return min(12u + firstLeadingBit(n), HISTOGRAM_BINS - 1u);
+}
+
 // Pass 3c, per cell: its block's partial added to its offset, and its list
 // length counted into the histogram.
 @compute @workgroup_size(64)
@@ -345,7 +354,7 @@ fn cs_scan_add(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups
     atomicAdd(&cells[n + cell], partial);
     let length = atomicLoad(&cells[cell]);
     if length > 0u {
-        atomicAdd(&aux[AUX_HISTOGRAM + min(length, HISTOGRAM_BINS - 1u)], 1u);
+        atomicAdd(&aux[AUX_HISTOGRAM + histogram_bin(length)], 1u);
         atomicMax(&aux[AUX_LONGEST], length);
     }
 }

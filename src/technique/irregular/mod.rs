@@ -117,7 +117,8 @@ struct ListStats {
     jobs: u32,
     /// Samples of the jobs that did not fit the list.
     overflow: u32,
-    /// Cells holding n samples (n from 1; the last bin: that many or more).
+    /// Cells by the samples they hold: bin n < 16 holds n, then one bin per
+    /// octave (`histogram_bin` of irregular.wgsl), the last one open.
     histogram: [u32; HISTOGRAM_BINS],
     longest: u32,
 }
@@ -137,14 +138,24 @@ impl ListStats {
         }
     }
 
-    /// The list length below which a fraction `q` of the non-empty cells lie.
+    /// The least list length of a histogram bin.
+    fn bin_floor(bin: usize) -> u32 {
+        if bin < 16 {
+            bin as u32
+        } else {
+            1 << (bin - 12)
+        }
+    }
+
+    /// The list length below which a fraction `q` of the non-empty cells
+    /// lie, to the octave past 16 (the least length of its bin).
     fn length_quantile(&self, q: f64) -> u32 {
         let total: u64 = self.histogram.iter().map(|&c| c as u64).sum();
         let mut seen = 0u64;
         for (n, &c) in self.histogram.iter().enumerate() {
             seen += c as u64;
             if c > 0 && seen as f64 >= q * total as f64 {
-                return n as u32;
+                return Self::bin_floor(n);
             }
         }
         0
@@ -550,5 +561,9 @@ mod tests {
         assert_eq!(s.length_quantile(0.5), 1);
         assert_eq!(s.length_quantile(0.95), 2);
         assert_eq!(s.length_quantile(1.0), 7);
+        // Past 16, one bin per octave: [16, 32) is bin 16, [1024, 2048) bin 22.
+        words[AUX_HISTOGRAM + 22] = 100;
+        let s = ListStats::from_words(&words);
+        assert_eq!(s.length_quantile(1.0), 1024);
     }
 }
