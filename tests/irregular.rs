@@ -218,3 +218,28 @@ fn sub_pixel_samples_converge_to_the_covered_fraction() {
         "{reference} {errors:?}"
     );
 }
+
+/// Sub-pixel samples on a curved, faceted receiver do not shadow their own
+/// surface: samples on a triangle's plane past a concave edge would lie
+/// under the next triangle (a wireframe of false shadow, mean error 0.08
+/// before samples were lifted off the plane). Averaged over the frame, the
+/// sub-pixel masks stay within a pixel-edge's worth of the centre samples.
+#[test]
+fn sub_pixel_samples_do_not_shadow_their_own_surface() {
+    let s = preset("curved", "default", "sun");
+    let (w, h) = (160, 90);
+    let centre = mask_of(&s, "raytraced", &[], w, h);
+    for (technique, set) in [
+        ("raytraced", "pixel_samples=32"),
+        ("irregular", "pixel_samples=16"),
+    ] {
+        let mask = mask_of(&s, technique, &[set], w, h);
+        let mean = mask
+            .iter()
+            .zip(&centre)
+            .map(|(a, b)| (a - b).abs())
+            .sum::<f32>()
+            / mask.len() as f32;
+        assert!(mean < 0.01, "{technique}[{set}]: {mean}");
+    }
+}

@@ -132,9 +132,14 @@ fn pixel_sample_offset(k: u32, count: u32) -> vec2f {
     return vec2f((f32(k) + 0.5) / n, f32(reverseBits(k)) * 2.3283064e-10 + 0.5 / n);
 }
 
+// The reference's PLANE_LIFT: how far a sub-pixel sample is lifted off
+// its pixel's plane, per unit of its distance from the pixel's centre.
+const PLANE_LIFT: f32 = 0.25;
+
 // Where sample `k` of pixel `px` lies on the surface's plane: the camera
-// ray through it met with the plane, written relative to the surface point
-// (the twin of the reference's `pixel_sample_point`).
+// ray through it met with the plane, written relative to the surface point,
+// lifted off the plane by PLANE_LIFT of its distance from the centre (the
+// twin of the reference's `pixel_sample_point`, which says why).
 fn sub_sample_point(px: vec2u, k: u32, s: Surface) -> vec3f {
     let count = irr.pixel.x;
     if count <= 1u {
@@ -151,7 +156,8 @@ fn sub_sample_point(px: vec2u, k: u32, s: Surface) -> vec3f {
         return s.p;
     }
     let to_near = near - s.p;
-    return s.p + to_near - d * (dot(to_near, s.n) / along);
+    let q = s.p + to_near - d * (dot(to_near, s.n) / along);
+    return q + s.n * (PLANE_LIFT * length(q - s.p));
 }
 
 // The shadow-ray origin of sample `k` of the pixel's surface.
