@@ -41,6 +41,10 @@ pub fn binning_words(cells: u64) -> u64 {
     2 * cells + 1 + cells.div_ceil(SCAN_BLOCK)
 }
 
+/// The family's WGSL: the interface and triangle passes, then the samples
+/// and their binning.
+const SOURCES: &[&str] = &[include_str!("irregular.wgsl"), include_str!("samples.wgsl")];
+
 /// `Irregular` of irregular.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -84,8 +88,7 @@ impl IrregularShared {
                 storage(5, false),
             ],
         });
-        let module =
-            crate::frame::technique_shader(gpu, "irregular", &[include_str!("irregular.wgsl")]);
+        let module = crate::frame::technique_shader(gpu, "irregular", SOURCES);
         let pipeline_layout = super::super::pipeline_layout(gpu, "irregular", &layout);
         let fullscreen = |fs: &str, write_mask| {
             super::super::fullscreen_pipeline(
@@ -161,7 +164,7 @@ mod tests {
     use crate::gpu::wgsl_layout::{assert_consts_match, assert_struct_matches};
 
     fn source() -> String {
-        crate::frame::technique_source(&[include_str!("irregular.wgsl")])
+        crate::frame::technique_source(SOURCES)
     }
 
     /// `Irregular` and `CasterTriangle` of irregular.wgsl are laid out as

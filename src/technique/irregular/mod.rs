@@ -118,7 +118,7 @@ struct ListStats {
     /// Samples of the jobs that did not fit the list.
     overflow: u32,
     /// Cells by the samples they hold: bin n < 16 holds n, then one bin per
-    /// octave (`histogram_bin` of irregular.wgsl), the last one open.
+    /// octave (`histogram_bin` of samples.wgsl), the last one open.
     histogram: [u32; HISTOGRAM_BINS],
     longest: u32,
 }

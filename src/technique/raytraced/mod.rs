@@ -276,7 +276,7 @@ impl PixelSampling {
 
 /// Sub-pixel sample `k` of `count` within a pixel, in [0, 1)²: a Hammersley
 /// pattern (x stratified, y the base-2 radical inverse), centred in its
-/// strata. `pixel_sample_offset` of irregular.wgsl is its twin.
+/// strata. `pixel_sample_offset` of irregular/samples.wgsl is its twin.
 pub fn pixel_sample_offset(k: u32, count: u32) -> Vec2 {
     let n = count as f32;
     Vec2::new(
@@ -291,7 +291,7 @@ pub fn pixel_sample_offset(k: u32, count: u32) -> Vec2 {
 /// the ray runs along the plane. Written relative to `p`, so that the point
 /// stays on the plane to the precision of `p` (the ray-origin offset is a
 /// few ULPs of it), and lifted off it by [`PLANE_LIFT`] of its distance from
-/// `p`. `sub_sample_point` of irregular.wgsl is its twin.
+/// `p`. `sub_sample_point` of irregular/samples.wgsl is its twin.
 pub fn pixel_sample_point(s: &PixelSampling, px: UVec2, k: u32, p: Vec3, n: Vec3) -> Vec3 {
     if s.count <= 1 {
         return p;

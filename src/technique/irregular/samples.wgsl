@@ -1,0 +1,288 @@
+// The irregular z-buffer's samples (composed with irregular.wgsl): each
+// pixel's sample points (its centre, or sub-pixel points on its surface
+// plane), their bounds on each light face, and their binning into the
+// light-space grid by count, prefix sum and scatter.
+
+// The G-buffer's surface at a pixel: position, unit normal, whether there
+// is one.
+struct Surface {
+    p: vec3f,
+    n: vec3f,
+    seen: bool,
+};
+
+fn surface(px: vec2u) -> Surface {
+    let pos = textureLoad(gbuffer_position, px, 0);
+    var s: Surface;
+    s.seen = pos.w >= 0.5;
+    s.p = pos.xyz;
+    s.n = normalize(textureLoad(gbuffer_normal, px, 0).xyz);
+    return s;
+}
+
+// Sub-pixel sample `k` of `count` within a pixel, in [0, 1)²: Hammersley
+// (x stratified, y the base-2 radical inverse), centred in its strata;
+// the twin of the reference's `pixel_sample_offset`.
+fn pixel_sample_offset(k: u32, count: u32) -> vec2f {
+    let n = f32(count);
+    return vec2f((f32(k) + 0.5) / n, f32(reverseBits(k)) * 2.3283064e-10 + 0.5 / n);
+}
+
+// The reference's PLANE_LIFT: how far a sub-pixel sample is lifted off
+// its pixel's plane, per unit of its distance from the pixel's centre.
+const PLANE_LIFT: f32 = 0.25;
+
+// Where sample `k` of pixel `px` lies on the surface's plane: the camera
+// ray through it met with the plane, written relative to the surface point,
+// lifted off the plane by PLANE_LIFT of its distance from the centre (the
+// twin of the reference's `pixel_sample_point`, which says why).
+fn sub_sample_point(px: vec2u, k: u32, s: Surface) -> vec3f {
+    let count = irr.pixel.x;
+    if count <= 1u {
+        return s.p;
+    }
+    let uv = (vec2f(px) + pixel_sample_offset(k, count)) / frame.size.xy;
+    let ndc = vec2f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
+    let a = frame.inv_view_proj * vec4f(ndc, 0.0, 1.0);
+    let b = frame.inv_view_proj * vec4f(ndc, 0.5, 1.0);
+    let near = a.xyz / a.w;
+    let d = normalize(b.xyz / b.w - near);
+    let along = dot(d, s.n);
+    if abs(along) < 1e-6 {
+        return s.p;
+    }
+    let to_near = near - s.p;
+    let q = s.p + to_near - d * (dot(to_near, s.n) / along);
+    return q + s.n * (PLANE_LIFT * length(q - s.p));
+}
+
+// The shadow-ray origin of sample `k` of the pixel's surface.
+fn sample_origin(px: vec2u, k: u32, s: Surface) -> vec3f {
+    return offset_origin(sub_sample_point(px, k, s), s.n, irr.offset.x);
+}
+
+// The cube face a direction from a local light falls in (+x, −x, +y, −y,
+// +z, −z), or 0 for a directional light.
+fn face_of(p: vec3f) -> u32 {
+    if !is_local() {
+        return 0u;
+    }
+    return cube_face(p - irr.light.xyz);
+}
+
+// Where a light-view point lands in its face's image: (x, y) of an
+// orthographic view, (x, y) / −z of a perspective one.
+fn image_of(v: vec3f) -> vec2f {
+    if is_local() {
+        return v.xy / max(-v.z, 1e-30);
+    }
+    return v.xy;
+}
+
+// A face's samples: their images' bounds.
+struct FaceBounds {
+    lo: vec2f,
+    hi: vec2f,
+    empty: bool,
+};
+
+fn face_bounds(face: u32) -> FaceBounds {
+    let b = AUX_BOUNDS + face * 4u;
+    var f: FaceBounds;
+    let hx = atomicLoad(&aux[b + 2u]);
+    f.empty = hx == 0u;
+    f.lo = vec2f(from_ordered(~atomicLoad(&aux[b])), from_ordered(~atomicLoad(&aux[b + 1u])));
+    f.hi = vec2f(from_ordered(hx), from_ordered(atomicLoad(&aux[b + 3u])));
+    return f;
+}
+
+// The grid cell (x, y) of an image point in `f`, unclamped.
+fn cell_of(f: FaceBounds, c: vec2f) -> vec2i {
+    let r = f32(irr.grid.y);
+    let extent = max(f.hi - f.lo, vec2f(1e-30));
+    return vec2i(floor((c - f.lo) / extent * r));
+}
+
+fn clamp_cell(c: vec2i) -> vec2i {
+    return clamp(c, vec2i(0), vec2i(i32(irr.grid.y) - 1));
+}
+
+fn cell_index(face: u32, c: vec2i) -> u32 {
+    let r = irr.grid.y;
+    return (face * r + u32(c.y)) * r + u32(c.x);
+}
+
+// Pass 1, per pixel: the bounds of the samples' images on each face.
+@fragment
+fn fs_bounds(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    let px = vec2u(frag.xy);
+    let s = surface(px);
+    for (var k = 0u; s.seen && k < irr.pixel.x; k++) {
+        let o = sample_origin(px, k, s);
+        let face = face_of(o);
+        let v = (irr.views[face] * vec4f(o, 1.0)).xyz;
+        if !is_local() || v.z < 0.0 {
+            let c = image_of(v);
+            let b = AUX_BOUNDS + face * 4u;
+            atomicMax(&aux[b], ~ordered(c.x));
+            atomicMax(&aux[b + 1u], ~ordered(c.y));
+            atomicMax(&aux[b + 2u], ordered(c.x));
+            atomicMax(&aux[b + 3u], ordered(c.y));
+        }
+    }
+    return vec4f(1.0);
+}
+
+// The cell sample `k` of a seen pixel is binned in, or N (irr.work.w)
+// where it lies behind a local light's face.
+struct Binned {
+    origin: vec3f,
+    cell: u32,
+};
+
+fn binned(px: vec2u, k: u32, s: Surface) -> Binned {
+    var b: Binned;
+    b.cell = irr.work.w;
+    let o = sample_origin(px, k, s);
+    let face = face_of(o);
+    let v = (irr.views[face] * vec4f(o, 1.0)).xyz;
+    if !is_local() || v.z < 0.0 {
+        b.origin = o;
+        b.cell = cell_index(face, clamp_cell(cell_of(face_bounds(face), image_of(v))));
+    }
+    return b;
+}
+
+// Pass 2, per pixel: each cell's samples counted.
+@fragment
+fn fs_count(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    let px = vec2u(frag.xy);
+    let s = surface(px);
+    for (var k = 0u; s.seen && k < irr.pixel.x; k++) {
+        let b = binned(px, k, s);
+        if b.cell < irr.work.w {
+            atomicAdd(&cells[b.cell], 1u);
+            atomicAdd(&aux[AUX_SAMPLES], 1u);
+        }
+    }
+    return vec4f(1.0);
+}
+
+// Pass 3a, a workgroup per block of SCAN_BLOCK counts: their exclusive
+// prefix sum (each thread sums 16 serially, then adds the threads before
+// it), the block's total kept for pass 3b.
+var<workgroup> thread_sums: array<u32, 64>;
+
+@compute @workgroup_size(64)
+fn cs_scan_blocks(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
+        @builtin(local_invocation_index) lane: u32) {
+    let n = irr.work.w;
+    let block = group.y * groups.x + group.x;
+    let per = SCAN_BLOCK / WORKGROUP;
+    let first = block * SCAN_BLOCK + lane * per;
+    var sum = 0u;
+    for (var k = 0u; k < per; k++) {
+        if first + k < n {
+            sum += atomicLoad(&cells[first + k]);
+        }
+    }
+    thread_sums[lane] = sum;
+    workgroupBarrier();
+    var before = 0u;
+    for (var k = 0u; k < lane; k++) {
+        before += thread_sums[k];
+    }
+    for (var k = 0u; k < per; k++) {
+        if first + k < n {
+            atomicStore(&cells[n + first + k], before);
+            before += atomicLoad(&cells[first + k]);
+        }
+    }
+    if lane == WORKGROUP - 1u && block * SCAN_BLOCK < n {
+        atomicStore(&cells[2u * n + 1u + block], before);
+    }
+}
+
+// Pass 3b, one workgroup: the blocks' totals turned into their exclusive
+// prefix sum (each thread a contiguous run of them), the grand total
+// written after the last cell's offset.
+@compute @workgroup_size(64)
+fn cs_scan_partials(@builtin(local_invocation_index) lane: u32) {
+    let n = irr.work.w;
+    let blocks = (n + SCAN_BLOCK - 1u) / SCAN_BLOCK;
+    let per = (blocks + WORKGROUP - 1u) / WORKGROUP;
+    let base = 2u * n + 1u;
+    let first = lane * per;
+    let last = min(first + per, blocks);
+    var sum = 0u;
+    for (var k = first; k < last; k++) {
+        sum += atomicLoad(&cells[base + k]);
+    }
+    thread_sums[lane] = sum;
+    workgroupBarrier();
+    var before = 0u;
+    for (var k = 0u; k < lane; k++) {
+        before += thread_sums[k];
+    }
+    for (var k = first; k < last; k++) {
+        let total = atomicLoad(&cells[base + k]);
+        atomicStore(&cells[base + k], before);
+        before += total;
+    }
+    if lane == WORKGROUP - 1u {
+        atomicStore(&cells[2u * n], before);
+    }
+}
+
+// The histogram's bin of a list length n ≥ 1: n itself below 16, then one
+// bin per octave ([16, 32) is bin 16), the last one open.
+fn histogram_bin(n: u32) -> u32 {
+    if n < 16u {
+        return n;
+    }
+    return min(12u + firstLeadingBit(n), HISTOGRAM_BINS - 1u);
+}
+
+// Pass 3c, per cell: its block's partial added to its offset, and its list
+// length counted into the histogram.
+@compute @workgroup_size(64)
+fn cs_scan_add(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let n = irr.work.w;
+    let cell = id.y * groups.x * WORKGROUP + id.x;
+    if cell >= n {
+        return;
+    }
+    let partial = atomicLoad(&cells[2u * n + 1u + cell / SCAN_BLOCK]);
+    atomicAdd(&cells[n + cell], partial);
+    let length = atomicLoad(&cells[cell]);
+    if length > 0u {
+        atomicAdd(&aux[AUX_HISTOGRAM + histogram_bin(length)], 1u);
+        atomicMax(&aux[AUX_LONGEST], length);
+    }
+}
+
+// Pass 4, per pixel: its samples written to their cells' runs of `samples`.
+@fragment
+fn fs_scatter(@builtin(position) frag: vec4f) -> @location(0) vec4f {
+    let px = vec2u(frag.xy);
+    let s = surface(px);
+    let pixel = px.y * irr.grid.z + px.x;
+    for (var k = 0u; s.seen && k < irr.pixel.x; k++) {
+        let b = binned(px, k, s);
+        if b.cell < irr.work.w {
+            let left = atomicSub(&cells[b.cell], 1u);
+            let slot = atomicLoad(&cells[irr.work.w + b.cell]) + left - 1u;
+            let id = pixel * 32u + k;
+            if irr.pixel.x <= 1u {
+                let o = bitcast<vec3u>(b.origin);
+                samples[4u * slot] = o.x;
+                samples[4u * slot + 1u] = o.y;
+                samples[4u * slot + 2u] = o.z;
+                samples[4u * slot + 3u] = id;
+            } else {
+                samples[slot] = id;
+            }
+        }
+    }
+    return vec4f(1.0);
+}
