@@ -101,7 +101,7 @@ fn heatmap_job(
 ) -> Result<(egui::ColorImage, String), String> {
     let (w, h) = (data.width, data.height);
     let (pos, nrm, mask, color) = (&data.positions, &data.normals, &data.mask, &data.color);
-    use crate::technique::raytraced::{ReferenceSettings, mask_from_gbuffer};
+    use crate::technique::raytraced::{PixelSampling, ReferenceSettings, mask_from_gbuffer};
     let positions: &[[f32; 4]] = bytemuck::cast_slice(pos);
     let normals: Vec<glam::Vec3> = bytemuck::cast_slice::<u8, [half::f16; 4]>(nrm)
         .iter()
@@ -122,6 +122,7 @@ fn heatmap_job(
         &normals,
         settings.samples_for(light),
         settings.offset_ulps,
+        &PixelSampling::CENTRE,
     );
     let considered: Vec<bool> = positions
         .iter()
@@ -155,7 +156,7 @@ fn heatmap_job(
 mod tests {
     use super::*;
     use crate::scene::{Material, shapes};
-    use crate::technique::raytraced::{ReferenceSettings, mask_from_gbuffer};
+    use crate::technique::raytraced::{PixelSampling, ReferenceSettings, mask_from_gbuffer};
     use glam::{Mat4, Vec3};
 
     /// A floor at y = 30 and a box whose top edge, under a sun 3° above the
@@ -201,8 +202,10 @@ mod tests {
         let (scene, light, positions, normals) = grazing_boundary();
         let settings = ReferenceSettings::defaults();
         let bvh = settings.casters(&scene, None).unwrap();
-        let mask = mask_from_gbuffer(&bvh, &light, &positions, &normals, 1, settings.offset_ulps);
-        let other = mask_from_gbuffer(&bvh, &light, &positions, &normals, 1, 512.0);
+        let centre = &PixelSampling::CENTRE;
+        let ulps = settings.offset_ulps;
+        let mask = mask_from_gbuffer(&bvh, &light, &positions, &normals, 1, ulps, centre);
+        let other = mask_from_gbuffer(&bvh, &light, &positions, &normals, 1, 512.0, centre);
         let moved = mask.iter().zip(&other).filter(|(a, b)| a != b).count();
         assert!(moved >= 5, "a 512-ULP offset moves {moved} samples");
         assert!(mask.contains(&0.0) && mask.contains(&1.0));

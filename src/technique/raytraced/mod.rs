@@ -319,22 +319,9 @@ pub const PLANE_LIFT: f32 = 0.25;
 
 /// Computes a whole visibility mask on the CPU from G-buffer data
 /// (`positions`: xyzw with w = coverage, `normals`: xyz geometric normal),
-/// at the pixels' centres.
+/// each pixel sampled as `sampling` says: the mean visibility of its
+/// sub-pixel points ([`PixelSampling::CENTRE`]: its centre).
 pub fn mask_from_gbuffer(
-    bvh: &CasterBvh,
-    light: &Light,
-    positions: &[[f32; 4]],
-    normals: &[Vec3],
-    samples: usize,
-    ulps: f32,
-) -> Vec<f32> {
-    let centre = PixelSampling::CENTRE;
-    mask_sampled(bvh, light, positions, normals, samples, ulps, &centre)
-}
-
-/// [`mask_from_gbuffer`] with each pixel sampled as `sampling` says: the
-/// mean visibility of its sub-pixel points.
-pub fn mask_sampled(
     bvh: &CasterBvh,
     light: &Light,
     positions: &[[f32; 4]],
@@ -409,7 +396,7 @@ impl ShadowTechnique for RayTraced {
             size: UVec2::new(frame.width(), frame.height()),
             count: settings.pixel_samples,
         };
-        let mask = mask_sampled(
+        let mask = mask_from_gbuffer(
             &bvh,
             ctx.light,
             positions,
