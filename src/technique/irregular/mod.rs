@@ -36,11 +36,15 @@ use std::sync::Arc;
 
 const GRID: ParamSpec = ParamSpec::int(
     "grid",
-    1024,
-    64,
+    0,
+    0,
     4096,
-    "cells per side of each light-space face the samples are binned into (directional lights: one face; point and spot lights: six cube faces); about one cell per pixel keeps the lists short",
+    "cells per side of each light-space face the samples are binned into (directional lights: one face; point and spot lights: six cube faces), at least 64; 0: chosen from the frame, the power of two that gives at least 1.5 cells per sample over the faces (a 1280 × 720 frame: 2048² under a directional light, six faces of 512² under a point light) — more cells shorten the lists, fewer shorten the per-cell passes",
 );
+/// Cells per sample the automatic grid gives at least, over the faces.
+const CELLS_PER_SAMPLE: f64 = 1.5;
+/// The least grid side (an explicit `grid` below it is raised to it).
+const GRID_MIN: u32 = 64;
 const LARGE_SAMPLES: ParamSpec = ParamSpec::int(
     "large_samples",
     256,
@@ -71,7 +75,7 @@ pub static FAMILY: Family = Family {
     presets: &[
         Preset {
             name: "default",
-            summary: "1024² cells per face, one sample per pixel, cut-outs alpha-tested at full resolution",
+            summary: "a grid of at least 1.5 cells per sample, one sample per pixel, cut-outs alpha-tested at full resolution",
             values: &[],
         },
         Preset {
@@ -98,6 +102,20 @@ struct IrregularConfig {
 }
 
 impl IrregularConfig {
+    /// The grid's side for `samples` samples over `faces` faces: `grid`, or
+    /// with `grid` 0 the power of two that gives each face at least
+    /// [`CELLS_PER_SAMPLE`] cells per sample it may hold on average.
+    fn grid_side(&self, samples: u64, faces: usize) -> u32 {
+        let side = match self.grid {
+            0 => {
+                let cells = CELLS_PER_SAMPLE * samples as f64 / faces.max(1) as f64;
+                (cells.sqrt().ceil() as u32).next_power_of_two()
+            }
+            g => g,
+        };
+        side.clamp(GRID_MIN, GRID.max as u32)
+    }
+
     fn parse(p: &ParamValues) -> Result<IrregularConfig> {
         Ok(IrregularConfig {
             grid: p.int(&GRID)?,
@@ -169,6 +187,8 @@ struct Buffers {
     /// Counts, offsets and prefix-sum partials (`cells` of irregular.wgsl).
     binning: wgpu::Buffer,
     cell_count: u64,
+    /// Cells per face side.
+    grid: u32,
     samples: wgpu::Buffer,
     marks: wgpu::Buffer,
     triangles: wgpu::Buffer,
@@ -229,12 +249,16 @@ impl IrregularZBuffer {
     /// storage-buffer limit or the memory budget are an error.
     fn ensure_buffers(&mut self, ctx: &MaskContext, faces: usize) -> Result<&Buffers> {
         let (w, h) = (ctx.frame.width(), ctx.frame.height());
+        let pixels = w as u64 * h as u64;
+        let grid = self
+            .config
+            .grid_side(pixels * self.config.pixel_samples as u64, faces);
         let key = (
             w,
             h,
             scene_fingerprint(ctx.scene),
             faces,
-            self.config.grid,
+            grid,
             self.config.pixel_samples,
         );
         let asked = self.stats.jobs as u64;
@@ -253,8 +277,7 @@ impl IrregularZBuffer {
         self.buffers = None;
         let gpu = ctx.gpu;
         let triangles = casters::caster_triangles(ctx.scene);
-        let cell_count = faces as u64 * self.config.grid as u64 * self.config.grid as u64;
-        let pixels = w as u64 * h as u64;
+        let cell_count = faces as u64 * grid as u64 * grid as u64;
         let capacity = job_capacity(triangles.len() as u64, faces as u64, asked);
         let sizes = [
             (
@@ -308,6 +331,7 @@ impl IrregularZBuffer {
             uniform,
             binning,
             cell_count,
+            grid,
             samples,
             marks,
             triangles: triangle_buffer,
@@ -361,12 +385,7 @@ impl ShadowTechnique for IrregularZBuffer {
                 LightType::Directional => light.direction.normalize().extend(0.0),
                 _ => light.position.extend(1.0),
             },
-            grid: UVec4::new(
-                faces as u32,
-                config.grid,
-                ctx.frame.width(),
-                ctx.frame.height(),
-            ),
+            grid: UVec4::new(faces as u32, b.grid, ctx.frame.width(), ctx.frame.height()),
             work: UVec4::new(
                 b.triangle_count,
                 config.large_samples,
@@ -548,6 +567,28 @@ mod tests {
         assert_eq!(job_capacity(100_000, 6, 0), 2_400_000);
         assert_eq!(job_capacity(100_000, 6, 1_500_000), 3_000_000);
         assert_eq!(job_capacity(100_000, 6, 1 << 30), JOB_CAPACITY.1);
+    }
+
+    /// The automatic grid gives at least 1.5 cells per sample over the
+    /// faces, in powers of two; an explicit side is kept, raised to 64.
+    #[test]
+    fn the_automatic_grid_follows_the_samples() {
+        let auto = IrregularConfig {
+            grid: 0,
+            large_samples: 256,
+            pixel_samples: 1,
+            offset_ulps: 64.0,
+        };
+        assert_eq!(auto.grid_side(1280 * 720, 1), 2048);
+        assert_eq!(auto.grid_side(1280 * 720, 6), 512);
+        assert_eq!(auto.grid_side(640 * 360, 1), 1024);
+        assert_eq!(auto.grid_side(640 * 360, 6), 256);
+        assert_eq!(auto.grid_side(16, 6), 64);
+        assert_eq!(auto.grid_side(1 << 40, 1), 4096);
+        let fixed = IrregularConfig { grid: 32, ..auto };
+        assert_eq!(fixed.grid_side(1280 * 720, 1), 64);
+        let fixed = IrregularConfig { grid: 1000, ..auto };
+        assert_eq!(fixed.grid_side(1280 * 720, 6), 1000);
     }
 
     /// The list-length quantiles come from the histogram of non-empty cells.
