@@ -104,16 +104,22 @@ struct IrregularConfig {
 impl IrregularConfig {
     /// The grid's side for `samples` samples over `faces` faces: `grid`, or
     /// with `grid` 0 the power of two that gives each face at least
-    /// [`CELLS_PER_SAMPLE`] cells per sample it may hold on average.
-    fn grid_side(&self, samples: u64, faces: usize) -> u32 {
-        let side = match self.grid {
-            0 => {
-                let cells = CELLS_PER_SAMPLE * samples as f64 / faces.max(1) as f64;
-                (cells.sqrt().ceil() as u32).next_power_of_two()
-            }
-            g => g,
-        };
-        side.clamp(GRID_MIN, GRID.max as u32)
+    /// [`CELLS_PER_SAMPLE`] cells per sample it may hold on average, halved
+    /// while the faces would hold more than `max_cells` (the largest
+    /// storage buffer's worth).
+    fn grid_side(&self, samples: u64, faces: usize, max_cells: u64) -> u32 {
+        if self.grid != 0 {
+            return self.grid.clamp(GRID_MIN, GRID.max as u32);
+        }
+        let faces = faces.max(1) as u64;
+        let cells = CELLS_PER_SAMPLE * samples as f64 / faces as f64;
+        let mut side = (cells.sqrt().ceil() as u32)
+            .next_power_of_two()
+            .clamp(GRID_MIN, GRID.max as u32);
+        while side > GRID_MIN && faces * side as u64 * side as u64 > max_cells {
+            side /= 2;
+        }
+        side
     }
 
     fn parse(p: &ParamValues) -> Result<IrregularConfig> {
@@ -250,9 +256,10 @@ impl IrregularZBuffer {
     fn ensure_buffers(&mut self, ctx: &MaskContext, faces: usize) -> Result<&Buffers> {
         let (w, h) = (ctx.frame.width(), ctx.frame.height());
         let pixels = w as u64 * h as u64;
-        let grid = self
-            .config
-            .grid_side(pixels * self.config.pixel_samples as u64, faces);
+        let limit = ctx.gpu.device.limits().max_storage_buffer_binding_size;
+        let max_cells = (limit / 4).saturating_sub(1) * SCAN_BLOCK / (2 * SCAN_BLOCK + 1);
+        let samples = pixels * self.config.pixel_samples as u64;
+        let grid = self.config.grid_side(samples, faces, max_cells);
         let key = (
             w,
             h,
@@ -570,7 +577,9 @@ mod tests {
     }
 
     /// The automatic grid gives at least 1.5 cells per sample over the
-    /// faces, in powers of two; an explicit side is kept, raised to 64.
+    /// faces, in powers of two, within the largest storage buffer; an
+    /// explicit side is kept (raised to 64), and one too large is an error
+    /// where the buffers are made.
     #[test]
     fn the_automatic_grid_follows_the_samples() {
         let auto = IrregularConfig {
@@ -579,16 +588,21 @@ mod tests {
             pixel_samples: 1,
             offset_ulps: 64.0,
         };
-        assert_eq!(auto.grid_side(1280 * 720, 1), 2048);
-        assert_eq!(auto.grid_side(1280 * 720, 6), 512);
-        assert_eq!(auto.grid_side(640 * 360, 1), 1024);
-        assert_eq!(auto.grid_side(640 * 360, 6), 256);
-        assert_eq!(auto.grid_side(16, 6), 64);
-        assert_eq!(auto.grid_side(1 << 40, 1), 4096);
+        let any = u64::MAX;
+        assert_eq!(auto.grid_side(1280 * 720, 1, any), 2048);
+        assert_eq!(auto.grid_side(1280 * 720, 6, any), 512);
+        assert_eq!(auto.grid_side(640 * 360, 1, any), 1024);
+        assert_eq!(auto.grid_side(640 * 360, 6, any), 256);
+        assert_eq!(auto.grid_side(16, 6, any), 64);
+        assert_eq!(auto.grid_side(1 << 40, 1, any), 4096);
+        // 16 samples a pixel of 1280 × 720 would ask for 4096², past a
+        // 128 MiB buffer's 16.7 M cells of counts and offsets.
+        let max_cells = (128 << 20) / 4 * 1024 / 2049;
+        assert_eq!(auto.grid_side(16 * 1280 * 720, 1, max_cells), 2048);
         let fixed = IrregularConfig { grid: 32, ..auto };
-        assert_eq!(fixed.grid_side(1280 * 720, 1), 64);
-        let fixed = IrregularConfig { grid: 1000, ..auto };
-        assert_eq!(fixed.grid_side(1280 * 720, 6), 1000);
+        assert_eq!(fixed.grid_side(1280 * 720, 1, any), 64);
+        let fixed = IrregularConfig { grid: 4096, ..auto };
+        assert_eq!(fixed.grid_side(1280 * 720, 6, max_cells), 4096);
     }
 
     /// The list-length quantiles come from the histogram of non-empty cells.
