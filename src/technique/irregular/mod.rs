@@ -39,10 +39,10 @@ const GRID: ParamSpec = ParamSpec::int(
     0,
     0,
     4096,
-    "cells per side of each light-space face the samples are binned into (directional lights: one face; point and spot lights: six cube faces), at least 64; 0: chosen from the frame, the power of two that gives at least 1.5 cells per sample over the faces (a 1280 × 720 frame: 2048² under a directional light, six faces of 512² under a point light) — more cells shorten the lists, fewer shorten the per-cell passes",
+    "cells per side of each light-space face the samples are binned into (directional lights: one face; point and spot lights: six cube faces), at least 64; 0: chosen from the frame, the power of two that gives at least one cell per sample over the faces, within the largest storage buffer (a 1280 × 720 frame: 1024² under a directional light, six faces of 512² under a point light) — more cells shorten the lists, fewer shorten the per-cell passes",
 );
 /// Cells per sample the automatic grid gives at least, over the faces.
-const CELLS_PER_SAMPLE: f64 = 1.5;
+const CELLS_PER_SAMPLE: f64 = 1.0;
 /// The least grid side (an explicit `grid` below it is raised to it).
 const GRID_MIN: u32 = 64;
 const LARGE_SAMPLES: ParamSpec = ParamSpec::int(
@@ -75,7 +75,7 @@ pub static FAMILY: Family = Family {
     presets: &[
         Preset {
             name: "default",
-            summary: "a grid of at least 1.5 cells per sample, one sample per pixel, cut-outs alpha-tested at full resolution",
+            summary: "a grid of at least one cell per sample, one sample per pixel, cut-outs alpha-tested at full resolution",
             values: &[],
         },
         Preset {
@@ -576,7 +576,7 @@ mod tests {
         assert_eq!(job_capacity(100_000, 6, 1 << 30), JOB_CAPACITY.1);
     }
 
-    /// The automatic grid gives at least 1.5 cells per sample over the
+    /// The automatic grid gives at least one cell per sample over the
     /// faces, in powers of two, within the largest storage buffer; an
     /// explicit side is kept (raised to 64), and one too large is an error
     /// where the buffers are made.
@@ -589,9 +589,9 @@ mod tests {
             offset_ulps: 64.0,
         };
         let any = u64::MAX;
-        assert_eq!(auto.grid_side(1280 * 720, 1, any), 2048);
+        assert_eq!(auto.grid_side(1280 * 720, 1, any), 1024);
         assert_eq!(auto.grid_side(1280 * 720, 6, any), 512);
-        assert_eq!(auto.grid_side(640 * 360, 1, any), 1024);
+        assert_eq!(auto.grid_side(640 * 360, 1, any), 512);
         assert_eq!(auto.grid_side(640 * 360, 6, any), 256);
         assert_eq!(auto.grid_side(16, 6, any), 64);
         assert_eq!(auto.grid_side(1 << 40, 1, any), 4096);
