@@ -115,11 +115,10 @@ fn the_report_covers_every_preset_shows_the_csv_and_resumes() {
     // Every preset is bounded relative to the shadow `none` misses: the
     // reference exact (its supersampled preset and shadow volumes within
     // 5 % of it), the other families within a quarter, and the failure
-    // demonstrations that fail on this
-    // view beyond a share of it: 8-bit depth, the far plane clipping
-    // z-fail's volumes and the darkening composition (a lit image cannot
-    // show it) over half; silhouette volumes of the open teapot (what
-    // per-triangle volumes fix) over 2 %.
+    // demonstrations that fail on this view beyond a share of it: 8-bit
+    // depth, the far plane clipping z-fail's volumes and the darkening
+    // composition (a lit image cannot show it) over half; silhouette
+    // volumes of the open teapot (what per-triangle volumes fix) over 2 %.
     const FAILING_HERE: [(&str, f64); 5] = [
         ("shadow-map:8bit", 0.5),
         ("shadow-volume:zfail-far-clip", 0.5),

@@ -41,6 +41,12 @@ pub fn binning_words(cells: u64) -> u64 {
     2 * cells + 1 + cells.div_ceil(SCAN_BLOCK)
 }
 
+/// The most cells whose [`binning_words`] fit in `bytes` (rounding the
+/// partials up: a cell or so under the exact bound).
+pub fn cells_fitting(bytes: u64) -> u64 {
+    (bytes / 4).saturating_sub(2) * SCAN_BLOCK / (2 * SCAN_BLOCK + 1)
+}
+
 /// The family's WGSL: the interface and triangle passes, then the samples
 /// and their binning.
 const SOURCES: &[&str] = &[include_str!("irregular.wgsl"), include_str!("samples.wgsl")];
@@ -202,6 +208,16 @@ mod tests {
                 ("SCAN_BLOCK", SCAN_BLOCK as u32),
             ],
         );
+    }
+
+    /// The cells that fit a buffer are the most whose binning words do.
+    #[test]
+    fn cells_fitting_inverts_binning_words() {
+        for bytes in [1u64 << 20, 128 << 20, (128 << 20) + 12_345, 1 << 31] {
+            let n = cells_fitting(bytes);
+            assert!(binning_words(n) * 4 <= bytes, "{bytes}: {n}");
+            assert!(binning_words(n + 2) * 4 > bytes, "{bytes}: {n}");
+        }
     }
 
     #[test]

@@ -30,7 +30,8 @@ use glam::{Mat4, UVec4, Vec3, Vec4};
 use gpu::{
     AUX_DISPATCH, AUX_HEADER_WORDS, AUX_HISTOGRAM, AUX_JOBS, AUX_LONGEST, AUX_OVERFLOW, AUX_PAIRS,
     AUX_SAMPLES, AUX_TESTS, HISTOGRAM_BINS, IrregularShared, IrregularUniform, JOB_CAPACITY,
-    MAX_FACES, SCAN_BLOCK, binning_words, grid_of_workgroups, storage_buffer, workgroups_for,
+    MAX_FACES, SCAN_BLOCK, binning_words, cells_fitting, grid_of_workgroups, storage_buffer,
+    workgroups_for,
 };
 use std::sync::Arc;
 
@@ -257,9 +258,8 @@ impl IrregularZBuffer {
         let (w, h) = (ctx.frame.width(), ctx.frame.height());
         let pixels = w as u64 * h as u64;
         let limit = ctx.gpu.device.limits().max_storage_buffer_binding_size;
-        let max_cells = (limit / 4).saturating_sub(1) * SCAN_BLOCK / (2 * SCAN_BLOCK + 1);
         let samples = pixels * self.config.pixel_samples as u64;
-        let grid = self.config.grid_side(samples, faces, max_cells);
+        let grid = self.config.grid_side(samples, faces, cells_fitting(limit));
         let key = (
             w,
             h,
@@ -295,7 +295,6 @@ impl IrregularZBuffer {
             ("caster triangles", triangles.len() as u64 * 64),
             ("job list", (AUX_HEADER_WORDS + 4 * capacity) * 4),
         ];
-        let limit = gpu.device.limits().max_storage_buffer_binding_size;
         for (what, bytes) in sizes {
             if bytes > limit {
                 bail!(
@@ -597,7 +596,7 @@ mod tests {
         assert_eq!(auto.grid_side(1 << 40, 1, any), 4096);
         // 16 samples a pixel of 1280 × 720 would ask for 4096², past a
         // 128 MiB buffer's 16.7 M cells of counts and offsets.
-        let max_cells = (128 << 20) / 4 * 1024 / 2049;
+        let max_cells = gpu::cells_fitting(128 << 20);
         assert_eq!(auto.grid_side(16 * 1280 * 720, 1, max_cells), 2048);
         let fixed = IrregularConfig { grid: 32, ..auto };
         assert_eq!(fixed.grid_side(1280 * 720, 1, any), 64);

@@ -168,23 +168,21 @@ fn fs_count(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     return vec4f(1.0);
 }
 
-// Pass 3a, a workgroup per block of SCAN_BLOCK counts: their exclusive
-// prefix sum (each thread sums 16 serially, then adds the threads before
-// it), the block's total kept for pass 3b.
+// Each thread's sum of its run, for the threads after it (passes 3a, 3b).
 var<workgroup> thread_sums: array<u32, 64>;
 
-@compute @workgroup_size(64)
-fn cs_scan_blocks(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
-        @builtin(local_invocation_index) lane: u32) {
-    let n = irr.work.w;
-    let block = group.y * groups.x + group.x;
-    let per = SCAN_BLOCK / WORKGROUP;
-    let first = block * SCAN_BLOCK + lane * per;
+// The workgroup's exclusive prefix sum of `cells[start, end)`, written at
+// `dst_offset` past each word: each thread sums its run of `per` words
+// serially, adds the sums of the threads before it, and writes its run.
+// Returns the running sum past this thread's run (the whole range's total
+// in the last thread). Call in uniform control flow (it waits at a
+// barrier).
+fn scan_in_workgroup(lane: u32, start: u32, end: u32, per: u32, dst_offset: u32) -> u32 {
+    let first = min(start + lane * per, end);
+    let last = min(first + per, end);
     var sum = 0u;
-    for (var k = 0u; k < per; k++) {
-        if first + k < n {
-            sum += atomicLoad(&cells[first + k]);
-        }
+    for (var k = first; k < last; k++) {
+        sum += atomicLoad(&cells[k]);
     }
     thread_sums[lane] = sum;
     workgroupBarrier();
@@ -192,14 +190,25 @@ fn cs_scan_blocks(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) 
     for (var k = 0u; k < lane; k++) {
         before += thread_sums[k];
     }
-    for (var k = 0u; k < per; k++) {
-        if first + k < n {
-            atomicStore(&cells[n + first + k], before);
-            before += atomicLoad(&cells[first + k]);
-        }
+    for (var k = first; k < last; k++) {
+        let count = atomicLoad(&cells[k]);
+        atomicStore(&cells[k + dst_offset], before);
+        before += count;
     }
-    if lane == WORKGROUP - 1u && block * SCAN_BLOCK < n {
-        atomicStore(&cells[2u * n + 1u + block], before);
+    return before;
+}
+
+// Pass 3a, a workgroup per block of SCAN_BLOCK counts: their exclusive
+// prefix sum (16 counts a thread), the block's total kept for pass 3b.
+@compute @workgroup_size(64)
+fn cs_scan_blocks(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
+        @builtin(local_invocation_index) lane: u32) {
+    let n = irr.work.w;
+    let block = group.y * groups.x + group.x;
+    let start = min(block * SCAN_BLOCK, n);
+    let total = scan_in_workgroup(lane, start, min(start + SCAN_BLOCK, n), SCAN_BLOCK / WORKGROUP, n);
+    if lane == WORKGROUP - 1u && start < n {
+        atomicStore(&cells[2u * n + 1u + block], total);
     }
 }
 
@@ -212,25 +221,9 @@ fn cs_scan_partials(@builtin(local_invocation_index) lane: u32) {
     let blocks = (n + SCAN_BLOCK - 1u) / SCAN_BLOCK;
     let per = (blocks + WORKGROUP - 1u) / WORKGROUP;
     let base = 2u * n + 1u;
-    let first = lane * per;
-    let last = min(first + per, blocks);
-    var sum = 0u;
-    for (var k = first; k < last; k++) {
-        sum += atomicLoad(&cells[base + k]);
-    }
-    thread_sums[lane] = sum;
-    workgroupBarrier();
-    var before = 0u;
-    for (var k = 0u; k < lane; k++) {
-        before += thread_sums[k];
-    }
-    for (var k = first; k < last; k++) {
-        let total = atomicLoad(&cells[base + k]);
-        atomicStore(&cells[base + k], before);
-        before += total;
-    }
+    let total = scan_in_workgroup(lane, base, base + blocks, per, 0u);
     if lane == WORKGROUP - 1u {
-        atomicStore(&cells[2u * n], before);
+        atomicStore(&cells[2u * n], total);
     }
 }
 
