@@ -33,11 +33,11 @@ pub fn read_back(
     let color = frame.read_color_rgba(gpu)?;
     let masks = (0..light_count)
         .map(|i| {
-            let raw = gpu.read_texture(frame.masks(), i as u32, 2)?;
-            Ok(bytemuck::cast_slice::<u8, half::f16>(&raw)
-                .iter()
-                .map(|h| h.to_f32())
-                .collect())
+            Ok(decode_mask(&gpu.read_texture(
+                frame.masks(),
+                i as u32,
+                2,
+            )?))
         })
         .collect::<Result<Vec<Vec<f32>>>>()?;
     let pos = gpu.read_texture(frame.gbuffer_position(), 0, 16)?;
@@ -52,6 +52,14 @@ pub fn read_back(
         masks,
         coverage,
     })
+}
+
+/// A mask layer's texels as read back (half floats) as visibilities.
+pub fn decode_mask(raw: &[u8]) -> Vec<f32> {
+    bytemuck::cast_slice::<u8, half::f16>(raw)
+        .iter()
+        .map(|h| h.to_f32())
+        .collect()
 }
 
 /// Converts a mask to 16-bit grey: 65535 = fully lit; background pixels 65535.

@@ -155,7 +155,14 @@ impl FrameLayouts {
             FrameLayouts {
                 frame: layout(
                     "frame",
-                    &[uniform_entry(gpu, 0, wgpu::ShaderStages::all(), false)],
+                    // The stages a pipeline here has (WebGPU refuses the
+                    // mesh and ray-tracing stages of `ShaderStages::all()`).
+                    &[uniform_entry(
+                        gpu,
+                        0,
+                        vf | wgpu::ShaderStages::COMPUTE,
+                        false,
+                    )],
                 ),
                 objects: layout(
                     "objects",

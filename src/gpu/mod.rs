@@ -94,6 +94,24 @@ fn rank(t: wgpu::DeviceType) -> u32 {
     }
 }
 
+/// A texture's texels copied into a `MAP_READ` buffer
+/// ([`GpuContext::copy_texture`]), rows padded.
+pub struct TextureCopy {
+    pub buffer: wgpu::Buffer,
+    padded_row: usize,
+    row: usize,
+}
+
+impl TextureCopy {
+    /// The mapped buffer's bytes with the rows' padding dropped.
+    pub fn unpad(&self, data: &[u8]) -> Vec<u8> {
+        data.chunks(self.padded_row)
+            .flat_map(|r| &r[..self.row])
+            .copied()
+            .collect()
+    }
+}
+
 impl GpuContext {
     /// Creates a headless context. `backend` (from `--backend`) wins over the
     /// `WGPU_BACKEND` environment variable; among adapters a real GPU is
@@ -131,6 +149,7 @@ impl GpuContext {
     /// a captured wgpu error into an `Err` naming `what`.
     /// A lost device (driver reset, GPU removed, or destroyed) is an error
     /// too, before and after `f`.
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn checked<T>(&self, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
         self.check_not_lost(what)?;
         let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
@@ -148,6 +167,14 @@ impl GpuContext {
             bail!("{what}: {e}");
         }
         r
+    }
+
+    /// In the browser, where the scopes' results can only be awaited, `f`
+    /// runs alone: the page awaits its own scopes around each frame.
+    #[cfg(target_arch = "wasm32")]
+    pub fn checked<T>(&self, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+        self.check_not_lost(what)?;
+        f()
     }
 
     /// An error once the device has been lost.
@@ -179,6 +206,15 @@ impl GpuContext {
             }
             .into());
         };
+        pollster::block_on(Self::from_adapter(instance, adapter))
+    }
+
+    /// Creates the context on `adapter` with the optional features the
+    /// techniques use (awaited: the browser build cannot block).
+    pub async fn from_adapter(
+        instance: wgpu::Instance,
+        adapter: wgpu::Adapter,
+    ) -> Result<GpuContext> {
         let info = adapter.get_info();
         let wanted = wgpu::Features::TIMESTAMP_QUERY
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
@@ -186,13 +222,14 @@ impl GpuContext {
             | wgpu::Features::DEPTH_CLIP_CONTROL
             | wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
         let features = adapter.features() & wanted;
-        let (device, queue) =
-            pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
                 label: Some("shadowlab"),
                 required_features: features,
                 required_limits: adapter.limits(),
                 ..Default::default()
-            }))?;
+            })
+            .await?;
         device.on_uncaptured_error(std::sync::Arc::new(|e: wgpu::Error| {
             log::error!("wgpu: {e}");
         }));
@@ -333,6 +370,19 @@ impl GpuContext {
         level: u32,
         bytes_per_pixel: u32,
     ) -> Result<Vec<u8>> {
+        let copy = self.copy_texture(texture, layer, level, bytes_per_pixel);
+        Ok(copy.unpad(&self.read_buffer(&copy.buffer)?))
+    }
+
+    /// Submits the copy of one layer of one mip level of a 2D texture into
+    /// a new `MAP_READ` buffer, its rows padded to wgpu's alignment.
+    pub fn copy_texture(
+        &self,
+        texture: &wgpu::Texture,
+        layer: u32,
+        level: u32,
+        bytes_per_pixel: u32,
+    ) -> TextureCopy {
         let (w, h) = (
             (texture.width() >> level).max(1),
             (texture.height() >> level).max(1),
@@ -373,12 +423,11 @@ impl GpuContext {
             },
         );
         self.queue.submit([enc.finish()]);
-        let data = self.read_buffer(&buffer)?;
-        let mut out = Vec::with_capacity((unpadded * h) as usize);
-        for row in data.chunks(padded as usize) {
-            out.extend_from_slice(&row[..unpadded as usize]);
+        TextureCopy {
+            buffer,
+            padded_row: padded as usize,
+            row: unpadded as usize,
         }
-        Ok(out)
     }
 
     /// Waits for the GPU and returns the contents of a `MAP_READ` buffer.

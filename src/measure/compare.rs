@@ -11,7 +11,6 @@ use crate::scene::{Light, Scene};
 use crate::technique::TechniqueInstance;
 use crate::technique::{MapLookup, TechniqueChoice};
 use anyhow::{Context, Result};
-use glam::Vec3;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -84,21 +83,11 @@ pub fn considered_at(
     lights: &[Light],
 ) -> Result<Vec<Vec<bool>>> {
     let nrm = gpu.read_texture(hf.frame.gbuffer_normal(), 0, 8)?;
-    let nrm: &[[half::f16; 4]] = bytemuck::cast_slice(&nrm);
-    Ok(lights
-        .iter()
-        .map(|l| {
-            pos.iter()
-                .zip(nrm)
-                .map(|(p, n)| {
-                    let normal = Vec3::new(n[0].to_f32(), n[1].to_f32(), n[2].to_f32());
-                    p[3] > 0.5
-                        && n[3].to_f32() > 0.5
-                        && l.reaches(Vec3::new(p[0], p[1], p[2]), normal)
-                })
-                .collect()
-        })
-        .collect())
+    Ok(quality::considered_from_gbuffer(
+        pos,
+        bytemuck::cast_slice(&nrm),
+        lights,
+    ))
 }
 
 /// What one technique renders for `compare`: its frame, the frame's time,

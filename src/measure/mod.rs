@@ -2,10 +2,14 @@
 //! `bench` (frame and pass timings, ratios to `none`), flicker along camera
 //! paths, and the soak (memory and frame-time drift over many frames).
 
+#[cfg(not(target_arch = "wasm32"))]
 pub mod bench;
+#[cfg(not(target_arch = "wasm32"))]
 pub mod compare;
+#[cfg(not(target_arch = "wasm32"))]
 pub mod flicker;
 pub mod quality;
+#[cfg(not(target_arch = "wasm32"))]
 pub mod soak;
 
 use crate::scene::{Camera, Light, Scene};
@@ -36,6 +40,7 @@ pub fn percentile<T: Copy>(sorted: &[T], q: f64) -> T {
     sorted[((sorted.len() - 1) as f64 * q).round() as usize]
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// A progress bar of `len` steps drawn with `template` (indicatif's), or a
 /// hidden one when `show` is false (a caller that draws its own).
 pub fn progress_bar(show: bool, len: u64, template: &str) -> indicatif::ProgressBar {
@@ -113,6 +118,7 @@ pub fn choice_label(c: &TechniqueChoice) -> String {
     }
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// Writes a CSV file through the `csv` crate, which quotes fields such as
 /// the label `x[a=1,b=2]`.
 pub fn write_csv(

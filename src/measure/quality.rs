@@ -1,6 +1,34 @@
 //! Mask and image quality metrics against the ray-traced reference.
 
+use crate::scene::Light;
+use glam::Vec3;
 use serde::{Deserialize, Serialize};
+
+/// Per light, the pixels that count: geometry drawn that receives shadows
+/// and that the light's direct light reaches (facing it, inside a spot's
+/// cone, within range), from the G-buffer's positions (`w` > 0.5 where a
+/// surface was drawn) and normals (`w` > 0.5 where it receives shadows).
+pub fn considered_from_gbuffer(
+    positions: &[[f32; 4]],
+    normals: &[[half::f16; 4]],
+    lights: &[Light],
+) -> Vec<Vec<bool>> {
+    lights
+        .iter()
+        .map(|l| {
+            positions
+                .iter()
+                .zip(normals)
+                .map(|(p, n)| {
+                    let normal = Vec3::new(n[0].to_f32(), n[1].to_f32(), n[2].to_f32());
+                    p[3] > 0.5
+                        && n[3].to_f32() > 0.5
+                        && l.reaches(Vec3::new(p[0], p[1], p[2]), normal)
+                })
+                .collect()
+        })
+        .collect()
+}
 
 /// Mismatch counts as percentages of the considered pixels.
 #[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq)]
@@ -288,6 +316,7 @@ pub struct FlipStats {
     pub p99: f64,
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// ꟻLIP (the `nv-flip` crate) between two sRGB RGBA8 images of one size.
 pub fn flip(reference_rgba: &[u8], test_rgba: &[u8], width: u32, height: u32) -> FlipStats {
     let rgb = |rgba: &[u8]| -> Vec<u8> {

@@ -16,6 +16,7 @@ pub use lighting::LitKey;
 use lighting::LitLights;
 pub use timing::{FrameTimings, GpuPassTimes};
 
+use crate::clock::Instant;
 use crate::frame::{self, FrameLayouts, FrameTargets, MAX_LIGHTS, SceneGpu};
 use crate::gpu::{GpuContext, WorkStage};
 use crate::scene::{AlphaMode, Camera, Light, Scene};
@@ -23,7 +24,6 @@ use crate::technique::{Feedback, MaskContext, TechniqueInstance, TechniqueNeeds}
 use anyhow::{Result, bail};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
-use std::time::Instant;
 
 /// Shading modes of [004].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]

@@ -3,7 +3,7 @@
 // weighted 1/o, its absolute value (turbulence) and a sine of it (marble).
 
 fn hash3(p: vec3i) -> u32 {
-    var h = u32(p.x) * 73856093u ^ u32(p.y) * 19349663u ^ u32(p.z) * 83492791u;
+    var h = (u32(p.x) * 73856093u) ^ (u32(p.y) * 19349663u) ^ (u32(p.z) * 83492791u);
     h = (h ^ (h >> 13u)) * 1274126177u;
     return h ^ (h >> 16u);
 }

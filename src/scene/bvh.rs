@@ -5,12 +5,12 @@
 
 use super::opacity::{CasterOpacity, Transmittance};
 use super::{Scene, scene_fingerprint};
+use crate::clock::Instant;
 use glam::Vec3;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::Ray;
 use obvhs::triangle::Triangle;
 use std::sync::{Arc, Mutex, Weak};
-use std::time::Instant;
 
 /// Which ray-tracing kernel answers shadow rays.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -28,6 +28,31 @@ enum Tracer {
         opacity: Option<CasterOpacity>,
     },
     Embree(super::embree::EmbreeScene),
+}
+
+/// obvhs's `build_cwbvh_from_tris` with its medium-build parameters, less
+/// its timer (std's `Instant`, which panics in the browser build): PLOC,
+/// reinsertion, then the compressed wide BVH.
+fn build_cwbvh(triangles: &[Triangle]) -> CwBvh {
+    let config = obvhs::BvhBuildParams::medium_build();
+    let mut bvh2 = obvhs::ploc::PlocBuilder::with_capacity(triangles.len()).build(
+        config.ploc_search_distance,
+        triangles,
+        (0..triangles.len() as u32).collect(),
+        config.sort_precision,
+        config.search_depth_threshold,
+    );
+    obvhs::bvh2::reinsertion::ReinsertionOptimizer::default().run(
+        &mut bvh2,
+        config.reinsertion_batch_ratio,
+        None,
+    );
+    obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh(
+        &bvh2,
+        config.max_prims_per_leaf.clamp(1, 3),
+        true,
+        false,
+    )
 }
 
 /// The acceleration structure over the world-space triangles of a scene's
@@ -60,13 +85,7 @@ impl CasterBvh {
                         v2: c.into(),
                     })
                     .collect();
-                let bvh = (!triangles.is_empty()).then(|| {
-                    obvhs::cwbvh::builder::build_cwbvh_from_tris(
-                        &triangles,
-                        obvhs::BvhBuildParams::medium_build(),
-                        &mut std::time::Duration::default(),
-                    )
-                });
+                let bvh = (!triangles.is_empty()).then(|| build_cwbvh(&triangles));
                 Tracer::Obvhs {
                     bvh,
                     triangles,

@@ -108,9 +108,11 @@ struct Api {
     release_scene: unsafe extern "C" fn(Scene),
     occluded1: unsafe extern "C" fn(Scene, *mut IntersectContext, *mut Ray),
     // Keeps the functions above loaded.
+    #[cfg(not(target_arch = "wasm32"))]
     _library: libloading::Library,
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// File names of the Embree 3 library per platform.
 const LIBRARY_NAMES: [&str; 4] = [
     "libembree3.so.3",
@@ -120,6 +122,14 @@ const LIBRARY_NAMES: [&str; 4] = [
 ];
 
 impl Api {
+    /// In the browser there is no library to load: the reference traces
+    /// with the pure-Rust kernel.
+    #[cfg(target_arch = "wasm32")]
+    fn load() -> Result<Api, String> {
+        Err("Embree 3 is not in the browser build; it traces with the pure-Rust kernel (kernel=obvhs)".into())
+    }
+
+    #[cfg(not(target_arch = "wasm32"))]
     fn load() -> Result<Api, String> {
         let mut errors = vec![];
         for name in LIBRARY_NAMES {
@@ -136,6 +146,7 @@ impl Api {
         ))
     }
 
+    #[cfg(not(target_arch = "wasm32"))]
     fn from_library(lib: libloading::Library) -> Result<Api, String> {
         macro_rules! symbol {
             ($name:literal) => {

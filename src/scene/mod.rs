@@ -16,6 +16,7 @@ pub mod material;
 pub mod mesh;
 pub mod obj;
 pub mod opacity;
+pub mod orbit;
 pub mod planes;
 pub mod shapes;
 pub mod toml_scene;
@@ -374,7 +375,7 @@ pub fn load_file_included(path: &Path, includes: &[PathBuf]) -> Result<Scene> {
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
-    let mut scene = match ext.as_str() {
+    let scene = match ext.as_str() {
         "obj" => obj::load_scene(path)?,
         "gltf" | "glb" => gltf_io::load_scene(path)?,
         "toml" => toml_scene::load(path, includes)?,
@@ -384,13 +385,42 @@ pub fn load_file_included(path: &Path, includes: &[PathBuf]) -> Result<Scene> {
             ext
         ),
     };
-    scene
-        .finalize()
-        .with_context(|| path.display().to_string())?;
+    finished(scene, &path.display().to_string())
+}
+
+/// Loads a scene file's `bytes` by the extension of its `name` (a glTF,
+/// GLB or OBJ file opened in the browser page, which has no file system:
+/// what it refers to outside itself is missing, with the loaders' own
+/// errors and fallbacks).
+pub fn load_bytes(name: &str, bytes: &[u8]) -> Result<Scene> {
+    let ext = Path::new(name)
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    let stem = Path::new(name)
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("file");
+    let scene = match ext.as_str() {
+        "obj" => {
+            let text = std::str::from_utf8(bytes).map_err(|_| {
+                anyhow::anyhow!("{name}: an OBJ file is text, and this is not UTF-8")
+            })?;
+            obj::load_text(name, text, Path::new(""), stem)?
+        }
+        "gltf" | "glb" => gltf_io::load_scene_bytes(name, bytes, Path::new(""))?,
+        _ => bail!("{name}: unknown scene format '.{ext}' (valid: .obj, .gltf, .glb)"),
+    };
+    finished(scene, name)
+}
+
+/// `scene` finalized, or an error when it has nothing to draw.
+fn finished(mut scene: Scene, file: &str) -> Result<Scene> {
+    scene.finalize().with_context(|| file.to_string())?;
     if scene.triangle_count() == 0 {
         bail!(
-            "{}: no triangles to draw (every triangle is degenerate, or every object is a shadow plane)",
-            path.display()
+            "{file}: no triangles to draw (every triangle is degenerate, or every object is a shadow plane)"
         );
     }
     Ok(scene)

@@ -270,8 +270,17 @@ fn to_material(dir: &Path, m: &tobj::Material, scene: &mut Scene) -> Result<Mate
 pub fn load_scene(path: &Path) -> Result<Scene> {
     let file = path.display().to_string();
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {file}"))?;
-    let info = check_obj(&file, &text)?;
-    let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("obj");
+    load_text(&file, &text, dir, stem)
+}
+
+/// Loads an OBJ file's `text` (a file opened in the browser page), its
+/// MTL libraries and textures looked for under `dir`.
+pub fn load_text(file: &str, text: &str, dir: &Path, stem: &str) -> Result<Scene> {
+    let file = file.to_string();
+    let info = check_obj(&file, text)?;
+    let dir = dir.to_path_buf();
     let (models, materials) =
         tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &LOAD_OPTIONS, |p| {
             let mtl_path = dir.join(p);
@@ -288,7 +297,7 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
             tobj::load_mtl_buf(&mut mtl_text.as_bytes())
         })
         .map_err(|e| anyhow!("{file}: {e}"))?;
-    let mut scene = Scene::new(path.file_stem().and_then(|s| s.to_str()).unwrap_or("obj"));
+    let mut scene = Scene::new(stem);
     scene.source = file.clone();
     let materials = match materials {
         Ok(mats) => mats,

@@ -1,8 +1,9 @@
 //! The viewer's input: window events, keys and mouse, and the camera and
 //! lights they move each frame.
 
-use super::{App, Overlay, PathMotion, orbit};
+use super::{App, Overlay, PathMotion};
 use crate::measure::flicker::path_camera;
+use crate::scene::orbit;
 use glam::Vec2;
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};

@@ -8,7 +8,6 @@ mod dock;
 mod gfx;
 mod heatmap;
 mod input;
-mod orbit;
 mod ui;
 
 use crate::args::ViewArgs;

@@ -258,31 +258,46 @@ impl TextureCache<'_> {
     }
 }
 
+/// Loads a `.gltf` or `.glb` file's `bytes` (a file opened in the browser
+/// page): external buffers and images are looked for under `base`.
+pub fn load_scene_bytes(name: &str, bytes: &[u8], base: &Path) -> Result<Scene> {
+    let stem = Path::new(name)
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("gltf");
+    without_panics(name, || load_bytes(name, bytes, base, stem))
+}
+
 fn load_checked(file: &str, path: &Path) -> Result<Scene> {
-    let file = file.to_string();
     let bytes = std::fs::read(path).with_context(|| format!("reading {file}"))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("gltf");
+    load_bytes(file, &bytes, base, stem)
+}
+
+fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene> {
+    let file = file.to_string();
     if bytes.starts_with(b"glTF") {
-        check_glb_layout(&file, &bytes)?;
+        check_glb_layout(&file, bytes)?;
     }
     // One parse without the importer's validation serves both checks that
     // must come before it.
-    let root = gltf::Gltf::from_slice_without_validation(&bytes)
+    let root = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| anyhow!("{file}: {e}"))?
         .document
         .into_json();
     check_attribute_indices(&file, &root)?;
-    let base = path.parent().unwrap_or(Path::new("."));
     check_external_files(&file, base, &root)?;
     let gltf::Gltf {
         document: doc,
         blob,
-    } = gltf::Gltf::from_slice(&bytes).map_err(|e| anyhow!("{file}: {e}"))?;
+    } = gltf::Gltf::from_slice(bytes).map_err(|e| anyhow!("{file}: {e}"))?;
     let buffers =
         gltf::import_buffers(&doc, Some(base), blob).map_err(|e| anyhow!("{file}: {e}"))?;
     let images = read_images(&file, &doc, base, &buffers);
     check_node_forest(&file, &doc)?;
     check_accessors(&file, &doc, &buffers)?;
-    let mut scene = Scene::new(path.file_stem().and_then(|s| s.to_str()).unwrap_or("gltf"));
+    let mut scene = Scene::new(stem);
     scene.source = file.clone();
     let mut textures = TextureCache {
         file: &file,

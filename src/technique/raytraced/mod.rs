@@ -9,6 +9,7 @@
 //! offset scales with the magnitude of the position.
 
 use super::{Family, MaskContext, ParamSpec, ParamValues, Preset, ShadowTechnique};
+use crate::clock::Instant;
 use crate::scene::area::{concentric_disk, stratified_square};
 use crate::scene::bvh::{CasterBvh, TraceKernel};
 use crate::scene::{Light, LightArea, LightType};
@@ -16,7 +17,6 @@ use anyhow::Result;
 use glam::{Mat4, UVec2, Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::Arc;
-use std::time::Instant;
 
 const SAMPLES: ParamSpec = ParamSpec::int(
     "samples",
@@ -156,6 +156,39 @@ impl ReferenceSettings {
         } else {
             1
         }
+    }
+
+    /// `light`'s mask from the G-buffer as read back (`gbuffer`: positions
+    /// as Rgba32Float, geometric normals as Rgba16Float) of a frame of
+    /// `size` seen through `inv_view_proj`: the reference's render_mask,
+    /// and the browser page's, which can only await its readbacks.
+    pub fn mask_from_gbuffer_bytes(
+        &self,
+        bvh: &CasterBvh,
+        light: &Light,
+        gbuffer: (&[u8], &[u8]),
+        inv_view_proj: Mat4,
+        size: UVec2,
+    ) -> Vec<f32> {
+        let positions: &[[f32; 4]] = bytemuck::cast_slice(gbuffer.0);
+        let normals: Vec<Vec3> = bytemuck::cast_slice::<u8, [half::f16; 4]>(gbuffer.1)
+            .iter()
+            .map(|n| Vec3::new(n[0].to_f32(), n[1].to_f32(), n[2].to_f32()).normalize_or_zero())
+            .collect();
+        let sampling = PixelSampling {
+            inv_view_proj,
+            size,
+            count: self.pixel_samples,
+        };
+        mask_from_gbuffer(
+            bvh,
+            light,
+            positions,
+            &normals,
+            self.samples_for(light),
+            self.offset_ulps,
+            &sampling,
+        )
     }
 }
 
@@ -383,32 +416,20 @@ impl ShadowTechnique for RayTraced {
         self.bvh_bytes = bvh.bytes();
         let pos_raw = gpu.read_texture(frame.gbuffer_position(), 0, 16)?;
         let nrm_raw = gpu.read_texture(frame.gbuffer_normal(), 0, 8)?;
-        let positions: &[[f32; 4]] = bytemuck::cast_slice(&pos_raw);
-        let normals: Vec<Vec3> = bytemuck::cast_slice::<u8, [half::f16; 4]>(&nrm_raw)
-            .iter()
-            .map(|n| Vec3::new(n[0].to_f32(), n[1].to_f32(), n[2].to_f32()).normalize_or_zero())
-            .collect();
-        let settings = self.settings;
-        let samples = settings.samples_for(ctx.light);
         let t = Instant::now();
-        let sampling = PixelSampling {
-            inv_view_proj: frame.uniform().inv_view_proj,
-            size: UVec2::new(frame.width(), frame.height()),
-            count: settings.pixel_samples,
-        };
-        let mask = mask_from_gbuffer(
+        let size = UVec2::new(frame.width(), frame.height());
+        let mask = self.settings.mask_from_gbuffer_bytes(
             &bvh,
             ctx.light,
-            positions,
-            &normals,
-            samples,
-            settings.offset_ulps,
-            &sampling,
+            (&pos_raw, &nrm_raw),
+            frame.uniform().inv_view_proj,
+            size,
         );
         self.trace_ms = t.elapsed().as_secs_f64() * 1e3;
+        let positions: &[[f32; 4]] = bytemuck::cast_slice(&pos_raw);
         self.rays = positions.iter().filter(|p| p[3] >= 0.5).count() as f64
-            * samples as f64
-            * settings.pixel_samples as f64;
+            * self.settings.samples_for(ctx.light) as f64
+            * self.settings.pixel_samples as f64;
         crate::frame::write_mask(gpu, frame, ctx.light_index, &mask);
         Ok(())
     }

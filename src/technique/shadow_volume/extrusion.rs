@@ -61,7 +61,7 @@ impl ShadowVolumeRenderer {
             return;
         }
         if self.adjacency.as_ref().is_none_or(|(k, _)| *k != key) {
-            let t = std::time::Instant::now();
+            let t = crate::clock::Instant::now();
             let used: Vec<bool> = (0..scene.meshes.len())
                 .map(|m| {
                     scene

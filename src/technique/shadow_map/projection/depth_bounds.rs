@@ -229,7 +229,7 @@ impl DepthReduction {
         let cascades = inputs.cascades.min(MAX_CASCADES as u32);
         let samples = inputs.fit == Fit::Samples;
         let wait = ctx.feedback == Feedback::ThisFrame;
-        let start = std::time::Instant::now();
+        let start = crate::clock::Instant::now();
         let mut own = FrameFeedback::own_encoder(gpu, wait);
         self.record(ctx, own.as_mut().unwrap_or(&mut *encoder), inputs);
         let bytes = self

@@ -332,7 +332,7 @@ impl ShadowMapTechnique {
             let marks = if refine && !wait {
                 state.carried_marks.take().unwrap_or_default()
             } else {
-                let start = std::time::Instant::now();
+                let start = crate::clock::Instant::now();
                 let first = passes == 1;
                 let marks =
                     self.mark_pages(ctx, encoder, state, &base, lookup_key, words, wait, first)?;
@@ -385,7 +385,7 @@ impl ShadowMapTechnique {
             }
         };
         if refine && !wait {
-            let start = std::time::Instant::now();
+            let start = crate::clock::Instant::now();
             state.carried_marks =
                 self.mark_pages(ctx, encoder, state, &base, lookup_key, words, false, true)?;
             feedback_ms += start.elapsed().as_secs_f64() * 1e3;

@@ -1,6 +1,6 @@
-//! Camera and light manipulation: orbit (left drag), zoom (middle drag or
-//! wheel), pan (right drag) as in the source documents' demos, WASD fly,
-//! and moving a light in the view plane.
+//! Camera and light manipulation of the viewer and the browser page: orbit
+//! (left drag), zoom (middle drag or wheel), pan (right drag) as in the
+//! source documents' demos, WASD fly, and moving a light in the view plane.
 
 use crate::scene::Camera;
 use glam::{Mat4, Vec2, Vec3, Vec4};
