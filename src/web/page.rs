@@ -1,7 +1,7 @@
-//! The lab in a page: a [`Lab`] renders the link's view on WebGPU into the
-//! canvas, switches technique and parameters from the same table as the
-//! native viewer and `--set`, moves the camera, and compares the frame with
-//! the reference, which runs on the page's one thread.
+//! The lab in a page: the link's view rendered on WebGPU into the canvas,
+//! its technique and parameters switched from the same table as the native
+//! viewer and `--set`, and the frame compared with the reference, which
+//! runs on the page's one thread.
 
 use super::present::{PendingDraw, PresentMode, Presenter};
 use super::query::{self, PageArgs};
@@ -10,12 +10,10 @@ use crate::gpu::GpuContext;
 use crate::headless::{HeadlessFrame, decode_mask};
 use crate::measure::quality::{self, MaskMetrics};
 use crate::renderer::RenderSettings;
-use crate::scene::{Camera, Light, Scene, orbit};
+use crate::scene::{Camera, Light, Scene};
 use crate::technique::raytraced::ReferenceSettings;
 use crate::technique::{self, Feedback, TechniqueChoice, TechniqueInstance};
 use anyhow::{Context, Result, anyhow, bail};
-use std::cell::RefCell;
-use std::rc::Rc;
 use wasm_bindgen::prelude::*;
 
 /// Frames rendered before a comparison, so that the techniques that feed a
@@ -55,37 +53,29 @@ impl log::Log for ConsoleLog {
 }
 
 /// What the canvas shows.
-enum Shown {
+pub(super) enum Shown {
     Image,
     /// The last comparison's heatmap, in the frame's colour format.
     Heatmap(wgpu::Texture),
 }
 
-struct Page {
-    gpu: GpuContext,
+/// Everything the page holds: the device, the scene and view, the
+/// technique's instances and frame, and what the canvas shows.
+pub(super) struct Page {
+    pub(super) gpu: GpuContext,
     presenter: Presenter,
     scene: Scene,
-    camera: Camera,
-    lights: Vec<Light>,
+    pub(super) camera: Camera,
+    pub(super) lights: Vec<Light>,
     args: PageArgs,
-    choice: TechniqueChoice,
+    pub(super) choice: TechniqueChoice,
     hf: HeadlessFrame,
     settings: RenderSettings,
-    shown: Shown,
+    pub(super) shown: Shown,
     /// The name of a file opened in the page, which no link can name.
     opened_file: Option<String>,
     /// Per light, the technique's mask of the last comparison.
-    compared_masks: Vec<Vec<f32>>,
-}
-
-/// The page's lab; JavaScript calls its methods (`web/main.js`).
-#[wasm_bindgen]
-pub struct Lab {
-    page: Rc<RefCell<Page>>,
-}
-
-fn js_error(e: anyhow::Error) -> JsValue {
-    JsValue::from_str(&format!("{e:#}"))
+    pub(super) compared_masks: Vec<Vec<f32>>,
 }
 
 /// Runs `f` inside validation and out-of-memory error scopes and awaits
@@ -105,7 +95,7 @@ async fn checked<T>(gpu: &GpuContext, what: &str, f: impl FnOnce() -> Result<T>)
 }
 
 impl Page {
-    async fn create(
+    pub(super) async fn create(
         canvas: web_sys::HtmlCanvasElement,
         pairs: &str,
         present: PresentMode,
@@ -181,7 +171,7 @@ impl Page {
         Ok(page)
     }
 
-    fn render(&mut self) -> Result<f64> {
+    pub(super) fn render(&mut self) -> Result<f64> {
         let t = self.hf.render(
             &self.gpu,
             &self.scene,
@@ -193,7 +183,7 @@ impl Page {
     }
 
     /// Puts what the canvas shows on it (see [`Presenter::present`]).
-    fn present(&self) -> Result<Option<PendingDraw>> {
+    pub(super) fn present(&self) -> Result<Option<PendingDraw>> {
         let source = match &self.shown {
             Shown::Image => self.hf.frame.color(),
             Shown::Heatmap(t) => t,
@@ -202,7 +192,7 @@ impl Page {
     }
 
     /// Replaces the technique (every light's instance).
-    async fn set_choice(&mut self, choice: TechniqueChoice) -> Result<()> {
+    pub(super) async fn set_choice(&mut self, choice: TechniqueChoice) -> Result<()> {
         if let Some(why) = unavailable(choice.family.id) {
             bail!("{} does not run in the page: {why}", choice.id());
         }
@@ -219,7 +209,7 @@ impl Page {
 
     /// The frame against the reference, per light, and the heatmap of the
     /// first light shown on the canvas.
-    async fn compare(&mut self) -> Result<serde_json::Value> {
+    pub(super) async fn compare(&mut self) -> Result<serde_json::Value> {
         let mut frame_ms = 0.0;
         for _ in 0..SETTLING_FRAMES {
             frame_ms = self.render()?;
@@ -308,7 +298,7 @@ impl Page {
 
     /// Replaces the scene by a file's (its camera and lights, or the link's
     /// light preset when the file has it).
-    async fn open(&mut self, name: &str, bytes: &[u8]) -> Result<()> {
+    pub(super) async fn open(&mut self, name: &str, bytes: &[u8]) -> Result<()> {
         let scene = crate::scene::load_bytes(name, bytes)?;
         let lights = match &self.args.view.light {
             Some(p) => scene
@@ -342,7 +332,7 @@ impl Page {
     }
 
     /// The query string of what the page shows now.
-    fn link(&self) -> Result<String> {
+    pub(super) fn link(&self) -> Result<String> {
         if let Some(f) = &self.opened_file {
             bail!("{f} was opened in the page: a link can name only built-in scenes");
         }
@@ -368,198 +358,5 @@ impl Page {
             }
         }
         Ok(query::link(&pairs))
-    }
-}
-
-/// The page, or an error while a comparison (or another awaited call)
-/// holds it.
-fn borrow(page: &RefCell<Page>) -> Result<std::cell::RefMut<'_, Page>, JsValue> {
-    page.try_borrow_mut()
-        .map_err(|_| JsValue::from_str("busy: a comparison is running"))
-}
-
-impl Lab {
-    fn page(&self) -> Result<std::cell::RefMut<'_, Page>, JsValue> {
-        borrow(&self.page)
-    }
-}
-
-#[wasm_bindgen]
-impl Lab {
-    /// The lab on `canvas` for the URL's parameters (`pairs`: a JSON array
-    /// of `[key, value]`, already decoded), presenting as `present` says
-    /// (`webgpu` or `readback`).
-    pub async fn create(
-        canvas: web_sys::HtmlCanvasElement,
-        pairs: String,
-        present: String,
-    ) -> Result<Lab, JsValue> {
-        let present = PresentMode::parse(&present).map_err(js_error)?;
-        let page = Page::create(canvas, &pairs, present)
-            .await
-            .map_err(js_error)?;
-        Ok(Lab {
-            page: Rc::new(RefCell::new(page)),
-        })
-    }
-
-    /// Renders and shows one frame; resolves to its CPU time in ms (0 while
-    /// a comparison runs).
-    pub fn frame(&self) -> js_sys::Promise {
-        let page = self.page.clone();
-        wasm_bindgen_futures::future_to_promise(async move {
-            let (ms, draw) = {
-                let Ok(mut p) = page.try_borrow_mut() else {
-                    return Ok(JsValue::from_f64(0.0));
-                };
-                let ms = p.render().map_err(js_error)?;
-                (ms, p.present().map_err(js_error)?)
-            };
-            if let Some(d) = draw {
-                d.draw().await.map_err(js_error)?;
-            }
-            Ok(JsValue::from_f64(ms))
-        })
-    }
-
-    /// Compares the frame with the reference; resolves to a JSON report.
-    pub fn compare(&self) -> js_sys::Promise {
-        let page = self.page.clone();
-        wasm_bindgen_futures::future_to_promise(async move {
-            let mut p = borrow(&page)?;
-            let report = p.compare().await.map_err(js_error)?;
-            if let Some(d) = p.present().map_err(js_error)? {
-                d.draw().await.map_err(js_error)?;
-            }
-            Ok(JsValue::from_str(&report.to_string()))
-        })
-    }
-
-    /// Switches to technique `spec` (`family:preset[key=value,...]`).
-    pub fn set_technique(&self, spec: String) -> js_sys::Promise {
-        let page = self.page.clone();
-        wasm_bindgen_futures::future_to_promise(async move {
-            let mut p = borrow(&page)?;
-            let choice = technique::parse_choice(&spec).map_err(js_error)?;
-            p.set_choice(choice).await.map_err(js_error)?;
-            Ok(JsValue::UNDEFINED)
-        })
-    }
-
-    /// Sets one parameter of the technique's table (`--set key=value`).
-    pub fn set_param(&self, key: String, value: String) -> js_sys::Promise {
-        let page = self.page.clone();
-        wasm_bindgen_futures::future_to_promise(async move {
-            let mut p = borrow(&page)?;
-            let mut choice = p.choice.clone();
-            choice.params.set(&key, &value).map_err(js_error)?;
-            p.set_choice(choice).await.map_err(js_error)?;
-            Ok(JsValue::UNDEFINED)
-        })
-    }
-
-    /// The technique's table: every row (name, kind, default, min, max,
-    /// step, doc), its current value and whether it applies to each light.
-    pub fn parameters(&self) -> Result<String, JsValue> {
-        let p = self.page()?;
-        let params = &p.choice.params;
-        let rows: Vec<serde_json::Value> = params
-            .specs
-            .iter()
-            .zip(&params.values)
-            .map(|(spec, &v)| {
-                let applies: Vec<bool> = p
-                    .lights
-                    .iter()
-                    .map(|l| params.applies(spec, Some(l.kind)))
-                    .collect();
-                serde_json::json!({"spec": spec, "value": spec.format(v), "applies": applies})
-            })
-            .collect();
-        Ok(serde_json::json!({"technique": p.choice.id(), "rows": rows}).to_string())
-    }
-
-    /// Every preset, with why it does not run in the page where it does not.
-    pub fn techniques() -> String {
-        let rows: Vec<serde_json::Value> = technique::preset_ids()
-            .into_iter()
-            .map(|id| {
-                let family = id.split(':').next().unwrap_or_default().to_string();
-                serde_json::json!({"id": id, "unavailable": unavailable(&family)})
-            })
-            .collect();
-        serde_json::Value::from(rows).to_string()
-    }
-
-    /// Built-in scene names.
-    pub fn scenes() -> String {
-        serde_json::json!(crate::scene::builtin::NAMES).to_string()
-    }
-
-    /// Orbits the camera by `dx`, `dy` radians (yaw, pitch).
-    pub fn orbit(&self, dx: f32, dy: f32) -> Result<(), JsValue> {
-        let mut p = self.page()?;
-        orbit::orbit(&mut p.camera, dx, dy);
-        p.shown = Shown::Image;
-        Ok(())
-    }
-
-    /// Moves the camera towards (`factor` < 1) or away from its target.
-    pub fn zoom(&self, factor: f32) -> Result<(), JsValue> {
-        let mut p = self.page()?;
-        orbit::zoom(&mut p.camera, factor);
-        p.shown = Shown::Image;
-        Ok(())
-    }
-
-    /// Pans by fractions of the distance to the target.
-    pub fn pan(&self, dx: f32, dy: f32) -> Result<(), JsValue> {
-        let mut p = self.page()?;
-        orbit::pan(&mut p.camera, dx, dy);
-        p.shown = Shown::Image;
-        Ok(())
-    }
-
-    /// Shows the rendered image again instead of the heatmap.
-    pub fn show_image(&self) -> Result<(), JsValue> {
-        self.page()?.shown = Shown::Image;
-        Ok(())
-    }
-
-    /// The query string that reproduces the view shown.
-    pub fn link(&self) -> Result<String, JsValue> {
-        self.page()?.link().map_err(js_error)
-    }
-
-    /// Opens a glTF, GLB or OBJ file's bytes as the scene.
-    pub fn load_file(&self, name: String, bytes: Vec<u8>) -> js_sys::Promise {
-        let page = self.page.clone();
-        wasm_bindgen_futures::future_to_promise(async move {
-            let mut p = borrow(&page)?;
-            p.open(&name, &bytes).await.map_err(js_error)?;
-            Ok(JsValue::UNDEFINED)
-        })
-    }
-
-    /// Light `light`'s mask of the last comparison, one byte a pixel
-    /// (255 = lit), rows top first, in base64: what the test suite compares
-    /// with the native build's mask of the same frame.
-    pub fn compared_mask(&self, light: usize) -> Result<String, JsValue> {
-        use base64::Engine as _;
-        let p = self.page()?;
-        let mask = p
-            .compared_masks
-            .get(light)
-            .ok_or_else(|| JsValue::from_str("no comparison of that light has run"))?;
-        let bytes: Vec<u8> = mask
-            .iter()
-            .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-            .collect();
-        Ok(base64::engine::general_purpose::STANDARD.encode(bytes))
-    }
-
-    /// The adapter's name, type and backend.
-    pub fn adapter(&self) -> Result<String, JsValue> {
-        Ok(self.page()?.gpu.adapter_summary())
     }
 }
