@@ -6,8 +6,8 @@
 # Usage: scripts/setup.sh [--test]
 set -euo pipefail
 
+source "$(dirname "$0")/packages.sh"
 need=()
-have_pkg() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
 have_pkg mesa-vulkan-drivers || need+=(mesa-vulkan-drivers)
 have_pkg libvulkan1 || need+=(libvulkan1)
 # Embree 3: the reference's fast ray-tracing kernel (loaded at run time;
@@ -21,13 +21,7 @@ if [[ "${1:-}" == "--test" ]]; then
   command -v chromium >/dev/null || need+=(chromium)
 fi
 
-if ((${#need[@]})); then
-  echo "setup: installing ${need[*]}"
-  SUDO=""
-  [[ $(id -u) -ne 0 ]] && SUDO="sudo"
-  $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${need[@]}" >/dev/null
-fi
+install_missing setup "${need[@]}"
 
 if [[ "${1:-}" == "--test" ]]; then
   cd "$(dirname "$0")/.."

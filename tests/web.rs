@@ -42,6 +42,17 @@ struct PageReport {
     mask: Option<String>,
 }
 
+impl PageReport {
+    fn assert_ok(&self) {
+        assert!(
+            self.title.starts_with("shadowlab: ok "),
+            "{}: {}",
+            self.query,
+            self.title
+        );
+    }
+}
+
 /// Opens `queries` in one Chromium and returns their reports.
 fn open_pages(out: &Path, queries: &[String]) -> Vec<PageReport> {
     assert!(
@@ -129,12 +140,7 @@ fn the_bar_links_compare_with_the_reference_in_the_page() {
         "scene=columns&light=sun&technique=shadow-volume:zfail&compare=1".to_string(),
     ];
     for r in open_pages(&out, &queries) {
-        assert!(
-            r.title.starts_with("shadowlab: ok "),
-            "{}: {}",
-            r.query,
-            r.title
-        );
+        r.assert_ok();
         let mismatch: f64 = title_field(&r.title, "mismatch")
             .and_then(|m| m.strip_suffix('%'))
             .and_then(|m| m.parse().ok())
@@ -190,12 +196,7 @@ fn the_pages_masks_equal_the_native_builds() {
     }
     let mut worst = (0.0, String::new());
     for r in open_pages(&out, &queries) {
-        assert!(
-            r.title.starts_with("shadowlab: ok "),
-            "{}: {}",
-            r.query,
-            r.title
-        );
+        r.assert_ok();
         use base64::Engine as _;
         let page = base64::engine::general_purpose::STANDARD
             .decode(r.mask.as_deref().expect("a compare=1 page's mask"))

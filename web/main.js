@@ -209,6 +209,13 @@ async function main() {
   };
   $('compare').onclick = () => compare().catch(fail);
   $('image').onclick = () => lab.show_image();
+  // Each click shows the next light's mask.
+  let maskLight = -1;
+  $('mask').onclick = () => {
+    maskLight = (maskLight + 1) % lab.light_count();
+    lab.show_mask(maskLight);
+    $('mask').textContent = `Mask (light ${maskLight})`;
+  };
   $('copy').onclick = async () => {
     const url = location.origin + location.pathname + '?' + lab.link();
     try { await navigator.clipboard.writeText(url); status('link copied'); }

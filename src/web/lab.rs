@@ -4,8 +4,9 @@
 //! file) return promises; a call that finds the page held by an awaited
 //! one is refused as busy, except a frame, which is skipped.
 
-use super::page::{Page, Shown, unavailable};
+use super::page::{Page, Presented, Shown, unavailable};
 use super::present::PresentMode;
+use super::readback::map_read;
 use crate::scene::orbit;
 use crate::technique;
 use std::cell::RefCell;
@@ -27,6 +28,35 @@ fn js_error(e: anyhow::Error) -> JsValue {
 fn borrow(page: &RefCell<Page>) -> Result<std::cell::RefMut<'_, Page>, JsValue> {
     page.try_borrow_mut()
         .map_err(|_| JsValue::from_str("busy: a comparison is running"))
+}
+
+/// Awaits what presenting left: the 2D canvas's readback, or the shown
+/// mask's, which is then drawn (skipped when an awaited call holds the
+/// page meanwhile).
+async fn finish(page: &RefCell<Page>, presented: Presented) -> anyhow::Result<()> {
+    let draw = match presented {
+        Presented::Drawn => None,
+        Presented::Draw(d) => Some(d),
+        Presented::Mask(copy) => {
+            let raw = copy.unpad(&map_read(&copy.buffer).await?);
+            match page.try_borrow() {
+                Ok(p) => p.present_mask(&raw)?,
+                Err(_) => None,
+            }
+        }
+    };
+    match draw {
+        Some(d) => d.draw().await,
+        None => Ok(()),
+    }
+}
+
+/// A heatmap is of the frame compared: once the camera moves, the image
+/// is shown instead (a mask view follows the camera).
+fn camera_moved(p: &mut Page) {
+    if matches!(p.shown, Shown::Heatmap(_)) {
+        p.shown = Shown::Image;
+    }
 }
 
 impl Lab {
@@ -59,16 +89,14 @@ impl Lab {
     pub fn frame(&self) -> js_sys::Promise {
         let page = self.page.clone();
         wasm_bindgen_futures::future_to_promise(async move {
-            let (ms, draw) = {
+            let (ms, presented) = {
                 let Ok(mut p) = page.try_borrow_mut() else {
                     return Ok(JsValue::from_f64(0.0));
                 };
                 let ms = p.render().map_err(js_error)?;
                 (ms, p.present().map_err(js_error)?)
             };
-            if let Some(d) = draw {
-                d.draw().await.map_err(js_error)?;
-            }
+            finish(&page, presented).await.map_err(js_error)?;
             Ok(JsValue::from_f64(ms))
         })
     }
@@ -79,9 +107,9 @@ impl Lab {
         wasm_bindgen_futures::future_to_promise(async move {
             let mut p = borrow(&page)?;
             let report = p.compare().await.map_err(js_error)?;
-            if let Some(d) = p.present().map_err(js_error)? {
-                d.draw().await.map_err(js_error)?;
-            }
+            let presented = p.present().map_err(js_error)?;
+            drop(p);
+            finish(&page, presented).await.map_err(js_error)?;
             Ok(JsValue::from_str(&report.to_string()))
         })
     }
@@ -151,7 +179,7 @@ impl Lab {
     pub fn orbit(&self, dx: f32, dy: f32) -> Result<(), JsValue> {
         let mut p = self.page()?;
         orbit::orbit(&mut p.camera, dx, dy);
-        p.shown = Shown::Image;
+        camera_moved(&mut p);
         Ok(())
     }
 
@@ -159,7 +187,7 @@ impl Lab {
     pub fn zoom(&self, factor: f32) -> Result<(), JsValue> {
         let mut p = self.page()?;
         orbit::zoom(&mut p.camera, factor);
-        p.shown = Shown::Image;
+        camera_moved(&mut p);
         Ok(())
     }
 
@@ -167,8 +195,26 @@ impl Lab {
     pub fn pan(&self, dx: f32, dy: f32) -> Result<(), JsValue> {
         let mut p = self.page()?;
         orbit::pan(&mut p.camera, dx, dy);
-        p.shown = Shown::Image;
+        camera_moved(&mut p);
         Ok(())
+    }
+
+    /// Shows light `light`'s visibility mask in grey (white = lit).
+    pub fn show_mask(&self, light: usize) -> Result<(), JsValue> {
+        let mut p = self.page()?;
+        if light >= p.lights.len() {
+            return Err(JsValue::from_str(&format!(
+                "light {light}: the scene has {} lights (they count from 0)",
+                p.lights.len()
+            )));
+        }
+        p.shown = Shown::Mask(light);
+        Ok(())
+    }
+
+    /// The number of lights (for the mask view's choice).
+    pub fn light_count(&self) -> Result<usize, JsValue> {
+        Ok(self.page()?.lights.len())
     }
 
     /// Shows the rendered image again instead of the heatmap.

@@ -57,6 +57,17 @@ pub(super) enum Shown {
     Image,
     /// The last comparison's heatmap, in the frame's colour format.
     Heatmap(wgpu::Texture),
+    /// A light's visibility mask in grey.
+    Mask(usize),
+}
+
+/// What presenting a frame leaves to await.
+pub(super) enum Presented {
+    Drawn,
+    /// The frame's colour on its way to a 2D canvas.
+    Draw(PendingDraw),
+    /// The mask shown, being read back ([`Page::present_mask`] shows it).
+    Mask(crate::gpu::TextureCopy),
 }
 
 /// Everything the page holds: the device, the scene and view, the
@@ -182,13 +193,35 @@ impl Page {
         Ok(t.total_ms)
     }
 
-    /// Puts what the canvas shows on it (see [`Presenter::present`]).
-    pub(super) fn present(&self) -> Result<Option<PendingDraw>> {
+    /// Puts what the canvas shows on it (see [`Presenter::present`]), or
+    /// starts reading back the mask it shows.
+    pub(super) fn present(&self) -> Result<Presented> {
         let source = match &self.shown {
             Shown::Image => self.hf.frame.color(),
             Shown::Heatmap(t) => t,
+            Shown::Mask(i) => {
+                let masks = self.hf.frame.masks();
+                return Ok(Presented::Mask(
+                    self.gpu.copy_texture(masks, *i as u32, 0, 2),
+                ));
+            }
         };
-        self.presenter.present(&self.gpu, source)
+        Ok(match self.presenter.present(&self.gpu, source)? {
+            Some(d) => Presented::Draw(d),
+            None => Presented::Drawn,
+        })
+    }
+
+    /// Shows a mask layer as read back (half floats) in grey, white = lit.
+    pub(super) fn present_mask(&self, raw: &[u8]) -> Result<Option<PendingDraw>> {
+        let rgba: Vec<u8> = decode_mask(raw)
+            .iter()
+            .flat_map(|v| {
+                let g = (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+                [g, g, g, 255]
+            })
+            .collect();
+        self.presenter.present(&self.gpu, &self.upload(&rgba))
     }
 
     /// Replaces the technique (every light's instance).
@@ -219,8 +252,7 @@ impl Page {
         let pos = read_texture(gpu, frame.gbuffer_position(), 0, 16).await?;
         let nrm = read_texture(gpu, frame.gbuffer_normal(), 0, 8).await?;
         let mut color = read_texture(gpu, frame.color(), 0, 4).await?;
-        let bgra = frame.color_format() == wgpu::TextureFormat::Bgra8UnormSrgb;
-        if bgra {
+        if frame.color_format() == wgpu::TextureFormat::Bgra8UnormSrgb {
             color.chunks_exact_mut(4).for_each(|p| p.swap(0, 2));
         }
         let considered = quality::considered_from_gbuffer(
@@ -251,10 +283,7 @@ impl Page {
                 &mask,
             ));
             if i == 0 {
-                let mut heat = quality::heatmap(&color, &considered[0], truth, &mask);
-                if bgra {
-                    heat.chunks_exact_mut(4).for_each(|p| p.swap(0, 2));
-                }
+                let heat = quality::heatmap(&color, &considered[0], truth, &mask);
                 self.shown = Shown::Heatmap(self.upload(&heat));
             }
             masks.push(mask);
@@ -271,12 +300,17 @@ impl Page {
         }))
     }
 
-    /// A texture of the frame's size and colour format holding `rgba`.
+    /// A texture of the frame's size and colour format holding `rgba`
+    /// (swapped to BGRA for a canvas that prefers it).
     fn upload(&self, rgba: &[u8]) -> wgpu::Texture {
         let frame = &self.hf.frame;
+        let mut texels = rgba.to_vec();
+        if frame.color_format() == wgpu::TextureFormat::Bgra8UnormSrgb {
+            texels.chunks_exact_mut(4).for_each(|p| p.swap(0, 2));
+        }
         let texture = crate::gpu::texture_2d(
             &self.gpu.device,
-            "heatmap",
+            "shown image",
             frame.width(),
             frame.height(),
             1,
@@ -285,7 +319,7 @@ impl Page {
         );
         self.gpu.queue.write_texture(
             texture.as_image_copy(),
-            rgba,
+            &texels,
             wgpu::TexelCopyBufferLayout {
                 offset: 0,
                 bytes_per_row: Some(4 * frame.width()),
