@@ -40,6 +40,7 @@ struct PageReport {
     title: String,
     screenshot: PathBuf,
     mask: Option<String>,
+    eval: Option<serde_json::Value>,
 }
 
 impl PageReport {
@@ -55,11 +56,21 @@ impl PageReport {
 
 /// Opens `queries` in one Chromium and returns their reports.
 fn open_pages(out: &Path, queries: &[String]) -> Vec<PageReport> {
+    open_pages_with(out, queries, None)
+}
+
+/// [`open_pages`], running the JavaScript expression `eval` (awaited) in
+/// each page once its title has settled.
+fn open_pages_with(out: &Path, queries: &[String], eval: Option<&str>) -> Vec<PageReport> {
     assert!(
         Path::new("out/web/shadowlab_bg.wasm").is_file(),
         "out/web/ is missing: run `bash scripts/web.sh` (scripts/test.sh runs it before the tests)"
     );
-    let run = Command::new("node")
+    let mut node = Command::new("node");
+    if let Some(e) = eval {
+        node.env("WEB_CHECK_EVAL", e);
+    }
+    let run = node
         .arg("--experimental-websocket")
         .arg("tools/web-check.mjs")
         .arg(out)
@@ -246,5 +257,62 @@ fn bad_input_in_the_page_is_a_stated_error() {
         reports[2].title.starts_with("shadowlab: error") && reports[2].title.contains("broken.glb"),
         "{}",
         reports[2].title
+    );
+}
+
+/// The page's panels: a technique for one light only, a light moved in the
+/// light table, the mask view; the link then says it cannot name the view.
+#[test]
+fn the_panels_change_one_light_and_show_its_mask() {
+    let out = tmpdir("panels");
+    let script = r#"(async () => {
+        const $ = (id) => document.getElementById(id);
+        $('scope').value = '0';
+        $('scope').onchange();
+        $('technique').value = 'shadow-volume:zfail';
+        await $('technique').onchange();
+        const position = document.querySelector('#lights tbody input');
+        position.value = '1,4.5,1';
+        position.onchange();
+        $('mask').click();
+        await new Promise((r) => setTimeout(r, 1500));
+        let link;
+        try { link = shadowlab.link(); } catch (e) { link = String(e); }
+        return { technique: JSON.parse(shadowlab.parameters(0)).technique,
+                 light: JSON.parse(shadowlab.lights())[0].position, link,
+                 status: $('status').textContent };
+    })()"#;
+    let r = &open_pages_with(
+        &out,
+        &["scene=room&light=point&size=320x180".to_string()],
+        Some(script),
+    )[0];
+    r.assert_ok();
+    let e = r.eval.as_ref().expect("the script's result");
+    assert_eq!(e["technique"], "shadow-volume:zfail", "{e}");
+    let position: Vec<f64> = serde_json::from_value(e["light"].clone()).unwrap();
+    assert_eq!(position, [1.0, 4.5, 1.0], "{e}");
+    assert!(
+        e["link"].as_str().unwrap().contains("a light was changed"),
+        "{e}"
+    );
+    assert!(
+        e["status"].as_str().unwrap().contains("FPS"),
+        "the frames go on: {e}"
+    );
+    // The mask view: black shadows on a white, lit room (mostly white).
+    let shot = image::open(&r.screenshot).unwrap().to_rgb8();
+    let (mut white, mut black, mut n) = (0, 0, 0);
+    for y in (20..180).step_by(2) {
+        for x in (20..320).step_by(2) {
+            let p = shot.get_pixel(x, y).0;
+            n += 1;
+            white += p.iter().all(|&c| c > 240) as usize;
+            black += p.iter().all(|&c| c < 15) as usize;
+        }
+    }
+    assert!(
+        white * 2 > n && black > n / 50,
+        "white {white}, black {black} of {n}"
     );
 }

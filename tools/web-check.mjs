@@ -104,11 +104,13 @@ for (const [i, q] of queries.entries()) {
     await send('DOM.setFileInputFiles', { nodeId: node.result.nodeId, files: [drop] });
     title = await waitTitle(Date.now());
   }
-  if (process.env.WEB_CHECK_EVAL) console.error('eval: ' + JSON.stringify(await evaluate(process.env.WEB_CHECK_EVAL)));
+  // WEB_CHECK_EVAL: an expression (awaited) run once the title settles;
+  // its value is the report's "eval", and the screenshot follows it.
+  const evaluated = process.env.WEB_CHECK_EVAL ? await evaluate(process.env.WEB_CHECK_EVAL) : undefined;
   const shot = await send('Page.captureScreenshot', { format: 'png' });
   const screenshot = join(outDir, `page-${i}.png`);
   await writeFile(screenshot, Buffer.from(shot.result.data, 'base64'));
-  const report = { query: q, title, screenshot, seconds: (Date.now() - start) / 1000 };
+  const report = { query: q, title, screenshot, seconds: (Date.now() - start) / 1000, eval: evaluated };
   // The technique's mask of the comparison (compare=1 pages), as base64 bytes.
   if (query.includes('compare=1') && title.startsWith('shadowlab: ok')) {
     report.mask = await evaluate('window.shadowlab.compared_mask(0)');

@@ -30,6 +30,16 @@ function relink(changes) {
   location.search = next.toString();
 }
 
+// The light whose technique the panel edits, or undefined for every light.
+function scope() {
+  return $('scope').value === '' ? undefined : Number($('scope').value);
+}
+
+function fillScope(lab) {
+  $('scope').replaceChildren(new Option('every light', ''));
+  for (let i = 0; i < lab.light_count(); i++) $('scope').add(new Option(`light ${i}`, String(i)));
+}
+
 function fillSelects(lab) {
   const scene = params.get('scene') || 'room';
   for (const name of JSON.parse(Lab.scenes())) {
@@ -38,6 +48,8 @@ function fillSelects(lab) {
   $('scene').onchange = () => relink({ scene: $('scene').value, camera: null, eye: null, target: null });
   $('light').value = params.get('light') || '';
   $('light').onchange = () => relink({ light: $('light').value });
+  fillScope(lab);
+  $('scope').onchange = () => safely(() => { $('technique').value = JSON.parse(lab.parameters(scope())).technique; fillParams(lab); });
   const current = JSON.parse(lab.parameters()).technique;
   for (const t of JSON.parse(Lab.techniques())) {
     const o = new Option(t.id + (t.unavailable ? ' (not in the page)' : ''), t.id, false, t.id === current);
@@ -46,8 +58,8 @@ function fillSelects(lab) {
     $('technique').add(o);
   }
   $('technique').onchange = async () => {
-    try { await lab.set_technique($('technique').value); fillParams(lab); status('technique ' + $('technique').value); }
-    catch (e) { fail(e); }
+    try { await lab.set_technique($('technique').value, scope()); fillParams(lab); status('technique ' + $('technique').value); }
+    catch (e) { status(String(e), true); }
   };
 }
 
@@ -74,15 +86,15 @@ function input(row, lab) {
 }
 
 async function apply(lab, key, value) {
-  try { await lab.set_param(key, value); status(key + ' = ' + value); }
+  try { await lab.set_param(key, value, scope()); status(key + ' = ' + value); }
   catch (e) { status(String(e), true); }
-  fillParams(lab);
+  safely(() => fillParams(lab));
 }
 
 function fillParams(lab) {
   const body = $('params').tBodies[0];
   body.replaceChildren();
-  for (const row of JSON.parse(lab.parameters()).rows) {
+  for (const row of JSON.parse(lab.parameters(scope())).rows) {
     const tr = body.insertRow();
     tr.className = row.applies.some((a) => a) ? '' : 'inactive';
     const name = tr.insertCell();
@@ -90,6 +102,38 @@ function fillParams(lab) {
     name.title = row.spec.doc;
     tr.insertCell().append(input(row, lab));
   }
+}
+
+// One row per light: position, direction and intensity, as a scene file
+// gives them (type, colour, range and cones keep their values).
+function fillLights(lab) {
+  const body = $('lights').tBodies[0];
+  body.replaceChildren();
+  JSON.parse(lab.lights()).forEach((light, i) => {
+    const tr = body.insertRow();
+    tr.insertCell().textContent = `${i} ${light.type}`;
+    const field = (get, set) => {
+      const el = document.createElement('input');
+      el.value = get();
+      el.size = 10;
+      el.onchange = () => {
+        try { set(el.value); lab.set_light(i, JSON.stringify(light)); status(`light ${i} changed`); }
+        catch (e) { status(String(e), true); fillLights(lab); }
+      };
+      tr.insertCell().append(el);
+    };
+    const vec = (v) => v.map((c) => +c.toFixed(3)).join(',');
+    const parse = (t) => t.split(',').map(Number);
+    field(() => vec(light.position), (t) => { light.position = parse(t); });
+    field(() => vec(light.direction), (t) => { light.direction = parse(t); });
+    field(() => light.intensity, (t) => { light.intensity = Number(t); });
+  });
+}
+
+// Runs a call to the lab from a control; a refusal (busy while a
+// comparison runs) is shown in the status line, not raised as an error.
+function safely(f) {
+  try { f(); } catch (e) { status(String(e), true); }
 }
 
 function mouse(lab, canvas) {
@@ -102,9 +146,9 @@ function mouse(lab, canvas) {
     const h = canvas.clientHeight || 1;
     const dx = (e.clientX - drag.x) / h, dy = (e.clientY - drag.y) / h;
     drag.x = e.clientX; drag.y = e.clientY;
-    if (drag.pan) lab.pan(dx, dy); else lab.orbit(dx * 3, dy * 3);
+    safely(() => { if (drag.pan) lab.pan(dx, dy); else lab.orbit(dx * 3, dy * 3); });
   };
-  canvas.onwheel = (e) => { e.preventDefault(); lab.zoom(Math.pow(0.9, -Math.sign(e.deltaY))); };
+  canvas.onwheel = (e) => { e.preventDefault(); safely(() => lab.zoom(Math.pow(0.9, -Math.sign(e.deltaY)))); };
 }
 
 async function openFile(lab, file) {
@@ -113,8 +157,10 @@ async function openFile(lab, file) {
     await lab.load_file(file.name, new Uint8Array(await file.arrayBuffer()));
     fillParams(lab);
     await lab.frame();
+    fillScope(lab);
+    fillLights(lab);
     status(file.name + ' opened');
-    setTitle(`ok technique=${JSON.parse(lab.parameters()).technique} file=${file.name}`);
+    setTitle(`ok technique=${JSON.parse(lab.parameters()).all} file=${file.name}`);
   } catch (e) { fail(e); }
 }
 
@@ -180,10 +226,13 @@ async function main() {
   window.shadowlab = lab;
   fillSelects(lab);
   fillParams(lab);
+  fillLights(lab);
   mouse(lab, canvas);
   files(lab, canvas);
   let fps = 0, times = [];
-  const shown = () => `on ${lab.adapter()}, presented by ${present}`;
+  // Read once: a call made while an awaited one holds the lab is refused.
+  const adapter = lab.adapter();
+  const shown = () => `on ${adapter}, presented by ${present}`;
   const tick = async () => {
     try { await lab.frame(); } catch (e) { fail(e); return; }
     const now = performance.now();
@@ -200,7 +249,7 @@ async function main() {
     await new Promise((r) => requestAnimationFrame(r));
   }
   fps = 1000 * FPS_FRAMES / (performance.now() - start);
-  const technique = JSON.parse(lab.parameters()).technique;
+  const technique = JSON.parse(lab.parameters()).all;
   const compare = async () => {
     status('running the reference …');
     const report = JSON.parse(await lab.compare());
@@ -208,14 +257,14 @@ async function main() {
     return report;
   };
   $('compare').onclick = () => compare().catch(fail);
-  $('image').onclick = () => lab.show_image();
+  $('image').onclick = () => safely(() => lab.show_image());
   // Each click shows the next light's mask.
   let maskLight = -1;
-  $('mask').onclick = () => {
+  $('mask').onclick = () => safely(() => {
     maskLight = (maskLight + 1) % lab.light_count();
     lab.show_mask(maskLight);
     $('mask').textContent = `Mask (light ${maskLight})`;
-  };
+  });
   $('copy').onclick = async () => {
     const url = location.origin + location.pathname + '?' + lab.link();
     try { await navigator.clipboard.writeText(url); status('link copied'); }

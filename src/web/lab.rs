@@ -114,34 +114,37 @@ impl Lab {
         })
     }
 
-    /// Switches to technique `spec` (`family:preset[key=value,...]`).
-    pub fn set_technique(&self, spec: String) -> js_sys::Promise {
+    /// Switches light `light` (every light: `undefined`) to technique
+    /// `spec` (`family:preset[key=value,...]`).
+    pub fn set_technique(&self, spec: String, light: Option<usize>) -> js_sys::Promise {
         let page = self.page.clone();
         wasm_bindgen_futures::future_to_promise(async move {
             let mut p = borrow(&page)?;
             let choice = technique::parse_choice(&spec).map_err(js_error)?;
-            p.set_choice(choice).await.map_err(js_error)?;
+            p.set_choice(choice, light).await.map_err(js_error)?;
             Ok(JsValue::UNDEFINED)
         })
     }
 
-    /// Sets one parameter of the technique's table (`--set key=value`).
-    pub fn set_param(&self, key: String, value: String) -> js_sys::Promise {
+    /// Sets one parameter of light `light`'s technique's table (every
+    /// light's: `undefined`), as `--set key=value` does.
+    pub fn set_param(&self, key: String, value: String, light: Option<usize>) -> js_sys::Promise {
         let page = self.page.clone();
         wasm_bindgen_futures::future_to_promise(async move {
             let mut p = borrow(&page)?;
-            let mut choice = p.choice.clone();
+            let mut choice = p.choice(light.unwrap_or(0)).clone();
             choice.params.set(&key, &value).map_err(js_error)?;
-            p.set_choice(choice).await.map_err(js_error)?;
+            p.set_choice(choice, light).await.map_err(js_error)?;
             Ok(JsValue::UNDEFINED)
         })
     }
 
     /// The technique's table: every row (name, kind, default, min, max,
     /// step, doc), its current value and whether it applies to each light.
-    pub fn parameters(&self) -> Result<String, JsValue> {
+    pub fn parameters(&self, light: Option<usize>) -> Result<String, JsValue> {
         let p = self.page()?;
-        let params = &p.choice.params;
+        let choice = p.choice(light.unwrap_or(0));
+        let params = &choice.params;
         let rows: Vec<serde_json::Value> = params
             .specs
             .iter()
@@ -155,7 +158,10 @@ impl Lab {
                 serde_json::json!({"spec": spec, "value": spec.format(v), "applies": applies})
             })
             .collect();
-        Ok(serde_json::json!({"technique": p.choice.id(), "rows": rows}).to_string())
+        Ok(
+            serde_json::json!({"technique": choice.id(), "all": p.technique_label(), "rows": rows})
+                .to_string(),
+        )
     }
 
     /// Every preset, with why it does not run in the page where it does not.
@@ -215,6 +221,19 @@ impl Lab {
     /// The number of lights (for the mask view's choice).
     pub fn light_count(&self) -> Result<usize, JsValue> {
         Ok(self.page()?.lights.len())
+    }
+
+    /// The lights as JSON (type, position, direction, colour, intensity,
+    /// range, cones, area), as a TOML scene writes them.
+    pub fn lights(&self) -> Result<String, JsValue> {
+        serde_json::to_string(&self.page()?.lights).map_err(|e| JsValue::from_str(&e.to_string()))
+    }
+
+    /// Replaces light `index` by `json` (one entry of [`Lab::lights`]).
+    pub fn set_light(&self, index: usize, json: String) -> Result<(), JsValue> {
+        let light: crate::scene::Light = serde_json::from_str(&json)
+            .map_err(|e| JsValue::from_str(&format!("light {index}: {e}")))?;
+        self.page()?.set_light(index, light).map_err(js_error)
     }
 
     /// Shows the rendered image again instead of the heatmap.

@@ -79,7 +79,6 @@ pub(super) struct Page {
     pub(super) camera: Camera,
     pub(super) lights: Vec<Light>,
     args: PageArgs,
-    pub(super) choice: TechniqueChoice,
     hf: HeadlessFrame,
     settings: RenderSettings,
     pub(super) shown: Shown,
@@ -87,6 +86,8 @@ pub(super) struct Page {
     opened_file: Option<String>,
     /// Per light, the technique's mask of the last comparison.
     pub(super) compared_masks: Vec<Vec<f32>>,
+    /// Whether a light was changed in the page: no link names it then.
+    lights_edited: bool,
 }
 
 /// Runs `f` inside validation and out-of-memory error scopes and awaits
@@ -165,12 +166,12 @@ impl Page {
             camera,
             lights,
             args,
-            choice,
             hf,
             settings,
             shown: Shown::Image,
             opened_file: None,
             compared_masks: vec![],
+            lights_edited: false,
         };
         let gpu = &page.gpu;
         checked(gpu, "the first frame", || {
@@ -224,18 +225,77 @@ impl Page {
         self.presenter.present(&self.gpu, &self.upload(&rgba))
     }
 
-    /// Replaces the technique (every light's instance).
-    pub(super) async fn set_choice(&mut self, choice: TechniqueChoice) -> Result<()> {
+    /// Light `light`'s technique (the first light's for a frame without
+    /// lights).
+    pub(super) fn choice(&self, light: usize) -> &TechniqueChoice {
+        &self.hf.techniques[light.min(self.hf.techniques.len() - 1)].choice
+    }
+
+    /// The technique of every light, or `None` when they differ.
+    fn common_choice(&self) -> Option<&TechniqueChoice> {
+        let first = self.choice(0);
+        let same =
+            |c: &TechniqueChoice| c.id() == first.id() && c.params.values == first.params.values;
+        self.hf
+            .techniques
+            .iter()
+            .all(|t| same(&t.choice))
+            .then_some(first)
+    }
+
+    /// The techniques' ids: one, or one per light where they differ.
+    pub(super) fn technique_label(&self) -> String {
+        match self.common_choice() {
+            Some(c) => c.id(),
+            None => self
+                .hf
+                .techniques
+                .iter()
+                .map(|t| t.choice.id())
+                .collect::<Vec<_>>()
+                .join("|"),
+        }
+    }
+
+    /// Replaces the technique of `light`, or of every light (`None`).
+    pub(super) async fn set_choice(
+        &mut self,
+        choice: TechniqueChoice,
+        light: Option<usize>,
+    ) -> Result<()> {
         if let Some(why) = unavailable(choice.family.id) {
             bail!("{} does not run in the page: {why}", choice.id());
         }
+        let count = self.lights.len();
+        if let Some(i) = light.filter(|&i| i >= count.max(1)) {
+            bail!("light {i}: the scene has {count} lights (they count from 0)");
+        }
         let gpu = &self.gpu;
-        let instances = checked(gpu, "creating the technique", || {
-            TechniqueInstance::per_light(gpu, &choice, self.lights.len())
+        let instances = checked(gpu, "creating the technique", || match light {
+            None => TechniqueInstance::per_light(gpu, &choice, count),
+            Some(_) => Ok(vec![TechniqueInstance::new(gpu, choice.clone())?]),
         })
         .await?;
-        self.hf.techniques = instances;
-        self.choice = choice;
+        match light {
+            None => self.hf.techniques = instances,
+            Some(i) => self.hf.techniques.splice(i..=i, instances).for_each(drop),
+        }
+        self.shown = Shown::Image;
+        Ok(())
+    }
+
+    /// Replaces light `index` (checked as a scene file's lights are).
+    pub(super) fn set_light(&mut self, index: usize, mut light: Light) -> Result<()> {
+        if index >= self.lights.len() {
+            bail!(
+                "light {index}: the scene has {} lights (they count from 0)",
+                self.lights.len()
+            );
+        }
+        light.direction = light.direction.normalize_or_zero();
+        light.validate()?;
+        self.lights[index] = light;
+        self.lights_edited = true;
         self.shown = Shown::Image;
         Ok(())
     }
@@ -290,7 +350,7 @@ impl Page {
         }
         self.compared_masks = masks;
         Ok(serde_json::json!({
-            "technique": self.choice.id(),
+            "technique": self.technique_label(),
             "adapter": gpu.adapter_summary(),
             "size": [w, h],
             "frame_ms": frame_ms,
@@ -351,7 +411,7 @@ impl Page {
         let (scene_gpu, techniques) = checked(gpu, "uploading the scene", || {
             Ok((
                 crate::frame::SceneGpu::upload(gpu, &scene)?,
-                TechniqueInstance::per_light(gpu, &self.choice, lights.len())?,
+                TechniqueInstance::per_light(gpu, self.choice(0), lights.len())?,
             ))
         })
         .await?;
@@ -359,6 +419,7 @@ impl Page {
         self.hf.techniques = techniques;
         self.camera = scene.camera;
         self.lights = lights;
+        self.lights_edited = false;
         self.scene = scene;
         self.shown = Shown::Image;
         self.opened_file = Some(name.to_string());
@@ -370,6 +431,14 @@ impl Page {
         if let Some(f) = &self.opened_file {
             bail!("{f} was opened in the page: a link can name only built-in scenes");
         }
+        if self.lights_edited {
+            bail!("a light was changed in the page: a link names only the scene's light presets");
+        }
+        let choice = self.common_choice().ok_or_else(|| {
+            anyhow!(
+                "the lights have different techniques: a link names one technique for every light"
+            )
+        })?;
         let c = &self.camera;
         let v = |p: glam::Vec3| format!("{},{},{}", p.x, p.y, p.z);
         let (w, h) = self.args.view.size;
@@ -377,16 +446,16 @@ impl Page {
             ("scene", self.args.view.scene.clone()),
             ("eye", v(c.eye)),
             ("target", v(c.target)),
-            ("technique", self.choice.id()),
+            ("technique", choice.id()),
             ("size", format!("{w}x{h}")),
         ];
         if let Some(l) = &self.args.view.light {
             pairs.push(("light", l.clone()));
         }
-        let specs = self.choice.family.params;
-        let defaults = technique::resolve(&self.choice.id()).map(|c| c.params.values);
+        let specs = choice.family.params;
+        let defaults = technique::resolve(&choice.id()).map(|c| c.params.values);
         for (i, spec) in specs.iter().enumerate() {
-            let value = self.choice.params.values[i];
+            let value = choice.params.values[i];
             if defaults.as_ref().is_ok_and(|d| d[i] != value) {
                 pairs.push(("set", format!("{}={}", spec.name, spec.format(value))));
             }
