@@ -2,7 +2,7 @@
 //! `visibility-N.png` (16-bit grey, 65535 = fully lit, background 65535) and
 //! `frame.json` (everything needed to reproduce the frame's rays).
 
-use crate::frame::{FrameTargets, SceneGpu};
+use crate::frame::{COLOR_FORMAT, FrameTargets, SceneGpu};
 use crate::gpu::GpuContext;
 use crate::renderer::{FrameCameras, FrameTimings, RenderSettings, Renderer};
 use crate::scene::{Camera, Light, Scene};
@@ -59,6 +59,13 @@ pub fn decode_mask(raw: &[u8]) -> Vec<f32> {
     bytemuck::cast_slice::<u8, half::f16>(raw)
         .iter()
         .map(|h| h.to_f32())
+        .collect()
+}
+
+/// A mask as bytes, 255 = fully lit.
+pub fn mask_to_u8(mask: &[f32]) -> Vec<u8> {
+    mask.iter()
+        .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
         .collect()
 }
 
@@ -199,21 +206,24 @@ impl HeadlessFrame {
         height: u32,
     ) -> Result<HeadlessFrame> {
         gpu.checked("creating the renderer", || {
-            Self::create(gpu, scene, choices, width, height)
+            Self::with_color_format(gpu, scene, choices, (width, height), COLOR_FORMAT)
         })
     }
 
-    fn create(
+    /// As [`HeadlessFrame::new`], the colour image in `color_format` (one
+    /// of [`crate::frame::COLOR_FORMATS`]: the browser page takes its
+    /// canvas's), without error scopes of its own.
+    pub fn with_color_format(
         gpu: &GpuContext,
         scene: &Scene,
         choices: &[TechniqueChoice],
-        width: u32,
-        height: u32,
+        (width, height): (u32, u32),
+        color_format: wgpu::TextureFormat,
     ) -> Result<HeadlessFrame> {
         crate::frame::check_formats(gpu)?;
         let renderer = Renderer::new(gpu);
         let scene_gpu = SceneGpu::upload(gpu, scene)?;
-        let frame = FrameTargets::new(gpu, width, height)?;
+        let frame = FrameTargets::with_color_format(gpu, width, height, color_format)?;
         let techniques = choices
             .iter()
             .map(|c| TechniqueInstance::new(gpu, c.clone()))

@@ -3,7 +3,6 @@
 //! composes `ambient + visibility × (diffuse + specular)`; a CPU ray tracer
 //! writes the same mask from the same G-buffer, so each technique can be
 //! measured against ground truth pixel by pixel.
-
 //!
 //! The command line, its reports, the guide's generated pages and the
 //! viewer are native only; the browser build (`web`, wasm32) renders the

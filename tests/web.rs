@@ -9,7 +9,6 @@ mod common;
 
 use common::gpu;
 use shadowlab::headless::{self, HeadlessFrame};
-use shadowlab::technique::TechniqueInstance;
 use shadowlab::web::query::PageArgs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -113,8 +112,8 @@ fn native_mask(query: &str) -> (Vec<f32>, Vec<bool>) {
     let (scene, camera, lights) = args.view.resolve().unwrap();
     let choice = args.choice().unwrap();
     let (w, h) = args.view.size;
-    let mut hf = HeadlessFrame::new(gpu(), &scene, std::slice::from_ref(&choice), w, h).unwrap();
-    hf.techniques = TechniqueInstance::per_light(gpu(), &choice, lights.len()).unwrap();
+    let choices = vec![choice; lights.len().max(1)];
+    let mut hf = HeadlessFrame::new(gpu(), &scene, &choices, w, h).unwrap();
     hf.render(gpu(), &scene, &camera, &lights, &args.view.settings())
         .unwrap();
     let img = headless::read_back(gpu(), &hf.frame, lights.len()).unwrap();

@@ -249,12 +249,16 @@ impl FrameTargets {
     /// order of its channels on the GPU.
     pub fn read_color_rgba(&self, gpu: &GpuContext) -> Result<Vec<u8>> {
         let mut rgba = gpu.read_texture(&self.color, 0, 4)?;
-        if self.color_format() == wgpu::TextureFormat::Bgra8UnormSrgb {
-            for p in rgba.chunks_exact_mut(4) {
-                p.swap(0, 2);
-            }
-        }
+        self.swap_rgba_order(&mut rgba);
         Ok(rgba)
+    }
+
+    /// Reorders colour texels between RGBA and this frame's colour format
+    /// (its own inverse: BGRA texels become RGBA and back; nothing for RGBA).
+    pub fn swap_rgba_order(&self, texels: &mut [u8]) {
+        if self.color_format() == wgpu::TextureFormat::Bgra8UnormSrgb {
+            texels.chunks_exact_mut(4).for_each(|p| p.swap(0, 2));
+        }
     }
 }
 

@@ -51,17 +51,21 @@ async fn finish(page: &RefCell<Page>, presented: Presented) -> anyhow::Result<()
     }
 }
 
-/// A heatmap is of the frame compared: once the camera moves, the image
-/// is shown instead (a mask view follows the camera).
-fn camera_moved(p: &mut Page) {
-    if matches!(p.shown, Shown::Heatmap(_)) {
-        p.shown = Shown::Image;
-    }
-}
-
 impl Lab {
     fn page(&self) -> Result<std::cell::RefMut<'_, Page>, JsValue> {
         borrow(&self.page)
+    }
+
+    /// Moves the camera by `f`. A heatmap is of the frame compared: once
+    /// the camera moves, the image is shown instead (a mask view follows
+    /// the camera).
+    fn move_camera(&self, f: impl FnOnce(&mut crate::scene::Camera)) -> Result<(), JsValue> {
+        let mut p = self.page()?;
+        f(&mut p.camera);
+        if matches!(p.shown, Shown::Heatmap(_)) {
+            p.shown = Shown::Image;
+        }
+        Ok(())
     }
 }
 
@@ -183,37 +187,23 @@ impl Lab {
 
     /// Orbits the camera by `dx`, `dy` radians (yaw, pitch).
     pub fn orbit(&self, dx: f32, dy: f32) -> Result<(), JsValue> {
-        let mut p = self.page()?;
-        orbit::orbit(&mut p.camera, dx, dy);
-        camera_moved(&mut p);
-        Ok(())
+        self.move_camera(|c| orbit::orbit(c, dx, dy))
     }
 
     /// Moves the camera towards (`factor` < 1) or away from its target.
     pub fn zoom(&self, factor: f32) -> Result<(), JsValue> {
-        let mut p = self.page()?;
-        orbit::zoom(&mut p.camera, factor);
-        camera_moved(&mut p);
-        Ok(())
+        self.move_camera(|c| orbit::zoom(c, factor))
     }
 
     /// Pans by fractions of the distance to the target.
     pub fn pan(&self, dx: f32, dy: f32) -> Result<(), JsValue> {
-        let mut p = self.page()?;
-        orbit::pan(&mut p.camera, dx, dy);
-        camera_moved(&mut p);
-        Ok(())
+        self.move_camera(|c| orbit::pan(c, dx, dy))
     }
 
     /// Shows light `light`'s visibility mask in grey (white = lit).
     pub fn show_mask(&self, light: usize) -> Result<(), JsValue> {
         let mut p = self.page()?;
-        if light >= p.lights.len() {
-            return Err(JsValue::from_str(&format!(
-                "light {light}: the scene has {} lights (they count from 0)",
-                p.lights.len()
-            )));
-        }
+        p.check_light(light).map_err(js_error)?;
         p.shown = Shown::Mask(light);
         Ok(())
     }
@@ -267,11 +257,7 @@ impl Lab {
             .compared_masks
             .get(light)
             .ok_or_else(|| JsValue::from_str("no comparison of that light has run"))?;
-        let bytes: Vec<u8> = mask
-            .iter()
-            .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-            .collect();
-        Ok(base64::engine::general_purpose::STANDARD.encode(bytes))
+        Ok(base64::engine::general_purpose::STANDARD.encode(crate::headless::mask_to_u8(mask)))
     }
 
     /// The adapter's name, type and backend.

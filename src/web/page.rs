@@ -7,12 +7,12 @@ use super::present::{PendingDraw, PresentMode, Presenter};
 use super::query::{self, PageArgs};
 use super::readback::read_texture;
 use crate::gpu::GpuContext;
-use crate::headless::{HeadlessFrame, decode_mask};
+use crate::headless::{HeadlessFrame, decode_mask, mask_to_u8};
 use crate::measure::quality::{self, MaskMetrics};
 use crate::renderer::RenderSettings;
 use crate::scene::{Camera, Light, Scene};
 use crate::technique::raytraced::ReferenceSettings;
-use crate::technique::{self, Feedback, TechniqueChoice, TechniqueInstance};
+use crate::technique::{Feedback, TechniqueChoice, TechniqueInstance};
 use anyhow::{Context, Result, anyhow, bail};
 use wasm_bindgen::prelude::*;
 
@@ -26,6 +26,14 @@ pub fn unavailable(family: &str) -> Option<&'static str> {
     (family == "raytraced").then_some(
         "the reference reads the G-buffer back inside a frame, which a page cannot wait for; the page runs it itself (compare=1, or Compare)",
     )
+}
+
+/// An error naming why `choice` does not run in the page ([`unavailable`]).
+fn check_runs_in_page(choice: &TechniqueChoice) -> Result<()> {
+    match unavailable(choice.family.id) {
+        Some(why) => bail!("{} does not run in the page: {why}", choice.id()),
+        None => Ok(()),
+    }
 }
 
 /// The `log` crate's records in the browser's console (warnings such as a
@@ -120,9 +128,7 @@ impl Page {
             serde_json::from_str(pairs).context("the page's URL parameters")?;
         let args = PageArgs::from_pairs(&pairs)?;
         let choice = args.choice()?;
-        if let Some(why) = unavailable(choice.family.id) {
-            bail!("{} does not run in the page: {why}", choice.id());
-        }
+        check_runs_in_page(&choice)?;
         let (scene, camera, lights) = args.view.resolve()?;
         let (w, h) = args.view.size;
         canvas.set_width(w);
@@ -148,11 +154,9 @@ impl Page {
             .map_err(|e| anyhow!("no WebGPU adapter in this browser: {e}"))?;
         let gpu = GpuContext::from_adapter(instance, adapter).await?;
         let color_format = presenter.configure(&gpu, w, h)?;
+        let choices = vec![choice; lights.len().max(1)];
         let hf = checked(&gpu, "creating the renderer", || {
-            let mut hf = HeadlessFrame::new(&gpu, &scene, &[choice.clone()], w, h)?;
-            hf.frame = crate::frame::FrameTargets::with_color_format(&gpu, w, h, color_format)?;
-            hf.techniques = TechniqueInstance::per_light(&gpu, &choice, lights.len())?;
-            Ok(hf)
+            HeadlessFrame::with_color_format(&gpu, &scene, &choices, (w, h), color_format)
         })
         .await?;
         let settings = RenderSettings {
@@ -215,12 +219,9 @@ impl Page {
 
     /// Shows a mask layer as read back (half floats) in grey, white = lit.
     pub(super) fn present_mask(&self, raw: &[u8]) -> Result<Option<PendingDraw>> {
-        let rgba: Vec<u8> = decode_mask(raw)
-            .iter()
-            .flat_map(|v| {
-                let g = (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-                [g, g, g, 255]
-            })
+        let rgba: Vec<u8> = mask_to_u8(&decode_mask(raw))
+            .into_iter()
+            .flat_map(|g| [g, g, g, 255])
             .collect();
         self.presenter.present(&self.gpu, &self.upload(&rgba))
     }
@@ -263,9 +264,7 @@ impl Page {
         choice: TechniqueChoice,
         light: Option<usize>,
     ) -> Result<()> {
-        if let Some(why) = unavailable(choice.family.id) {
-            bail!("{} does not run in the page: {why}", choice.id());
-        }
+        check_runs_in_page(&choice)?;
         let count = self.lights.len();
         if let Some(i) = light.filter(|&i| i >= count.max(1)) {
             bail!("light {i}: the scene has {count} lights (they count from 0)");
@@ -286,17 +285,23 @@ impl Page {
 
     /// Replaces light `index` (checked as a scene file's lights are).
     pub(super) fn set_light(&mut self, index: usize, mut light: Light) -> Result<()> {
+        self.check_light(index)?;
+        light.direction = light.direction.normalize_or_zero();
+        light.validate()?;
+        self.lights[index] = light;
+        self.lights_edited = true;
+        self.shown = Shown::Image;
+        Ok(())
+    }
+
+    /// An error unless light `index` exists.
+    pub(super) fn check_light(&self, index: usize) -> Result<()> {
         if index >= self.lights.len() {
             bail!(
                 "light {index}: the scene has {} lights (they count from 0)",
                 self.lights.len()
             );
         }
-        light.direction = light.direction.normalize_or_zero();
-        light.validate()?;
-        self.lights[index] = light;
-        self.lights_edited = true;
-        self.shown = Shown::Image;
         Ok(())
     }
 
@@ -312,9 +317,7 @@ impl Page {
         let pos = read_texture(gpu, frame.gbuffer_position(), 0, 16).await?;
         let nrm = read_texture(gpu, frame.gbuffer_normal(), 0, 8).await?;
         let mut color = read_texture(gpu, frame.color(), 0, 4).await?;
-        if frame.color_format() == wgpu::TextureFormat::Bgra8UnormSrgb {
-            color.chunks_exact_mut(4).for_each(|p| p.swap(0, 2));
-        }
+        frame.swap_rgba_order(&mut color);
         let considered = quality::considered_from_gbuffer(
             bytemuck::cast_slice(&pos),
             bytemuck::cast_slice(&nrm),
@@ -365,9 +368,7 @@ impl Page {
     fn upload(&self, rgba: &[u8]) -> wgpu::Texture {
         let frame = &self.hf.frame;
         let mut texels = rgba.to_vec();
-        if frame.color_format() == wgpu::TextureFormat::Bgra8UnormSrgb {
-            texels.chunks_exact_mut(4).for_each(|p| p.swap(0, 2));
-        }
+        frame.swap_rgba_order(&mut texels);
         let texture = crate::gpu::texture_2d(
             &self.gpu.device,
             "shown image",
@@ -442,23 +443,17 @@ impl Page {
         let c = &self.camera;
         let v = |p: glam::Vec3| format!("{},{},{}", p.x, p.y, p.z);
         let (w, h) = self.args.view.size;
+        // The technique as `compare` labels it: its preset, and in brackets
+        // the values that differ from it.
         let mut pairs: Vec<(&str, String)> = vec![
             ("scene", self.args.view.scene.clone()),
             ("eye", v(c.eye)),
             ("target", v(c.target)),
-            ("technique", choice.id()),
+            ("technique", crate::measure::choice_label(choice)),
             ("size", format!("{w}x{h}")),
         ];
         if let Some(l) = &self.args.view.light {
             pairs.push(("light", l.clone()));
-        }
-        let specs = choice.family.params;
-        let defaults = technique::resolve(&choice.id()).map(|c| c.params.values);
-        for (i, spec) in specs.iter().enumerate() {
-            let value = choice.params.values[i];
-            if defaults.as_ref().is_ok_and(|d| d[i] != value) {
-                pairs.push(("set", format!("{}={}", spec.name, spec.format(value))));
-            }
         }
         Ok(query::link(&pairs))
     }
