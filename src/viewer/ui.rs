@@ -599,7 +599,13 @@ mod tests {
             ),
             (
                 &spot,
-                &["fov", "fit", "roll", "normal_offset_local"][..],
+                &[
+                    "fov",
+                    "fit",
+                    "roll",
+                    "normal_offset_local",
+                    "slope_bias_clamp_local",
+                ][..],
                 &[
                     "omni",
                     "cascades",
@@ -620,6 +626,7 @@ mod tests {
                     "omni",
                     "fov",
                     "normal_offset_local",
+                    "slope_bias_clamp_local",
                     "split_lambda",
                     "lispsm_n",
                 ][..],

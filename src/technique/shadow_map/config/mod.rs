@@ -194,6 +194,16 @@ pub const SLOPE_BIAS_CLAMP: ParamSpec = ParamSpec::float(
 )
 .for_lights(LightKinds::DIRECTIONAL);
 
+pub const SLOPE_BIAS_CLAMP_LOCAL: ParamSpec = ParamSpec::float(
+    "slope_bias_clamp_local",
+    10.0,
+    0.0,
+    64.0,
+    0.25,
+    "spot lights and cube faces: the depth bias is capped at this many texel widths of depth at the map's mean distance √(near·far) (fewer nearer the light, more beyond it: one cap per map in perspective depth), so that casters lit at grazing angles do not push their stored depth behind what they shade; 0 = no cap",
+)
+.for_lights(LightKinds::LOCAL);
+
 pub const NORMAL_OFFSET_DIRECTIONAL: ParamSpec = ParamSpec::float(
     "normal_offset_directional",
     0.25,
@@ -212,7 +222,7 @@ pub const NORMAL_OFFSET_SLOPE: ParamSpec = ParamSpec::boolean(
 
 pub const NORMAL_OFFSET_LOCAL: ParamSpec = ParamSpec::float(
     "normal_offset_local",
-    0.5,
+    1.0,
     0.0,
     10.0,
     0.1,
@@ -329,6 +339,7 @@ pub const PARAMS: &[ParamSpec] = &[
     DEPTH_BIAS,
     SLOPE_BIAS,
     SLOPE_BIAS_CLAMP,
+    SLOPE_BIAS_CLAMP_LOCAL,
     NORMAL_OFFSET_DIRECTIONAL,
     NORMAL_OFFSET_LOCAL,
     NORMAL_OFFSET_SLOPE,
@@ -390,6 +401,7 @@ pub struct ShadowMapConfig {
     pub slope_bias: f32,
     /// Cap of the depth bias in texel widths of depth (directional maps).
     pub slope_bias_clamp: f32,
+    pub slope_bias_clamp_local: f32,
     pub normal_offset_directional: f32,
     pub normal_offset_local: f32,
     /// Normal offset × sin²θ between normal and light.
@@ -461,6 +473,7 @@ impl ShadowMapConfig {
             depth_bias: p.float(&DEPTH_BIAS)?.round().min(i32::MAX as f32) as i32,
             slope_bias: p.float(&SLOPE_BIAS)?,
             slope_bias_clamp: p.float(&SLOPE_BIAS_CLAMP)?,
+            slope_bias_clamp_local: p.float(&SLOPE_BIAS_CLAMP_LOCAL)?,
             normal_offset_directional: p.float(&NORMAL_OFFSET_DIRECTIONAL)?,
             normal_offset_local: p.float(&NORMAL_OFFSET_LOCAL)?,
             normal_offset_slope: p.flag(&NORMAL_OFFSET_SLOPE)?,

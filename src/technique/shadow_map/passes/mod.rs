@@ -10,7 +10,7 @@ use super::gpu::edge_mask::{ChainInput, ChainSource};
 use super::gpu::maps::Maps;
 use super::gpu::pipelines::{LookupKey, MapShape};
 use super::gpu::uniform::slot_offset;
-use super::projection::bias_cap::bias_clamp;
+use super::projection::bias_cap::{BiasCaps, bias_clamp};
 use super::projection::caster_cull::CasterCull;
 use super::projection::setup::MapProjection;
 use super::{CullFace, DepthFormat, LightSetup, ShadowMapConfig, ShadowMapTechnique, clear_op};
@@ -68,7 +68,11 @@ impl ShadowMapTechnique {
         }
         let c = &self.config;
         let side = c.map_side(ctx.light, ctx.gpu.max_texture_size());
-        let clamp = bias_clamp(setup, face, side, c.slope_bias_clamp);
+        let caps = BiasCaps {
+            directional: c.slope_bias_clamp,
+            local: c.slope_bias_clamp_local,
+        };
+        let clamp = bias_clamp(setup, face, side, caps);
         let key = DepthPassKey {
             clamp_bits: clamp.to_bits(),
             ..p.depth_key
