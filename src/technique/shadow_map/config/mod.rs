@@ -196,11 +196,11 @@ pub const SLOPE_BIAS_CLAMP: ParamSpec = ParamSpec::float(
 
 pub const SLOPE_BIAS_CLAMP_LOCAL: ParamSpec = ParamSpec::float(
     "slope_bias_clamp_local",
-    10.0,
+    0.0,
     0.0,
     64.0,
     0.25,
-    "spot lights and cube faces: the depth bias is capped at this many texel widths of depth at the map's mean distance √(near·far) (fewer nearer the light, more beyond it: one cap per map in perspective depth), so that casters lit at grazing angles do not push their stored depth behind what they shade; 0 = no cap",
+    "spot lights and cube faces: the depth bias is capped at this many texel widths of depth at the map's mean distance √(near·far) (fewer nearer the light, more beyond it: one cap per map in perspective depth), so that casters lit at grazing angles do not push their stored depth behind what they shade; it brings back acne on surfaces lit at grazing angles, which a larger normal_offset_local keeps away at the price of moved shadow edges; 0 = no cap",
 )
 .for_lights(LightKinds::LOCAL);
 
@@ -222,7 +222,7 @@ pub const NORMAL_OFFSET_SLOPE: ParamSpec = ParamSpec::boolean(
 
 pub const NORMAL_OFFSET_LOCAL: ParamSpec = ParamSpec::float(
     "normal_offset_local",
-    1.0,
+    0.5,
     0.0,
     10.0,
     0.1,
