@@ -54,7 +54,7 @@ impl ShadowMapTechnique {
                 cone_tan: (ctx.light.outer_cone_deg.to_radians()).tan(),
                 position: ctx.light.position,
             });
-        self.last_seen = self.reduce_seen(ctx, encoder, spot, single, cascaded)?;
+        self.last_seen = self.reduce_seen(ctx, encoder, spot, single)?;
         let fitted_turn = match c.roll {
             Roll::Up => Turn::Upright,
             Roll::Square => Turn::Fitted {
@@ -115,6 +115,7 @@ impl ShadowMapTechnique {
                         l.direction,
                         &ctx.scene_gpu.bounds,
                         &c.warp,
+                        self.seen_depths(ctx),
                     );
                 }
                 setup
@@ -139,15 +140,10 @@ impl ShadowMapTechnique {
         encoder: &mut wgpu::CommandEncoder,
         spot: Option<SpotImage>,
         single: bool,
-        cascaded: bool,
     ) -> Result<Option<SeenBounds>> {
         let c = self.config;
         let directional = ctx.light.kind == LightType::Directional;
-        // A single warped map is fitted by its warp, not to what was seen.
-        let fits_seen = spot.is_some()
-            || (directional
-                && c.cascades.fit != Fit::Frustum
-                && (cascaded || c.warp.kind == Warp::None));
+        let fits_seen = spot.is_some() || (directional && c.cascades.fit != Fit::Frustum);
         if !fits_seen {
             return Ok(None);
         }
@@ -167,6 +163,21 @@ impl ShadowMapTechnique {
             far_limit: c.cascades.far_limit(ctx.fit_camera.far),
         };
         reduction.seen(ctx, encoder, &inputs)
+    }
+
+    /// The view depths the camera saw (SDSM's reduction), where the maps
+    /// are fitted to them (`fit=depth|samples`) and the reduction has them:
+    /// what a single warped map's body spans.
+    fn seen_depths(&self, ctx: &MaskContext) -> Option<(f32, f32)> {
+        let c = &self.config.cascades;
+        let seen = self.last_seen.as_ref().filter(|_| c.fit != Fit::Frustum)?;
+        Some(cascades::partitioned_depths(
+            ctx.fit_camera,
+            ctx.fit_frame.width() as f32 / ctx.fit_frame.height() as f32,
+            &ctx.scene_gpu.bounds,
+            c,
+            Some(seen),
+        ))
     }
 
     /// What a directional light's single map is fitted to this frame: the

@@ -135,6 +135,7 @@ pub fn warp_setup(
     light_dir: Vec3,
     scene: &Aabb,
     params: &WarpParams,
+    seen_depths: Option<(f32, f32)>,
 ) {
     let ranges: Vec<(f32, f32)> = match &setup.cascades {
         Some(split) => std::iter::once(split.near)
@@ -143,10 +144,12 @@ pub fn warp_setup(
             .windows(2)
             .map(|w| (w[0], w[1]))
             .collect(),
-        None => {
-            let reach = view_reach(camera, scene).max(camera.near * 1.01);
-            vec![(camera.near, reach)]
-        }
+        None => vec![seen_depths.unwrap_or_else(|| {
+            (
+                camera.near,
+                view_reach(camera, scene).max(camera.near * 1.01),
+            )
+        })],
     };
     let view = camera.view();
     for (face, (z0, z1)) in setup.faces.iter_mut().zip(ranges) {
@@ -293,5 +296,58 @@ pub(super) mod tests {
         // The light along the view direction: no warp.
         let along = cam.target - cam.eye;
         assert!(lispsm(&cam, along, &scene, &body, (0.5, 80.0), 0.0).is_none());
+    }
+
+    /// A single warped map warps the view between the depths the camera
+    /// saw: the seen slice stays inside the map under every warp and takes
+    /// more of it than under the whole view's warp.
+    #[test]
+    fn one_warped_map_warps_the_seen_depths() {
+        use crate::technique::shadow_map::projection::setup::{MapProjection, slice_corners};
+        let scene = Aabb {
+            min: Vec3::new(-50.0, 0.0, -50.0),
+            max: Vec3::new(50.0, 10.0, 50.0),
+        };
+        let cam = Camera::new(Vec3::new(0.0, 2.0, 40.0), Vec3::new(0.0, 0.0, 0.0));
+        let light = Vec3::new(1.0, -1.0, 0.2);
+        let (z0, z1) = (20.0, 35.0);
+        let slice = clip_to_bounds(&slice_corners(&cam, 1.5, z0, z1), &scene);
+        // The area of the map the slice's image spans (its box in NDC).
+        let share = |kind: Warp, seen: Option<(f32, f32)>| {
+            let mut setup = LightSetup {
+                faces: vec![Mat4::IDENTITY],
+                near: 0.0,
+                far: 1.0,
+                projection: MapProjection::Orthographic,
+                texel_scale: 1.0,
+                cascades: None,
+                warp_depth: None,
+            };
+            let params = WarpParams {
+                kind,
+                lispsm_n: 0.0,
+                tsm_focus: 0.0,
+            };
+            warp_setup(&mut setup, &cam, 1.5, light, &scene, &params, seen);
+            assert!(setup.warp_depth.is_some(), "{kind:?}");
+            let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+            for c in &slice {
+                let q = ndc(setup.faces[0], *c);
+                assert!(
+                    q.x.abs() <= 1.0 + 1e-3 && q.y.abs() <= 1.0 + 1e-3,
+                    "{kind:?} {c} → {q}"
+                );
+                (lo, hi) = (lo.min(q), hi.max(q));
+            }
+            (hi.x - lo.x) * (hi.y - lo.y) / 4.0
+        };
+        for kind in [Warp::Psm, Warp::Lispsm, Warp::Tsm] {
+            let whole = share(kind, None);
+            let seen = share(kind, Some((z0, z1)));
+            assert!(
+                seen > 1.2 * whole && seen > 0.5,
+                "{kind:?}: {seen} vs {whole}"
+            );
+        }
     }
 }
