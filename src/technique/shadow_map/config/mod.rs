@@ -239,8 +239,8 @@ pub const EDGE_MASK: ParamSpec = ParamSpec::boolean(
 
 pub const RECEIVER_PLANE: ParamSpec = ParamSpec::boolean(
     "receiver_plane",
-    false,
-    "receiver-plane depth bias (Isidoro 2006): each texel a tap reads is compared against the receiver's plane (from its geometric normal) at the texel's centre, not against one depth — a lit wall then never falls behind the back face that meets it at its own corner, but the plane passes in front of a caster that touches the receiver at a steep angle (a trunk under its canopy); the virtual map takes the plane from screen derivatives",
+    true,
+    "receiver-plane depth bias (Isidoro 2006) on receivers without a convex part (part_ids): each kernel tap is compared against the receiver's plane (from its geometric normal) at the tap's centre, not against one depth, so that a kernel wider than the slope bias covers does not reach the receiver's own curved surface (grid, disk, pcss, varwidth); pcf2x2 and hard compare each texel at its centre; a receiver with a part ignores its own texels instead, and keeps one depth, which a plane carried past its edge would pass under a surface that meets it there; the plane passes in front of a caster that touches the receiver at a steep angle (a trunk under its canopy); every map takes the plane from the surface's normal over the kernel's reach",
 )
 .when(Condition::IsNot("filter", &["vsm", "esm", "evsm2", "evsm4", "msm"]));
 

@@ -33,19 +33,27 @@ fn solve_plane(dx: vec3f, dy: vec3f, limit: f32) -> vec2f {
     return clamp(g, vec2f(-limit), vec2f(limit));
 }
 
-// The virtual map's receiver plane at lookup point `q` of world point p in
-// level `l`, from the screen derivatives of (u, v, depth): those of p (a
-// G-buffer load) mapped into the level by finite difference — screen
-// derivatives of values read from a parameter block come out wrong on
-// lavapipe when it is a storage buffer. 0 when off. Must run in uniform
-// control flow. (The other maps take it from the surface's normal:
-// `receiver_plane_at`.)
-fn receiver_plane(l: VirtualLevel, q: VirtualPoint, p: vec3f, n: vec3f) -> vec2f {
-    let t = vec3f(q.uv, q.z);
-    let qx = virtual_point(l, p + dpdx(p), n);
-    let qy = virtual_point(l, p + dpdy(p), n);
-    let g = solve_plane(vec3f(qx.uv, qx.z) - t, vec3f(qy.uv, qy.z) - t, 4.0);
-    return select(vec2f(0.0), g, RECEIVER_PLANE);
+// A unit tangent of the surface with unit normal `normal`.
+fn surface_tangent(normal: vec3f) -> vec3f {
+    let helper = select(vec3f(1.0, 0.0, 0.0), vec3f(0.0, 1.0, 0.0), abs(normal.x) > 0.7);
+    return normalize(cross(normal, helper));
+}
+
+// The virtual map's receiver plane at lookup point `q` of world point p
+// (moved along n) in level `l`, from the level points of two steps of the
+// kernel's reach along the surface of geometric normal `normal`, as the
+// other maps take it (`receiver_plane_at`): screen derivatives broke the
+// plane wherever a pixel quad straddles a silhouette. 0 when off.
+fn receiver_plane(l: VirtualLevel, q: VirtualPoint, p: vec3f, n: vec3f, normal: vec3f) -> vec2f {
+    if !RECEIVER_PLANE {
+        return vec2f(0.0);
+    }
+    let step = level_texel_world(l, p) * max(kernel_reach(), 1.0);
+    let t = surface_tangent(normal);
+    let at = vec3f(q.uv, q.z);
+    let qx = virtual_point(l, p + t * step, n);
+    let qy = virtual_point(l, p + cross(normal, t) * step, n);
+    return solve_plane(vec3f(qx.uv, qx.z) - at, vec3f(qy.uv, qy.z) - at, 4.0);
 }
 
 // The receiver depth to compare at a tap's uv.

@@ -105,7 +105,7 @@ fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     receiver_part = receiver_part_of(vec2i(frag.xy), g.xyz, normal);
     let n = offset_direction(g, normal);
     if VIRTUAL {
-        return vec4f(virtual_visibility(frag.xy, g, n));
+        return vec4f(virtual_visibility(frag.xy, g, n, normal));
     }
     if !CASCADED {
         let face = face_of(g.xyz);
@@ -213,17 +213,17 @@ fn map_point(face: u32, p: vec3f) -> vec3f {
 
 // The receiver plane (Isidoro 2006) from the surface itself: d(depth)/d(uv)
 // of the plane through p with normal `normal`, from the map points of two
-// steps of `step` along it (screen derivatives break where a pixel quad
-// straddles an edge, exactly where the plane matters); 0 when off.
+// steps of `step` along it — the kernel's reach: over one texel of a fine
+// map the depth difference drowns in float rounding (screen derivatives
+// break where a pixel quad straddles an edge, exactly where the plane
+// matters); 0 when off.
 fn receiver_plane_at(face: u32, p: vec3f, normal: vec3f, at: vec3f, step: f32) -> vec2f {
     if !RECEIVER_PLANE {
         return vec2f(0.0);
     }
-    let helper = select(vec3f(1.0, 0.0, 0.0), vec3f(0.0, 1.0, 0.0), abs(normal.x) > 0.7);
-    let t = normalize(cross(normal, helper));
-    let b = cross(normal, t);
+    let t = surface_tangent(normal);
     let dx = map_point(face, p + t * step) - at;
-    let dy = map_point(face, p + b * step) - at;
+    let dy = map_point(face, p + cross(normal, t) * step) - at;
     return solve_plane(dx, dy, 4.0);
 }
 
@@ -244,7 +244,7 @@ fn projected(face: u32, g: vec4f, offset_n: vec3f, normal: vec3f) -> Projected {
     let p = offset_point(g.xyz, offset_n, texel_world);
     let c = clip_of(face, p);
     let at = map_point(face, p);
-    let gradient = receiver_plane_at(face, p, normal, at, texel_world);
+    let gradient = receiver_plane_at(face, p, normal, at, texel_world * max(kernel_reach(), 1.0));
     // Outside the map counts as lit.
     let inside = g.w >= 0.5 && c.w > 0.0 && all(at.xy >= vec2f(0.0)) && all(at.xy <= vec2f(1.0))
         && at.z <= 1.0 && at.z >= 0.0;
@@ -256,7 +256,7 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
     if !pr.inside {
         return 1.0;
     }
-    rp_gradient = pr.gradient;
+    rp_gradient = select(pr.gradient, vec2f(0.0), has_own_part());
     rp_origin = pr.uv;
     if FILTER_KIND >= FILTER_VSM {
         return moment_visibility(moments_at(pr.uv, face), select(linear01(pr.clip), pr.z, is_warped()));

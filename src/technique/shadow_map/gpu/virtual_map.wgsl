@@ -516,14 +516,11 @@ fn fs_adaptive_mark(@builtin(position) frag: vec4f) -> @location(0) vec4f {
 // The lookup: the pixel's level or, where its kernel's pages are not all
 // resident, the first coarser level of the view where they are; lit where
 // none is. With MARKED_RESIDENT, the pixel's level without that search.
-fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f) -> f32 {
+fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f, normal: vec3f) -> f32 {
     let marked = vsm_pixel_level[pixel_index(vec2i(frag))];
     let first = select(marked, 0u, marked == NO_LEVEL);
     var found = FoundLevel(first, level_at(first), VirtualPoint());
     found.point = virtual_point(found.level, g.xyz, n);
-    // Derivatives first, in uniform control flow: of the surface point
-    // (a texture load), mapped into the level by finite difference.
-    let gradient = receiver_plane(found.level, found.point, g.xyz, n);
     if marked == NO_LEVEL || g.w < 0.5 {
         return 1.0;
     }
@@ -536,9 +533,9 @@ fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f) -> f32 {
     filtered_level = found.level;
     let q = found.point;
     kernel_slots = kernel_slots_of(filtered_level, q.uv * sm.map.x);
-    let scale = exp2(f32(found.index - first));
+    let gradient = receiver_plane(filtered_level, q, g.xyz, n, normal);
     virtual_texel_world = level_texel_world(filtered_level, g.xyz);
-    return filtered(found.index, Projected(vec4f(0.0, 0.0, q.z, 1.0), q.uv, q.z, gradient * scale, q.inside), frag);
+    return filtered(found.index, Projected(vec4f(0.0, 0.0, q.z, 1.0), q.uv, q.z, gradient, q.inside), frag);
 }
 
 // Debug views of a virtual map: pages tinted by level over the scene, and
