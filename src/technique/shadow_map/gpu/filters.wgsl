@@ -87,7 +87,10 @@ fn lit_at(texel: vec2i, face: u32, z: f32) -> f32 {
 
 // Bilinear (hardware-style 2×2) comparison at uv.
 fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
-    if RECEIVER_PLANE && !VIRTUAL && any(rp_gradient != vec2f(0.0)) {
+    if RECEIVER_PLANE && any(rp_gradient != vec2f(0.0)) {
+        if VIRTUAL {
+            return virtual_bilinear_compare(uv, z);
+        }
         return bilinear_compare(uv, face, z);
     }
     if !BYTE_MAP && !VIRTUAL {
