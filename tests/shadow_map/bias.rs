@@ -8,13 +8,15 @@ use shadowlab::scene::builtin;
 /// angles, the uncapped slope bias pushes the pipe's own stored depth far
 /// behind it and light leaks through onto the wall it shades; capped, the
 /// interior is clean, and no acne appears elsewhere. The same holds for a
-/// virtual map's clipmap levels, each capped by its own texel size.
+/// virtual map's clipmap levels, each capped by its own texel size (at 20
+/// texel widths, not 5: it leaks a little more and keeps acne off curved
+/// surfaces lit at grazing angles).
 #[test]
 fn capping_the_slope_bias_stops_light_leaking_at_grazing_casters() {
     let pipe = preset("curved", "pipe", "sun");
     for (technique, capped_at_most, uncapped_at_least) in [
         ("shadow-map:pcf", 0.05, 0.2),
-        ("shadow-map:virtual", 0.01, 0.03),
+        ("shadow-map:virtual", 0.05, 0.1),
     ] {
         let capped = compare(&pipe, technique, (320, 180)).mask;
         let uncapped = compare(
@@ -25,7 +27,8 @@ fn capping_the_slope_bias_stops_light_leaking_at_grazing_casters() {
         .mask;
         assert!(
             capped.interior.false_lit_pct <= capped_at_most
-                && uncapped.interior.false_lit_pct >= uncapped_at_least,
+                && uncapped.interior.false_lit_pct >= uncapped_at_least
+                && capped.interior.false_lit_pct <= 0.5 * uncapped.interior.false_lit_pct,
             "{technique}: capped {capped:?}\nuncapped {uncapped:?}"
         );
         // Capped, no acne comes back on the other scenes under the sun.
