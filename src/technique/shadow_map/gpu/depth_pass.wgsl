@@ -126,7 +126,7 @@ fn fs_depth_moments(i: DepthOut) -> @location(0) vec4f {
     if i.hemisphere < 0.0 {
         discard;
     }
-    return moments_of(clamp(i.linear, 0.0, 1.0));
+    return moments_of(moment_depth_of(i.linear));
 }
 
 // Separable box blur of one moment layer along one axis.

@@ -43,9 +43,10 @@ fn surface_tangent(normal: vec3f) -> vec3f {
 // (moved along n) in level `l`, from the level points of two steps of the
 // kernel's reach along the surface of geometric normal `normal`, as the
 // other maps take it (`receiver_plane_at`): screen derivatives broke the
-// plane wherever a pixel quad straddles a silhouette. 0 when off.
+// plane wherever a pixel quad straddles a silhouette. 0 when off or
+// facing away from the light, as there.
 fn receiver_plane(l: VirtualLevel, q: VirtualPoint, p: vec3f, n: vec3f, normal: vec3f) -> vec2f {
-    if !RECEIVER_PLANE {
+    if !RECEIVER_PLANE || !(dot(normal, to_light(p)) > 0.0) {
         return vec2f(0.0);
     }
     let step = level_texel_world(l, p) * max(kernel_reach(), 1.0);

@@ -216,9 +216,11 @@ fn map_point(face: u32, p: vec3f) -> vec3f {
 // steps of `step` along it — the kernel's reach: over one texel of a fine
 // map the depth difference drowns in float rounding (screen derivatives
 // break where a pixel quad straddles an edge, exactly where the plane
-// matters); 0 when off.
+// matters); 0 when off, and on a receiver facing away from the light (its
+// visibility never reaches the image; seen from behind, the plane is
+// ill-conditioned).
 fn receiver_plane_at(face: u32, p: vec3f, normal: vec3f, at: vec3f, step: f32) -> vec2f {
-    if !RECEIVER_PLANE {
+    if !RECEIVER_PLANE || !(dot(normal, to_light(p)) > 0.0) {
         return vec2f(0.0);
     }
     let t = surface_tangent(normal);
@@ -259,7 +261,7 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
     rp_gradient = select(pr.gradient, vec2f(0.0), has_own_part());
     rp_origin = pr.uv;
     if FILTER_KIND >= FILTER_VSM {
-        return moment_visibility(moments_at(pr.uv, face), select(linear01(pr.clip), pr.z, is_warped()));
+        return moment_visibility(moments_at(pr.uv, face), moment_depth_of(select(linear01(pr.clip), pr.z, is_warped())));
     }
     // Edge mask: where every tap agrees, the kernel's loops run zero times.
     // A trip count, not an early return: SIMD rasterisers (llvmpipe among

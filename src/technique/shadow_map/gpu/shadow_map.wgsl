@@ -84,6 +84,9 @@ struct ShadowMap {
     // dot(row, (p, 1)) — a perspective's z/w would tilt every surface and
     // the slope bias with it.
     warp_depth: vec4f,
+    // x the stored depth the moments take as 0, y the scale to 1 (one
+    // directional map: the depths its seen receivers span; else 0, 1)
+    moment_depth: vec4f,
 };
 
 @group(2) @binding(0) var<uniform> sm: ShadowMap;
@@ -162,6 +165,14 @@ struct DepthOut {
 };
 
 // Linear depth in [0, 1] of a light-clip position.
+// The depth a moment filter stores and compares: `linear` mapped from the
+// window of stored depths the receivers span (`sm.moment_depth`) onto
+// [0, 1], so that the filter's exponent or variance works on their depth
+// range, not the scene's; casters nearer than the window store 0.
+fn moment_depth_of(linear: f32) -> f32 {
+    return clamp((linear - sm.moment_depth.x) * sm.moment_depth.y, 0.0, 1.0);
+}
+
 fn linear01(c: vec4f) -> f32 {
     if is_orthographic() || is_paraboloid() {
         return c.z; // orthographic, or the paraboloid's linear depth

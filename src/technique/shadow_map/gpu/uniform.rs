@@ -38,13 +38,17 @@ pub struct ShadowMapUniform {
     pub warp: Vec4,
     /// Warped faces: the row giving a point's stored (linear) depth.
     pub warp_depth: Vec4,
+    /// x the stored depth moment filters take as 0, y the scale to 1
+    /// (`LightSetup::moment_depth`).
+    pub moment_depth: Vec4,
 }
 
 impl ShadowMapUniform {
     /// The fields the parameters, the light and the maps' culling
     /// (`CullFace::for_shape`) fix: light, kernel, soft-shadow and moment
-    /// terms; the rest zero. Under a light without an area the soft filters
-    /// get no penumbra unless `hard_light_penumbra` pretends one.
+    /// terms (moment depth over the whole range); the rest zero. Under a
+    /// light without an area the soft filters get no penumbra unless
+    /// `hard_light_penumbra` pretends one.
     pub fn with_filter(
         c: &ShadowMapConfig,
         normal_offset: f32,
@@ -78,6 +82,7 @@ impl ShadowMapUniform {
                 c.exponent_negative,
                 c.moment_bias,
             ),
+            moment_depth: Vec4::new(0.0, 1.0, 0.0, 0.0),
             ..ShadowMapUniform::zeroed()
         }
     }
@@ -151,6 +156,11 @@ pub fn slot_data(
             cascade_view_z: t.fit_view.row(2),
             warp: light.direction.normalize_or_zero().extend(0.0),
             warp_depth: setup.warp_depth.unwrap_or(Vec4::ZERO),
+            moment_depth: setup
+                .moment_depth
+                .map_or(Vec4::new(0.0, 1.0, 0.0, 0.0), |w| {
+                    Vec4::new(w.x, 1.0 / (w.y - w.x).max(1e-6), 0.0, 0.0)
+                }),
             ..ShadowMapUniform::with_filter(c, t.normal_offset, light, t.cull)
         };
         for f in 0..MAX_FACES as u32 {
@@ -187,7 +197,8 @@ mod wgsl_tests {
             &source,
             "ShadowMap",
             crate::field_offsets!(ShadowMapUniform; faces, light, kernel, map, soft, depth, face,
-                moments, cascade, cascade_far, cascade_texel, cascade_view_z, warp, warp_depth),
+                moments, cascade, cascade_far, cascade_texel, cascade_view_z, warp, warp_depth,
+                moment_depth),
             std::mem::size_of::<ShadowMapUniform>(),
         );
     }

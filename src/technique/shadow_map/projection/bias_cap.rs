@@ -92,6 +92,7 @@ mod tests {
                 texel_scales,
             }),
             warp_depth: None,
+            moment_depth: None,
         }
     }
 

@@ -203,6 +203,7 @@ pub fn cascade_setup(
             texel_scales,
         }),
         warp_depth: None,
+        moment_depth: None,
     }
 }
 

@@ -91,7 +91,7 @@ impl ShadowMapTechnique {
                         self.last_seen.as_ref(),
                     )
                 } else if single {
-                    let (setup, fit) = setup::directional_setup(
+                    let (mut setup, fit) = setup::directional_setup(
                         l,
                         &ctx.scene_gpu.bounds,
                         ctx.fit_camera,
@@ -99,6 +99,15 @@ impl ShadowMapTechnique {
                         &fitted,
                     );
                     fits.push(fit);
+                    setup.moment_depth = self.seen_depths(ctx).and_then(|seen| {
+                        setup::seen_depth_window(
+                            setup.faces[0],
+                            ctx.fit_camera,
+                            aspect,
+                            &ctx.scene_gpu.bounds,
+                            seen,
+                        )
+                    });
                     setup
                 } else if spot.is_some() {
                     let (setup, fit) = setup::spot_setup(l, &ctx.scene_gpu.bounds, &fitted);

@@ -40,6 +40,11 @@ pub struct LightSetup {
     /// Warped faces (LiSPSM): texel sizes vary over the map, and depth is
     /// stored linear along the light as dot(row, (p, 1)), 0 nearest it.
     pub warp_depth: Option<Vec4>,
+    /// One directional map: the window of stored depths (0 nearest the
+    /// light) that the receivers the camera sees span
+    /// ([`seen_depth_window`]); moment filters store and compare depth
+    /// mapped from it onto [0, 1]. `None`: the map's whole range.
+    pub moment_depth: Option<Vec2>,
 }
 
 /// The view-depth partition of cascaded maps, one entry per face.
@@ -77,6 +82,30 @@ pub fn view_in_scene(
         &slice_corners(camera, aspect, z0, z1.max(z0 * 1.001)),
         scene_bounds,
     )
+}
+
+/// The window of stored depths (0 nearest the light) of an orthographic
+/// map `face` that the camera's view between view depths `z0` and `z1`
+/// spans inside the scene, widened by a sixteenth of its width each way
+/// (normal offsets, the kernel's reach); `None` where the view misses the
+/// scene. A moment filter's exponent or variance then works on the depths
+/// its receivers span, not on the scene's (a 2 km landscape's range left a
+/// tree's shadow under 1 % of it).
+pub fn seen_depth_window(
+    face: Mat4,
+    camera: &Camera,
+    aspect: f32,
+    scene_bounds: &Aabb,
+    (z0, z1): (f32, f32),
+) -> Option<Vec2> {
+    let (lo, hi) = view_in_scene(camera, aspect, scene_bounds, z0, z1)
+        .iter()
+        .map(|p| face.project_point3(*p).z)
+        .fold(None, |w: Option<(f32, f32)>, z| {
+            Some(w.map_or((z, z), |(lo, hi)| (lo.min(z), hi.max(z))))
+        })?;
+    let pad = (hi - lo) / 16.0;
+    Some(Vec2::new((lo - pad).max(0.0), (hi + pad).min(1.0)))
 }
 
 /// A spot light's view: from its position along its direction.
@@ -321,6 +350,7 @@ pub fn light_setup(
                 texel_scale: 4.0,
                 cascades: None,
                 warp_depth: None,
+                moment_depth: None,
             }
         }
         LightType::Point => {
@@ -338,6 +368,7 @@ pub fn light_setup(
                 texel_scale: 2.0,
                 cascades: None,
                 warp_depth: None,
+                moment_depth: None,
             }
         }
         LightType::Directional => directional_setup(light, scene_bounds, camera, aspect, fp).0,
@@ -386,6 +417,7 @@ pub fn spot_setup(light: &Light, scene_bounds: &Aabb, fp: &FrustumParams) -> (Li
         texel_scale: 2.0 * window.half.max_element(),
         cascades: None,
         warp_depth: None,
+        moment_depth: None,
     };
     let fit = MapFit {
         turn,
@@ -469,6 +501,7 @@ pub fn directional_setup(
         texel_scale: 2.0 * half.max_element(),
         cascades: None,
         warp_depth: None,
+        moment_depth: None,
     };
     (setup, MapFit { turn, half })
 }
@@ -476,6 +509,43 @@ pub fn directional_setup(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A low sun along a 1 km strip and a camera seeing its first 60 m: the
+    /// window of stored depths holds every point of that view inside the
+    /// scene (widened by a sixteenth each way), and is a small part of the
+    /// map's depth range, which spans the whole strip.
+    #[test]
+    fn the_seen_depth_window_holds_the_view_and_little_else() {
+        let bounds = Aabb {
+            min: Vec3::new(-20.0, 0.0, -1000.0),
+            max: Vec3::new(20.0, 10.0, 0.0),
+        };
+        let light = Light::directional(Vec3::new(0.0, -0.2, -1.0), 1.0);
+        let mut camera = Camera::new(Vec3::new(0.0, 5.0, 0.0), Vec3::new(0.0, 0.0, -30.0));
+        camera.far = 60.0;
+        let (setup, _) =
+            directional_setup(&light, &bounds, &camera, 1.0, &FrustumParams::default());
+        let w = seen_depth_window(
+            setup.faces[0],
+            &camera,
+            1.0,
+            &bounds,
+            (camera.near, camera.far),
+        )
+        .expect("the view lies in the scene");
+        assert!(0.0 <= w.x && w.x < w.y && w.y <= 1.0, "{w}");
+        assert!(w.y - w.x < 0.15, "the window spans {w} of a 1 km range");
+        for p in view_in_scene(&camera, 1.0, &bounds, camera.near, camera.far) {
+            let z = setup.faces[0].project_point3(p).z;
+            assert!(w.x < z && z < w.y, "{p} at {z} outside {w}");
+        }
+        let behind = Camera::new(Vec3::new(0.0, 5.0, 100.0), Vec3::new(0.0, 5.0, 200.0));
+        assert_eq!(
+            seen_depth_window(setup.faces[0], &behind, 1.0, &bounds, (1.0, 50.0)),
+            None,
+            "a view outside the scene has no window"
+        );
+    }
 
     /// A point light off an edge of the scene's box sees the box's nearer
     /// parts obliquely in a cube face: every point of the box inside a

@@ -182,6 +182,8 @@ pub fn warp_setup(
         if let Some(w) = warped {
             *face = w.view_proj;
             setup.warp_depth = Some(w.depth_row);
+            // Warped depth is linear along the light, not the window's.
+            setup.moment_depth = None;
         }
     }
 }
@@ -322,6 +324,7 @@ pub(super) mod tests {
                 texel_scale: 1.0,
                 cascades: None,
                 warp_depth: None,
+                moment_depth: None,
             };
             let params = WarpParams {
                 kind,
