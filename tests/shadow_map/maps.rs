@@ -113,6 +113,33 @@ fn cube_faces_cover_every_direction() {
     }
 }
 
+/// `esm` filters exp(c·z) in log space, so no exponent overflows a 32-bit
+/// float: at c = 2000, 25 times what exp(c(z − 1)) allowed, the square's
+/// shadow is still there, as sharp as the reference's away from its edges,
+/// and every visibility is a number in [0, 1].
+#[test]
+fn log_space_esm_takes_exponents_past_a_floats_range() {
+    for light in lights_over_squares() {
+        let scene = squares_over_floor(&[(Vec3::new(0.0, 1.0, 0.0), 0.7)], light, false);
+        let m = compare(&scene, "shadow-map:esm[esm_exponent=2000]", (200, 200)).mask;
+        let shadow = m.reference_shadowed_pct;
+        assert!(
+            shadow > 2.0
+                && m.all.total_pct <= 0.08 * shadow
+                && m.interior_mae < 0.002
+                && m.graded_interior_pct < 0.5,
+            "{:?}: {m:?}",
+            light.kind
+        );
+        let mask = mask_of(&scene, "shadow-map:esm", &["esm_exponent=2000"], 64, 64);
+        assert!(
+            mask.iter().all(|v| (0.0..=1.0).contains(v)),
+            "{:?}: a visibility outside [0, 1]",
+            light.kind
+        );
+    }
+}
+
 #[test]
 fn filters_match_the_reference_on_a_square_over_a_plane() {
     // Bounds as shares of the reference's shadow: the hard-edged filters

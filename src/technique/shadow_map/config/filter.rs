@@ -80,9 +80,19 @@ pub const EXPONENT: ParamSpec = ParamSpec::float(
     1.0,
     80.0,
     1.0,
-    "esm and evsm: exponent c of the positive warp exp(c(z − 1))",
+    "evsm: exponent c of the positive warp exp(c(z − 1)) (its square must fit a 32-bit float)",
 )
-.when(Condition::Is("filter", &["esm", "evsm2", "evsm4"]));
+.when(Condition::Is("filter", &["evsm2", "evsm4"]));
+
+pub const ESM_EXPONENT: ParamSpec = ParamSpec::float(
+    "esm_exponent",
+    200.0,
+    10.0,
+    2000.0,
+    10.0,
+    "esm: exponent c of exp(c·z), with z over the depths the receivers span; the map holds z and its blur and lookup filter exp(c·z) in log space (Lauritzen 2007), so any c fits a 32-bit float; a larger c bleeds less light and gives a receiver nearer than its filter's occluders more acne",
+)
+.when(Condition::Is("filter", &["esm"]));
 
 pub const EXPONENT_NEGATIVE: ParamSpec = ParamSpec::float(
     "exponent_negative",

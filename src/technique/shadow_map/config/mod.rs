@@ -14,8 +14,8 @@ use crate::technique::{ParamSpec, ParamValues};
 use anyhow::Result;
 
 use self::filter::{
-    BLEEDING_REDUCTION, BLOCKER_SEARCH, BLUR, EXPONENT, EXPONENT_NEGATIVE, HARD_LIGHT_PENUMBRA,
-    LIGHT_SIZE, MOMENT_BIAS, VARWIDTH_EXPONENT, VARWIDTH_SCALE,
+    BLEEDING_REDUCTION, BLOCKER_SEARCH, BLUR, ESM_EXPONENT, EXPONENT, EXPONENT_NEGATIVE,
+    HARD_LIGHT_PENUMBRA, LIGHT_SIZE, MOMENT_BIAS, VARWIDTH_EXPONENT, VARWIDTH_SCALE,
 };
 use self::paging::{
     CLIPMAP_LEVELS, PAGE_SIZE, PAGING, POOL, REFINE_STEPS, TEXELS_PER_PIXEL, VIRTUAL_SIZE,
@@ -363,6 +363,7 @@ pub const PARAMS: &[ParamSpec] = &[
     AREA,
     AREA_MAPS,
     BLEEDING_REDUCTION,
+    ESM_EXPONENT,
     EXPONENT,
     EXPONENT_NEGATIVE,
     MOMENT_BIAS,
@@ -431,6 +432,8 @@ pub struct ShadowMapConfig {
     pub area: bool,
     pub area_maps: u32,
     pub bleeding_reduction: f32,
+    /// esm's exponent (log space).
+    pub esm_exponent: f32,
     pub exponent: f32,
     pub exponent_negative: f32,
     pub moment_bias: f32,
@@ -499,6 +502,7 @@ impl ShadowMapConfig {
             area: p.flag(&AREA)?,
             area_maps: p.int(&AREA_MAPS)?,
             bleeding_reduction: p.float(&BLEEDING_REDUCTION)?,
+            esm_exponent: p.float(&ESM_EXPONENT)?,
             exponent: p.float(&EXPONENT)?,
             exponent_negative: p.float(&EXPONENT_NEGATIVE)?,
             moment_bias: p.float(&MOMENT_BIAS)?,

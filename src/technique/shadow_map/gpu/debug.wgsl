@@ -14,7 +14,7 @@ fn fs_debug_map(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     var d: f32;
     if FILTER_KIND >= FILTER_VSM {
         d = moment_texel(t, 0u).x;
-        if FILTER_KIND == FILTER_ESM || FILTER_KIND == FILTER_EVSM2 || FILTER_KIND == FILTER_EVSM4 {
+        if FILTER_KIND == FILTER_EVSM2 || FILTER_KIND == FILTER_EVSM4 {
             d = 1.0 + log(max(d, 1e-30)) / sm.moments.y;
         }
     } else {

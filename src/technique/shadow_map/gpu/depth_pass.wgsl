@@ -106,7 +106,9 @@ fn moments_of(z: f32) -> vec4f {
             return vec4f(z, z * z, 0.0, 0.0);
         }
         case FILTER_ESM: {
-            return vec4f(exp(cp * (z - 1.0)), 0.0, 0.0, 0.0);
+            // Log space (Lauritzen 2007): the depth itself; the blur and
+            // the lookup filter exp(c·z) without ever forming it.
+            return vec4f(z, 0.0, 0.0, 0.0);
         }
         case FILTER_EVSM2, FILTER_EVSM4: {
             let p = exp(cp * (z - 1.0));
@@ -136,6 +138,21 @@ fn fs_blur(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let axis = select(vec2i(1, 0), vec2i(0, 1), sm.face.y == 1u);
     let size = i32(sm.map.x);
     var sum = vec4f(0.0);
+    if FILTER_KIND == FILTER_ESM {
+        // log(mean exp(c·z)) / c, taken relative to the largest depth so
+        // that no term overflows however large c is.
+        let c = sm.moments.y;
+        var top = 0.0;
+        for (var k = -r; k <= r; k++) {
+            let t = clamp(vec2i(frag.xy) + axis * k, vec2i(0), vec2i(size - 1));
+            top = max(top, textureLoad(moment_map, t, i32(sm.face.x), 0).x);
+        }
+        for (var k = -r; k <= r; k++) {
+            let t = clamp(vec2i(frag.xy) + axis * k, vec2i(0), vec2i(size - 1));
+            sum.x += exp(c * (textureLoad(moment_map, t, i32(sm.face.x), 0).x - top));
+        }
+        return vec4f(top + log(sum.x / f32(2 * r + 1)) / c, 0.0, 0.0, 0.0);
+    }
     for (var k = -r; k <= r; k++) {
         let t = clamp(vec2i(frag.xy) + axis * k, vec2i(0), vec2i(size - 1));
         sum += textureLoad(moment_map, t, i32(sm.face.x), 0);

@@ -209,7 +209,8 @@ fn moment_visibility(m: vec4f, z: f32) -> f32 {
             return chebyshev(m.xy, z, 1e-6);
         }
         case FILTER_ESM: {
-            return clamp(m.x * exp(-cp * (z - 1.0)), 0.0, 1.0);
+            // m.x: log(mean exp(c·z_occluder)) / c (log space).
+            return clamp(exp(cp * (m.x - z)), 0.0, 1.0);
         }
         case FILTER_EVSM2: {
             let p = exp(cp * (z - 1.0));

@@ -64,8 +64,8 @@ struct ShadowMap {
     // x face rendered by the depth pass (or blurred), y blur axis (0 x, 1 y),
     // z blur radius (texels), w unused
     face: vec4u,
-    // moments: x light-bleeding reduction, y exponent c (esm, evsm +),
-    // z exponent c− (evsm), w moment bias (msm)
+    // moments: x light-bleeding reduction, y exponent c (esm in log space,
+    // evsm +), z exponent c− (evsm), w moment bias (msm)
     moments: vec4f,
     // x cascades (0 when not `CASCADED`), y fraction of each cascade blended into
     // the next, z view depth where the first cascade starts, w 1 where the

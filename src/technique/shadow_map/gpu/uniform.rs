@@ -2,7 +2,9 @@
 //! its slots: one per face for the depth pass and lookup, two for the blur.
 
 use crate::scene::Light;
-use crate::technique::shadow_map::config::{CullFace, DepthFormat, Select, ShadowMapConfig};
+use crate::technique::shadow_map::config::{
+    CullFace, DepthFormat, Filter, Select, ShadowMapConfig,
+};
 use crate::technique::shadow_map::projection::setup::LightSetup;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec4};
@@ -78,7 +80,11 @@ impl ShadowMapUniform {
             ),
             moments: Vec4::new(
                 c.bleeding_reduction,
-                c.exponent,
+                if c.filter == Filter::Esm {
+                    c.esm_exponent
+                } else {
+                    c.exponent
+                },
                 c.exponent_negative,
                 c.moment_bias,
             ),
