@@ -131,12 +131,17 @@ fn fs_depth_moments(i: DepthOut) -> @location(0) vec4f {
     return moments_of(moment_depth_of(i.linear));
 }
 
+// The moments k texels from frag along the blur's axis (clamped to the map).
+fn blur_tap(frag: vec2f, k: i32) -> vec4f {
+    let axis = select(vec2i(1, 0), vec2i(0, 1), sm.face.y == 1u);
+    let t = clamp(vec2i(frag) + axis * k, vec2i(0), vec2i(i32(sm.map.x) - 1));
+    return textureLoad(moment_map, t, i32(sm.face.x), 0);
+}
+
 // Separable box blur of one moment layer along one axis.
 @fragment
 fn fs_blur(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let r = i32(sm.face.z);
-    let axis = select(vec2i(1, 0), vec2i(0, 1), sm.face.y == 1u);
-    let size = i32(sm.map.x);
     var sum = vec4f(0.0);
     if FILTER_KIND == FILTER_ESM {
         // log(mean exp(c·z)) / c, taken relative to the largest depth so
@@ -144,18 +149,15 @@ fn fs_blur(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         let c = sm.moments.y;
         var top = 0.0;
         for (var k = -r; k <= r; k++) {
-            let t = clamp(vec2i(frag.xy) + axis * k, vec2i(0), vec2i(size - 1));
-            top = max(top, textureLoad(moment_map, t, i32(sm.face.x), 0).x);
+            top = max(top, blur_tap(frag.xy, k).x);
         }
         for (var k = -r; k <= r; k++) {
-            let t = clamp(vec2i(frag.xy) + axis * k, vec2i(0), vec2i(size - 1));
-            sum.x += exp(c * (textureLoad(moment_map, t, i32(sm.face.x), 0).x - top));
+            sum.x += exp(c * (blur_tap(frag.xy, k).x - top));
         }
         return vec4f(top + log(sum.x / f32(2 * r + 1)) / c, 0.0, 0.0, 0.0);
     }
     for (var k = -r; k <= r; k++) {
-        let t = clamp(vec2i(frag.xy) + axis * k, vec2i(0), vec2i(size - 1));
-        sum += textureLoad(moment_map, t, i32(sm.face.x), 0);
+        sum += blur_tap(frag.xy, k);
     }
     return sum / f32(2 * r + 1);
 }

@@ -46,7 +46,7 @@ fn surface_tangent(normal: vec3f) -> vec3f {
 // plane wherever a pixel quad straddles a silhouette. 0 when off or
 // facing away from the light, as there.
 fn receiver_plane(l: VirtualLevel, q: VirtualPoint, p: vec3f, n: vec3f, normal: vec3f) -> vec2f {
-    if !RECEIVER_PLANE || !(dot(normal, to_light(p)) > 0.0) {
+    if !RECEIVER_PLANE || !faces_light(p, normal) {
         return vec2f(0.0);
     }
     let step = level_texel_world(l, p) * max(kernel_reach(), 1.0);
@@ -89,9 +89,6 @@ fn lit_at(texel: vec2i, face: u32, z: f32) -> f32 {
 // Bilinear (hardware-style 2×2) comparison at uv.
 fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
     if RECEIVER_PLANE && any(rp_gradient != vec2f(0.0)) {
-        if VIRTUAL {
-            return virtual_bilinear_compare(uv, z);
-        }
         return bilinear_compare(uv, face, z);
     }
     if !BYTE_MAP && !VIRTUAL {

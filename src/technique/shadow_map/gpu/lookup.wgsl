@@ -161,12 +161,18 @@ fn to_light(p: vec3f) -> vec3f {
     return select(normalize(sm.light.xyz - p), -normalize(sm.warp.xyz), is_orthographic());
 }
 
+// Whether a surface at p with unit normal `normal` faces the light. Not
+// `dot ≤ 0` negated: at the light's own position the direction is NaN,
+// which faces nothing.
+fn faces_light(p: vec3f, normal: vec3f) -> bool {
+    return dot(normal, to_light(p)) > 0.0;
+}
+
 // `part_ids`: the convex part of the G-buffer's pixel where its geometric
 // normal faces the light (a convex part cannot shadow that side of
 // itself), else 0.
 fn receiver_part_of(pixel: vec2i, g: vec3f, normal: vec3f) -> u32 {
-    // Not `<= 0`: at the light's own position the direction is NaN.
-    if !PART_IDS || !(dot(normal, to_light(g)) > 0.0) {
+    if !PART_IDS || !faces_light(g, normal) {
         return 0u;
     }
     return textureLoad(gbuffer_part, pixel, 0).r;
@@ -220,7 +226,7 @@ fn map_point(face: u32, p: vec3f) -> vec3f {
 // visibility never reaches the image; seen from behind, the plane is
 // ill-conditioned).
 fn receiver_plane_at(face: u32, p: vec3f, normal: vec3f, at: vec3f, step: f32) -> vec2f {
-    if !RECEIVER_PLANE || !(dot(normal, to_light(p)) > 0.0) {
+    if !RECEIVER_PLANE || !faces_light(p, normal) {
         return vec2f(0.0);
     }
     let t = surface_tangent(normal);

@@ -9,6 +9,10 @@ use crate::technique::shadow_map::projection::setup::LightSetup;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec4};
 
+/// `ShadowMapUniform::moment_depth` where moment filters take the map's
+/// whole depth range: offset 0, scale 1.
+const WHOLE_MOMENT_DEPTH: Vec4 = Vec4::new(0.0, 1.0, 0.0, 0.0);
+
 /// The most faces (cube) or cascades one light's maps have.
 pub const MAX_FACES: usize = 8;
 
@@ -88,7 +92,7 @@ impl ShadowMapUniform {
                 c.exponent_negative,
                 c.moment_bias,
             ),
-            moment_depth: Vec4::new(0.0, 1.0, 0.0, 0.0),
+            moment_depth: WHOLE_MOMENT_DEPTH,
             ..ShadowMapUniform::zeroed()
         }
     }
@@ -162,11 +166,9 @@ pub fn slot_data(
             cascade_view_z: t.fit_view.row(2),
             warp: light.direction.normalize_or_zero().extend(0.0),
             warp_depth: setup.warp_depth.unwrap_or(Vec4::ZERO),
-            moment_depth: setup
-                .moment_depth
-                .map_or(Vec4::new(0.0, 1.0, 0.0, 0.0), |w| {
-                    Vec4::new(w.x, 1.0 / (w.y - w.x).max(1e-6), 0.0, 0.0)
-                }),
+            moment_depth: setup.moment_depth.map_or(WHOLE_MOMENT_DEPTH, |w| {
+                Vec4::new(w.x, 1.0 / (w.y - w.x).max(1e-6), 0.0, 0.0)
+            }),
             ..ShadowMapUniform::with_filter(c, t.normal_offset, light, t.cull)
         };
         for f in 0..MAX_FACES as u32 {

@@ -182,33 +182,6 @@ fn virtual_pcf2x2(uv: vec2f, z: f32) -> f32 {
     return select(v, 1.0, a.z < 0);
 }
 
-// `virtual_pcf2x2` with the receiver plane: each of the four texels
-// compared against the plane at its centre, as `bilinear_compare` does in
-// the other maps (one depth for the four needs a slope bias over half a
-// texel, which the bias cap withholds from surfaces lit at grazing angles).
-fn virtual_bilinear_compare(uv: vec2f, z: f32) -> f32 {
-    let extent = f32(filtered_level.pages * vsm.page_texels);
-    let p = clamp(uv * sm.map.x - 0.5, vec2f(0.0), vec2f(extent - 1.0));
-    let a = filtered_texel(vec2i(floor(p)));
-    if a.z < 0 {
-        return 1.0;
-    }
-    let b = floor(p);
-    let lit = vec4f(virtual_lit_at_plane(a, vec2i(0, 1), b, uv, z), virtual_lit_at_plane(a, vec2i(1, 1), b, uv, z),
-        virtual_lit_at_plane(a, vec2i(1, 0), b, uv, z), virtual_lit_at_plane(a, vec2i(0, 0), b, uv, z));
-    let f = fract(p);
-    return mix(mix(lit.w, lit.z, f.x), mix(lit.x, lit.y, f.x), f.y);
-}
-
-// Whether texel `b + o` of the level filtered, at atlas texel `a + o`, is
-// lit for the receiver depth z at uv carried along the receiver plane to
-// the texel's centre.
-fn virtual_lit_at_plane(a: vec3i, o: vec2i, b: vec2f, uv: vec2f, z: f32) -> f32 {
-    let centre = (b + vec2f(o) + 0.5) * sm.map.y;
-    let stored = textureLoad(depth_map, a.xy + o, a.z, 0);
-    return select(0.0, 1.0, z + dot(centre - uv, rp_gradient) <= stored);
-}
-
 // Stored depth at atlas texel a (layer a.z); 1 (lit) where no page is
 // resident (a.z = −1).
 fn atlas_stored(a: vec3i) -> f32 {
