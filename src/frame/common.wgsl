@@ -48,6 +48,23 @@ const ALPHA_OPAQUE: u32 = 0u;
 const ALPHA_MASK: u32 = 1u;
 const ALPHA_BLEND: u32 = 2u;
 
+// Where the camera ray through screen point `at` (pixels) meets the plane
+// through p with unit normal n; p itself where the ray runs along the plane.
+fn camera_ray_on_plane(at: vec2f, p: vec3f, n: vec3f) -> vec3f {
+    let uv = at / frame.size.xy;
+    let ndc = vec2f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
+    let a = frame.inv_view_proj * vec4f(ndc, 0.0, 1.0);
+    let b = frame.inv_view_proj * vec4f(ndc, 0.5, 1.0);
+    let near = a.xyz / a.w;
+    let d = normalize(b.xyz / b.w - near);
+    let along = dot(d, n);
+    if abs(along) < 1e-6 {
+        return p;
+    }
+    let to_near = near - p;
+    return p + to_near - d * (dot(to_near, n) / along);
+}
+
 // The scene-wide ID of `object`'s convex part `part` (0: none).
 fn part_id(object: u32, part: u32) -> u32 {
     return select(0u, objects[object].parts.x + part, part != 0u);

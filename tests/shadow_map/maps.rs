@@ -113,6 +113,49 @@ fn cube_faces_cover_every_direction() {
     }
 }
 
+/// `edge_ramp_pixels`: where the map's texels are magnified (a 64² map
+/// seen close up, a few pixels a texel), the 3×3 kernel's ramp spans
+/// some fifteen pixels of graded visibility past the reference's edge band;
+/// steepened to two pixels, the edge is as sharp as the hard light's, and no
+/// pixel changes side of ½ (the thresholded mismatch cannot move).
+#[test]
+fn magnified_texels_keep_a_hard_lights_edge_sharp() {
+    let sun = lights_over_squares()[2];
+    let mut scene = squares_over_floor(&[(Vec3::new(0.0, 1.0, 0.0), 0.7)], sun, false);
+    scene.camera = Camera::new(Vec3::new(1.0, 0.8, 1.2), Vec3::new(1.0, 0.0, 0.2));
+    let steep = compare(&scene, "shadow-map:pcf[size=64]", (160, 90)).mask;
+    let soft = compare(
+        &scene,
+        "shadow-map:pcf[size=64,edge_ramp_pixels=0]",
+        (160, 90),
+    )
+    .mask;
+    assert!(
+        soft.graded_interior_pct > 5.0
+            && steep.graded_interior_pct <= 0.2 * soft.graded_interior_pct
+            && steep.interior_mae <= 0.5 * soft.interior_mae,
+        "steepened {steep:?}\nas filtered {soft:?}"
+    );
+    let a = mask_of(&scene, "shadow-map:pcf", &["size=64"], 160, 90);
+    let b = mask_of(
+        &scene,
+        "shadow-map:pcf",
+        &["size=64", "edge_ramp_pixels=0"],
+        160,
+        90,
+    );
+    let changed = a
+        .iter()
+        .zip(&b)
+        .filter(|(x, y)| (**x < 0.5) != (**y < 0.5))
+        .count();
+    let graded = b.iter().filter(|v| **v > 0.05 && **v < 0.95).count();
+    assert!(
+        changed == 0 && graded > 100,
+        "{changed} pixels changed side, {graded} graded as filtered"
+    );
+}
+
 /// `esm` filters exp(c·z) in log space, so no exponent overflows a 32-bit
 /// float: at c = 2000, 25 times what exp(c(z − 1)) allowed, the square's
 /// shadow is still there, as sharp as the reference's away from its edges,

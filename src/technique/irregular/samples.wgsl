@@ -41,18 +41,7 @@ fn sub_sample_point(px: vec2u, k: u32, s: Surface) -> vec3f {
     if count <= 1u {
         return s.p;
     }
-    let uv = (vec2f(px) + pixel_sample_offset(k, count)) / frame.size.xy;
-    let ndc = vec2f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
-    let a = frame.inv_view_proj * vec4f(ndc, 0.0, 1.0);
-    let b = frame.inv_view_proj * vec4f(ndc, 0.5, 1.0);
-    let near = a.xyz / a.w;
-    let d = normalize(b.xyz / b.w - near);
-    let along = dot(d, s.n);
-    if abs(along) < 1e-6 {
-        return s.p;
-    }
-    let to_near = near - s.p;
-    let q = s.p + to_near - d * (dot(to_near, s.n) / along);
+    let q = camera_ray_on_plane(vec2f(px) + pixel_sample_offset(k, count), s.p, s.n);
     return q + s.n * (PLANE_LIFT * length(q - s.p));
 }
 

@@ -196,37 +196,40 @@ pub const SLOPE_BIAS_CLAMP: ParamSpec = ParamSpec::float(
 
 pub const SLOPE_BIAS_CLAMP_LOCAL: ParamSpec = ParamSpec::float(
     "slope_bias_clamp_local",
-    0.0,
+    10.0,
     0.0,
     64.0,
     0.25,
-    "spot lights and cube faces: the depth bias is capped at this many texel widths of depth at the map's mean distance √(near·far) (fewer nearer the light, more beyond it: one cap per map in perspective depth), so that casters lit at grazing angles do not push their stored depth behind what they shade; it brings back acne on surfaces lit at grazing angles, which a larger normal_offset_local keeps away at the price of moved shadow edges; 0 = no cap",
+    "spot lights and cube faces: the depth bias is capped at this many texel widths of depth at the map's mean distance √(near·far) (fewer nearer the light, more beyond it: one cap per map in perspective depth), so that casters lit at grazing angles do not push their stored depth behind what they shade (a concave surface shadowing itself near its terminator); a lower cap brings back acne on surfaces lit at grazing angles; 0 = no cap",
 )
 .for_lights(LightKinds::LOCAL);
 
 pub const NORMAL_OFFSET_DIRECTIONAL: ParamSpec = ParamSpec::float(
     "normal_offset_directional",
-    0.25,
+    0.5,
     0.0,
     10.0,
     0.05,
-    "directional lights: lookup point moved along the geometric normal, in shadow-map texels (¼ with the bias cap of `slope_bias_clamp`: edges stay in place, acne stays away); none on solids under cull=solids and on receivers with a part (part_ids)",
+    "directional lights: lookup point moved along the geometric normal, in shadow-map texels, × sinⁿθ (`normal_offset_power`); near a concave surface's terminator a receiver lies within a texel of its own silhouette in the map, where a 2×2 comparison straddles it and reads the ground past it as lit: the offset moves the lookup to the surface's side; more moves shadow edges on receivers lit at grazing angles; none on solids under cull=solids and on receivers with a part (part_ids)",
 )
 .for_lights(LightKinds::DIRECTIONAL);
 
-pub const NORMAL_OFFSET_SLOPE: ParamSpec = ParamSpec::boolean(
-    "normal_offset_slope",
-    true,
-    "scale the normal offset by sin²θ between the normal and the light (full at grazing light, none facing it; Holbert's normal-offset shadows scale by sin θ, sin² measured lower or equal mismatch on 23 sun and 18 point and spot views)",
+pub const NORMAL_OFFSET_POWER: ParamSpec = ParamSpec::float(
+    "normal_offset_power",
+    8.0,
+    0.0,
+    16.0,
+    1.0,
+    "the normal offset scaled by sinⁿθ between the normal and the light, n this power (full at grazing light, none facing it): 0 moves every receiver by the whole offset, 1 is Holbert's normal-offset shadows (sin θ); a higher power keeps the offset where a receiver lies within a texel of its own silhouette in the map (grazing light) and away from the shadow edges on receivers lit at moderate angles",
 );
 
 pub const NORMAL_OFFSET_LOCAL: ParamSpec = ParamSpec::float(
     "normal_offset_local",
-    0.5,
+    1.0,
     0.0,
     10.0,
     0.1,
-    "point and spot lights: lookup point moved along the geometric normal, in shadow-map texels at the point's distance; none on solids under cull=solids and on receivers with a part (part_ids)",
+    "point and spot lights: lookup point moved along the geometric normal, in shadow-map texels at the point's distance, × sinⁿθ (`normal_offset_power`; see normal_offset_directional); none on solids under cull=solids and on receivers with a part (part_ids)",
 )
 .for_lights(LightKinds::LOCAL);
 
@@ -243,6 +246,16 @@ pub const RECEIVER_PLANE: ParamSpec = ParamSpec::boolean(
     "receiver-plane depth bias (Isidoro 2006) on receivers without a convex part (part_ids): each kernel tap is compared against the receiver's plane (from its geometric normal) at the tap's centre, not against one depth, so that a kernel wider than the slope bias covers does not reach the receiver's own curved surface (grid, disk, pcss, varwidth); pcf2x2 and hard compare each texel at its centre; a receiver with a part ignores its own texels instead, and keeps one depth, which a plane carried past its edge would pass under a surface that meets it there; the plane passes in front of a caster that touches the receiver at a steep angle (a trunk under its canopy); every map takes the plane from the surface's normal over the kernel's reach",
 )
 .when(Condition::IsNot("filter", &["vsm", "esm", "evsm2", "evsm4", "msm"]));
+
+pub const EDGE_RAMP_PIXELS: ParamSpec = ParamSpec::float(
+    "edge_ramp_pixels",
+    2.0,
+    0.0,
+    64.0,
+    0.5,
+    "grid, disk and pcf2x2: the widest a shadow edge's ramp may be on screen, in pixels; where the map's texels are magnified (a close-up, a receiver lit at a grazing angle), the kernel's ramp of 2·reach texels spans tens of pixels, and its visibility is steepened about ½ until it spans this many: a hard light's edge stays an anti-aliased line along the filtered contour instead of a blur, and no pixel changes side of ½; 0 = as filtered",
+)
+.when(Condition::Is("filter", &["grid", "disk", "pcf2x2"]));
 
 pub const CULL: ParamSpec = ParamSpec::choice_of::<CullFace>(
     "cull",
@@ -342,8 +355,9 @@ pub const PARAMS: &[ParamSpec] = &[
     SLOPE_BIAS_CLAMP_LOCAL,
     NORMAL_OFFSET_DIRECTIONAL,
     NORMAL_OFFSET_LOCAL,
-    NORMAL_OFFSET_SLOPE,
+    NORMAL_OFFSET_POWER,
     RECEIVER_PLANE,
+    EDGE_RAMP_PIXELS,
     EDGE_MASK,
     CULL,
     SOLID_FRONT_BIAS,
@@ -405,9 +419,11 @@ pub struct ShadowMapConfig {
     pub slope_bias_clamp_local: f32,
     pub normal_offset_directional: f32,
     pub normal_offset_local: f32,
-    /// Normal offset × sin²θ between normal and light.
-    pub normal_offset_slope: bool,
+    /// Normal offset × sinⁿθ between normal and light, n this power.
+    pub normal_offset_power: f32,
     pub receiver_plane: bool,
+    /// The widest a shadow edge's ramp may be on screen (pixels; 0: off).
+    pub edge_ramp_pixels: f32,
     /// The kernel only at shadow edges (the edge mask's bounds chain).
     pub edge_mask: bool,
     pub cull: CullFace,
@@ -479,8 +495,9 @@ impl ShadowMapConfig {
             slope_bias_clamp_local: p.float(&SLOPE_BIAS_CLAMP_LOCAL)?,
             normal_offset_directional: p.float(&NORMAL_OFFSET_DIRECTIONAL)?,
             normal_offset_local: p.float(&NORMAL_OFFSET_LOCAL)?,
-            normal_offset_slope: p.flag(&NORMAL_OFFSET_SLOPE)?,
+            normal_offset_power: p.float(&NORMAL_OFFSET_POWER)?,
             receiver_plane: p.flag(&RECEIVER_PLANE)?,
+            edge_ramp_pixels: p.float(&EDGE_RAMP_PIXELS)?,
             edge_mask: p.flag(&EDGE_MASK)?,
             cull: p.choice(&CULL)?,
             solid_front_bias: p.float(&SOLID_FRONT_BIAS)?,

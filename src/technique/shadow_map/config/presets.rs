@@ -18,11 +18,8 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "hard",
-        summary: "nearest texel, no filtering; normal offset ½ texel (no kernel averages its acne away)",
-        values: &[
-            (FILTER.name, "hard"),
-            (NORMAL_OFFSET_DIRECTIONAL.name, "0.5"),
-        ],
+        summary: "nearest texel, no filtering",
+        values: &[(FILTER.name, "hard")],
     },
     Preset {
         name: "pcf2x2",
@@ -84,7 +81,7 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "csm",
-        summary: "4 stabilised cascades of 1024² fitted to the view frustum (the memory of one 2048² map), λ 0.95 (Sascha Willems' sample), each pixel in the finest map that holds it (select=map), 5 % blended, normal offset ½ texel of each cascade",
+        summary: "4 stabilised cascades of 1024² fitted to the view frustum (the memory of one 2048² map), λ 0.95 (Sascha Willems' sample), each pixel in the finest map that holds it (select=map), 5 % blended, normal offset ¾ texel of each cascade",
         values: &[
             (CASCADES.name, "4"),
             (SIZE.name, "1024"),
@@ -92,7 +89,7 @@ pub const PRESETS: &[Preset] = &[
             (BLEND.name, "0.05"),
             (SELECT.name, "map"),
             (FIT.name, "frustum"),
-            (NORMAL_OFFSET_DIRECTIONAL.name, "0.5"),
+            (NORMAL_OFFSET_DIRECTIONAL.name, "0.75"),
         ],
     },
     Preset {
@@ -112,14 +109,14 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "pssm",
-        summary: "parallel-split maps: 4 cascades of 1024² fitted to their slices, λ 0.6 (bgfx), normal offset ½ texel",
+        summary: "parallel-split maps: 4 cascades of 1024² fitted to their slices, λ 0.6 (bgfx), normal offset ¾ texel",
         values: &[
             (CASCADES.name, "4"),
             (SIZE.name, "1024"),
             (SPLIT_LAMBDA.name, "0.6"),
             (STABILIZE.name, "false"),
             (FIT.name, "frustum"),
-            (NORMAL_OFFSET_DIRECTIONAL.name, "0.5"),
+            (NORMAL_OFFSET_DIRECTIONAL.name, "0.75"),
         ],
     },
     Preset {
@@ -131,7 +128,6 @@ pub const PRESETS: &[Preset] = &[
             (SPLIT_LAMBDA.name, "0.95"),
             (BLEND.name, "0.1"),
             (FIT.name, "samples"),
-            (NORMAL_OFFSET_DIRECTIONAL.name, "0.5"),
         ],
     },
     Preset {

@@ -19,6 +19,8 @@ fn stored(texel: vec2i, face: u32) -> f32 {
 // plane, and the uv it was measured at; taps compare against that plane.
 var<private> rp_gradient: vec2f;
 var<private> rp_origin: vec2f;
+// The receiver's compared depth at rp_origin.
+var<private> rp_depth: f32;
 
 // d(depth)/d(uv) of a plane from its steps dx, dy of (u, v, depth) per
 // screen pixel: solve [du/dx dv/dx; du/dy dv/dy] · g = [dz/dx; dz/dy];
@@ -89,7 +91,7 @@ fn lit_at(texel: vec2i, face: u32, z: f32) -> f32 {
 // Bilinear (hardware-style 2×2) comparison at uv.
 fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
     if RECEIVER_PLANE && any(rp_gradient != vec2f(0.0)) {
-        return bilinear_compare(uv, face, z);
+        return bilinear_compare(uv, face);
     }
     if !BYTE_MAP && !VIRTUAL {
         // A receiver with its own part gathers the four comparisons and
@@ -105,7 +107,7 @@ fn pcf2x2(uv: vec2f, face: u32, z: f32) -> f32 {
     if VIRTUAL {
         return virtual_pcf2x2(uv, z);
     }
-    return bilinear_compare(uv, face, z);
+    return bilinear_compare(uv, face);
 }
 
 // `pcf2x2` ignoring the receiver's own part: the four comparisons and
@@ -123,19 +125,21 @@ fn bilinear_weighted(v: vec4f, uv: vec2f) -> f32 {
     return mix(mix(v.w, v.z, f.x), mix(v.x, v.y, f.x), f.y);
 }
 
-// A 2×2 comparison filtered by hand from four texel loads; with the
-// receiver plane each texel is compared against the plane at its centre.
-fn bilinear_compare(uv: vec2f, face: u32, z: f32) -> f32 {
+// A 2×2 comparison at uv filtered by hand from four texel loads, each
+// texel compared against the receiver's depth at its centre (its plane's,
+// with the receiver plane): the depth a tap at uv compares, `tap_z`.
+fn bilinear_compare(uv: vec2f, face: u32) -> f32 {
     let b = vec2i(floor(uv * sm.map.x - 0.5));
-    return bilinear_weighted(vec4f(lit_at_plane(b + vec2i(0, 1), face, z, uv), lit_at_plane(b + vec2i(1, 1), face, z, uv),
-        lit_at_plane(b + vec2i(1, 0), face, z, uv), lit_at_plane(b, face, z, uv)), uv);
+    return bilinear_weighted(vec4f(lit_at_plane(b + vec2i(0, 1), face), lit_at_plane(b + vec2i(1, 1), face),
+        lit_at_plane(b + vec2i(1, 0), face), lit_at_plane(b, face)), uv);
 }
 
-// `lit_at` against the receiver depth z at uv carried along the receiver
-// plane to the texel's centre.
-fn lit_at_plane(texel: vec2i, face: u32, z: f32, uv: vec2f) -> f32 {
+// `lit_at` against the receiver's depth carried along its plane from
+// rp_origin to the texel's centre: the same depth for every tap that reads
+// the texel (the edge mask compares the texel against it too).
+fn lit_at_plane(texel: vec2i, face: u32) -> f32 {
     let centre = (vec2f(texel) + 0.5) * sm.map.y;
-    return lit_at(texel, face, z + dot(centre - uv, rp_gradient));
+    return lit_at(texel, face, tap_z(rp_depth, centre));
 }
 
 fn moment_texel(t: vec2i, face: u32) -> vec4f {

@@ -98,10 +98,46 @@ fn linear_depth(z: f32) -> f32 {
     return n * f / (f - z * (f - n));
 }
 
+// The world steps over the receiver's plane from this pixel's camera ray to
+// its right and lower neighbours' (`set_pixel_steps`).
+var<private> pixel_step_x: vec3f;
+var<private> pixel_step_y: vec3f;
+
+fn set_pixel_steps(frag: vec2f, g: vec3f, normal: vec3f) {
+    pixel_step_x = camera_ray_on_plane(frag + vec2f(1.0, 0.0), g, normal) - g;
+    pixel_step_y = camera_ray_on_plane(frag + vec2f(0.0, 1.0), g, normal) - g;
+}
+
+// The smaller singular value of the map's Jacobian over the screen, whose
+// columns are the uv steps jx, jy of one pixel along x and y: the fewest
+// texels a pixel step crosses in any direction (0 where degenerate).
+fn texels_per_pixel(jx: vec2f, jy: vec2f) -> f32 {
+    let a = jx * sm.map.x;
+    let b = jy * sm.map.x;
+    let t = dot(a, a) + dot(b, b);
+    let d = abs(a.x * b.y - a.y * b.x);
+    let largest = sqrt(0.5 * (t + sqrt(max(t * t - 4.0 * d * d, 0.0))));
+    return select(0.0, d / largest, largest > 0.0);
+}
+
+// `edge_ramp_pixels`: visibility v of a kernel whose ramp spans 2·reach
+// texels, steepened about ½ where those texels span more pixels than that
+// on screen (magnified texels); ½ itself stays, so no pixel changes side.
+fn sharpened(v: f32, texels_per_pixel: f32) -> f32 {
+    let sharpens = FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK || FILTER_KIND == FILTER_PCF2X2;
+    if !sharpens || sm.screen.x <= 0.0 || !(texels_per_pixel > 0.0) {
+        return v;
+    }
+    let ramp_pixels = 2.0 * kernel_reach() / texels_per_pixel;
+    let k = max(ramp_pixels / sm.screen.x, 1.0);
+    return clamp(0.5 + (v - 0.5) * k, 0.0, 1.0);
+}
+
 @fragment
 fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let g = textureLoad(gbuffer_position, vec2i(frag.xy), 0);
     let normal = normalize(textureLoad(gbuffer_normal, vec2i(frag.xy), 0).xyz);
+    set_pixel_steps(frag.xy, g.xyz, normal);
     receiver_part = receiver_part_of(vec2i(frag.xy), g.xyz, normal);
     let n = offset_direction(g, normal);
     if VIRTUAL {
@@ -179,15 +215,14 @@ fn receiver_part_of(pixel: vec2i, g: vec3f, normal: vec3f) -> u32 {
 }
 
 // G-buffer point g moved along `offset_direction` n by `sm.kernel.y`
-// texels of world size `texel_world` (× sin²θ between normal and light
-// when `sm.kernel.w` is set: full at grazing light, none facing it).
+// texels of world size `texel_world`, × sinⁿθ between normal and light
+// for n = `sm.kernel.w` (`normal_offset_power`: full at grazing light, none
+// facing it).
 fn offset_point(g: vec3f, n: vec3f, texel_world: f32) -> vec3f {
-    var offset = sm.kernel.y * texel_world;
-    if sm.kernel.w > 0.5 {
-        let cos_theta = clamp(dot(n, to_light(g)), 0.0, 1.0);
-        offset *= (1.0 - cos_theta * cos_theta);
-    }
-    return g + n * offset;
+    let cos_theta = clamp(dot(n, to_light(g)), 0.0, 1.0);
+    // pow(0, 0) is undefined in WGSL: power 0 is the whole offset.
+    let sin_power = select(pow(max(1.0 - cos_theta * cos_theta, 1e-12), 0.5 * sm.kernel.w), 1.0, sm.kernel.w == 0.0);
+    return g + n * (sm.kernel.y * texel_world * sin_power);
 }
 
 // A G-buffer point in one face of the map: its light-clip position, map uv
@@ -198,6 +233,9 @@ struct Projected {
     uv: vec2f,
     z: f32,
     gradient: vec2f,
+    // The fewest map texels one pixel step crosses, in any direction
+    // (`texels_per_pixel`).
+    texels_per_pixel: f32,
     inside: bool,
 };
 
@@ -256,7 +294,9 @@ fn projected(face: u32, g: vec4f, offset_n: vec3f, normal: vec3f) -> Projected {
     // Outside the map counts as lit.
     let inside = g.w >= 0.5 && c.w > 0.0 && all(at.xy >= vec2f(0.0)) && all(at.xy <= vec2f(1.0))
         && at.z <= 1.0 && at.z >= 0.0;
-    return Projected(c, at.xy, at.z, gradient, inside);
+    let jx = map_point(face, p + pixel_step_x).xy - at.xy;
+    let jy = map_point(face, p + pixel_step_y).xy - at.xy;
+    return Projected(c, at.xy, at.z, gradient, texels_per_pixel(jx, jy), inside);
 }
 
 // The filtered visibility of a projected point in `face`.
@@ -266,6 +306,7 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
     }
     rp_gradient = select(pr.gradient, vec2f(0.0), has_own_part());
     rp_origin = pr.uv;
+    rp_depth = pr.z;
     if FILTER_KIND >= FILTER_VSM {
         return moment_visibility(moments_at(pr.uv, face), moment_depth_of(select(linear01(pr.clip), pr.z, is_warped())));
     }
@@ -282,7 +323,7 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
         known = edge_class(pr.uv, face, pr.z, rp_gradient * sm.map.y, kernel_reach());
         count = select(count, 0u, known >= 0.0);
     }
-    return select(kernel(face, pr, frag, count), known, known >= 0.0);
+    return select(sharpened(kernel(face, pr, frag, count), pr.texels_per_pixel), known, known >= 0.0);
 }
 
 // The filter's kernel at a projected point, with `count` taps per side (0:
@@ -295,8 +336,7 @@ fn kernel(face: u32, pr: Projected, frag: vec2f, count: u32) -> f32 {
     var v = 1.0;
     switch FILTER_KIND {
         case FILTER_HARD: {
-            let t = floor(uv * sm.map.x);
-            v = lit_at(vec2i(t), face, tap_z(z, (t + 0.5) * sm.map.y));
+            v = lit_at_plane(vec2i(floor(uv * sm.map.x)), face);
         }
         case FILTER_PCF2X2: {
             v = pcf2x2(uv, face, z);

@@ -47,8 +47,8 @@ struct ShadowMap {
     // view matrices)
     light: vec4f,
     // x filter radius (texels), y normal offset (texels), z slope-scaled
-    // bias of warped depth passes (per depth slope per pixel), w 1 when the
-    // normal offset scales with sin θ between normal and light
+    // bias of warped depth passes (per depth slope per pixel), w the power n
+    // of the normal offset's sinⁿθ between normal and light
     kernel: vec4f,
     // x map size, y 1/size, z world size of a texel at unit distance
     // (perspective, paraboloid) or of any texel (orthographic), w the
@@ -87,6 +87,9 @@ struct ShadowMap {
     // x the stored depth the moments take as 0, y the scale to 1 (one
     // directional map: the depths its seen receivers span; else 0, 1)
     moment_depth: vec4f,
+    // x the widest a shadow edge's ramp may be on screen, in pixels
+    // (`edge_ramp_pixels`; 0: as filtered), yzw unused
+    screen: vec4f,
 };
 
 @group(2) @binding(0) var<uniform> sm: ShadowMap;

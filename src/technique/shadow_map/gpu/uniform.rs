@@ -47,6 +47,9 @@ pub struct ShadowMapUniform {
     /// x the stored depth moment filters take as 0, y the scale to 1
     /// (`LightSetup::moment_depth`).
     pub moment_depth: Vec4,
+    /// x the widest a shadow edge's ramp may be on screen, in pixels
+    /// (`edge_ramp_pixels`), yzw unused.
+    pub screen: Vec4,
 }
 
 impl ShadowMapUniform {
@@ -70,12 +73,7 @@ impl ShadowMapUniform {
             light: light
                 .position
                 .extend((cull == CullFace::Solids) as u32 as f32),
-            kernel: Vec4::new(
-                c.radius,
-                normal_offset,
-                c.slope_bias,
-                c.normal_offset_slope as u32 as f32,
-            ),
+            kernel: Vec4::new(c.radius, normal_offset, c.slope_bias, c.normal_offset_power),
             soft: Vec4::new(
                 c.light_size * penumbra,
                 c.varwidth_scale * penumbra,
@@ -93,13 +91,14 @@ impl ShadowMapUniform {
                 c.moment_bias,
             ),
             moment_depth: WHOLE_MOMENT_DEPTH,
+            screen: Vec4::new(c.edge_ramp_pixels, 0.0, 0.0, 0.0),
             ..ShadowMapUniform::zeroed()
         }
     }
 }
 
 /// Uniform slots: per face, the depth pass (and lookup), blur along x, blur along y.
-pub const STRIDE: u64 = 768;
+pub const STRIDE: u64 = 1024;
 pub const SLOTS: u64 = MAX_FACES as u64 * 3;
 
 /// What one frame's uniforms share beyond the parameters: the maps' side
@@ -206,7 +205,7 @@ mod wgsl_tests {
             "ShadowMap",
             crate::field_offsets!(ShadowMapUniform; faces, light, kernel, map, soft, depth, face,
                 moments, cascade, cascade_far, cascade_texel, cascade_view_z, warp, warp_depth,
-                moment_depth),
+                moment_depth, screen),
             std::mem::size_of::<ShadowMapUniform>(),
         );
     }
