@@ -3,6 +3,7 @@
 //! parameter once; the enums carry the choices into Rust and, as generated
 //! WGSL constants and pipeline-overridable constants, into the shaders.
 
+pub mod bias;
 pub mod filter;
 pub mod paging;
 pub mod partition;
@@ -13,6 +14,10 @@ use crate::technique::params::{CasterAlpha, Condition, LightKinds, choice_enum};
 use crate::technique::{ParamSpec, ParamValues};
 use anyhow::Result;
 
+use self::bias::{
+    DEPTH_BIAS, NORMAL_OFFSET_DIRECTIONAL, NORMAL_OFFSET_LOCAL, NORMAL_OFFSET_POWER,
+    RECEIVER_PLANE, SLOPE_BIAS, SLOPE_BIAS_CLAMP, SLOPE_BIAS_CLAMP_LOCAL,
+};
 use self::filter::{
     BLEEDING_REDUCTION, BLOCKER_SEARCH, BLUR, ESM_EXPONENT, EXPONENT, EXPONENT_NEGATIVE,
     HARD_LIGHT_PENUMBRA, LIGHT_SIZE, MOMENT_BIAS, VARWIDTH_EXPONENT, VARWIDTH_SCALE,
@@ -166,84 +171,10 @@ pub const FORMAT: ParamSpec = ParamSpec::choice_of::<DepthFormat>(
     "depth format; r8 stores depth in 8 bits and shows the low-precision failure",
 );
 
-pub const DEPTH_BIAS: ParamSpec = ParamSpec::float(
-    "depth_bias",
-    2.0,
-    0.0,
-    100000.0,
-    1.0,
-    "constant depth bias of the depth pass, in the format's smallest steps",
-);
-
-pub const SLOPE_BIAS: ParamSpec = ParamSpec::float(
-    "slope_bias",
-    2.0,
-    0.0,
-    20.0,
-    0.1,
-    "slope-scaled depth bias (polygon offset factor)",
-);
-
-pub const SLOPE_BIAS_CLAMP: ParamSpec = ParamSpec::float(
-    "slope_bias_clamp",
-    5.0,
-    0.0,
-    64.0,
-    0.25,
-    "directional maps (one map, cascades or a virtual clipmap, unwarped): the depth bias is capped at this many texel widths of depth (the depth step across one texel of a 45° surface, per cascade or clipmap level), so that casters lit at grazing angles do not push their stored depth far behind them and leak light onto what they shade; 0 = no cap",
-)
-.for_lights(LightKinds::DIRECTIONAL);
-
-pub const SLOPE_BIAS_CLAMP_LOCAL: ParamSpec = ParamSpec::float(
-    "slope_bias_clamp_local",
-    10.0,
-    0.0,
-    64.0,
-    0.25,
-    "spot lights and cube faces: the depth bias is capped at this many texel widths of depth at the map's mean distance √(near·far) (fewer nearer the light, more beyond it: one cap per map in perspective depth), so that casters lit at grazing angles do not push their stored depth behind what they shade (a concave surface shadowing itself near its terminator); a lower cap brings back acne on surfaces lit at grazing angles; 0 = no cap",
-)
-.for_lights(LightKinds::LOCAL);
-
-pub const NORMAL_OFFSET_DIRECTIONAL: ParamSpec = ParamSpec::float(
-    "normal_offset_directional",
-    0.5,
-    0.0,
-    10.0,
-    0.05,
-    "directional lights: lookup point moved along the geometric normal, in shadow-map texels, × sinⁿθ (`normal_offset_power`); near a concave surface's terminator a receiver lies within a texel of its own silhouette in the map, where a 2×2 comparison straddles it and reads the ground past it as lit: the offset moves the lookup to the surface's side; more moves shadow edges on receivers lit at grazing angles; none on solids under cull=solids and on receivers with a part (part_ids)",
-)
-.for_lights(LightKinds::DIRECTIONAL);
-
-pub const NORMAL_OFFSET_POWER: ParamSpec = ParamSpec::float(
-    "normal_offset_power",
-    8.0,
-    0.0,
-    16.0,
-    1.0,
-    "the normal offset scaled by sinⁿθ between the normal and the light, n this power (full at grazing light, none facing it): 0 moves every receiver by the whole offset, 1 is Holbert's normal-offset shadows (sin θ); a higher power keeps the offset where a receiver lies within a texel of its own silhouette in the map (grazing light) and away from the shadow edges on receivers lit at moderate angles",
-);
-
-pub const NORMAL_OFFSET_LOCAL: ParamSpec = ParamSpec::float(
-    "normal_offset_local",
-    1.0,
-    0.0,
-    10.0,
-    0.1,
-    "point and spot lights: lookup point moved along the geometric normal, in shadow-map texels at the point's distance, × sinⁿθ (`normal_offset_power`; see normal_offset_directional); none on solids under cull=solids and on receivers with a part (part_ids)",
-)
-.for_lights(LightKinds::LOCAL);
-
 pub const EDGE_MASK: ParamSpec = ParamSpec::boolean(
     "edge_mask",
     false,
     "grid, disk, pcss, varwidth: a chain of depth bounds of the map (per block, two planes that follow a flat or sloped surface, or its least and greatest depth) classifies each pixel as lit, shadowed or at a shadow edge from 4 texels covering its kernel, compared along the receiver plane with receiver_plane=true, with part_ids a cell of the receiver's own convex part counts as lit; where the chain finds an edge and the kernel reaches at most 2.5 texels, the texels it reads are compared one by one; only edge pixels run the kernel (PCF at shadow silhouettes, [000] §4.3); the mask is the full kernel's",
-)
-.when(Condition::IsNot("filter", &["vsm", "esm", "evsm2", "evsm4", "msm"]));
-
-pub const RECEIVER_PLANE: ParamSpec = ParamSpec::boolean(
-    "receiver_plane",
-    true,
-    "receiver-plane depth bias (Isidoro 2006) on receivers without a convex part (part_ids): each kernel tap is compared against the receiver's plane (from its geometric normal) at the tap's centre, not against one depth, so that a kernel wider than the slope bias covers does not reach the receiver's own curved surface (grid, disk, pcss, varwidth); pcf2x2 and hard compare each texel at its centre; a receiver with a part ignores its own texels instead, and keeps one depth, which a plane carried past its edge would pass under a surface that meets it there; the plane passes in front of a caster that touches the receiver at a steep angle (a trunk under its canopy); every map takes the plane from the surface's normal over the kernel's reach",
 )
 .when(Condition::IsNot("filter", &["vsm", "esm", "evsm2", "evsm4", "msm"]));
 

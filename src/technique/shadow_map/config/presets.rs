@@ -3,11 +3,10 @@
 //! parameter through the table's own constant, so a misspelt parameter
 //! does not compile; the values are checked by `every_preset_is_valid_for_its_table`.
 
+use super::bias::{NORMAL_OFFSET_DIRECTIONAL, SLOPE_BIAS_CLAMP};
 use super::paging::PAGING;
 use super::partition::{BLEND, CASCADES, FIT, SELECT, SPLIT_LAMBDA, STABILIZE, WARP};
-use super::{
-    AREA, FILTER, FORMAT, NORMAL_OFFSET_DIRECTIONAL, RADIUS, SAMPLES, SIZE, SLOPE_BIAS_CLAMP,
-};
+use super::{AREA, FILTER, FORMAT, RADIUS, SAMPLES, SIZE};
 use crate::technique::Preset;
 
 pub const PRESETS: &[Preset] = &[
