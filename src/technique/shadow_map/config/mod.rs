@@ -200,7 +200,7 @@ pub const SOLID_FRONT_BIAS: ParamSpec = ParamSpec::float(
     0.0,
     64.0,
     0.5,
-    "cull=solids, maps whose bias is capped (unwarped directional: one map, cascades, clipmap levels): concave solids (a convex one never shadows its own lit side) also store their front faces, with this many times the slope bias and its cap: where a back face lies too close before a receiver to shadow it (a smooth solid shadowing itself near its terminator), the pushed front face still does; 0 = back faces only",
+    "cull=solids, maps whose bias is capped (unwarped directional: one map, cascades, clipmap levels; spot maps and cube faces under slope_bias_clamp_local): concave solids (a convex one never shadows its own lit side) also store their front faces, with this many times the slope bias and its cap: where a back face lies too close before a receiver to shadow it (a smooth solid shadowing itself near its terminator), the pushed front face still does; 0 = back faces only",
 )
 .when(Condition::Is("cull", &["solids"]));
 
