@@ -120,12 +120,18 @@ fn texels_per_pixel(jx: vec2f, jy: vec2f) -> f32 {
     return select(0.0, d / largest, largest > 0.0);
 }
 
+// Whether the filter's ramp is steepened (`edge_ramp_pixels`: grid, disk,
+// pcf2x2). A constant of the pipeline: the other filters never find the
+// pixel's footprint in the map.
+fn steepens_ramps() -> bool {
+    return FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK || FILTER_KIND == FILTER_PCF2X2;
+}
+
 // `edge_ramp_pixels`: visibility v of a kernel whose ramp spans 2·reach
 // texels, steepened about ½ where those texels span more pixels than that
 // on screen (magnified texels); ½ itself stays, so no pixel changes side.
 fn sharpened(v: f32, texels_per_pixel: f32) -> f32 {
-    let sharpens = FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK || FILTER_KIND == FILTER_PCF2X2;
-    if !sharpens || sm.screen.x <= 0.0 || !(texels_per_pixel > 0.0) {
+    if !steepens_ramps() || sm.screen.x <= 0.0 || !(texels_per_pixel > 0.0) {
         return v;
     }
     let ramp_pixels = 2.0 * kernel_reach() / texels_per_pixel;
@@ -137,7 +143,9 @@ fn sharpened(v: f32, texels_per_pixel: f32) -> f32 {
 fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let g = textureLoad(gbuffer_position, vec2i(frag.xy), 0);
     let normal = normalize(textureLoad(gbuffer_normal, vec2i(frag.xy), 0).xyz);
-    set_pixel_steps(frag.xy, g.xyz, normal);
+    if steepens_ramps() {
+        set_pixel_steps(frag.xy, g.xyz, normal);
+    }
     receiver_part = receiver_part_of(vec2i(frag.xy), g.xyz, normal);
     let n = offset_direction(g, normal);
     if VIRTUAL {
@@ -294,9 +302,13 @@ fn projected(face: u32, g: vec4f, offset_n: vec3f, normal: vec3f) -> Projected {
     // Outside the map counts as lit.
     let inside = g.w >= 0.5 && c.w > 0.0 && all(at.xy >= vec2f(0.0)) && all(at.xy <= vec2f(1.0))
         && at.z <= 1.0 && at.z >= 0.0;
-    let jx = map_point(face, p + pixel_step_x).xy - at.xy;
-    let jy = map_point(face, p + pixel_step_y).xy - at.xy;
-    return Projected(c, at.xy, at.z, gradient, texels_per_pixel(jx, jy), inside);
+    var footprint = 0.0;
+    if steepens_ramps() {
+        let jx = map_point(face, p + pixel_step_x).xy - at.xy;
+        let jy = map_point(face, p + pixel_step_y).xy - at.xy;
+        footprint = texels_per_pixel(jx, jy);
+    }
+    return Projected(c, at.xy, at.z, gradient, footprint, inside);
 }
 
 // The filtered visibility of a projected point in `face`.

@@ -535,9 +535,13 @@ fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f, normal: vec3f) -> f32 {
     kernel_slots = kernel_slots_of(filtered_level, q.uv * sm.map.x);
     let gradient = receiver_plane(filtered_level, q, g.xyz, n, normal);
     virtual_texel_world = level_texel_world(filtered_level, g.xyz);
-    let jx = virtual_point(filtered_level, g.xyz + pixel_step_x, n).uv - q.uv;
-    let jy = virtual_point(filtered_level, g.xyz + pixel_step_y, n).uv - q.uv;
-    let pr = Projected(vec4f(0.0, 0.0, q.z, 1.0), q.uv, q.z, gradient, texels_per_pixel(jx, jy), q.inside);
+    var footprint = 0.0;
+    if steepens_ramps() {
+        let jx = virtual_point(filtered_level, g.xyz + pixel_step_x, n).uv - q.uv;
+        let jy = virtual_point(filtered_level, g.xyz + pixel_step_y, n).uv - q.uv;
+        footprint = texels_per_pixel(jx, jy);
+    }
+    let pr = Projected(vec4f(0.0, 0.0, q.z, 1.0), q.uv, q.z, gradient, footprint, q.inside);
     return filtered(found.index, pr, frag);
 }
 
