@@ -18,7 +18,9 @@ pub struct CasterTriangle {
     pub v: Vec4,
 }
 
-/// The triangles of `scene`'s shadow casters. The back faces a
+/// The triangles of `scene`'s shadow casters, wound in world space as in
+/// their mesh (an object mirrored by its transform has two corners
+/// swapped), so that a solid's stay wound outward. The back faces a
 /// double-sided material added are left out: the exact test does not
 /// depend on a triangle's winding, so they would test every sample twice.
 pub fn caster_triangles(scene: &Scene) -> Vec<CasterTriangle> {
@@ -34,6 +36,7 @@ pub fn caster_triangles(scene: &Scene) -> Vec<CasterTriangle> {
             m.triangle_count()
         };
         let object = f32::from_bits(index as u32);
+        let mirrored = o.transform.determinant() < 0.0;
         for t in m.indices.chunks_exact(3).take(front_faces) {
             let corner = |k: usize| {
                 let i = t[k] as usize;
@@ -43,7 +46,8 @@ pub fn caster_triangles(scene: &Scene) -> Vec<CasterTriangle> {
                     uv.y,
                 )
             };
-            let ((a, va), (b, vb), (c, vc)) = (corner(0), corner(1), corner(2));
+            let (second, third) = if mirrored { (2, 1) } else { (1, 2) };
+            let ((a, va), (b, vb), (c, vc)) = (corner(0), corner(second), corner(third));
             out.push(CasterTriangle {
                 a,
                 b,
@@ -86,5 +90,27 @@ mod tests {
             .transform_point3(m.positions[m.indices[0] as usize]);
         assert!((t.a.truncate() - first).length() < 1e-5);
         assert!(o.casts_shadow);
+    }
+
+    /// A solid stays wound outward in world space under a mirroring
+    /// transform (the triangle pass skips a solid's faces turned away from
+    /// the light by their winding).
+    #[test]
+    fn mirrored_solids_stay_wound_outward() {
+        use crate::scene::{Material, shapes};
+        use glam::{Mat4, Vec3};
+        for scale in [Vec3::ONE, Vec3::new(-1.0, 1.0, 1.0), Vec3::new(1.0, -2.0, -1.0), Vec3::splat(-1.0)] {
+            let mut scene = Scene::new("mirror");
+            let mesh = scene.add_mesh(shapes::cuboid(Vec3::new(1.0, 2.0, 3.0)));
+            let material = scene.add_material(Material::default());
+            let transform = Mat4::from_translation(Vec3::new(4.0, 1.0, -2.0)) * Mat4::from_scale(scale);
+            scene.add_object("box", mesh, material, transform);
+            let volume: f32 = caster_triangles(&scene)
+                .iter()
+                .map(|t| t.a.truncate().dot(t.b.truncate().cross(t.c.truncate())) / 6.0)
+                .sum();
+            let expected = 6.0 * (scale.x * scale.y * scale.z).abs();
+            assert!((volume - expected).abs() < 1e-3, "{scale}: volume {volume}, expected {expected}");
+        }
     }
 }

@@ -48,7 +48,7 @@ struct CasterTriangle {
 // origin's xyz (bits) and the id. Sub-pixel samples: the id alone, the
 // origin found again from the G-buffer (4 bytes a sample, so that 16 of
 // them for a 1280 × 720 frame fit one storage buffer).
-@group(2) @binding(2) var<storage, read_write> samples: array<u32>;
+@group(2) @binding(2) var<storage, read_write> samples: array<vec4u>;
 // Per pixel: bit k set once a caster blocks its sample k.
 @group(2) @binding(3) var<storage, read_write> marks: array<atomic<u32>>;
 @group(2) @binding(4) var<storage, read> triangles: array<CasterTriangle>;
@@ -57,6 +57,7 @@ struct CasterTriangle {
 @group(2) @binding(5) var<storage, read_write> aux: array<atomic<u32>>;
 
 const AUX_SAMPLES: u32 = 0u;
+// (AUX_TESTS follows AUX_PAIRS: `count_work` adds both by one index.)
 const AUX_PAIRS: u32 = 1u;
 const AUX_TESTS: u32 = 2u;
 // Jobs asked for by large triangles (some may not have fitted the list).
@@ -148,14 +149,30 @@ fn blocks(t: CasterTriangle, o: vec3f) -> bool {
     return is_solid_at(object, uv, 0.0, 0.5);
 }
 
+// Whether `t` is a face of an opaque solid turned away from the light:
+// a ray from outside the solid toward the light that crosses it leaves
+// the solid through a face turned toward the light, which blocks it too,
+// so only those are tested (half a solid's faces; the irregular
+// z-buffer's twin of a shadow map storing one side of its solids).
+// `caster_triangles` keeps every solid's triangles wound outward.
+fn faces_away_on_a_solid(t: CasterTriangle) -> bool {
+    let object = bitcast<u32>(t.v.w);
+    if objects[object].info.w == 0u || objects[object].alpha.x != ALPHA_OPAQUE {
+        return false;
+    }
+    var to_light = -irr.light.xyz;
+    if is_local() {
+        to_light = irr.light.xyz - t.a.xyz;
+    }
+    return dot(cross(t.b.xyz - t.a.xyz, t.c.xyz - t.a.xyz), to_light) <= 0.0;
+}
+
 // The sample in `slot`: xyz its shadow-ray origin, w its id (bits).
 fn sample_at(slot: u32) -> vec4f {
     if irr.pixel.x <= 1u {
-        let w = 4u * slot;
-        let o = vec3u(samples[w], samples[w + 1u], samples[w + 2u]);
-        return vec4f(bitcast<vec3f>(o), bitcast<f32>(samples[w + 3u]));
+        return bitcast<vec4f>(samples[slot]);
     }
-    let id = samples[slot];
+    let id = samples[slot / 4u][slot % 4u];
     let pixel = id / 32u;
     let px = vec2u(pixel % irr.grid.z, pixel / irr.grid.z);
     return vec4f(sample_origin(px, id % 32u, surface(px)), bitcast<f32>(id));
@@ -277,17 +294,38 @@ fn triangle_cells(t: CasterTriangle, face: u32, f: FaceBounds) -> vec4i {
     return vec4i(c0, c1);
 }
 
-// Pass 5, per triangle: on every face the samples of the cells its image
+// The triangle-cell pairs and sample tests of one workgroup's threads,
+// added to the header once per workgroup (the threads would otherwise
+// contend for the same two words).
+var<workgroup> group_work: array<atomic<u32>, 2>;
+
+// Adds a thread's (pairs, tests) to the header's counters through its
+// workgroup's. Call in uniform control flow (it waits at a barrier).
+fn count_work(lane: u32, work: vec2u) {
+    if work.x > 0u {
+        atomicAdd(&group_work[0], work.x);
+    }
+    if work.y > 0u {
+        atomicAdd(&group_work[1], work.y);
+    }
+    workgroupBarrier();
+    if lane < 2u {
+        let total = atomicLoad(&group_work[lane]);
+        if total > 0u {
+            atomicAdd(&aux[AUX_PAIRS + lane], total);
+        }
+    }
+}
+
+// Triangle `index` on every face: the samples of the cells its image
 // covers tested, or, where they are more than `irr.work.y`, listed as jobs
 // of JOB_SAMPLES for the job pass. Jobs past the list's capacity are
-// counted (AUX_OVERFLOW, in samples) and tested here.
-@compute @workgroup_size(64)
-fn cs_triangles(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
-    let index = id.y * groups.x * WORKGROUP + id.x;
-    if index >= irr.work.x {
-        return;
-    }
+// counted (AUX_OVERFLOW, in samples) and tested here. Its (pairs, tests).
+fn triangle_work(index: u32) -> vec2u {
     let t = triangles[index];
+    if faces_away_on_a_solid(t) {
+        return vec2u(0u);
+    }
     var tests = 0u;
     var pairs = 0u;
     for (var face = 0u; face < irr.grid.x; face++) {
@@ -310,10 +348,19 @@ fn cs_triangles(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroup
         }
         tests += test_samples(t, face, box, box.y, 0u, first, work, 1u);
     }
-    if pairs > 0u {
-        atomicAdd(&aux[AUX_PAIRS], pairs);
-        atomicAdd(&aux[AUX_TESTS], tests);
+    return vec2u(pairs, tests);
+}
+
+// Pass 5, a thread per caster triangle.
+@compute @workgroup_size(64)
+fn cs_triangles(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u,
+        @builtin(local_invocation_index) lane: u32) {
+    let index = id.y * groups.x * WORKGROUP + id.x;
+    var work = vec2u(0u);
+    if index < irr.work.x {
+        work = triangle_work(index);
     }
+    count_work(lane, work);
 }
 
 // Pass 6, one invocation: the job pass's workgroups, one per listed job.
@@ -326,14 +373,9 @@ fn cs_job_dispatch() {
     atomicStore(&aux[AUX_DISPATCH + 2u], 1u);
 }
 
-// Pass 7, a workgroup per job: its threads share the job's samples.
-@compute @workgroup_size(64)
-fn cs_jobs(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
-        @builtin(local_invocation_index) lane: u32) {
-    let e = group.y * groups.x + group.x;
-    if e >= min(atomicLoad(&aux[AUX_JOBS]), irr.work.z) {
-        return;
-    }
+// Job `e`'s tests by thread `lane` of its workgroup: every WORKGROUP-th
+// of the job's samples from the lane's.
+fn job_tests(e: u32, lane: u32) -> u32 {
     let w = AUX_JOB_LIST + 4u * e;
     let entry = atomicLoad(&aux[w]);
     let first = atomicLoad(&aux[w + 1u]) * JOB_SAMPLES;
@@ -342,10 +384,19 @@ fn cs_jobs(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups:
     let box = triangle_cells(t, face, face_bounds(face));
     let y0 = box.y + i32(atomicLoad(&aux[w + 2u]));
     let seen0 = atomicLoad(&aux[w + 3u]);
-    let tests = test_samples(t, face, box, y0, seen0, first + lane, first + JOB_SAMPLES, WORKGROUP);
-    if tests > 0u {
-        atomicAdd(&aux[AUX_TESTS], tests);
+    return test_samples(t, face, box, y0, seen0, first + lane, first + JOB_SAMPLES, WORKGROUP);
+}
+
+// Pass 7, a workgroup per job: its threads share the job's samples.
+@compute @workgroup_size(64)
+fn cs_jobs(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
+        @builtin(local_invocation_index) lane: u32) {
+    let e = group.y * groups.x + group.x;
+    var tests = 0u;
+    if e < min(atomicLoad(&aux[AUX_JOBS]), irr.work.z) {
+        tests = job_tests(e, lane);
     }
+    count_work(lane, vec2u(0u, tests));
 }
 
 // Pass 8, per pixel: the mask, the fraction of its samples no caster blocks.

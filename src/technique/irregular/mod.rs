@@ -215,6 +215,53 @@ pub struct IrregularZBuffer {
     readback: crate::gpu::AsyncReadback,
     pending: bool,
     stats: ListStats,
+    /// GPU time of each of the frame's [`Pass`]es, where the adapter has
+    /// timestamps (counters `<pass>_ms`).
+    timer: Option<crate::gpu::TimestampPairs>,
+    pass_ms: [f64; Pass::ALL.len()],
+}
+
+/// The frame's passes, timed apart.
+#[derive(Clone, Copy)]
+enum Pass {
+    /// The samples' bounds on each face.
+    Bounds,
+    /// Each cell's samples counted.
+    Counts,
+    /// The counts' prefix sum (three compute passes).
+    PrefixSum,
+    /// The samples written to their cells' runs.
+    Scatter,
+    /// A thread per caster triangle, and the job dispatch.
+    Triangles,
+    /// A workgroup per job of a large triangle.
+    Jobs,
+    /// The mask from the marks.
+    MaskWrite,
+}
+
+impl Pass {
+    const ALL: [Pass; 7] = [
+        Pass::Bounds,
+        Pass::Counts,
+        Pass::PrefixSum,
+        Pass::Scatter,
+        Pass::Triangles,
+        Pass::Jobs,
+        Pass::MaskWrite,
+    ];
+
+    fn counter(self) -> &'static str {
+        match self {
+            Pass::Bounds => "bounds_ms",
+            Pass::Counts => "counts_ms",
+            Pass::PrefixSum => "prefix_sum_ms",
+            Pass::Scatter => "scatter_ms",
+            Pass::Triangles => "triangles_ms",
+            Pass::Jobs => "jobs_ms",
+            Pass::MaskWrite => "mask_write_ms",
+        }
+    }
 }
 
 /// The job list's capacity: four jobs per caster triangle and face, or twice
@@ -230,7 +277,7 @@ fn job_capacity(triangles: u64, faces: u64, asked: u64) -> u64 {
 fn sample_bytes(pixels: u64, pixel_samples: u32) -> u64 {
     match pixel_samples {
         0 | 1 => pixels * 16,
-        n => pixels * n as u64 * 4,
+        n => (pixels * n as u64 * 4).next_multiple_of(16),
     }
 }
 
@@ -247,6 +294,16 @@ impl IrregularZBuffer {
             ),
             pending: false,
             stats: ListStats::default(),
+            timer: gpu
+                .timestamps
+                .then(|| {
+                crate::gpu::TimestampPairs::new(
+                    &gpu.device,
+                    "irregular pass timestamps",
+                    Pass::ALL.len() as u32,
+                )
+            }),
+            pass_ms: [0.0; Pass::ALL.len()],
         }
     }
 
@@ -384,6 +441,7 @@ impl ShadowTechnique for IrregularZBuffer {
         let faces = views.len();
         let config = self.config;
         let shared = self.shared.clone();
+        let stamps = self.timer.as_mut().map(|t| t.begin_frame());
         let b = self.ensure_buffers(ctx, faces)?;
         let mut uniform = IrregularUniform {
             views: [Mat4::IDENTITY; MAX_FACES],
@@ -430,8 +488,18 @@ impl ShadowTechnique for IrregularZBuffer {
                 None => pass.dispatch_workgroups_indirect(&b.job_args, 0),
             }
         };
+        let stamp = |encoder: &mut wgpu::CommandEncoder, pass: Pass, end: bool| {
+            if let Some(s) = &stamps {
+                s.stamp(encoder, pass as u32, end);
+            }
+        };
+        stamp(encoder, Pass::Bounds, false);
         fullscreen(encoder, "irregular bounds", &shared.bounds);
+        stamp(encoder, Pass::Bounds, true);
+        stamp(encoder, Pass::Counts, false);
         fullscreen(encoder, "irregular counts", &shared.count);
+        stamp(encoder, Pass::Counts, true);
+        stamp(encoder, Pass::PrefixSum, false);
         let blocks = grid_of_workgroups(b.cell_count.div_ceil(SCAN_BLOCK));
         compute(
             encoder,
@@ -445,9 +513,12 @@ impl ShadowTechnique for IrregularZBuffer {
             &shared.scan_partials,
             Some((1, 1)),
         );
-        let per_cell = Some(workgroups_for(b.cell_count));
-        compute(encoder, "irregular offsets", &shared.scan_add, per_cell);
+        compute(encoder, "irregular offsets", &shared.scan_add, Some(blocks));
+        stamp(encoder, Pass::PrefixSum, true);
+        stamp(encoder, Pass::Scatter, false);
         fullscreen(encoder, "irregular scatter", &shared.scatter);
+        stamp(encoder, Pass::Scatter, true);
+        stamp(encoder, Pass::Triangles, false);
         let per_triangle = Some(workgroups_for(b.triangle_count as u64));
         compute(
             encoder,
@@ -462,8 +533,16 @@ impl ShadowTechnique for IrregularZBuffer {
             Some((1, 1)),
         );
         encoder.copy_buffer_to_buffer(&b.aux, AUX_DISPATCH as u64 * 4, &b.job_args, 0, 12);
+        stamp(encoder, Pass::Triangles, true);
+        stamp(encoder, Pass::Jobs, false);
         compute(encoder, "irregular jobs", &shared.jobs, None);
+        stamp(encoder, Pass::Jobs, true);
+        stamp(encoder, Pass::MaskWrite, false);
         fullscreen(encoder, "irregular mask", &shared.mask);
+        stamp(encoder, Pass::MaskWrite, true);
+        if let Some(t) = &mut self.timer {
+            t.resolve(encoder);
+        }
         if let Some(target) = self.readback.target() {
             let aux = &self.buffers.as_ref().expect("made above").aux;
             encoder.copy_buffer_to_buffer(aux, 0, target, 0, AUX_HEADER_WORDS * 4);
@@ -479,12 +558,18 @@ impl ShadowTechnique for IrregularZBuffer {
         if let Some(data) = self.readback.try_read(gpu)? {
             self.stats = ListStats::from_words(bytemuck::cast_slice(&data));
         }
+        if let Some(t) = &mut self.timer {
+            t.request_readback();
+            if let Some(ms) = t.latest(gpu)? {
+                self.pass_ms.copy_from_slice(ms);
+            }
+        }
         Ok(())
     }
 
     fn counters(&self) -> Vec<(&'static str, f64)> {
         let s = &self.stats;
-        vec![
+        let mut counters = vec![
             ("samples_binned", s.samples as f64),
             ("list_length_p50", s.length_quantile(0.5) as f64),
             ("list_length_p99", s.length_quantile(0.99) as f64),
@@ -493,7 +578,11 @@ impl ShadowTechnique for IrregularZBuffer {
             ("list_length_max", s.longest as f64),
             ("large_triangle_jobs", s.jobs as f64),
             ("job_overflow_samples", s.overflow as f64),
-        ]
+        ];
+        if self.timer.is_some() {
+            counters.extend(Pass::ALL.iter().map(|&p| (p.counter(), self.pass_ms[p as usize])));
+        }
+        counters
     }
 
     fn resource_bytes(&self) -> u64 {

@@ -101,6 +101,14 @@ fn cell_index(face: u32, c: vec2i) -> u32 {
     return (face * r + u32(c.y)) * r + u32(c.x);
 }
 
+// aux[word] raised to `value`, read first: after the first samples few
+// raise a bound, and a read does not contend for the word as a write does.
+fn raise(word: u32, value: u32) {
+    if value > atomicLoad(&aux[word]) {
+        atomicMax(&aux[word], value);
+    }
+}
+
 // Pass 1, per pixel: the bounds of the samples' images on each face.
 @fragment
 fn fs_bounds(@builtin(position) frag: vec4f) -> @location(0) vec4f {
@@ -113,10 +121,10 @@ fn fs_bounds(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         if !is_local() || v.z < 0.0 {
             let c = image_of(v);
             let b = AUX_BOUNDS + face * 4u;
-            atomicMax(&aux[b], ~ordered(c.x));
-            atomicMax(&aux[b + 1u], ~ordered(c.y));
-            atomicMax(&aux[b + 2u], ordered(c.x));
-            atomicMax(&aux[b + 3u], ordered(c.y));
+            raise(b, ~ordered(c.x));
+            raise(b + 1u, ~ordered(c.y));
+            raise(b + 2u, ordered(c.x));
+            raise(b + 3u, ordered(c.y));
         }
     }
     return vec4f(1.0);
@@ -151,7 +159,6 @@ fn fs_count(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         let b = binned(px, k, s);
         if b.cell < irr.work.w {
             atomicAdd(&cells[b.cell], 1u);
-            atomicAdd(&aux[AUX_SAMPLES], 1u);
         }
     }
     return vec4f(1.0);
@@ -203,7 +210,7 @@ fn cs_scan_blocks(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) 
 
 // Pass 3b, one workgroup: the blocks' totals turned into their exclusive
 // prefix sum (each thread a contiguous run of them), the grand total
-// written after the last cell's offset.
+// written after the last cell's offset and as the samples binned.
 @compute @workgroup_size(64)
 fn cs_scan_partials(@builtin(local_invocation_index) lane: u32) {
     let n = irr.work.w;
@@ -213,6 +220,7 @@ fn cs_scan_partials(@builtin(local_invocation_index) lane: u32) {
     let total = scan_in_workgroup(lane, base, base + blocks, per, 0u);
     if lane == WORKGROUP - 1u {
         atomicStore(&cells[2u * n], total);
+        atomicStore(&aux[AUX_SAMPLES], total);
     }
 }
 
@@ -225,21 +233,41 @@ fn histogram_bin(n: u32) -> u32 {
     return min(12u + firstLeadingBit(n), HISTOGRAM_BINS - 1u);
 }
 
-// Pass 3c, per cell: its block's partial added to its offset, and its list
-// length counted into the histogram.
+// The list-length histogram and longest list of one workgroup's cells,
+// added to the header once per workgroup (not once per cell: every cell
+// would contend for the same few words).
+var<workgroup> block_histogram: array<atomic<u32>, HISTOGRAM_BINS>;
+var<workgroup> block_longest: atomic<u32>;
+
+// Pass 3c, a workgroup per block of SCAN_BLOCK cells: each cell's block
+// partial added to its offset, and its list length counted into the
+// histogram.
 @compute @workgroup_size(64)
-fn cs_scan_add(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
+fn cs_scan_add(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
+        @builtin(local_invocation_index) lane: u32) {
     let n = irr.work.w;
-    let cell = id.y * groups.x * WORKGROUP + id.x;
-    if cell >= n {
-        return;
+    let block = group.y * groups.x + group.x;
+    let start = min(block * SCAN_BLOCK, n);
+    let end = min(start + SCAN_BLOCK, n);
+    let partial = atomicLoad(&cells[2u * n + 1u + block]);
+    for (var cell = start + lane; cell < end; cell += WORKGROUP) {
+        let offset = atomicLoad(&cells[n + cell]);
+        atomicStore(&cells[n + cell], offset + partial);
+        let length = atomicLoad(&cells[cell]);
+        if length > 0u {
+            atomicAdd(&block_histogram[histogram_bin(length)], 1u);
+            atomicMax(&block_longest, length);
+        }
     }
-    let partial = atomicLoad(&cells[2u * n + 1u + cell / SCAN_BLOCK]);
-    atomicAdd(&cells[n + cell], partial);
-    let length = atomicLoad(&cells[cell]);
-    if length > 0u {
-        atomicAdd(&aux[AUX_HISTOGRAM + histogram_bin(length)], 1u);
-        atomicMax(&aux[AUX_LONGEST], length);
+    workgroupBarrier();
+    if lane < HISTOGRAM_BINS {
+        let count = atomicLoad(&block_histogram[lane]);
+        if count > 0u {
+            atomicAdd(&aux[AUX_HISTOGRAM + lane], count);
+        }
+    }
+    if lane == 0u {
+        raise(AUX_LONGEST, atomicLoad(&block_longest));
     }
 }
 
@@ -256,13 +284,9 @@ fn fs_scatter(@builtin(position) frag: vec4f) -> @location(0) vec4f {
             let slot = atomicLoad(&cells[irr.work.w + b.cell]) + left - 1u;
             let id = pixel * 32u + k;
             if irr.pixel.x <= 1u {
-                let o = bitcast<vec3u>(b.origin);
-                samples[4u * slot] = o.x;
-                samples[4u * slot + 1u] = o.y;
-                samples[4u * slot + 2u] = o.z;
-                samples[4u * slot + 3u] = id;
+                samples[slot] = vec4u(bitcast<vec3u>(b.origin), id);
             } else {
-                samples[slot] = id;
+                samples[slot / 4u][slot % 4u] = id;
             }
         }
     }
