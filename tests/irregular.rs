@@ -36,6 +36,35 @@ fn masks_match_the_reference_under_every_light_type() {
     }
 }
 
+/// An opaque solid's faces turned away from the light are not tested:
+/// the mask is the one every face gives (the same solids as cut-outs with
+/// no hole, which are never skipped), with fewer tests.
+#[test]
+fn a_solids_faces_away_from_the_light_are_skipped() {
+    for light in ["sun", "point"] {
+        let solids = preset("columns", "default", light);
+        let mut holeless = solids.clone();
+        for m in &mut holeless.materials {
+            m.alpha_mode = shadowlab::scene::AlphaMode::Mask;
+        }
+        let tests = |s: &shadowlab::scene::Scene| {
+            let mut hf = rendered_frame(s, "irregular", &[], 160, 90);
+            render_again(&mut hf, s);
+            render_again(&mut hf, s);
+            counter(&hf, "sample_tests")
+        };
+        let (skipping, all) = (tests(&solids), tests(&holeless));
+        assert!(
+            skipping > 0.0 && skipping < 0.95 * all,
+            "{light}: {skipping} of {all}"
+        );
+        let a = mask_of(&solids, "irregular", &[], 160, 90);
+        let b = mask_of(&holeless, "irregular", &[], 160, 90);
+        assert!(a.iter().any(|&v| v < 0.5), "{light}");
+        assert_eq!(pixels_differing(&a, &b), 0, "{light}");
+    }
+}
+
 /// Leaf cards and the fence are alpha-tested: light falls through their
 /// holes as in the reference (drawn solid they cover several per cent).
 #[test]

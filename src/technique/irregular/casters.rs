@@ -99,18 +99,27 @@ mod tests {
     fn mirrored_solids_stay_wound_outward() {
         use crate::scene::{Material, shapes};
         use glam::{Mat4, Vec3};
-        for scale in [Vec3::ONE, Vec3::new(-1.0, 1.0, 1.0), Vec3::new(1.0, -2.0, -1.0), Vec3::splat(-1.0)] {
+        for scale in [
+            Vec3::ONE,
+            Vec3::new(-1.0, 1.0, 1.0),
+            Vec3::new(1.0, -2.0, -1.0),
+            Vec3::splat(-1.0),
+        ] {
             let mut scene = Scene::new("mirror");
             let mesh = scene.add_mesh(shapes::cuboid(Vec3::new(1.0, 2.0, 3.0)));
             let material = scene.add_material(Material::default());
-            let transform = Mat4::from_translation(Vec3::new(4.0, 1.0, -2.0)) * Mat4::from_scale(scale);
+            let transform =
+                Mat4::from_translation(Vec3::new(4.0, 1.0, -2.0)) * Mat4::from_scale(scale);
             scene.add_object("box", mesh, material, transform);
             let volume: f32 = caster_triangles(&scene)
                 .iter()
                 .map(|t| t.a.truncate().dot(t.b.truncate().cross(t.c.truncate())) / 6.0)
                 .sum();
             let expected = 6.0 * (scale.x * scale.y * scale.z).abs();
-            assert!((volume - expected).abs() < 1e-3, "{scale}: volume {volume}, expected {expected}");
+            assert!(
+                (volume - expected).abs() < 1e-3,
+                "{scale}: volume {volume}, expected {expected}"
+            );
         }
     }
 }

@@ -5,7 +5,9 @@
 //! grid only bins the camera's own samples (the G-buffer's surfaces, with
 //! the reference's ray-origin offset), and every caster triangle tests the
 //! samples binned in the cells its light-space image covers, exactly, with
-//! the shadow ray's own intersection test. The mask has no resolution
+//! the shadow ray's own intersection test (an opaque solid's faces turned
+//! away from the light are skipped: its faces toward the light block the
+//! same rays). The mask has no resolution
 //! error: it is the reference's, computed by rasterization-style work.
 //!
 //! Per frame: the samples' bounds on each face (one orthographic view for a
@@ -294,9 +296,7 @@ impl IrregularZBuffer {
             ),
             pending: false,
             stats: ListStats::default(),
-            timer: gpu
-                .timestamps
-                .then(|| {
+            timer: gpu.timestamps.then(|| {
                 crate::gpu::TimestampPairs::new(
                     &gpu.device,
                     "irregular pass timestamps",
@@ -580,7 +580,11 @@ impl ShadowTechnique for IrregularZBuffer {
             ("job_overflow_samples", s.overflow as f64),
         ];
         if self.timer.is_some() {
-            counters.extend(Pass::ALL.iter().map(|&p| (p.counter(), self.pass_ms[p as usize])));
+            counters.extend(
+                Pass::ALL
+                    .iter()
+                    .map(|&p| (p.counter(), self.pass_ms[p as usize])),
+            );
         }
         counters
     }
