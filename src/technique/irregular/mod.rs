@@ -23,6 +23,7 @@
 
 mod casters;
 mod gpu;
+mod timing;
 
 use super::{Family, MaskContext, ParamSpec, ParamValues, Preset, ShadowTechnique};
 use crate::gpu::GpuContext;
@@ -36,6 +37,7 @@ use gpu::{
     workgroups_for,
 };
 use std::sync::Arc;
+use timing::{Pass, PassTimer};
 
 const GRID: ParamSpec = ParamSpec::int(
     "grid",
@@ -217,53 +219,8 @@ pub struct IrregularZBuffer {
     readback: crate::gpu::AsyncReadback,
     pending: bool,
     stats: ListStats,
-    /// GPU time of each of the frame's [`Pass`]es, where the adapter has
-    /// timestamps (counters `<pass>_ms`).
-    timer: Option<crate::gpu::TimestampPairs>,
-    pass_ms: [f64; Pass::ALL.len()],
-}
-
-/// The frame's passes, timed apart.
-#[derive(Clone, Copy)]
-enum Pass {
-    /// The samples' bounds on each face.
-    Bounds,
-    /// Each cell's samples counted.
-    Counts,
-    /// The counts' prefix sum (three compute passes).
-    PrefixSum,
-    /// The samples written to their cells' runs.
-    Scatter,
-    /// A thread per caster triangle, and the job dispatch.
-    Triangles,
-    /// A workgroup per job of a large triangle.
-    Jobs,
-    /// The mask from the marks.
-    MaskWrite,
-}
-
-impl Pass {
-    const ALL: [Pass; 7] = [
-        Pass::Bounds,
-        Pass::Counts,
-        Pass::PrefixSum,
-        Pass::Scatter,
-        Pass::Triangles,
-        Pass::Jobs,
-        Pass::MaskWrite,
-    ];
-
-    fn counter(self) -> &'static str {
-        match self {
-            Pass::Bounds => "bounds_ms",
-            Pass::Counts => "counts_ms",
-            Pass::PrefixSum => "prefix_sum_ms",
-            Pass::Scatter => "scatter_ms",
-            Pass::Triangles => "triangles_ms",
-            Pass::Jobs => "jobs_ms",
-            Pass::MaskWrite => "mask_write_ms",
-        }
-    }
+    /// GPU time of each pass.
+    timer: PassTimer,
 }
 
 /// The job list's capacity: four jobs per caster triangle and face, or twice
@@ -296,14 +253,7 @@ impl IrregularZBuffer {
             ),
             pending: false,
             stats: ListStats::default(),
-            timer: gpu.timestamps.then(|| {
-                crate::gpu::TimestampPairs::new(
-                    &gpu.device,
-                    "irregular pass timestamps",
-                    Pass::ALL.len() as u32,
-                )
-            }),
-            pass_ms: [0.0; Pass::ALL.len()],
+            timer: PassTimer::new(gpu),
         }
     }
 
@@ -441,7 +391,7 @@ impl ShadowTechnique for IrregularZBuffer {
         let faces = views.len();
         let config = self.config;
         let shared = self.shared.clone();
-        let stamps = self.timer.as_mut().map(|t| t.begin_frame());
+        let stamps = self.timer.begin_frame();
         let b = self.ensure_buffers(ctx, faces)?;
         let mut uniform = IrregularUniform {
             views: [Mat4::IDENTITY; MAX_FACES],
@@ -488,61 +438,39 @@ impl ShadowTechnique for IrregularZBuffer {
                 None => pass.dispatch_workgroups_indirect(&b.job_args, 0),
             }
         };
-        let stamp = |encoder: &mut wgpu::CommandEncoder, pass: Pass, end: bool| {
-            if let Some(s) = &stamps {
-                s.stamp(encoder, pass as u32, end);
-            }
-        };
-        stamp(encoder, Pass::Bounds, false);
-        fullscreen(encoder, "irregular bounds", &shared.bounds);
-        stamp(encoder, Pass::Bounds, true);
-        stamp(encoder, Pass::Counts, false);
-        fullscreen(encoder, "irregular counts", &shared.count);
-        stamp(encoder, Pass::Counts, true);
-        stamp(encoder, Pass::PrefixSum, false);
-        let blocks = grid_of_workgroups(b.cell_count.div_ceil(SCAN_BLOCK));
-        compute(
-            encoder,
-            "irregular prefix sum",
-            &shared.scan_blocks,
-            Some(blocks),
-        );
-        compute(
-            encoder,
-            "irregular partials",
-            &shared.scan_partials,
-            Some((1, 1)),
-        );
-        compute(encoder, "irregular offsets", &shared.scan_add, Some(blocks));
-        stamp(encoder, Pass::PrefixSum, true);
-        stamp(encoder, Pass::Scatter, false);
-        fullscreen(encoder, "irregular scatter", &shared.scatter);
-        stamp(encoder, Pass::Scatter, true);
-        stamp(encoder, Pass::Triangles, false);
+        stamps.time(encoder, Pass::Bounds, |e| {
+            fullscreen(e, "irregular bounds", &shared.bounds)
+        });
+        stamps.time(encoder, Pass::Counts, |e| {
+            fullscreen(e, "irregular counts", &shared.count)
+        });
+        let blocks = Some(grid_of_workgroups(b.cell_count.div_ceil(SCAN_BLOCK)));
+        stamps.time(encoder, Pass::PrefixSum, |e| {
+            compute(e, "irregular prefix sum", &shared.scan_blocks, blocks);
+            compute(e, "irregular partials", &shared.scan_partials, Some((1, 1)));
+            compute(e, "irregular offsets", &shared.scan_add, blocks);
+        });
+        stamps.time(encoder, Pass::Scatter, |e| {
+            fullscreen(e, "irregular scatter", &shared.scatter)
+        });
         let per_triangle = Some(workgroups_for(b.triangle_count as u64));
-        compute(
-            encoder,
-            "irregular triangles",
-            &shared.triangles,
-            per_triangle,
-        );
-        compute(
-            encoder,
-            "irregular job dispatch",
-            &shared.job_dispatch,
-            Some((1, 1)),
-        );
-        encoder.copy_buffer_to_buffer(&b.aux, AUX_DISPATCH as u64 * 4, &b.job_args, 0, 12);
-        stamp(encoder, Pass::Triangles, true);
-        stamp(encoder, Pass::Jobs, false);
-        compute(encoder, "irregular jobs", &shared.jobs, None);
-        stamp(encoder, Pass::Jobs, true);
-        stamp(encoder, Pass::MaskWrite, false);
-        fullscreen(encoder, "irregular mask", &shared.mask);
-        stamp(encoder, Pass::MaskWrite, true);
-        if let Some(t) = &mut self.timer {
-            t.resolve(encoder);
-        }
+        stamps.time(encoder, Pass::Triangles, |e| {
+            compute(e, "irregular triangles", &shared.triangles, per_triangle);
+            compute(
+                e,
+                "irregular job dispatch",
+                &shared.job_dispatch,
+                Some((1, 1)),
+            );
+            e.copy_buffer_to_buffer(&b.aux, AUX_DISPATCH as u64 * 4, &b.job_args, 0, 12);
+        });
+        stamps.time(encoder, Pass::Jobs, |e| {
+            compute(e, "irregular jobs", &shared.jobs, None)
+        });
+        stamps.time(encoder, Pass::MaskWrite, |e| {
+            fullscreen(e, "irregular mask", &shared.mask)
+        });
+        self.timer.resolve(encoder);
         if let Some(target) = self.readback.target() {
             let aux = &self.buffers.as_ref().expect("made above").aux;
             encoder.copy_buffer_to_buffer(aux, 0, target, 0, AUX_HEADER_WORDS * 4);
@@ -558,12 +486,7 @@ impl ShadowTechnique for IrregularZBuffer {
         if let Some(data) = self.readback.try_read(gpu)? {
             self.stats = ListStats::from_words(bytemuck::cast_slice(&data));
         }
-        if let Some(t) = &mut self.timer {
-            t.request_readback();
-            if let Some(ms) = t.latest(gpu)? {
-                self.pass_ms.copy_from_slice(ms);
-            }
-        }
+        self.timer.after_frame(gpu)?;
         Ok(())
     }
 
@@ -579,13 +502,7 @@ impl ShadowTechnique for IrregularZBuffer {
             ("large_triangle_jobs", s.jobs as f64),
             ("job_overflow_samples", s.overflow as f64),
         ];
-        if self.timer.is_some() {
-            counters.extend(
-                Pass::ALL
-                    .iter()
-                    .map(|&p| (p.counter(), self.pass_ms[p as usize])),
-            );
-        }
+        counters.extend(self.timer.counters());
         counters
     }
 
