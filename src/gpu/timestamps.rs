@@ -109,14 +109,15 @@ impl Stamps {
     }
 }
 
-/// The GPU time of one stretch of each frame's work, summed over its
-/// pairs (one per light, say): a [`TimestampPairs`] made on first use and
-/// remade when the pair count changes; read a frame late, without a stall.
+/// The GPU time of one stretch of each frame's work, per pair and summed
+/// over its pairs (one per light, say): a [`TimestampPairs`] made on first
+/// use and remade when the pair count changes; read a frame late, without
+/// a stall.
 pub struct SectionTimer {
     label: &'static str,
     pairs: Option<TimestampPairs>,
-    /// The newest frame's time whose timestamps arrived, ms.
-    pub last_ms: f64,
+    /// Each pair's time of the newest frame whose timestamps arrived, ms.
+    last_pairs_ms: Vec<f64>,
 }
 
 impl SectionTimer {
@@ -124,8 +125,20 @@ impl SectionTimer {
         SectionTimer {
             label,
             pairs: None,
-            last_ms: 0.0,
+            last_pairs_ms: vec![],
         }
+    }
+
+    /// The newest frame's time whose timestamps arrived, over all its
+    /// pairs, ms.
+    pub fn last_ms(&self) -> f64 {
+        self.last_pairs_ms.iter().sum()
+    }
+
+    /// Each pair's time of the newest frame whose timestamps arrived, ms
+    /// (empty before any arrived).
+    pub fn last_pairs_ms(&self) -> &[f64] {
+        &self.last_pairs_ms
     }
 
     /// Starts a frame of `pairs` stretches; `None` without timestamps.
@@ -163,7 +176,7 @@ impl SectionTimer {
     /// Forgets the time: this frame has no such stretch.
     pub fn clear(&mut self) {
         self.pairs = None;
-        self.last_ms = 0.0;
+        self.last_pairs_ms.clear();
     }
 
     /// After the frame's stretches are recorded, into the encoder that
@@ -180,7 +193,7 @@ impl SectionTimer {
         if let Some(p) = &mut self.pairs {
             p.request_readback();
             if let Some(t) = p.latest(gpu)? {
-                self.last_ms = t.iter().sum();
+                self.last_pairs_ms = t.to_vec();
             }
         }
         Ok(())

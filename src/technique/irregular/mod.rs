@@ -7,8 +7,8 @@
 //! samples binned in the cells its light-space image covers, exactly, with
 //! the shadow ray's own intersection test (an opaque solid's faces turned
 //! away from the light are skipped: its faces toward the light block the
-//! same rays). The mask has no resolution
-//! error: it is the reference's, computed by rasterization-style work.
+//! same rays). The mask has no resolution error: it is the reference's,
+//! computed by rasterization-style work.
 //!
 //! Per frame: the samples' bounds on each face (one orthographic view for a
 //! directional light, six cube faces for point and spot lights), the
@@ -232,7 +232,8 @@ fn job_capacity(triangles: u64, faces: u64, asked: u64) -> u64 {
 }
 
 /// Bytes of the sorted samples: 16 a pixel for one sample per pixel (the
-/// origin kept), 4 a sample for sub-pixel samples (the id alone).
+/// origin kept), 4 a sample for sub-pixel samples (the id alone), in whole
+/// 16-byte words (`samples` is an array of `vec4u`).
 fn sample_bytes(pixels: u64, pixel_samples: u32) -> u64 {
     match pixel_samples {
         0 | 1 => pixels * 16,
@@ -391,7 +392,7 @@ impl ShadowTechnique for IrregularZBuffer {
         let faces = views.len();
         let config = self.config;
         let shared = self.shared.clone();
-        let stamps = self.timer.begin_frame();
+        let stamps = self.timer.begin_frame(ctx.gpu);
         let b = self.ensure_buffers(ctx, faces)?;
         let mut uniform = IrregularUniform {
             views: [Mat4::IDENTITY; MAX_FACES],

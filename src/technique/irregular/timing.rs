@@ -2,7 +2,7 @@
 //! `<pass>_ms`), where the adapter has timestamp queries: where a frame's
 //! mask time goes.
 
-use crate::gpu::{GpuContext, Stamps, TimestampPairs};
+use crate::gpu::{GpuContext, SectionTimer, Stamps};
 use anyhow::Result;
 
 /// The frame's passes, timed apart.
@@ -50,8 +50,9 @@ impl Pass {
 
 /// A pair of timestamps per [`Pass`], read back a frame or two late.
 pub struct PassTimer {
-    pairs: Option<TimestampPairs>,
-    ms: [f64; Pass::ALL.len()],
+    timer: SectionTimer,
+    /// Whether the adapter has timestamp queries (else no counters).
+    timed: bool,
 }
 
 /// One frame's timestamps (none without timestamp queries).
@@ -79,48 +80,36 @@ impl FrameStamps {
 impl PassTimer {
     pub fn new(gpu: &GpuContext) -> PassTimer {
         PassTimer {
-            pairs: gpu.timestamps.then(|| {
-                TimestampPairs::new(
-                    &gpu.device,
-                    "irregular pass timestamps",
-                    Pass::ALL.len() as u32,
-                )
-            }),
-            ms: [0.0; Pass::ALL.len()],
+            timer: SectionTimer::new("irregular pass timestamps"),
+            timed: gpu.timestamps,
         }
     }
 
-    pub fn begin_frame(&mut self) -> FrameStamps {
-        FrameStamps(self.pairs.as_mut().map(TimestampPairs::begin_frame))
+    pub fn begin_frame(&mut self, gpu: &GpuContext) -> FrameStamps {
+        FrameStamps(self.timer.begin(gpu, Pass::ALL.len() as u32))
     }
 
     /// After the frame's passes, into the encoder that holds the last.
     pub fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder) {
-        if let Some(p) = &mut self.pairs {
-            p.resolve(encoder);
-        }
+        self.timer.resolve(encoder);
     }
 
     /// After the frame's submission: asks for its times and takes the
     /// newest that have arrived.
     pub fn after_frame(&mut self, gpu: &GpuContext) -> Result<()> {
-        if let Some(p) = &mut self.pairs {
-            p.request_readback();
-            if let Some(ms) = p.latest(gpu)? {
-                self.ms.copy_from_slice(ms);
-            }
-        }
-        Ok(())
+        self.timer.after_frame(gpu)
     }
 
-    /// `<pass>_ms` of each pass, none without timestamp queries.
+    /// `<pass>_ms` of each pass (0 until a frame's times arrive), none
+    /// without timestamp queries.
     pub fn counters(&self) -> Vec<(&'static str, f64)> {
-        match self.pairs {
-            Some(_) => Pass::ALL
-                .iter()
-                .map(|&p| (p.counter(), self.ms[p as usize]))
-                .collect(),
-            None => vec![],
+        if !self.timed {
+            return vec![];
         }
+        let ms = self.timer.last_pairs_ms();
+        Pass::ALL
+            .iter()
+            .map(|&p| (p.counter(), ms.get(p as usize).copied().unwrap_or(0.0)))
+            .collect()
     }
 }

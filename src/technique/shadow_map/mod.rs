@@ -488,7 +488,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                 ("refine_passes", p.refine_passes as f64),
                 ("page_feedback_ms", p.feedback_ms),
                 ("page_marking_ms", v.marking_ms()),
-                ("lookup_ms", self.lookup_timer.last_ms),
+                ("lookup_ms", self.lookup_timer.last_ms()),
                 ("map_triangles", self.map_triangles as f64),
             ];
         }
@@ -499,12 +499,12 @@ impl ShadowTechnique for ShadowMapTechnique {
                     ("faces", m.layers as f64),
                     ("maps_per_face", self.samples as f64),
                     ("map_triangles", self.map_triangles as f64),
-                    ("lookup_ms", self.lookup_timer.last_ms),
+                    ("lookup_ms", self.lookup_timer.last_ms()),
                 ]
                 .into_iter()
                 .chain(
                     self.chain()
-                        .map(|_| ("edge_chain_ms", self.chain_timer.last_ms)),
+                        .map(|_| ("edge_chain_ms", self.chain_timer.last_ms())),
                 )
                 .chain(self.turn.map(|t| {
                     (
@@ -520,7 +520,7 @@ impl ShadowTechnique for ShadowMapTechnique {
                             "sdsm_reduction_ms",
                             self.depth_reduction
                                 .as_ref()
-                                .map_or(0.0, |r| r.timer.last_ms),
+                                .map_or(0.0, |r| r.timer.last_ms()),
                         ),
                         (
                             "sdsm_wait_ms",

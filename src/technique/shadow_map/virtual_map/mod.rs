@@ -165,7 +165,7 @@ impl VirtualState {
     /// The GPU time of the frame's first marking pass whose timestamps
     /// arrived, ms.
     pub fn marking_ms(&self) -> f64 {
-        self.mark_timer.last_ms
+        self.mark_timer.last_ms()
     }
 
     /// After the frame's submission: asks for the frame-late marks and the
