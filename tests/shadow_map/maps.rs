@@ -4,7 +4,7 @@
 
 use super::common::*;
 use glam::{Mat4, Vec3, Vec4};
-use shadowlab::scene::{Camera, Light, Material, Scene, builtin, shapes};
+use shadowlab::scene::{Camera, Light, LightArea, Material, Scene, builtin, shapes};
 use shadowlab::technique::light_space::bias_matrix;
 
 /// The six directions along the world's axes: one per cube face.
@@ -114,45 +114,72 @@ fn cube_faces_cover_every_direction() {
 }
 
 /// `edge_ramp_pixels`: where the map's texels are magnified (a 64² map
-/// seen close up, a few pixels a texel), the 3×3 kernel's ramp spans
-/// some fifteen pixels of graded visibility past the reference's edge band;
-/// steepened to two pixels, the edge is as sharp as the hard light's, and no
-/// pixel changes side of ½ (the thresholded mismatch cannot move).
+/// seen close up, a few pixels a texel), a kernel's ramp spans many pixels
+/// of graded visibility past the reference's edge band — the 3×3 grid's
+/// some fifteen, and the ½-texel disk that pcss and varwidth draw under a
+/// light without an area (no penumbra to draw) fewer; steepened to two
+/// pixels, the edge is as sharp as the hard light's, and no pixel changes
+/// side of ½ (the thresholded mismatch cannot move).
 #[test]
 fn magnified_texels_keep_a_hard_lights_edge_sharp() {
     let sun = lights_over_squares()[2];
     let mut scene = squares_over_floor(&[(Vec3::new(0.0, 1.0, 0.0), 0.7)], sun, false);
     scene.camera = Camera::new(Vec3::new(1.0, 0.8, 1.2), Vec3::new(1.0, 0.0, 0.2));
-    let steep = compare(&scene, "shadow-map:pcf[size=64]", (160, 90)).mask;
-    let soft = compare(
-        &scene,
-        "shadow-map:pcf[size=64,edge_ramp_pixels=0]",
-        (160, 90),
-    )
-    .mask;
-    assert!(
-        soft.graded_interior_pct > 5.0
-            && steep.graded_interior_pct <= 0.2 * soft.graded_interior_pct
-            && steep.interior_mae <= 0.5 * soft.interior_mae,
-        "steepened {steep:?}\nas filtered {soft:?}"
-    );
-    let a = mask_of(&scene, "shadow-map:pcf", &["size=64"], 160, 90);
+    for (id, least_graded) in [
+        ("shadow-map:pcf", 5.0),
+        ("shadow-map:pcss", 2.0),
+        ("shadow-map:varwidth", 2.0),
+    ] {
+        let steep = compare(&scene, &format!("{id}[size=64]"), (160, 90)).mask;
+        let soft = compare(
+            &scene,
+            &format!("{id}[size=64,edge_ramp_pixels=0]"),
+            (160, 90),
+        )
+        .mask;
+        assert!(
+            soft.graded_interior_pct > least_graded
+                && steep.graded_interior_pct <= 0.2 * soft.graded_interior_pct
+                && steep.interior_mae <= 0.5 * soft.interior_mae,
+            "{id}: steepened {steep:?}\nas filtered {soft:?}"
+        );
+        let a = mask_of(&scene, id, &["size=64"], 160, 90);
+        let b = mask_of(&scene, id, &["size=64", "edge_ramp_pixels=0"], 160, 90);
+        let changed = a
+            .iter()
+            .zip(&b)
+            .filter(|(x, y)| (**x < 0.5) != (**y < 0.5))
+            .count();
+        let graded = b.iter().filter(|v| **v > 0.05 && **v < 0.95).count();
+        assert!(
+            changed == 0 && graded > 100,
+            "{id}: {changed} pixels changed side, {graded} graded as filtered"
+        );
+    }
+}
+
+/// A penumbra is not a ramp to steepen: under a light with an area, pcss
+/// draws the penumbra the area casts, and `edge_ramp_pixels` leaves every
+/// pixel of it as it is, magnified texels or not.
+#[test]
+fn an_area_lights_penumbra_is_not_steepened() {
+    let mut sun = lights_over_squares()[2];
+    sun.area = Some(LightArea::Sphere { radius: 0.02 });
+    let mut scene = squares_over_floor(&[(Vec3::new(0.0, 1.0, 0.0), 0.7)], sun, false);
+    scene.camera = Camera::new(Vec3::new(1.0, 0.8, 1.2), Vec3::new(1.0, 0.0, 0.2));
+    let a = mask_of(&scene, "shadow-map:pcss", &["size=64"], 160, 90);
     let b = mask_of(
         &scene,
-        "shadow-map:pcf",
+        "shadow-map:pcss",
         &["size=64", "edge_ramp_pixels=0"],
         160,
         90,
     );
-    let changed = a
-        .iter()
-        .zip(&b)
-        .filter(|(x, y)| (**x < 0.5) != (**y < 0.5))
-        .count();
-    let graded = b.iter().filter(|v| **v > 0.05 && **v < 0.95).count();
+    let graded = a.iter().filter(|v| **v > 0.05 && **v < 0.95).count();
     assert!(
-        changed == 0 && graded > 100,
-        "{changed} pixels changed side, {graded} graded as filtered"
+        a == b && graded > 100,
+        "{graded} graded pixels, masks equal: {}",
+        a == b
     );
 }
 

@@ -184,9 +184,9 @@ pub const EDGE_RAMP_PIXELS: ParamSpec = ParamSpec::float(
     0.0,
     64.0,
     0.5,
-    "grid, disk and pcf2x2: the widest a shadow edge's ramp may be on screen, in pixels; where the map's texels are magnified (a close-up, a receiver lit at a grazing angle), the kernel's ramp of 2·reach texels spans tens of pixels, and its visibility is steepened about ½ until it spans this many: a hard light's edge stays an anti-aliased line along the filtered contour instead of a blur, and no pixel changes side of ½; 0 = as filtered",
+    "grid, disk and pcf2x2, and pcss and varwidth under a light without an area (their ½-texel disk): the widest a shadow edge's ramp may be on screen, in pixels; where the map's texels are magnified (a close-up, a receiver lit at a grazing angle), the kernel's ramp of 2·reach texels spans tens of pixels, and its visibility is steepened about ½ until it spans this many: a hard light's edge stays an anti-aliased line along the filtered contour instead of a blur, and no pixel changes side of ½; 0 = as filtered",
 )
-.when(Condition::Is("filter", &["grid", "disk", "pcf2x2"]));
+.when(Condition::Is("filter", &["grid", "disk", "pcf2x2", "pcss", "varwidth"]));
 
 pub const CULL: ParamSpec = ParamSpec::choice_of::<CullFace>(
     "cull",
@@ -393,6 +393,19 @@ pub struct ShadowMapConfig {
     pub paging: PagingConfig,
 }
 
+/// The radius in texels of the disk pcss and varwidth draw where the light
+/// casts no penumbra (the shader's least kernel): half a texel, the
+/// resolution of the map, not a shadow's softness.
+pub const HARD_LIGHT_DISK_RADIUS: f32 = 0.5;
+
+/// The reach of a Vogel disk of `radius` texels and `samples`² taps: its
+/// outermost tap, radius·√((N² − ½)/N²), plus the half texel of its 2×2
+/// comparison.
+fn disk_reach(radius: f32, samples: u32) -> f32 {
+    let taps = (samples * samples) as f32;
+    radius * ((taps - 0.5) / taps).sqrt() + 0.5
+}
+
 impl ShadowMapConfig {
     /// How far in texels from its centre a pixel's kernel reads (the
     /// lookup's `kernel_reach()`, `sm.map.w`): none (hard), its farthest
@@ -407,9 +420,29 @@ impl ShadowMapConfig {
         match self.filter {
             Filter::Hard => 0.0,
             Filter::Grid => self.radius * (1.0 - 1.0 / n) + 0.5,
-            Filter::Disk => self.radius * ((n * n - 0.5) / (n * n)).sqrt() + 0.5,
+            Filter::Disk => disk_reach(self.radius, self.samples),
             Filter::Pcss | Filter::Varwidth => self.blocker_search.max(64.0) + 0.5,
             _ => 0.5,
+        }
+    }
+
+    /// The reach in texels of the ramp `edge_ramp_pixels` steepens (the
+    /// lookup's `sm.screen.y`): the kernel's for grid, disk and pcf2x2; for
+    /// pcss and varwidth under a light without an area (and no
+    /// `hard_light_penumbra`), the disk of [`HARD_LIGHT_DISK_RADIUS`] they
+    /// draw there, whose ramp is resolution, not penumbra. 0 where nothing
+    /// is steepened: a penumbra the light's area (or a pretended size)
+    /// draws, the hard and moment filters, or `edge_ramp_pixels` = 0.
+    pub fn ramp_reach(&self, light_has_area: bool) -> f32 {
+        if self.edge_ramp_pixels <= 0.0 {
+            return 0.0;
+        }
+        match self.filter {
+            Filter::Grid | Filter::Disk | Filter::Pcf2x2 => self.kernel_reach(),
+            Filter::Pcss | Filter::Varwidth if !light_has_area && !self.hard_light_penumbra => {
+                disk_reach(HARD_LIGHT_DISK_RADIUS, self.samples)
+            }
+            _ => 0.0,
         }
     }
 

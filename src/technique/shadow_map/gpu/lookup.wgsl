@@ -120,21 +120,27 @@ fn texels_per_pixel(jx: vec2f, jy: vec2f) -> f32 {
     return select(0.0, d / largest, largest > 0.0);
 }
 
-// Whether the filter's ramp is steepened (`edge_ramp_pixels`: grid, disk,
-// pcf2x2). A constant of the pipeline: the other filters never find the
-// pixel's footprint in the map.
+// Whether the filter's ramp is steepened (`edge_ramp_pixels`): a constant
+// of the pipeline for the filters that can be (grid, disk, pcf2x2; pcss and
+// varwidth, whose kernel under a light without an area is a ½-texel disk),
+// the others never find the pixel's footprint in the map; and sm.screen.y,
+// the ramp's reach in texels, 0 where there is nothing to steepen (a
+// penumbra). Callers run it as a one-trip loop, not a branch (see
+// `filtered`).
 fn steepens_ramps() -> bool {
-    return FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK || FILTER_KIND == FILTER_PCF2X2;
+    return (FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK || FILTER_KIND == FILTER_PCF2X2
+        || FILTER_KIND == FILTER_PCSS || FILTER_KIND == FILTER_VARWIDTH) && sm.screen.y > 0.0;
 }
 
 // `edge_ramp_pixels`: visibility v of a kernel whose ramp spans 2·reach
-// texels, steepened about ½ where those texels span more pixels than that
-// on screen (magnified texels); ½ itself stays, so no pixel changes side.
+// texels (sm.screen.y), steepened about ½ where those texels span more
+// pixels than that on screen (magnified texels); ½ itself stays, so no
+// pixel changes side.
 fn sharpened(v: f32, texels_per_pixel: f32) -> f32 {
     if !steepens_ramps() || sm.screen.x <= 0.0 || !(texels_per_pixel > 0.0) {
         return v;
     }
-    let ramp_pixels = 2.0 * kernel_reach() / texels_per_pixel;
+    let ramp_pixels = 2.0 * sm.screen.y / texels_per_pixel;
     let k = max(ramp_pixels / sm.screen.x, 1.0);
     return clamp(0.5 + (v - 0.5) * k, 0.0, 1.0);
 }
@@ -143,7 +149,7 @@ fn sharpened(v: f32, texels_per_pixel: f32) -> f32 {
 fn fs_lookup(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let g = textureLoad(gbuffer_position, vec2i(frag.xy), 0);
     let normal = normalize(textureLoad(gbuffer_normal, vec2i(frag.xy), 0).xyz);
-    if steepens_ramps() {
+    for (var steepened = steepens_ramps(); steepened; steepened = false) {
         set_pixel_steps(frag.xy, g.xyz, normal);
     }
     receiver_part = receiver_part_of(vec2i(frag.xy), g.xyz, normal);
@@ -303,7 +309,7 @@ fn projected(face: u32, g: vec4f, offset_n: vec3f, normal: vec3f) -> Projected {
     let inside = g.w >= 0.5 && c.w > 0.0 && all(at.xy >= vec2f(0.0)) && all(at.xy <= vec2f(1.0))
         && at.z <= 1.0 && at.z >= 0.0;
     var footprint = 0.0;
-    if steepens_ramps() {
+    for (var steepened = steepens_ramps(); steepened; steepened = false) {
         let jx = map_point(face, p + pixel_step_x).xy - at.xy;
         let jy = map_point(face, p + pixel_step_y).xy - at.xy;
         footprint = texels_per_pixel(jx, jy);

@@ -88,7 +88,8 @@ struct ShadowMap {
     // directional map: the depths its seen receivers span; else 0, 1)
     moment_depth: vec4f,
     // x the widest a shadow edge's ramp may be on screen, in pixels
-    // (`edge_ramp_pixels`; 0: as filtered), yzw unused
+    // (`edge_ramp_pixels`; 0: as filtered), y the reach in texels of the
+    // ramp it steepens (0: none, as under a penumbra), zw unused
     screen: vec4f,
 };
 

@@ -48,7 +48,8 @@ pub struct ShadowMapUniform {
     /// (`LightSetup::moment_depth`).
     pub moment_depth: Vec4,
     /// x the widest a shadow edge's ramp may be on screen, in pixels
-    /// (`edge_ramp_pixels`), yzw unused.
+    /// (`edge_ramp_pixels`), y the reach in texels of the ramp it steepens
+    /// (`ShadowMapConfig::ramp_reach`; 0: none), zw unused.
     pub screen: Vec4,
 }
 
@@ -91,7 +92,12 @@ impl ShadowMapUniform {
                 c.moment_bias,
             ),
             moment_depth: WHOLE_MOMENT_DEPTH,
-            screen: Vec4::new(c.edge_ramp_pixels, 0.0, 0.0, 0.0),
+            screen: Vec4::new(
+                c.edge_ramp_pixels,
+                c.ramp_reach(light.area.is_some()),
+                0.0,
+                0.0,
+            ),
             ..ShadowMapUniform::zeroed()
         }
     }

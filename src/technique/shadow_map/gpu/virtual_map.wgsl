@@ -536,7 +536,7 @@ fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f, normal: vec3f) -> f32 {
     let gradient = receiver_plane(filtered_level, q, g.xyz, n, normal);
     virtual_texel_world = level_texel_world(filtered_level, g.xyz);
     var footprint = 0.0;
-    if steepens_ramps() {
+    for (var steepened = steepens_ramps(); steepened; steepened = false) {
         let jx = virtual_point(filtered_level, g.xyz + pixel_step_x, n).uv - q.uv;
         let jy = virtual_point(filtered_level, g.xyz + pixel_step_y, n).uv - q.uv;
         footprint = texels_per_pixel(jx, jy);
