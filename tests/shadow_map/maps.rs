@@ -129,6 +129,8 @@ fn magnified_texels_keep_a_hard_lights_edge_sharp() {
         ("shadow-map:pcf", 5.0),
         ("shadow-map:pcss", 2.0),
         ("shadow-map:varwidth", 2.0),
+        ("shadow-map:vsm", 2.0),
+        ("shadow-map:msm", 2.0),
     ] {
         let steep = compare(&scene, &format!("{id}[size=64]"), (160, 90)).mask;
         let soft = compare(
@@ -167,20 +169,16 @@ fn an_area_lights_penumbra_is_not_steepened() {
     sun.area = Some(LightArea::Sphere { radius: 0.02 });
     let mut scene = squares_over_floor(&[(Vec3::new(0.0, 1.0, 0.0), 0.7)], sun, false);
     scene.camera = Camera::new(Vec3::new(1.0, 0.8, 1.2), Vec3::new(1.0, 0.0, 0.2));
-    let a = mask_of(&scene, "shadow-map:pcss", &["size=64"], 160, 90);
-    let b = mask_of(
-        &scene,
-        "shadow-map:pcss",
-        &["size=64", "edge_ramp_pixels=0"],
-        160,
-        90,
-    );
-    let graded = a.iter().filter(|v| **v > 0.05 && **v < 0.95).count();
-    assert!(
-        a == b && graded > 100,
-        "{graded} graded pixels, masks equal: {}",
-        a == b
-    );
+    for id in ["shadow-map:pcss", "shadow-map:vsm"] {
+        let a = mask_of(&scene, id, &["size=64"], 160, 90);
+        let b = mask_of(&scene, id, &["size=64", "edge_ramp_pixels=0"], 160, 90);
+        let graded = a.iter().filter(|v| **v > 0.05 && **v < 0.95).count();
+        assert!(
+            a == b && graded > 100,
+            "{id}: {graded} graded pixels, masks equal: {}",
+            a == b
+        );
+    }
 }
 
 /// `esm` filters exp(c·z) in log space, so no exponent overflows a 32-bit

@@ -184,9 +184,9 @@ pub const EDGE_RAMP_PIXELS: ParamSpec = ParamSpec::float(
     0.0,
     64.0,
     0.5,
-    "grid, disk and pcf2x2, and pcss and varwidth under a light without an area (their ½-texel disk): the widest a shadow edge's ramp may be on screen, in pixels; where the map's texels are magnified (a close-up, a receiver lit at a grazing angle), the kernel's ramp of 2·reach texels spans tens of pixels, and its visibility is steepened about ½ until it spans this many: a hard light's edge stays an anti-aliased line along the filtered contour instead of a blur, and no pixel changes side of ½; 0 = as filtered",
+    "every filter but hard (pcss, varwidth and the moment filters only under a light without an area, where their ramp is the map's resolution and blur, not a penumbra): the widest a shadow edge's ramp may be on screen, in pixels; where the map's texels are magnified (a close-up, a receiver lit at a grazing angle), the kernel's ramp of 2·reach texels spans tens of pixels, and its visibility is steepened about ½ until it spans this many: a hard light's edge stays an anti-aliased line along the filtered contour instead of a blur, and no pixel changes side of ½; 0 = as filtered",
 )
-.when(Condition::Is("filter", &["grid", "disk", "pcf2x2", "pcss", "varwidth"]));
+.when(Condition::IsNot("filter", &["hard"]));
 
 pub const CULL: ParamSpec = ParamSpec::choice_of::<CullFace>(
     "cull",
@@ -430,9 +430,12 @@ impl ShadowMapConfig {
     /// lookup's `sm.screen.y`): the kernel's for grid, disk and pcf2x2; for
     /// pcss and varwidth under a light without an area (and no
     /// `hard_light_penumbra`), the disk of [`HARD_LIGHT_DISK_RADIUS`] they
-    /// draw there, whose ramp is resolution, not penumbra. 0 where nothing
-    /// is steepened: a penumbra the light's area (or a pretended size)
-    /// draws, the hard and moment filters, or `edge_ramp_pixels` = 0.
+    /// draw there, whose ramp is resolution, not penumbra; for the moment
+    /// filters under such a light, their blur's (`blur` + ½ texels: the
+    /// ramp a box of 2·blur + 1 texels draws across an edge, which a hard
+    /// light's truth does not have). 0 where nothing is steepened: a
+    /// penumbra the light's area (or a pretended size) draws, the hard
+    /// filter, or `edge_ramp_pixels` = 0.
     pub fn ramp_reach(&self, light_has_area: bool) -> f32 {
         if self.edge_ramp_pixels <= 0.0 {
             return 0.0;
@@ -441,6 +444,11 @@ impl ShadowMapConfig {
             Filter::Grid | Filter::Disk | Filter::Pcf2x2 => self.kernel_reach(),
             Filter::Pcss | Filter::Varwidth if !light_has_area && !self.hard_light_penumbra => {
                 disk_reach(HARD_LIGHT_DISK_RADIUS, self.samples)
+            }
+            Filter::Vsm | Filter::Esm | Filter::Evsm2 | Filter::Evsm4 | Filter::Msm
+                if !light_has_area =>
+            {
+                self.blur as f32 + 0.5
             }
             _ => 0.0,
         }

@@ -121,15 +121,15 @@ fn texels_per_pixel(jx: vec2f, jy: vec2f) -> f32 {
 }
 
 // Whether the filter's ramp is steepened (`edge_ramp_pixels`): a constant
-// of the pipeline for the filters that can be (grid, disk, pcf2x2; pcss and
-// varwidth, whose kernel under a light without an area is a ½-texel disk),
-// the others never find the pixel's footprint in the map; and sm.screen.y,
+// of the pipeline for the filters that can be (all but hard; pcss and
+// varwidth draw a ½-texel disk under a light without an area, the moment
+// filters their blur), the hard filter never finds the pixel's footprint in
+// the map; and sm.screen.y,
 // the ramp's reach in texels, 0 where there is nothing to steepen (a
 // penumbra). Callers run it as a one-trip loop, not a branch (see
 // `filtered`).
 fn steepens_ramps() -> bool {
-    return (FILTER_KIND == FILTER_GRID || FILTER_KIND == FILTER_DISK || FILTER_KIND == FILTER_PCF2X2
-        || FILTER_KIND == FILTER_PCSS || FILTER_KIND == FILTER_VARWIDTH) && sm.screen.y > 0.0;
+    return FILTER_KIND != FILTER_HARD && sm.screen.y > 0.0;
 }
 
 // `edge_ramp_pixels`: visibility v of a kernel whose ramp spans 2·reach
@@ -326,7 +326,7 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
     rp_origin = pr.uv;
     rp_depth = pr.z;
     if FILTER_KIND >= FILTER_VSM {
-        return moment_visibility(moments_at(pr.uv, face), moment_depth_of(select(linear01(pr.clip), pr.z, is_warped())));
+        return sharpened(moment_visibility(moments_at(pr.uv, face), moment_depth_of(select(linear01(pr.clip), pr.z, is_warped()))), pr.texels_per_pixel);
     }
     // Edge mask: where every tap agrees, the kernel's loops run zero times.
     // A trip count, not an early return: SIMD rasterisers (llvmpipe among
