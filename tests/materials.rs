@@ -93,6 +93,46 @@ fn a_texel_sized_hole_in_a_cutout_lights_the_floor_behind_it() {
     );
 }
 
+/// Shadow volumes shadow a cut-out as a solid (they have no holes), and
+/// `auto` must do so however the camera looks: seen from the light's side
+/// through a cut-out's holes, a view ray enters its volume through the light
+/// cap, which z-pass does not count, so the floor behind the holes came out
+/// lit under z-pass. `auto` takes z-fail for such casters: its mask is
+/// z-fail's on every pixel, while z-pass's lights the holes.
+#[test]
+fn auto_volumes_of_a_cutout_seen_through_its_holes_count_as_z_fail() {
+    let sun = Light::directional(Vec3::new(0.02, -1.0, 0.01), 1.0);
+    let mut s = squares_over_floor(&[(Vec3::new(0.0, 1.0, 0.0), 1.0)], sun, false);
+    let holes: Vec<(u32, u32)> = (0..8u32)
+        .flat_map(|y| (0..8u32).map(move |x| (x, y)))
+        .filter(|(x, y)| (x + y) % 2 == 0)
+        .collect();
+    s.textures.push(holed_texture(8, &holes));
+    // Double-sided: the sheet's two faces make a closed surface, whose
+    // volume is extruded from its silhouette.
+    let mut s = with_square_material(
+        s,
+        Material {
+            double_sided: true,
+            ..cutout(0)
+        },
+    );
+    s.camera = Camera::new(Vec3::new(0.3, 4.0, 0.6), Vec3::ZERO);
+    let (w, h) = (160, 160);
+    let auto = mask_of(&s, "shadow-volume:auto", &[], w, h);
+    let zfail = mask_of(&s, "shadow-volume:zfail", &[], w, h);
+    let zpass = mask_of(&s, "shadow-volume:zpass", &[], w, h);
+    let differ = |a: &[f32], b: &[f32]| a.iter().zip(b).filter(|(x, y)| x != y).count();
+    assert_eq!(differ(&auto, &zfail), 0, "auto differs from z-fail");
+    let lit_by_zpass = differ(&zpass, &zfail);
+    assert!(
+        lit_by_zpass > 500 && shadowed(&zfail) > shadowed(&zpass) + 500,
+        "z-pass should light the holes: {lit_by_zpass} pixels differ, {} shadowed by z-fail, {} by z-pass",
+        shadowed(&zfail),
+        shadowed(&zpass)
+    );
+}
+
 /// Two translucent panes of opacity ½ (one of them double-sided, whose two
 /// faces are one surface) let a quarter of the light through, in both
 /// kernels of the reference; `hashed` shadow maps come near it, `cutout`

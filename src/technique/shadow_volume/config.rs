@@ -30,7 +30,7 @@ choice_enum! {
 pub const METHOD: ParamSpec = ParamSpec::choice_of::<Method>(
     "method",
     Method::Auto as usize,
-    "zpass: count volume faces in front of each pixel (fails when the camera is in a shadow); zfail: count those behind (Carmack's reverse; caps needed); auto: z-fail only for casters whose volume can contain part of the near-plane rectangle",
+    "zpass: count volume faces in front of each pixel (fails when the camera is in a shadow); zfail: count those behind (Carmack's reverse; caps needed); auto: z-fail only for casters whose volume can contain part of the near-plane rectangle, or that the camera sees through (cut-out and translucent casters: a view ray through their holes enters the volume through its light cap, which z-pass does not count)",
 );
 pub const SILHOUETTE: ParamSpec = ParamSpec::choice_of::<SilhouetteMode>(
     "silhouette",
@@ -134,7 +134,7 @@ pub const PARAMS: &[ParamSpec] = &[
 pub const PRESETS: &[Preset] = &[
     Preset {
         name: "auto",
-        summary: "hybrid: z-fail only where a volume can contain the near plane; per-triangle volumes for meshes that are not closed; GPU extrusion",
+        summary: "hybrid: z-fail only where a volume can contain the near plane or the camera sees through the caster; per-triangle volumes for meshes that are not closed; GPU extrusion",
         values: &[],
     },
     Preset {

@@ -9,7 +9,8 @@
 //! shadow), z-fail (Carmack's reverse: back +1, front −1 where it fails;
 //! needs caps and a far plane at infinity or depth clamp) or `auto` (z-fail
 //! only for casters whose volume can contain part of the near-plane
-//! rectangle). Meshes that are not closed can extrude every triangle's own
+//! rectangle, or that the camera can see through: cut-outs and translucent
+//! casters). Meshes that are not closed can extrude every triangle's own
 //! volume instead (`silhouette=triangles`). Where the count is not 0 the mask
 //! is 1 − darkening.
 //!
@@ -257,12 +258,23 @@ impl ShadowVolumeRenderer {
                     SilhouetteMode::Auto | SilhouetteMode::Edges => VolumeKind::Silhouette,
                     SilhouetteMode::Triangles => VolumeKind::Triangles,
                 };
+                // Z-pass counts the side faces a view ray crosses, so it
+                // needs the ray to enter a volume through a side or stop at
+                // the opaque light cap; through a cut-out's holes or a
+                // translucent pane (which the G-buffer sees past) it enters
+                // through the light cap and counts nothing. Such casters
+                // take z-fail, which counts behind the pixel.
+                let object = &ctx.scene.objects[c.object];
+                let see_through = ctx.scene.materials[object.material].is_see_through();
                 let zfail = match method {
                     Method::ZPass => false,
                     Method::ZFail => true,
-                    Method::Auto => region
-                        .as_ref()
-                        .is_none_or(|r| silhouette::meets(r, &c.world_bounds)),
+                    Method::Auto => {
+                        see_through
+                            || region
+                                .as_ref()
+                                .is_none_or(|r| silhouette::meets(r, &c.world_bounds))
+                    }
                 };
                 CasterPlan {
                     kind,
