@@ -550,7 +550,7 @@ impl ShadowTechnique for ShadowVolumeRenderer {
 }
 
 #[cfg(test)]
-mod wgsl_tests {
+mod tests {
     use super::{Args, ExtrudeParams, IndirectArgs, VolumeUniform};
     use crate::gpu::wgsl_layout::assert_struct_matches;
     use std::mem::{offset_of, size_of};
