@@ -122,9 +122,12 @@ fn auto_volumes_of_a_cutout_seen_through_its_holes_count_as_z_fail() {
     let auto = mask_of(&s, "shadow-volume:auto", &[], w, h);
     let zfail = mask_of(&s, "shadow-volume:zfail", &[], w, h);
     let zpass = mask_of(&s, "shadow-volume:zpass", &[], w, h);
-    let differ = |a: &[f32], b: &[f32]| a.iter().zip(b).filter(|(x, y)| x != y).count();
-    assert_eq!(differ(&auto, &zfail), 0, "auto differs from z-fail");
-    let lit_by_zpass = differ(&zpass, &zfail);
+    assert_eq!(
+        pixels_differing(&auto, &zfail),
+        0,
+        "auto differs from z-fail"
+    );
+    let lit_by_zpass = pixels_differing(&zpass, &zfail);
     assert!(
         lit_by_zpass > 500 && shadowed(&zfail) > shadowed(&zpass) + 500,
         "z-pass should light the holes: {lit_by_zpass} pixels differ, {} shadowed by z-fail, {} by z-pass",

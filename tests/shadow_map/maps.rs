@@ -116,8 +116,9 @@ fn cube_faces_cover_every_direction() {
 /// `edge_ramp_pixels`: where the map's texels are magnified (a 64² map
 /// seen close up, a few pixels a texel), a kernel's ramp spans many pixels
 /// of graded visibility past the reference's edge band — the 3×3 grid's
-/// some fifteen, and the ½-texel disk that pcss and varwidth draw under a
-/// light without an area (no penumbra to draw) fewer; steepened to two
+/// some fifteen, and under a light without an area (no penumbra to draw)
+/// the ½-texel disk of pcss and varwidth and the moment filters' blur
+/// fewer; steepened to two
 /// pixels, the edge is as sharp as the hard light's, and no pixel changes
 /// side of ½ (the thresholded mismatch cannot move).
 #[test]

@@ -120,14 +120,12 @@ fn texels_per_pixel(jx: vec2f, jy: vec2f) -> f32 {
     return select(0.0, d / largest, largest > 0.0);
 }
 
-// Whether the filter's ramp is steepened (`edge_ramp_pixels`): a constant
-// of the pipeline for the filters that can be (all but hard; pcss and
-// varwidth draw a ½-texel disk under a light without an area, the moment
-// filters their blur), the hard filter never finds the pixel's footprint in
-// the map; and sm.screen.y,
-// the ramp's reach in texels, 0 where there is nothing to steepen (a
-// penumbra). Callers run it as a one-trip loop, not a branch (see
-// `filtered`).
+// Whether the filter's ramp is steepened (`edge_ramp_pixels`): sm.screen.y,
+// the ramp's reach in texels (`ShadowMapConfig::ramp_reach`), is 0 where
+// there is nothing to steepen (a penumbra, or `edge_ramp_pixels` = 0); the
+// hard filter, which has no ramp, is left out as a constant of the
+// pipeline, so it never finds the pixel's footprint in the map. Callers run
+// it as a one-trip loop, not a branch (see `filtered`).
 fn steepens_ramps() -> bool {
     return FILTER_KIND != FILTER_HARD && sm.screen.y > 0.0;
 }
@@ -137,7 +135,7 @@ fn steepens_ramps() -> bool {
 // pixels than that on screen (magnified texels); ½ itself stays, so no
 // pixel changes side.
 fn sharpened(v: f32, texels_per_pixel: f32) -> f32 {
-    if !steepens_ramps() || sm.screen.x <= 0.0 || !(texels_per_pixel > 0.0) {
+    if !steepens_ramps() || !(texels_per_pixel > 0.0) {
         return v;
     }
     let ramp_pixels = 2.0 * sm.screen.y / texels_per_pixel;
