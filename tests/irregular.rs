@@ -4,6 +4,8 @@
 
 mod common;
 use common::*;
+use glam::Vec3;
+use shadowlab::technique::raytraced::{OFFSET_ULPS as ULPS, offset_ray_origin};
 
 /// Under point, spot and directional lights, on open and closed meshes and
 /// curved receivers, the mask is the reference's: no resolution error.
@@ -76,22 +78,63 @@ fn cut_out_casters_let_light_through_their_holes() {
     }
 }
 
-/// Every pixel that shows a surface is binned once, and the lists are short.
+/// Every pixel that shows a surface the light reaches (facing it, inside a
+/// spot's cone) is binned once, and the lists are short; elsewhere it is
+/// not binned and it is shadowed, as in the reference, on every pixel.
 #[test]
-fn every_seen_sample_is_binned() {
-    let s = preset("room", "default", "sun");
-    let mut hf = rendered_frame(&s, "irregular", &[], 160, 90);
-    render_again(&mut hf, &s);
-    render_again(&mut hf, &s);
-    let raw = gpu()
-        .read_texture(hf.frame.gbuffer_position(), 0, 16)
-        .unwrap();
-    let positions: &[[f32; 4]] = bytemuck::cast_slice(&raw);
-    let seen = positions.iter().filter(|p| p[3] >= 0.5).count();
-    assert!(seen > 160 * 90 / 2);
-    assert_eq!(counter(&hf, "samples_binned") as usize, seen);
-    assert!(counter(&hf, "list_length_p50") >= 1.0);
-    assert!(counter(&hf, "list_length_p99") <= 8.0);
+fn every_seen_sample_the_light_reaches_is_binned() {
+    let (w, h) = (160, 90);
+    for (scene, camera, light) in [("curved", "default", "sun"), ("room", "default", "spot")] {
+        let s = preset(scene, camera, light);
+        let mut hf = rendered_frame(&s, "irregular", &[], w, h);
+        render_again(&mut hf, &s);
+        render_again(&mut hf, &s);
+        let raw = gpu()
+            .read_texture(hf.frame.gbuffer_position(), 0, 16)
+            .unwrap();
+        let positions: &[[f32; 4]] = bytemuck::cast_slice(&raw);
+        let raw = gpu().read_texture(hf.frame.gbuffer_normal(), 0, 8).unwrap();
+        let normals: &[[half::f16; 4]] = bytemuck::cast_slice(&raw);
+        let reached: Vec<Option<bool>> = positions
+            .iter()
+            .zip(normals)
+            .map(|(p, n)| {
+                let n = Vec3::new(n[0].to_f32(), n[1].to_f32(), n[2].to_f32()).normalize();
+                let ulps = ULPS.default as f32;
+                let o = offset_ray_origin(Vec3::new(p[0], p[1], p[2]), n, ulps);
+                (p[3] >= 0.5).then(|| s.lights[0].reaches(o, n))
+            })
+            .collect();
+        let seen = reached.iter().flatten().count();
+        let binned = reached.iter().flatten().filter(|&&r| r).count();
+        assert!(binned > w as usize * h as usize / 10, "{scene}/{light}: {binned} reached");
+        assert!(
+            seen - binned > 100,
+            "{scene}/{light}: {seen} seen, {binned} reached"
+        );
+        assert_eq!(
+            counter(&hf, "samples_binned") as usize,
+            binned,
+            "{scene}/{light}"
+        );
+        assert!(counter(&hf, "list_length_p50") >= 1.0);
+        assert!(counter(&hf, "list_length_p99") <= 8.0);
+        let irregular = mask_of(&s, "irregular", &[], w, h);
+        let reference = mask_of(&s, "raytraced", &[], w, h);
+        assert_eq!(
+            pixels_differing(&irregular, &reference),
+            0,
+            "{scene}/{light}"
+        );
+        let unreached = irregular
+            .iter()
+            .zip(&reached)
+            .filter(|(_, r)| **r == Some(false));
+        assert!(
+            unreached.map(|(&v, _)| v).all(|v| v == 0.0),
+            "{scene}/{light}"
+        );
+    }
 }
 
 /// A triangle's samples are tested the same whether its own thread tests
@@ -166,7 +209,7 @@ fn a_grid_past_the_device_limit_is_an_error() {
 /// samples agrees.
 #[test]
 fn sub_pixel_samples_converge_to_the_covered_fraction() {
-    use glam::{Mat4, Vec2, Vec3};
+    use glam::{Mat4, Vec2};
     use shadowlab::scene::{Camera, Light, Material, Scene, shapes};
     let turn = 0.4f32;
     let mut s = Scene::new("turned square");

@@ -101,17 +101,30 @@ impl Light {
             LightType::Directional => -self.direction,
             _ => self.position - p,
         };
-        if n.dot(to_light) <= 0.0 {
-            return false;
-        }
+        n.dot(to_light) > 0.0 && self.shines_on(p)
+    }
+
+    /// True where this light emits towards `p` at all: inside a spot
+    /// light's outer cone and within the range (when one is set).
+    pub fn shines_on(&self, p: Vec3) -> bool {
         if self.kind == LightType::Directional {
             return true;
         }
+        let to_light = self.position - p;
         let d = to_light.length();
-        let in_cone = self.kind != LightType::Spot
-            || (-to_light / d).dot(self.direction.normalize())
-                > self.outer_cone_deg.to_radians().cos();
+        let in_cone =
+            self.kind != LightType::Spot || (-to_light / d).dot(self.cone_axis()) > self.cone_cos();
         in_cone && (self.range <= 0.0 || d < self.range)
+    }
+
+    /// A spot light's unit axis.
+    pub fn cone_axis(&self) -> Vec3 {
+        self.direction.normalize()
+    }
+
+    /// The cosine of a spot light's outer cone.
+    pub fn cone_cos(&self) -> f32 {
+        self.outer_cone_deg.to_radians().cos()
     }
 
     pub fn validate(&self) -> Result<()> {

@@ -61,6 +61,7 @@ pub struct IrregularUniform {
     pub work: UVec4,
     pub offset: Vec4,
     pub pixel: UVec4,
+    pub cone: Vec4,
 }
 
 /// The family's layout and pipelines, shared per device.
@@ -181,7 +182,7 @@ mod tests {
         assert_struct_matches(
             &source,
             "Irregular",
-            crate::field_offsets!(IrregularUniform; views, light, grid, work, offset, pixel),
+            crate::field_offsets!(IrregularUniform; views, light, grid, work, offset, pixel, cone),
             std::mem::size_of::<IrregularUniform>(),
         );
         assert_struct_matches(

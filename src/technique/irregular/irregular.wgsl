@@ -19,11 +19,15 @@ struct Irregular {
     // x caster triangles, y samples above which a triangle is left to the
     // job pass, z the job list's capacity, w the cells (faces · R²)
     work: vec4u,
-    // x ray-origin offset in ULPs (the reference's rule), yzw unused
+    // x ray-origin offset in ULPs (the reference's rule), y the light's
+    // range (0: none), zw unused
     offset: vec4f,
     // x samples per pixel (1: its centre; up to 32, one mark bit each), yzw
     // unused
     pixel: vec4u,
+    // xyz a spot light's unit axis, w the cosine of its outer cone (below
+    // −1 for other lights: no cone)
+    cone: vec4f,
 };
 
 struct CasterTriangle {

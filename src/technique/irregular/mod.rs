@@ -48,6 +48,9 @@ const GRID: ParamSpec = ParamSpec::int(
 );
 /// Cells per sample the automatic grid gives at least, over the faces.
 const CELLS_PER_SAMPLE: f64 = 1.0;
+/// The uniform's cone cosine for a light without a cone: below every
+/// cosine, so every direction is inside.
+const NO_CONE: f32 = -2.0;
 /// The least grid side (an explicit `grid` below it is raised to it).
 const GRID_MIN: u32 = 64;
 const LARGE_SAMPLES: ParamSpec = ParamSpec::int(
@@ -407,8 +410,12 @@ impl ShadowTechnique for IrregularZBuffer {
                 b.job_capacity,
                 b.cell_count as u32,
             ),
-            offset: Vec4::new(config.offset_ulps, 0.0, 0.0, 0.0),
+            offset: Vec4::new(config.offset_ulps, light.range, 0.0, 0.0),
             pixel: UVec4::new(config.pixel_samples, 0, 0, 0),
+            cone: match light.kind {
+                LightType::Spot => light.cone_axis().extend(light.cone_cos()),
+                _ => Vec4::new(0.0, 0.0, 0.0, NO_CONE),
+            },
         };
         uniform.views[..faces].copy_from_slice(&views);
         ctx.gpu

@@ -50,6 +50,23 @@ fn sample_origin(px: vec2u, k: u32, s: Surface) -> vec3f {
     return offset_origin(sub_sample_point(px, k, s), s.n, irr.offset.x);
 }
 
+// Whether the light reaches the sample at `o` on a surface with normal
+// `n` at all (the reference's rule): its ray to the light leaves above the
+// surface's plane (below it the surface itself hides the light), inside a
+// spot's outer cone and within the range. Elsewhere the sample is marked
+// shadowed and not binned.
+fn light_reaches(o: vec3f, n: vec3f) -> bool {
+    let to_light = select(-irr.light.xyz, irr.light.xyz - o, is_local());
+    if dot(to_light, n) <= 0.0 {
+        return false;
+    }
+    if !is_local() {
+        return true;
+    }
+    let d = length(to_light);
+    return dot(-to_light / d, irr.cone.xyz) > irr.cone.w && (irr.offset.y <= 0.0 || d < irr.offset.y);
+}
+
 // The cube face a direction from a local light falls in (+x, −x, +y, −y,
 // +z, −z), or 0 for a directional light.
 fn face_of(p: vec3f) -> u32 {
@@ -118,7 +135,7 @@ fn fs_bounds(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         let o = sample_origin(px, k, s);
         let face = face_of(o);
         let v = (irr.views[face] * vec4f(o, 1.0)).xyz;
-        if !is_local() || v.z < 0.0 {
+        if light_reaches(o, s.n) && (!is_local() || v.z < 0.0) {
             let c = image_of(v);
             let b = AUX_BOUNDS + face * 4u;
             raise(b, ~ordered(c.x));
@@ -131,16 +148,22 @@ fn fs_bounds(@builtin(position) frag: vec4f) -> @location(0) vec4f {
 }
 
 // The cell sample `k` of a seen pixel is binned in, or N (irr.work.w)
-// where it lies behind a local light's face.
+// where it lies behind a local light's face or the light does not reach
+// it (`hidden`: `light_reaches`).
 struct Binned {
     origin: vec3f,
     cell: u32,
+    hidden: bool,
 };
 
 fn binned(px: vec2u, k: u32, s: Surface) -> Binned {
     var b: Binned;
     b.cell = irr.work.w;
     let o = sample_origin(px, k, s);
+    b.hidden = !light_reaches(o, s.n);
+    if b.hidden {
+        return b;
+    }
     let face = face_of(o);
     let v = (irr.views[face] * vec4f(o, 1.0)).xyz;
     if !is_local() || v.z < 0.0 {
@@ -150,7 +173,8 @@ fn binned(px: vec2u, k: u32, s: Surface) -> Binned {
     return b;
 }
 
-// Pass 2, per pixel: each cell's samples counted.
+// Pass 2, per pixel: each cell's samples counted; samples the light does
+// not reach marked.
 @fragment
 fn fs_count(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let px = vec2u(frag.xy);
@@ -159,6 +183,8 @@ fn fs_count(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         let b = binned(px, k, s);
         if b.cell < irr.work.w {
             atomicAdd(&cells[b.cell], 1u);
+        } else if b.hidden {
+            atomicOr(&marks[px.y * irr.grid.z + px.x], 1u << k);
         }
     }
     return vec4f(1.0);

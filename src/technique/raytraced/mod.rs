@@ -227,7 +227,10 @@ fn pcg(mut v: u32) -> u32 {
 /// Visibility of `light` from the surface point `p` with geometric normal
 /// `n`: the light a shadow ray carries past the casters (0 or 1 unless it
 /// crosses translucent ones) for hard lights, its mean over `samples` rays
-/// for area lights.
+/// for area lights. A ray below the surface's plane carries none (the
+/// surface itself hides the light there), nor does a light that does not
+/// shine on `p` (outside a spot's cone, past the range): the irregular
+/// z-buffer bins no such sample.
 pub fn visibility(
     bvh: &CasterBvh,
     light: &Light,
@@ -238,16 +241,27 @@ pub fn visibility(
     seed: u32,
 ) -> f32 {
     let origin = offset_ray_origin(p, n, ulps);
+    if !light.shines_on(origin) {
+        return 0.0;
+    }
     let to_point = |target: Vec3| {
         let d = target - origin;
         let len = d.length();
         if len <= 0.0 {
             1.0
+        } else if d.dot(n) <= 0.0 {
+            0.0
         } else {
             bvh.transmittance(origin, d / len, len)
         }
     };
-    let to_dir = |dir: Vec3| bvh.transmittance(origin, dir.normalize(), f32::INFINITY);
+    let to_dir = |dir: Vec3| {
+        if dir.dot(n) <= 0.0 {
+            0.0
+        } else {
+            bvh.transmittance(origin, dir.normalize(), f32::INFINITY)
+        }
+    };
     let Some(area) = light.area.filter(|_| samples > 1) else {
         return match light.kind {
             LightType::Directional => to_dir(-light.direction),
