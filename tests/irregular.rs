@@ -107,7 +107,10 @@ fn every_seen_sample_the_light_reaches_is_binned() {
             .collect();
         let seen = reached.iter().flatten().count();
         let binned = reached.iter().flatten().filter(|&&r| r).count();
-        assert!(binned > w as usize * h as usize / 10, "{scene}/{light}: {binned} reached");
+        assert!(
+            binned > w as usize * h as usize / 10,
+            "{scene}/{light}: {binned} reached"
+        );
         assert!(
             seen - binned > 100,
             "{scene}/{light}: {seen} seen, {binned} reached"
