@@ -515,4 +515,45 @@ mod tests {
         let light = Light::directional(Vec3::new(0.0, -1.0, 0.0), 1.0);
         assert_eq!(visibility(&bvh, &light, above, Vec3::Y, 1, 64.0, 0), 0.0);
     }
+
+    #[test]
+    fn a_light_the_surface_or_the_cone_hides_is_not_traced() {
+        let mut s = Scene::new("far box");
+        let m = s.add_material(crate::scene::Material::default());
+        let cube = s.add_mesh(crate::scene::shapes::cuboid(Vec3::splat(0.5)));
+        s.add_object(
+            "Box",
+            cube,
+            m,
+            glam::Mat4::from_translation(Vec3::new(50.0, 0.0, 0.0)),
+        );
+        s.finalize().unwrap();
+        let bvh = CasterBvh::build(&s, TraceKernel::Obvhs).unwrap();
+        let (p, n) = (Vec3::ZERO, Vec3::Y);
+        let vis = |l: &Light, samples| visibility(&bvh, l, p, n, samples, 64.0, 7);
+        // A sun overhead lights the point; one under its surface does not.
+        assert_eq!(vis(&Light::directional(Vec3::NEG_Y, 1.0), 1), 1.0);
+        assert_eq!(vis(&Light::directional(Vec3::Y, 1.0), 1), 0.0);
+        // A spot lights it inside its cone only.
+        let above = Vec3::new(0.0, 5.0, 0.0);
+        assert_eq!(vis(&Light::spot(above, p, 1.0, 20.0, 30.0), 1), 1.0);
+        assert_eq!(
+            vis(
+                &Light::spot(above, Vec3::new(9.0, 0.0, 0.0), 1.0, 20.0, 30.0),
+                1
+            ),
+            0.0
+        );
+        // A point light within its range only.
+        let mut point = Light::point(above, 1.0);
+        point.range = 10.0;
+        assert_eq!(vis(&point, 1), 1.0);
+        point.range = 2.0;
+        assert_eq!(vis(&point, 1), 0.0);
+        // A sphere light centred on the horizon: the half below it is hidden.
+        let mut horizon = Light::point(Vec3::new(-5.0, 0.0, 0.0), 1.0);
+        horizon.area = Some(LightArea::Sphere { radius: 1.0 });
+        let half = vis(&horizon, 256);
+        assert!((half - 0.5).abs() < 0.1, "{half}");
+    }
 }
