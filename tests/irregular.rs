@@ -95,12 +95,12 @@ fn every_seen_sample_the_light_reaches_is_binned() {
         let positions: &[[f32; 4]] = bytemuck::cast_slice(&raw);
         let raw = gpu().read_texture(hf.frame.gbuffer_normal(), 0, 8).unwrap();
         let normals: &[[half::f16; 4]] = bytemuck::cast_slice(&raw);
+        let ulps = ULPS.default as f32;
         let reached: Vec<Option<bool>> = positions
             .iter()
             .zip(normals)
             .map(|(p, n)| {
                 let n = Vec3::new(n[0].to_f32(), n[1].to_f32(), n[2].to_f32()).normalize();
-                let ulps = ULPS.default as f32;
                 let o = offset_ray_origin(Vec3::new(p[0], p[1], p[2]), n, ulps);
                 (p[3] >= 0.5).then(|| s.lights[0].reaches(o, n))
             })

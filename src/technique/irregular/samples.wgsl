@@ -133,9 +133,12 @@ fn fs_bounds(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let s = surface(px);
     for (var k = 0u; s.seen && k < irr.pixel.x; k++) {
         let o = sample_origin(px, k, s);
+        if !light_reaches(o, s.n) {
+            continue;
+        }
         let face = face_of(o);
         let v = (irr.views[face] * vec4f(o, 1.0)).xyz;
-        if light_reaches(o, s.n) && (!is_local() || v.z < 0.0) {
+        if !is_local() || v.z < 0.0 {
             let c = image_of(v);
             let b = AUX_BOUNDS + face * 4u;
             raise(b, ~ordered(c.x));

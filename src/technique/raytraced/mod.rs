@@ -244,24 +244,24 @@ pub fn visibility(
     if !light.shines_on(origin) {
         return 0.0;
     }
+    // Along unit `dir` for `len`: nothing below the surface's plane.
+    let through = |dir: Vec3, len: f32| {
+        if dir.dot(n) <= 0.0 {
+            0.0
+        } else {
+            bvh.transmittance(origin, dir, len)
+        }
+    };
     let to_point = |target: Vec3| {
         let d = target - origin;
         let len = d.length();
         if len <= 0.0 {
             1.0
-        } else if d.dot(n) <= 0.0 {
-            0.0
         } else {
-            bvh.transmittance(origin, d / len, len)
+            through(d / len, len)
         }
     };
-    let to_dir = |dir: Vec3| {
-        if dir.dot(n) <= 0.0 {
-            0.0
-        } else {
-            bvh.transmittance(origin, dir.normalize(), f32::INFINITY)
-        }
-    };
+    let to_dir = |dir: Vec3| through(dir.normalize(), f32::INFINITY);
     let Some(area) = light.area.filter(|_| samples > 1) else {
         return match light.kind {
             LightType::Directional => to_dir(-light.direction),
