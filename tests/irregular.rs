@@ -78,6 +78,31 @@ fn cut_out_casters_let_light_through_their_holes() {
     }
 }
 
+/// The glass pane is translucent: `blended_casters=transmit` lets each
+/// sample keep the light its crossings pass, as the reference does, where
+/// `cutout` (the default) lights what lies in its shadow.
+#[test]
+fn translucent_casters_transmit_as_in_the_reference() {
+    for light in ["sun", "point"] {
+        let s = preset("foliage", "eye-level", light);
+        let cutout = compare(&s, "irregular", (192, 108)).mask;
+        let transmit = compare(&s, "irregular[blended_casters=transmit]", (192, 108)).mask;
+        let (c, t) = (
+            cutout
+                .fractional_mae
+                .expect("the pane's shadow is fractional"),
+            transmit
+                .fractional_mae
+                .expect("the pane's shadow is fractional"),
+        );
+        assert!(c > 0.1 && t < 0.005, "{light}: cutout {c}, transmit {t}");
+        assert!(
+            transmit.all.total_pct <= 0.05 && transmit.mean_abs_error < 0.001,
+            "{light}: {transmit:?}"
+        );
+    }
+}
+
 /// Every pixel that shows a surface the light reaches (facing it, inside a
 /// spot's cone) is binned once, and the lists are short; elsewhere it is
 /// not binned and it is shadowed, as in the reference, on every pixel.

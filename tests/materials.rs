@@ -187,6 +187,52 @@ fn two_stacked_half_transparent_panes_pass_a_quarter_of_the_light() {
     assert!((hashed - 0.25).abs() < 0.08, "hashed: {hashed}");
 }
 
+/// The irregular z-buffer on the same panes: `transmit` keeps the
+/// reference's quarter (the optical depths summed in fixed point), the
+/// other modes draw them as the shadow maps do.
+#[test]
+fn irregular_transmits_through_stacked_panes_as_the_reference() {
+    let sun = Light::directional(Vec3::new(0.1, -1.0, 0.05), 1.0);
+    let squares = [
+        (Vec3::new(0.0, 1.0, 0.0), 1.5),
+        (Vec3::new(0.0, 2.0, 0.0), 1.5),
+    ];
+    let mut s = squares_over_floor(&squares, sun, false);
+    let pane = |double_sided| Material {
+        alpha: 0.5,
+        alpha_mode: AlphaMode::Blend,
+        double_sided,
+        ..Material::color("pane", Vec3::splat(0.8))
+    };
+    let lower = s.add_material(pane(false));
+    let upper = s.add_material(pane(true));
+    s.objects[1].material = lower;
+    s.objects[2].material = upper;
+    s.finalize().unwrap();
+    let (w, h) = (64, 64);
+    let centre = (h / 2 * w + w / 2) as usize;
+    let reference = mask_of(&s, "raytraced", &[], w, h);
+    let transmit = mask_of(&s, "irregular", &["blended_casters=transmit"], w, h);
+    assert!(
+        (transmit[centre] - 0.25).abs() < 1e-3,
+        "transmit: {} at the centre",
+        transmit[centre]
+    );
+    let worst = reference
+        .iter()
+        .zip(&transmit)
+        .map(|(r, t)| (r - t).abs())
+        .fold(0.0f32, f32::max);
+    assert!(
+        worst < 1e-3,
+        "transmit differs from the reference by {worst}"
+    );
+    for (mode, expected) in [("cutout", 0.0), ("opaque", 0.0), ("ignore", 1.0)] {
+        let m = mask_of(&s, "irregular", &[&format!("blended_casters={mode}")], w, h);
+        assert_eq!(m[centre], expected, "{mode}");
+    }
+}
+
 /// A one-sided sheet seen from below is culled (the camera sees the
 /// background); made double-sided it is drawn and lit from below by a light
 /// under it, with nothing in its way.

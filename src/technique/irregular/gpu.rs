@@ -209,6 +209,17 @@ mod tests {
                 ("SCAN_BLOCK", SCAN_BLOCK as u32),
             ],
         );
+        use super::super::BlendedCrossing;
+        use crate::technique::params::Choice;
+        let blended: Vec<(String, u32)> = BlendedCrossing::ALL
+            .iter()
+            .map(|b| {
+                let name = BlendedCrossing::NAMES[b.index()].to_ascii_uppercase();
+                (format!("BLENDED_{name}"), b.index() as u32)
+            })
+            .collect();
+        let blended: Vec<(&str, u32)> = blended.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+        assert_consts_match(&source, &blended);
     }
 
     /// The cells that fit a buffer are the most whose binning words do.

@@ -22,8 +22,8 @@ struct Irregular {
     // x ray-origin offset in ULPs (the reference's rule), y the light's
     // range (0: none), zw unused
     offset: vec4f,
-    // x samples per pixel (1: its centre; up to 32, one mark bit each), yzw
-    // unused
+    // x samples per pixel (1: its centre; up to 32, one mark bit each), y
+    // how rays meet translucent casters (BLENDED_*), zw unused
     pixel: vec4u,
     // xyz a spot light's unit axis, w the cosine of its outer cone (below
     // −1 for other lights: no cone)
@@ -53,7 +53,8 @@ struct CasterTriangle {
 // origin found again from the G-buffer (4 bytes a sample, so that 16 of
 // them for a 1280 × 720 frame fit one storage buffer).
 @group(2) @binding(2) var<storage, read_write> samples: array<vec4u>;
-// Per pixel: bit k set once a caster blocks its sample k.
+// Per pixel: bit k set once a caster blocks its sample k; then, under
+// BLENDED_TRANSMIT, each sample's optical depth (`depth_slot`).
 @group(2) @binding(3) var<storage, read_write> marks: array<atomic<u32>>;
 @group(2) @binding(4) var<storage, read> triangles: array<CasterTriangle>;
 // The header (AUX_* words: counters, list-length histogram, per-face bounds)
@@ -113,10 +114,26 @@ fn offset_origin(p: vec3f, n: vec3f, ulps: f32) -> vec3f {
     return out;
 }
 
-// Whether triangle `t` blocks the ray from `o` to the light (Möller &
-// Trumbore 1997), through a hole of a cut-out (alpha-tested at full
-// resolution, blended casters cut at ½, as the reference's cut-outs).
-fn blocks(t: CasterTriangle, o: vec3f) -> bool {
+// How a shadow ray meets a translucent (glTF BLEND) caster (`irr.pixel.y`,
+// `BlendedCrossing` of mod.rs): solid where its opacity reaches ½, letting
+// 1 − opacity through (the reference's transmittance), solid, or not at all.
+const BLENDED_CUTOUT: u32 = 0u;
+const BLENDED_TRANSMIT: u32 = 1u;
+const BLENDED_OPAQUE: u32 = 2u;
+const BLENDED_IGNORE: u32 = 3u;
+// Optical depth −ln(transmittance) is summed per sample in fixed point,
+// these units per unit (an order-independent product of transmittances).
+const DEPTH_UNITS: f32 = 65536.0;
+// The optical depth past which a sample counts as blocked: ln 65536, where
+// the reference stops tracing (`OPAQUE_ENOUGH`, a transmittance of 1/65536).
+const OPAQUE_DEPTH: f32 = 11.090355;
+
+// The opacity triangle `t` puts in the way of the ray from `o` to the light
+// (Möller & Trumbore 1997): 0 where the ray misses it or passes a cut-out's
+// hole, 1 where it blocks, the opacity in between where a translucent
+// caster transmits the rest (alpha-tested and sampled at full resolution,
+// as the reference's see-through casters).
+fn opacity_crossed(t: CasterTriangle, o: vec3f) -> f32 {
     var d = -irr.light.xyz;
     var t_max = 3.0e38;
     if is_local() {
@@ -128,29 +145,40 @@ fn blocks(t: CasterTriangle, o: vec3f) -> bool {
     let p = cross(d, e2);
     let det = dot(e1, p);
     if abs(det) < 1e-30 {
-        return false;
+        return 0.0;
     }
     let inv = 1.0 / det;
     let s = o - t.a.xyz;
     let u = dot(s, p) * inv;
     if u < 0.0 || u > 1.0 {
-        return false;
+        return 0.0;
     }
     let q = cross(s, e1);
     let w = dot(d, q) * inv;
     if w < 0.0 || u + w > 1.0 {
-        return false;
+        return 0.0;
     }
     let hit = dot(e2, q) * inv;
     if hit <= 0.0 || hit >= t_max {
-        return false;
+        return 0.0;
     }
     let object = bitcast<u32>(t.v.w);
-    if objects[object].alpha.x == ALPHA_OPAQUE {
-        return true;
+    let mode = objects[object].alpha.x;
+    if mode == ALPHA_OPAQUE || (mode == ALPHA_BLEND && irr.pixel.y == BLENDED_OPAQUE) {
+        return 1.0;
     }
     let uv = vec2f(t.a.w, t.v.x) * (1.0 - u - w) + vec2f(t.b.w, t.v.y) * u + vec2f(t.c.w, t.v.z) * w;
-    return is_solid_at(object, uv, 0.0, 0.5);
+    if mode == ALPHA_BLEND && irr.pixel.y == BLENDED_TRANSMIT {
+        return clamp(opacity_at(object, uv, 0.0), 0.0, 1.0);
+    }
+    return select(0.0, 1.0, is_solid_at(object, uv, 0.0, 0.5));
+}
+
+// Whether the ray tests leave `t` out: a translucent caster under
+// `blended_casters=ignore`.
+fn ignored(t: CasterTriangle) -> bool {
+    let object = bitcast<u32>(t.v.w);
+    return objects[object].alpha.x == ALPHA_BLEND && irr.pixel.y == BLENDED_IGNORE;
 }
 
 // Whether `t` is a face of an opaque solid turned away from the light:
@@ -182,7 +210,15 @@ fn sample_at(slot: u32) -> vec4f {
     return vec4f(sample_origin(px, id % 32u, surface(px)), bitcast<f32>(id));
 }
 
-// Sample `slot` tested against triangle `t`; whether it needed a test.
+// Where sample k of `pixel` sums its optical depth (`BLENDED_TRANSMIT`):
+// after the marks, one word per sample.
+fn depth_slot(pixel: u32, k: u32) -> u32 {
+    return irr.grid.z * irr.grid.w + pixel * max(irr.pixel.x, 1u) + k;
+}
+
+// Sample `slot` tested against triangle `t`; whether it needed a test. A
+// blocked sample is marked; a translucent crossing adds its optical depth,
+// and marks the sample once the sum passes OPAQUE_DEPTH.
 fn test_sample(t: CasterTriangle, slot: u32) -> u32 {
     let sample = sample_at(slot);
     let id = bitcast<u32>(sample.w);
@@ -191,8 +227,16 @@ fn test_sample(t: CasterTriangle, slot: u32) -> u32 {
     if (atomicLoad(&marks[pixel]) & bit) != 0u {
         return 0u;
     }
-    if blocks(t, sample.xyz) {
+    let opacity = opacity_crossed(t, sample.xyz);
+    if opacity >= 1.0 {
         atomicOr(&marks[pixel], bit);
+    } else if opacity > 0.0 {
+        let depth = min(-log(1.0 - opacity), OPAQUE_DEPTH);
+        let units = u32(round(depth * DEPTH_UNITS));
+        let before = atomicAdd(&marks[depth_slot(pixel, id % 32u)], units);
+        if f32(before + units) >= OPAQUE_DEPTH * DEPTH_UNITS {
+            atomicOr(&marks[pixel], bit);
+        }
     }
     return 1u;
 }
@@ -327,7 +371,7 @@ fn count_work(lane: u32, work: vec2u) {
 // counted (AUX_OVERFLOW, in samples) and tested here. Its (pairs, tests).
 fn triangle_work(index: u32) -> vec2u {
     let t = triangles[index];
-    if faces_away_on_a_solid(t) {
+    if faces_away_on_a_solid(t) || ignored(t) {
         return vec2u(0u);
     }
     var tests = 0u;
@@ -403,10 +447,23 @@ fn cs_jobs(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups:
     count_work(lane, vec2u(0u, tests));
 }
 
-// Pass 8, per pixel: the mask, the fraction of its samples no caster blocks.
+// Pass 8, per pixel: the mask, the mean of its samples' light: 0 where a
+// caster blocks the sample, else the transmittance of the translucent
+// casters it crossed (1 without `BLENDED_TRANSMIT`).
 @fragment
 fn fs_mask(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let px = vec2u(frag.xy);
-    let blocked = countOneBits(atomicLoad(&marks[px.y * irr.grid.z + px.x]));
-    return vec4f(1.0 - f32(blocked) / f32(max(irr.pixel.x, 1u)));
+    let pixel = px.y * irr.grid.z + px.x;
+    let count = max(irr.pixel.x, 1u);
+    let blocked = atomicLoad(&marks[pixel]);
+    if irr.pixel.y != BLENDED_TRANSMIT {
+        return vec4f(1.0 - f32(countOneBits(blocked)) / f32(count));
+    }
+    var light = 0.0;
+    for (var k = 0u; k < count; k++) {
+        if (blocked & (1u << k)) == 0u {
+            light += exp(-f32(atomicLoad(&marks[depth_slot(pixel, k)])) / DEPTH_UNITS);
+        }
+    }
+    return vec4f(light / f32(count));
 }

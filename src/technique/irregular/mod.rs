@@ -25,6 +25,7 @@ mod casters;
 mod gpu;
 mod timing;
 
+use super::params::{Choice, choice_enum};
 use super::{Family, MaskContext, ParamSpec, ParamValues, Preset, ShadowTechnique};
 use crate::gpu::GpuContext;
 use crate::scene::{LightType, scene_fingerprint};
@@ -61,6 +62,27 @@ const LARGE_SAMPLES: ParamSpec = ParamSpec::int(
     "a triangle whose cells hold more samples than this is split into jobs of 1024 samples, each tested by a workgroup of 64 threads, not by the triangle's one thread (one invocation looping over many samples runs long: llvmpipe ends a shader's loops after 65535 iterations, GPUs have watchdogs)",
 );
 
+choice_enum! {
+    /// How the shadow rays meet translucent (glTF `BLEND`) casters.
+    pub enum BlendedCrossing {
+        /// Solid where the opacity reaches ½ (the other families' default).
+        Cutout = "cutout",
+        /// Letting 1 − opacity through, multiplied over the surfaces a ray
+        /// crosses: the reference's transmittance.
+        Transmit = "transmit",
+        /// Solid everywhere.
+        Opaque = "opaque",
+        /// Not in the way at all.
+        Ignore = "ignore",
+    }
+}
+
+const BLENDED_CASTERS: ParamSpec = ParamSpec::choice_of::<BlendedCrossing>(
+    "blended_casters",
+    BlendedCrossing::Cutout as usize,
+    "translucent (glTF BLEND) casters: cutout — solid where opacity ≥ ½; transmit — each sample keeps the product of 1 − opacity over the translucent surfaces its ray crosses (summed as optical depth, 4 more bytes per sample), exactly what the reference traces; opaque — solid everywhere; ignore — cast no shadow",
+);
+
 pub static FAMILY: Family = Family {
     id: "irregular",
     summary: "irregular z-buffer (alias-free shadow maps): caster triangles tested exactly against the camera's own samples, binned in light space",
@@ -79,6 +101,7 @@ pub static FAMILY: Family = Family {
         LARGE_SAMPLES,
         super::raytraced::PIXEL_SAMPLES,
         super::raytraced::OFFSET_ULPS,
+        BLENDED_CASTERS,
     ],
     presets: &[
         Preset {
@@ -107,6 +130,7 @@ struct IrregularConfig {
     large_samples: u32,
     pixel_samples: u32,
     offset_ulps: f32,
+    blended: BlendedCrossing,
 }
 
 impl IrregularConfig {
@@ -136,6 +160,7 @@ impl IrregularConfig {
             large_samples: p.int(&LARGE_SAMPLES)?,
             pixel_samples: p.int(&super::raytraced::PIXEL_SAMPLES)?,
             offset_ulps: p.float(&super::raytraced::OFFSET_ULPS)?,
+            blended: p.choice(&BLENDED_CASTERS)?,
         })
     }
 }
@@ -194,9 +219,10 @@ impl ListStats {
     }
 }
 
-/// The buffers of one frame size, scene and light shape.
+/// The buffers of one frame size, scene, light shape, grid, sample count and
+/// whether the marks hold optical depths.
 struct Buffers {
-    key: (u32, u32, u64, usize, u32, u32),
+    key: (u32, u32, u64, usize, u32, u32, bool),
     uniform: wgpu::Buffer,
     /// Counts, offsets and prefix-sum partials (`cells` of irregular.wgsl).
     binning: wgpu::Buffer,
@@ -244,6 +270,16 @@ fn sample_bytes(pixels: u64, pixel_samples: u32) -> u64 {
     }
 }
 
+/// The marks' bytes: a word per pixel, then under `transmit` a word of
+/// optical depth per sample.
+fn mark_bytes(pixels: u64, config: &IrregularConfig) -> u64 {
+    let depths = match config.blended {
+        BlendedCrossing::Transmit => pixels * config.pixel_samples.max(1) as u64,
+        _ => 0,
+    };
+    (pixels + depths) * 4
+}
+
 impl IrregularZBuffer {
     fn new(gpu: &GpuContext, config: IrregularConfig) -> IrregularZBuffer {
         IrregularZBuffer {
@@ -278,6 +314,7 @@ impl IrregularZBuffer {
             faces,
             grid,
             self.config.pixel_samples,
+            self.config.blended == BlendedCrossing::Transmit,
         );
         let asked = self.stats.jobs as u64;
         if self
@@ -305,6 +342,7 @@ impl IrregularZBuffer {
             ("samples", sample_bytes(pixels, self.config.pixel_samples)),
             ("caster triangles", triangles.len() as u64 * 64),
             ("job list", (AUX_HEADER_WORDS + 4 * capacity) * 4),
+            ("marks", mark_bytes(pixels, &self.config)),
         ];
         for (what, bytes) in sizes {
             if bytes > limit {
@@ -315,7 +353,7 @@ impl IrregularZBuffer {
                 );
             }
         }
-        let total = sizes.iter().map(|s| s.1).sum::<u64>() + pixels * 4;
+        let total = sizes.iter().map(|s| s.1).sum::<u64>();
         gpu.check_allocation("irregular (grid, samples, casters)", (1, 1, 1), total)?;
         let uniform = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("irregular uniform"),
@@ -325,7 +363,7 @@ impl IrregularZBuffer {
         });
         let binning = storage_buffer(gpu, "irregular cell counts and offsets", sizes[0].1);
         let samples = storage_buffer(gpu, "irregular samples", sizes[1].1);
-        let marks = storage_buffer(gpu, "irregular marks", pixels * 4);
+        let marks = storage_buffer(gpu, "irregular marks", sizes[4].1);
         let triangle_buffer = storage_buffer(gpu, "irregular casters", sizes[2].1);
         gpu.queue
             .write_buffer(&triangle_buffer, 0, bytemuck::cast_slice(&triangles));
@@ -411,7 +449,7 @@ impl ShadowTechnique for IrregularZBuffer {
                 b.cell_count as u32,
             ),
             offset: Vec4::new(config.offset_ulps, light.range, 0.0, 0.0),
-            pixel: UVec4::new(config.pixel_samples, 0, 0, 0),
+            pixel: UVec4::new(config.pixel_samples, config.blended.index() as u32, 0, 0),
             cone: match light.kind {
                 LightType::Spot => light.cone_axis().extend(light.cone_cos()),
                 _ => Vec4::new(0.0, 0.0, 0.0, NO_CONE),
@@ -604,6 +642,7 @@ mod tests {
             large_samples: 256,
             pixel_samples: 1,
             offset_ulps: 64.0,
+            blended: BlendedCrossing::Cutout,
         };
         let any = u64::MAX;
         assert_eq!(auto.grid_side(1280 * 720, 1, any), 1024);
