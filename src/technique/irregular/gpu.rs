@@ -74,9 +74,11 @@ pub struct IrregularShared {
     pub scan_blocks: wgpu::ComputePipeline,
     pub scan_partials: wgpu::ComputePipeline,
     pub scan_add: wgpu::ComputePipeline,
-    pub triangles: wgpu::ComputePipeline,
+    /// The test passes without and with `TRANSMIT` (index: whether the
+    /// samples sum optical depths).
+    pub triangles: [wgpu::ComputePipeline; 2],
     pub job_dispatch: wgpu::ComputePipeline,
-    pub jobs: wgpu::ComputePipeline,
+    pub jobs: [wgpu::ComputePipeline; 2],
 }
 
 impl IrregularShared {
@@ -112,16 +114,21 @@ impl IrregularShared {
                 Some(super::super::frame_depth_read(Default::default())),
             )
         };
-        let compute = |entry: &str| {
+        let compute_with = |entry: &str, transmit: bool| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry),
                 layout: Some(&pipeline_layout),
                 module: &module,
                 entry_point: Some(entry),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &[("TRANSMIT", if transmit { 1.0 } else { 0.0 })],
+                    ..Default::default()
+                },
                 cache: None,
             })
         };
+        let compute = |entry: &str| compute_with(entry, false);
+        let both = |entry: &str| [compute_with(entry, false), compute_with(entry, true)];
         IrregularShared {
             bounds: fullscreen("fs_bounds", wgpu::ColorWrites::empty()),
             count: fullscreen("fs_count", wgpu::ColorWrites::empty()),
@@ -130,9 +137,9 @@ impl IrregularShared {
             scan_blocks: compute("cs_scan_blocks"),
             scan_partials: compute("cs_scan_partials"),
             scan_add: compute("cs_scan_add"),
-            triangles: compute("cs_triangles"),
+            triangles: both("cs_triangles"),
             job_dispatch: compute("cs_job_dispatch"),
-            jobs: compute("cs_jobs"),
+            jobs: both("cs_jobs"),
             layout,
         }
     }

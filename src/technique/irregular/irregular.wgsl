@@ -121,6 +121,10 @@ const BLENDED_CUTOUT: u32 = 0u;
 const BLENDED_TRANSMIT: u32 = 1u;
 const BLENDED_OPAQUE: u32 = 2u;
 const BLENDED_IGNORE: u32 = 3u;
+// Whether the pipeline sums optical depths (`blended_casters=transmit`): a
+// pipeline constant, so that the other modes' test passes carry none of
+// its code (llvmpipe runs both sides of a branch its lanes diverge on).
+override TRANSMIT: bool = false;
 // Optical depth −ln(transmittance) is summed per sample in fixed point,
 // these units per unit (an order-independent product of transmittances).
 const DEPTH_UNITS: f32 = 65536.0;
@@ -164,21 +168,34 @@ fn opacity_crossed(t: CasterTriangle, o: vec3f) -> f32 {
     }
     let object = bitcast<u32>(t.v.w);
     let mode = objects[object].alpha.x;
-    if mode == ALPHA_OPAQUE || (mode == ALPHA_BLEND && irr.pixel.y == BLENDED_OPAQUE) {
+    if mode == ALPHA_OPAQUE {
         return 1.0;
     }
-    let uv = vec2f(t.a.w, t.v.x) * (1.0 - u - w) + vec2f(t.b.w, t.v.y) * u + vec2f(t.c.w, t.v.z) * w;
-    if mode == ALPHA_BLEND && irr.pixel.y == BLENDED_TRANSMIT {
-        return clamp(opacity_at(object, uv, 0.0), 0.0, 1.0);
-    }
-    return select(0.0, 1.0, is_solid_at(object, uv, 0.0, 0.5));
+    return see_through_opacity(t, object, mode == ALPHA_BLEND, u, w);
 }
 
-// Whether the ray tests leave `t` out: a translucent caster under
-// `blended_casters=ignore`.
-fn ignored(t: CasterTriangle) -> bool {
-    let object = bitcast<u32>(t.v.w);
-    return objects[object].alpha.x == ALPHA_BLEND && irr.pixel.y == BLENDED_IGNORE;
+// A cut-out's or translucent caster's opacity where the ray meets it, at
+// barycentric (u, w): its opacity map read once.
+fn see_through_opacity(t: CasterTriangle, object: u32, blended: bool, u: f32, w: f32) -> f32 {
+    let uv = vec2f(t.a.w, t.v.x) * (1.0 - u - w) + vec2f(t.b.w, t.v.y) * u + vec2f(t.c.w, t.v.z) * w;
+    let opacity = opacity_at(object, uv, 0.0);
+    if !blended {
+        return select(0.0, 1.0, opacity >= bitcast<f32>(objects[object].alpha.y));
+    }
+    if TRANSMIT {
+        return clamp(opacity, 0.0, 1.0);
+    }
+    switch irr.pixel.y {
+        case BLENDED_OPAQUE: {
+            return 1.0;
+        }
+        case BLENDED_IGNORE: {
+            return 0.0;
+        }
+        default: {
+            return select(0.0, 1.0, opacity >= 0.5);
+        }
+    }
 }
 
 // Whether `t` is a face of an opaque solid turned away from the light:
@@ -230,7 +247,7 @@ fn test_sample(t: CasterTriangle, slot: u32) -> u32 {
     let opacity = opacity_crossed(t, sample.xyz);
     if opacity >= 1.0 {
         atomicOr(&marks[pixel], bit);
-    } else if opacity > 0.0 {
+    } else if TRANSMIT && opacity > 0.0 {
         let depth = min(-log(1.0 - opacity), OPAQUE_DEPTH);
         let units = u32(round(depth * DEPTH_UNITS));
         let before = atomicAdd(&marks[depth_slot(pixel, id % 32u)], units);
@@ -371,7 +388,7 @@ fn count_work(lane: u32, work: vec2u) {
 // counted (AUX_OVERFLOW, in samples) and tested here. Its (pairs, tests).
 fn triangle_work(index: u32) -> vec2u {
     let t = triangles[index];
-    if faces_away_on_a_solid(t) || ignored(t) {
+    if faces_away_on_a_solid(t) {
         return vec2u(0u);
     }
     var tests = 0u;

@@ -434,6 +434,7 @@ impl ShadowTechnique for IrregularZBuffer {
         let config = self.config;
         let shared = self.shared.clone();
         let stamps = self.timer.begin_frame(ctx.gpu);
+        let transmit = (config.blended == BlendedCrossing::Transmit) as usize;
         let b = self.ensure_buffers(ctx, faces)?;
         let mut uniform = IrregularUniform {
             views: [Mat4::IDENTITY; MAX_FACES],
@@ -501,7 +502,12 @@ impl ShadowTechnique for IrregularZBuffer {
         });
         let per_triangle = Some(workgroups_for(b.triangle_count as u64));
         stamps.time(encoder, Pass::Triangles, |e| {
-            compute(e, "irregular triangles", &shared.triangles, per_triangle);
+            compute(
+                e,
+                "irregular triangles",
+                &shared.triangles[transmit],
+                per_triangle,
+            );
             compute(
                 e,
                 "irregular job dispatch",
@@ -511,7 +517,7 @@ impl ShadowTechnique for IrregularZBuffer {
             e.copy_buffer_to_buffer(&b.aux, AUX_DISPATCH as u64 * 4, &b.job_args, 0, 12);
         });
         stamps.time(encoder, Pass::Jobs, |e| {
-            compute(e, "irregular jobs", &shared.jobs, None)
+            compute(e, "irregular jobs", &shared.jobs[transmit], None)
         });
         stamps.time(encoder, Pass::MaskWrite, |e| {
             fullscreen(e, "irregular mask", &shared.mask)
