@@ -5,7 +5,7 @@
 // Chromium over its DevTools protocol (headless --dump-dom cannot wait for
 // WebGPU), and for a QUERY that starts with "drop:" opens the page, then
 // hands the named file to its file input. Prints one JSON line per page:
-// {"query", "title", "screenshot", "seconds"} and, for a compare=1 page,
+// {"query", "title", "screenshot", "seconds", "retries"} and, for a compare=1 page,
 // "mask": its technique's mask of the first light (base64, a byte a pixel). A page whose title still
 // says "loading" after TIMEOUT_S is reported as such, not waited for.
 import { createServer } from 'node:http';
@@ -15,6 +15,8 @@ import { tmpdir } from 'node:os';
 import { join, extname } from 'node:path';
 
 const TIMEOUT_S = Number(process.env.WEB_CHECK_TIMEOUT_S || 240);
+// Times a page that found no WebGPU adapter is opened again.
+const GPU_RETRIES = 2;
 const [outDir, ...queries] = process.argv.slice(2);
 const root = 'out/web';
 const types = { '.html': 'text/html', '.js': 'text/javascript', '.wasm': 'application/wasm', '.css': 'text/css' };
@@ -93,9 +95,22 @@ async function waitTitle(start) {
 for (const [i, q] of queries.entries()) {
   const start = Date.now();
   const [drop, query] = q.startsWith('drop:') ? [q.slice(5).split('?')[0], q.slice(5).split('?')[1] || ''] : [null, q];
-  await send('Page.navigate', { url: query.startsWith('/') ? `http://127.0.0.1:${port}${query}` : `http://127.0.0.1:${port}/?${query}` });
-  await sleep(300);
-  let title = await waitTitle(start);
+  const url = query.startsWith('/') ? `http://127.0.0.1:${port}${query}` : `http://127.0.0.1:${port}/?${query}`;
+  let title = '';
+  let retries = 0;
+  for (;;) {
+    await send('Page.navigate', { url });
+    await sleep(300);
+    title = await waitTitle(Date.now());
+    // Chromium answers requestAdapter with null while its GPU process is
+    // being relaunched (SwiftShader under load): the browser's state, not
+    // the page's, so the page is opened again, at most GPU_RETRIES times,
+    // and the report says how often.
+    if (!title.includes('no WebGPU adapter') || retries >= GPU_RETRIES) break;
+    retries++;
+    console.error(`no WebGPU adapter for ${q}: opening it again (${retries} of ${GPU_RETRIES})`);
+    await sleep(2000);
+  }
   if (drop && title.startsWith('shadowlab: ok')) {
     // The file input, given the file as a user picking it would.
     const doc = await send('DOM.getDocument');
@@ -110,7 +125,7 @@ for (const [i, q] of queries.entries()) {
   const shot = await send('Page.captureScreenshot', { format: 'png' });
   const screenshot = join(outDir, `page-${i}.png`);
   await writeFile(screenshot, Buffer.from(shot.result.data, 'base64'));
-  const report = { query: q, title, screenshot, seconds: (Date.now() - start) / 1000, eval: evaluated };
+  const report = { query: q, title, screenshot, seconds: (Date.now() - start) / 1000, eval: evaluated, retries };
   // The technique's mask of the comparison (compare=1 pages), as base64 bytes.
   if (query.includes('compare=1') && title.startsWith('shadowlab: ok')) {
     report.mask = await evaluate('window.shadowlab.compared_mask(0)');
