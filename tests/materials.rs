@@ -136,12 +136,9 @@ fn auto_volumes_of_a_cutout_seen_through_its_holes_count_as_z_fail() {
     );
 }
 
-/// Two translucent panes of opacity ½ (one of them double-sided, whose two
-/// faces are one surface) let a quarter of the light through, in both
-/// kernels of the reference; `hashed` shadow maps come near it, `cutout`
-/// (opacity ≥ ½: solid), `opaque` and `ignore` do not.
-#[test]
-fn two_stacked_half_transparent_panes_pass_a_quarter_of_the_light() {
+/// Two translucent panes of opacity ½ over a floor under a sun, one of them
+/// double-sided (its two faces are one surface).
+fn stacked_half_transparent_panes() -> Scene {
     let sun = Light::directional(Vec3::new(0.1, -1.0, 0.05), 1.0);
     let squares = [
         (Vec3::new(0.0, 1.0, 0.0), 1.5),
@@ -159,6 +156,16 @@ fn two_stacked_half_transparent_panes_pass_a_quarter_of_the_light() {
     s.objects[1].material = lower;
     s.objects[2].material = upper;
     s.finalize().unwrap();
+    s
+}
+
+/// Two translucent panes of opacity ½ (one of them double-sided, whose two
+/// faces are one surface) let a quarter of the light through, in both
+/// kernels of the reference; `hashed` shadow maps come near it, `cutout`
+/// (opacity ≥ ½: solid), `opaque` and `ignore` do not.
+#[test]
+fn two_stacked_half_transparent_panes_pass_a_quarter_of_the_light() {
+    let s = stacked_half_transparent_panes();
     let (w, h) = (64, 64);
     let centre = (h / 2 * w + w / 2) as usize;
     for kernel in ["obvhs", "embree"] {
@@ -192,23 +199,7 @@ fn two_stacked_half_transparent_panes_pass_a_quarter_of_the_light() {
 /// other modes draw them as the shadow maps do.
 #[test]
 fn irregular_transmits_through_stacked_panes_as_the_reference() {
-    let sun = Light::directional(Vec3::new(0.1, -1.0, 0.05), 1.0);
-    let squares = [
-        (Vec3::new(0.0, 1.0, 0.0), 1.5),
-        (Vec3::new(0.0, 2.0, 0.0), 1.5),
-    ];
-    let mut s = squares_over_floor(&squares, sun, false);
-    let pane = |double_sided| Material {
-        alpha: 0.5,
-        alpha_mode: AlphaMode::Blend,
-        double_sided,
-        ..Material::color("pane", Vec3::splat(0.8))
-    };
-    let lower = s.add_material(pane(false));
-    let upper = s.add_material(pane(true));
-    s.objects[1].material = lower;
-    s.objects[2].material = upper;
-    s.finalize().unwrap();
+    let s = stacked_half_transparent_panes();
     let (w, h) = (64, 64);
     let centre = (h / 2 * w + w / 2) as usize;
     let reference = mask_of(&s, "raytraced", &[], w, h);

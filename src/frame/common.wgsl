@@ -122,12 +122,18 @@ fn opacity_at(object: u32, uv: vec2f, lod: f32) -> f32 {
 // a mask material where its opacity reaches the cutoff, a blended one
 // where it reaches `blend_cutoff`, an opaque one everywhere.
 fn is_solid_at(object: u32, uv: vec2f, lod: f32, blend_cutoff: f32) -> bool {
-    let a = objects[object].alpha;
-    if a.x == ALPHA_OPAQUE {
+    if objects[object].alpha.x == ALPHA_OPAQUE {
         return true;
     }
-    let cutoff = select(blend_cutoff, bitcast<f32>(a.y), a.x == ALPHA_MASK);
-    return opacity_at(object, uv, lod) >= cutoff;
+    return reaches_cutoff(object, opacity_at(object, uv, lod), blend_cutoff);
+}
+
+// Whether `opacity`, read on a mask or blended `object`, reaches the cutoff
+// that makes it solid: the material's for a mask, `blend_cutoff` for a
+// blended one.
+fn reaches_cutoff(object: u32, opacity: f32, blend_cutoff: f32) -> bool {
+    let a = objects[object].alpha;
+    return opacity >= select(blend_cutoff, bitcast<f32>(a.y), a.x == ALPHA_MASK);
 }
 
 struct VertexIn {

@@ -114,13 +114,10 @@ fn offset_origin(p: vec3f, n: vec3f, ulps: f32) -> vec3f {
     return out;
 }
 
-// How a shadow ray meets a translucent (glTF BLEND) caster (`irr.pixel.y`,
-// `BlendedCrossing` of mod.rs): solid where its opacity reaches ½, letting
-// 1 − opacity through (the reference's transmittance), solid, or not at all.
-const BLENDED_CUTOUT: u32 = 0u;
-const BLENDED_TRANSMIT: u32 = 1u;
-const BLENDED_OPAQUE: u32 = 2u;
-const BLENDED_IGNORE: u32 = 3u;
+// How a shadow ray meets a translucent (glTF BLEND) caster is `irr.pixel.y`,
+// one of the BLENDED_* constants prepended from `BlendedCrossing` of
+// mod.rs: solid where its opacity reaches ½, letting 1 − opacity through
+// (the reference's transmittance), solid, or not at all.
 // Whether the pipeline sums optical depths (`blended_casters=transmit`): a
 // pipeline constant, so that the other modes' test passes carry none of
 // its code (llvmpipe runs both sides of a branch its lanes diverge on).
@@ -180,7 +177,7 @@ fn see_through_opacity(t: CasterTriangle, object: u32, blended: bool, u: f32, w:
     let uv = vec2f(t.a.w, t.v.x) * (1.0 - u - w) + vec2f(t.b.w, t.v.y) * u + vec2f(t.c.w, t.v.z) * w;
     let opacity = opacity_at(object, uv, 0.0);
     if !blended {
-        return select(0.0, 1.0, opacity >= bitcast<f32>(objects[object].alpha.y));
+        return select(0.0, 1.0, reaches_cutoff(object, opacity, 0.5));
     }
     if TRANSMIT {
         return clamp(opacity, 0.0, 1.0);
@@ -193,7 +190,7 @@ fn see_through_opacity(t: CasterTriangle, object: u32, blended: bool, u: f32, w:
             return 0.0;
         }
         default: {
-            return select(0.0, 1.0, opacity >= 0.5);
+            return select(0.0, 1.0, reaches_cutoff(object, opacity, 0.5));
         }
     }
 }
