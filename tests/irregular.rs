@@ -166,19 +166,32 @@ fn every_seen_sample_the_light_reaches_is_binned() {
 }
 
 /// A triangle's samples are tested the same whether its own thread tests
-/// them or workgroups share them in jobs; no job overflows.
+/// them or workgroups share them in jobs; no job overflows. On `foliage`
+/// the opaque casters' jobs fill the list from its start and the
+/// see-through casters' (leaves, fence, glass) from its end.
 #[test]
 fn large_triangles_in_jobs_give_the_same_mask() {
-    let s = preset("room", "default", "point");
-    let direct = mask_of(&s, "irregular", &["large_samples=16384"], 160, 90);
-    let jobs = mask_of(&s, "irregular", &["large_samples=1"], 160, 90);
-    assert!(direct.iter().any(|&v| v < 0.5));
-    assert_eq!(pixels_differing(&direct, &jobs), 0);
-    let mut hf = rendered_frame(&s, "irregular", &["large_samples=1"], 160, 90);
-    render_again(&mut hf, &s);
-    render_again(&mut hf, &s);
-    assert!(counter(&hf, "large_triangle_jobs") > 0.0);
-    assert_eq!(counter(&hf, "job_overflow_samples"), 0.0);
+    for (scene, camera, light, extra) in [
+        ("room", "default", "point", None),
+        (
+            "foliage",
+            "eye-level",
+            "sun",
+            Some("blended_casters=transmit"),
+        ),
+    ] {
+        let s = preset(scene, camera, light);
+        let params = |large| -> Vec<&str> { [Some(large), extra].into_iter().flatten().collect() };
+        let direct = mask_of(&s, "irregular", &params("large_samples=16384"), 160, 90);
+        let jobs = mask_of(&s, "irregular", &params("large_samples=1"), 160, 90);
+        assert!(direct.iter().any(|&v| v < 0.5), "{scene}");
+        assert_eq!(pixels_differing(&direct, &jobs), 0, "{scene}");
+        let mut hf = rendered_frame(&s, "irregular", &params("large_samples=1"), 160, 90);
+        render_again(&mut hf, &s);
+        render_again(&mut hf, &s);
+        assert!(counter(&hf, "large_triangle_jobs") > 0.0, "{scene}");
+        assert_eq!(counter(&hf, "job_overflow_samples"), 0.0, "{scene}");
+    }
 }
 
 /// Where a coarse grid crowds thousands of a ground camera's samples into

@@ -18,13 +18,23 @@ pub struct CasterTriangle {
     pub v: Vec4,
 }
 
+/// The caster triangles of a scene, those of opaque materials first.
+pub struct Casters {
+    pub triangles: Vec<CasterTriangle>,
+    /// How many lead the list: the triangles of opaque materials, which the
+    /// test passes built without the see-through code run over
+    /// (`TestPass::Opaque`).
+    pub opaque: u32,
+}
+
 /// The triangles of `scene`'s shadow casters, wound in world space as in
 /// their mesh (an object mirrored by its transform has two corners
-/// swapped), so that a solid's stay wound outward. The back faces a
-/// double-sided material added are left out: the exact test does not
-/// depend on a triangle's winding, so they would test every sample twice.
-pub fn caster_triangles(scene: &Scene) -> Vec<CasterTriangle> {
-    let mut out = vec![];
+/// swapped), so that a solid's stay wound outward; opaque materials' first,
+/// each part in the scene's order. The back faces a double-sided material
+/// added are left out: the exact test does not depend on a triangle's
+/// winding, so they would test every sample twice.
+pub fn caster_triangles(scene: &Scene) -> Casters {
+    let (mut opaque, mut see_through) = (vec![], vec![]);
     for (index, o) in scene.objects.iter().enumerate() {
         if !o.casts_shadow || o.shadow_plane {
             continue;
@@ -37,6 +47,11 @@ pub fn caster_triangles(scene: &Scene) -> Vec<CasterTriangle> {
         };
         let object = f32::from_bits(index as u32);
         let mirrored = o.transform.determinant() < 0.0;
+        let out = if scene.materials[o.material].is_see_through() {
+            &mut see_through
+        } else {
+            &mut opaque
+        };
         for t in m.indices.chunks_exact(3).take(front_faces) {
             let corner = |k: usize| {
                 let i = t[k] as usize;
@@ -56,7 +71,12 @@ pub fn caster_triangles(scene: &Scene) -> Vec<CasterTriangle> {
             });
         }
     }
-    out
+    let count = opaque.len() as u32;
+    opaque.append(&mut see_through);
+    Casters {
+        triangles: opaque,
+        opaque: count,
+    }
 }
 
 #[cfg(test)]
@@ -65,11 +85,13 @@ mod tests {
     use crate::scene::builtin;
 
     /// Every caster triangle is listed once, in world space, with its
-    /// object; a double-sided material's added back faces are not.
+    /// object, opaque materials' first; a double-sided material's added
+    /// back faces are not.
     #[test]
     fn casters_are_listed_once_in_world_space() {
         let scene = builtin::by_name("foliage").unwrap().unwrap();
-        let triangles = caster_triangles(&scene);
+        let casters = caster_triangles(&scene);
+        let triangles = &casters.triangles;
         let expected: usize = scene
             .objects
             .iter()
@@ -90,6 +112,15 @@ mod tests {
             .transform_point3(m.positions[m.indices[0] as usize]);
         assert!((t.a.truncate() - first).length() < 1e-5);
         assert!(o.casts_shadow);
+        // Opaque materials' triangles lead, the see-through ones follow.
+        let see_through = |t: &CasterTriangle| {
+            let o = &scene.objects[t.v.w.to_bits() as usize];
+            scene.materials[o.material].is_see_through()
+        };
+        let opaque = casters.opaque as usize;
+        assert!(0 < opaque && opaque < triangles.len(), "{opaque}");
+        assert!(!triangles[..opaque].iter().any(see_through));
+        assert!(triangles[opaque..].iter().all(see_through));
     }
 
     /// A solid stays wound outward in world space under a mirroring
@@ -112,6 +143,7 @@ mod tests {
                 Mat4::from_translation(Vec3::new(4.0, 1.0, -2.0)) * Mat4::from_scale(scale);
             scene.add_object("box", mesh, material, transform);
             let volume: f32 = caster_triangles(&scene)
+                .triangles
                 .iter()
                 .map(|t| t.a.truncate().dot(t.b.truncate().cross(t.c.truncate())) / 6.0)
                 .sum();

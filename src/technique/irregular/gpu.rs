@@ -23,6 +23,9 @@ pub const AUX_OVERFLOW: usize = 7;
 pub const AUX_HISTOGRAM: usize = 8;
 pub const HISTOGRAM_BINS: usize = 32;
 pub const AUX_LONGEST: usize = 64;
+/// The see-through casters' jobs and their indirect dispatch arguments.
+pub const AUX_SEE_THROUGH_JOBS: usize = 65;
+pub const AUX_SEE_THROUGH_DISPATCH: usize = 66;
 /// Samples of one job of a large triangle (`JOB_SAMPLES`), checked against
 /// the WGSL.
 #[cfg(test)]
@@ -60,6 +63,34 @@ fn module_source() -> String {
     .join("\n")
 }
 
+/// The variants of the test passes (pipeline constants `SEE_THROUGH` and
+/// `TRANSMIT` of irregular.wgsl), each over its own run of the caster
+/// list. llvmpipe slows a loop by the code it holds even where no lane
+/// runs it, so the opaque casters' tests carry no see-through code.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TestPass {
+    /// The opaque casters, which block every ray they meet.
+    Opaque,
+    /// The cut-out and translucent casters, their opacity maps read.
+    SeeThrough,
+    /// The same, translucent crossings summed as optical depth
+    /// (`blended_casters=transmit`).
+    Transmit,
+}
+
+impl TestPass {
+    const ALL: [TestPass; 3] = [TestPass::Opaque, TestPass::SeeThrough, TestPass::Transmit];
+
+    /// Its pipeline constants.
+    fn constants(self) -> [(&'static str, f64); 2] {
+        let on = |b: bool| if b { 1.0 } else { 0.0 };
+        [
+            ("SEE_THROUGH", on(self != TestPass::Opaque)),
+            ("TRANSMIT", on(self == TestPass::Transmit)),
+        ]
+    }
+}
+
 /// `Irregular` of irregular.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -83,11 +114,10 @@ pub struct IrregularShared {
     pub scan_blocks: wgpu::ComputePipeline,
     pub scan_partials: wgpu::ComputePipeline,
     pub scan_add: wgpu::ComputePipeline,
-    /// The test passes without and with `TRANSMIT` (index: whether the
-    /// samples sum optical depths).
-    pub triangles: [wgpu::ComputePipeline; 2],
+    /// The test passes, one per [`TestPass`] (its index).
+    pub triangles: [wgpu::ComputePipeline; 3],
     pub job_dispatch: wgpu::ComputePipeline,
-    pub jobs: [wgpu::ComputePipeline; 2],
+    pub jobs: [wgpu::ComputePipeline; 3],
 }
 
 impl IrregularShared {
@@ -123,21 +153,21 @@ impl IrregularShared {
                 Some(super::super::frame_depth_read(Default::default())),
             )
         };
-        let compute_with = |entry: &str, transmit: bool| {
+        let compute_with = |entry: &str, constants: &[(&str, f64)]| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry),
                 layout: Some(&pipeline_layout),
                 module: &module,
                 entry_point: Some(entry),
                 compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &[("TRANSMIT", if transmit { 1.0 } else { 0.0 })],
+                    constants,
                     ..Default::default()
                 },
                 cache: None,
             })
         };
-        let compute = |entry: &str| compute_with(entry, false);
-        let both = |entry: &str| [compute_with(entry, false), compute_with(entry, true)];
+        let compute = |entry: &str| compute_with(entry, &[]);
+        let variants = |entry: &str| TestPass::ALL.map(|v| compute_with(entry, &v.constants()));
         IrregularShared {
             bounds: fullscreen("fs_bounds", wgpu::ColorWrites::empty()),
             count: fullscreen("fs_count", wgpu::ColorWrites::empty()),
@@ -146,9 +176,9 @@ impl IrregularShared {
             scan_blocks: compute("cs_scan_blocks"),
             scan_partials: compute("cs_scan_partials"),
             scan_add: compute("cs_scan_add"),
-            triangles: both("cs_triangles"),
+            triangles: variants("cs_triangles"),
             job_dispatch: compute("cs_job_dispatch"),
-            jobs: both("cs_jobs"),
+            jobs: variants("cs_jobs"),
             layout,
         }
     }
@@ -219,6 +249,8 @@ mod tests {
                 ("AUX_HISTOGRAM", AUX_HISTOGRAM as u32),
                 ("HISTOGRAM_BINS", HISTOGRAM_BINS as u32),
                 ("AUX_LONGEST", AUX_LONGEST as u32),
+                ("AUX_SEE_THROUGH_JOBS", AUX_SEE_THROUGH_JOBS as u32),
+                ("AUX_SEE_THROUGH_DISPATCH", AUX_SEE_THROUGH_DISPATCH as u32),
                 ("AUX_JOB_LIST", AUX_HEADER_WORDS as u32),
                 ("WORKGROUP", WORKGROUP),
                 ("JOB_SAMPLES", JOB_SAMPLES),

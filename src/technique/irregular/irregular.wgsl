@@ -23,7 +23,9 @@ struct Irregular {
     // range (0: none), zw unused
     offset: vec4f,
     // x samples per pixel (1: its centre; up to 32, one mark bit each), y
-    // how rays meet translucent casters (BLENDED_*), zw unused
+    // how rays meet translucent casters (BLENDED_*), z the opaque casters'
+    // triangles (they lead `triangles`; the see-through ones follow), w
+    // unused
     pixel: vec4u,
     // xyz a spot light's unit axis, w the cosine of its outer cone (below
     // −1 for other lights: no cone)
@@ -77,6 +79,10 @@ const HISTOGRAM_BINS: u32 = 32u;
 const AUX_BOUNDS: u32 = 40u;
 // The longest list.
 const AUX_LONGEST: u32 = 64u;
+// The see-through casters' jobs (they fill the list from its end), and the
+// indirect dispatch of their job pass.
+const AUX_SEE_THROUGH_JOBS: u32 = 65u;
+const AUX_SEE_THROUGH_DISPATCH: u32 = 66u;
 // The jobs, four words each: triangle · 8 + face, job, the box row its
 // first sample lies in, the box's samples before that row.
 const AUX_JOB_LIST: u32 = 80u;
@@ -114,6 +120,11 @@ fn offset_origin(p: vec3f, n: vec3f, ulps: f32) -> vec3f {
     return out;
 }
 
+// Whether the test passes run over the see-through casters (the list's
+// triangles from `irr.pixel.z` on) or the opaque ones (before it): a
+// pipeline constant, so that the opaque casters' loops hold none of the
+// see-through code (llvmpipe slows a loop by the code it holds, run or not).
+override SEE_THROUGH: bool = false;
 // How a shadow ray meets a translucent (glTF BLEND) caster is `irr.pixel.y`,
 // one of the BLENDED_* constants prepended from `BlendedCrossing` of
 // mod.rs: solid where its opacity reaches ½, letting 1 − opacity through
@@ -162,6 +173,9 @@ fn opacity_crossed(t: CasterTriangle, o: vec3f) -> f32 {
     let hit = dot(e2, q) * inv;
     if hit <= 0.0 || hit >= t_max {
         return 0.0;
+    }
+    if !SEE_THROUGH {
+        return 1.0;
     }
     let object = bitcast<u32>(t.v.w);
     let mode = objects[object].alpha.x;
@@ -292,6 +306,27 @@ fn test_samples(t: CasterTriangle, face: u32, box: vec4i, y0: i32, seen0: u32, f
     return tests;
 }
 
+// The job counter of this pass's casters.
+fn jobs_word() -> u32 {
+    return select(AUX_JOBS, AUX_SEE_THROUGH_JOBS, SEE_THROUGH);
+}
+
+// The jobs this pass's casters may list: the whole list for the opaque
+// ones (their pass runs first), what they left for the see-through ones.
+fn job_room() -> u32 {
+    let capacity = irr.work.z;
+    if !SEE_THROUGH {
+        return capacity;
+    }
+    return capacity - min(atomicLoad(&aux[AUX_JOBS]), capacity);
+}
+
+// The first word of this pass's `slot`-th job: the opaque casters' jobs
+// run from the list's start, the see-through ones' from its end.
+fn job_word(slot: u32) -> u32 {
+    return AUX_JOB_LIST + 4u * select(slot, irr.work.z - 1u - slot, SEE_THROUGH);
+}
+
 // Lists the jobs of a triangle's samples on a face (`fitted` of them, from
 // list slot `slot`), each with the row its first sample lies in, so that a
 // job's threads walk only its own rows.
@@ -302,7 +337,7 @@ fn list_jobs(index: u32, face: u32, box: vec4i, slot: u32, fitted: u32) {
         let run = row_run(face, box, y);
         let length = run.y - run.x;
         for (; job < fitted && job * JOB_SAMPLES < seen + length; job++) {
-            let e = AUX_JOB_LIST + 4u * (slot + job);
+            let e = job_word(slot + job);
             atomicStore(&aux[e], index * 8u + face);
             atomicStore(&aux[e + 1u], job);
             atomicStore(&aux[e + 2u], u32(y - box.y));
@@ -400,8 +435,9 @@ fn triangle_work(index: u32) -> vec2u {
         var first = 0u;
         if work > irr.work.y {
             let jobs = (work + JOB_SAMPLES - 1u) / JOB_SAMPLES;
-            let slot = atomicAdd(&aux[AUX_JOBS], jobs);
-            let fitted = min(jobs, irr.work.z - min(slot, irr.work.z));
+            let slot = atomicAdd(&aux[jobs_word()], jobs);
+            let room = job_room();
+            let fitted = min(jobs, room - min(slot, room));
             list_jobs(index, face, box, slot, fitted);
             first = min(fitted * JOB_SAMPLES, work);
             if first < work {
@@ -413,32 +449,48 @@ fn triangle_work(index: u32) -> vec2u {
     return vec2u(pairs, tests);
 }
 
-// Pass 5, a thread per caster triangle.
+// Pass 5, a thread per caster triangle of this pass's run of the list.
 @compute @workgroup_size(64)
 fn cs_triangles(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u,
         @builtin(local_invocation_index) lane: u32) {
-    let index = id.y * groups.x * WORKGROUP + id.x;
+    let index = select(0u, irr.pixel.z, SEE_THROUGH) + id.y * groups.x * WORKGROUP + id.x;
     var work = vec2u(0u);
-    if index < irr.work.x {
+    if index < select(irr.pixel.z, irr.work.x, SEE_THROUGH) {
         work = triangle_work(index);
     }
     count_work(lane, work);
 }
 
-// Pass 6, one invocation: the job pass's workgroups, one per listed job.
+// The jobs listed and fitted: the opaque casters' (`opaque`) or the
+// see-through ones'.
+fn jobs_listed(opaque: bool) -> u32 {
+    let capacity = irr.work.z;
+    let first = min(atomicLoad(&aux[AUX_JOBS]), capacity);
+    if opaque {
+        return first;
+    }
+    return min(atomicLoad(&aux[AUX_SEE_THROUGH_JOBS]), capacity - first);
+}
+
+// The (x, y, z) workgroups of a job pass over `count` jobs, at `word`.
+fn write_dispatch(word: u32, count: u32) {
+    let x = min(count, 65535u);
+    atomicStore(&aux[word], x);
+    atomicStore(&aux[word + 1u], select(0u, (count + x - 1u) / max(x, 1u), x > 0u));
+    atomicStore(&aux[word + 2u], 1u);
+}
+
+// Pass 6, one invocation: the job passes' workgroups, one per listed job.
 @compute @workgroup_size(1)
 fn cs_job_dispatch() {
-    let count = min(atomicLoad(&aux[AUX_JOBS]), irr.work.z);
-    let x = min(count, 65535u);
-    atomicStore(&aux[AUX_DISPATCH], x);
-    atomicStore(&aux[AUX_DISPATCH + 1u], select(0u, (count + x - 1u) / max(x, 1u), x > 0u));
-    atomicStore(&aux[AUX_DISPATCH + 2u], 1u);
+    write_dispatch(AUX_DISPATCH, jobs_listed(true));
+    write_dispatch(AUX_SEE_THROUGH_DISPATCH, jobs_listed(false));
 }
 
 // Job `e`'s tests by thread `lane` of its workgroup: every WORKGROUP-th
 // of the job's samples from the lane's.
 fn job_tests(e: u32, lane: u32) -> u32 {
-    let w = AUX_JOB_LIST + 4u * e;
+    let w = job_word(e);
     let entry = atomicLoad(&aux[w]);
     let first = atomicLoad(&aux[w + 1u]) * JOB_SAMPLES;
     let t = triangles[entry / 8u];
@@ -449,13 +501,14 @@ fn job_tests(e: u32, lane: u32) -> u32 {
     return test_samples(t, face, box, y0, seen0, first + lane, first + JOB_SAMPLES, WORKGROUP);
 }
 
-// Pass 7, a workgroup per job: its threads share the job's samples.
+// Pass 7, a workgroup per job of this pass's casters: its threads share
+// the job's samples.
 @compute @workgroup_size(64)
 fn cs_jobs(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) groups: vec3u,
         @builtin(local_invocation_index) lane: u32) {
     let e = group.y * groups.x + group.x;
     var tests = 0u;
-    if e < min(atomicLoad(&aux[AUX_JOBS]), irr.work.z) {
+    if e < jobs_listed(!SEE_THROUGH) {
         tests = job_tests(e, lane);
     }
     count_work(lane, vec2u(0u, tests));

@@ -15,12 +15,15 @@
 //! samples binned by count, prefix sum and scatter (sorted by cell, so a
 //! row of cells' samples is one contiguous run and the lists cannot
 //! overflow), a triangle pass in which each triangle tests the samples of
-//! its cells (triangles whose cells hold more than `large_samples` are
+//! its cells, the opaque casters first and the see-through ones after,
+//! each with a pipeline of its own (triangles whose cells hold more than
+//! `large_samples` are
 //! listed as jobs of 1024 samples, each shared by a workgroup of an
 //! indirect dispatch, so that no invocation loops long however dense the
 //! samples; jobs past the list's capacity are counted, tested by their
 //! triangle's thread, and the list grows for the next frame), and the mask.
 
+mod buffers;
 mod casters;
 mod gpu;
 mod timing;
@@ -28,13 +31,14 @@ mod timing;
 use super::params::{Choice, choice_enum};
 use super::{Family, MaskContext, ParamSpec, ParamValues, Preset, ShadowTechnique};
 use crate::gpu::GpuContext;
-use crate::scene::{LightType, scene_fingerprint};
-use anyhow::{Result, bail};
+use crate::scene::LightType;
+use anyhow::Result;
+use buffers::Buffers;
 use glam::{Mat4, UVec4, Vec3, Vec4};
 use gpu::{
     AUX_DISPATCH, AUX_HEADER_WORDS, AUX_HISTOGRAM, AUX_JOBS, AUX_LONGEST, AUX_OVERFLOW, AUX_PAIRS,
-    AUX_SAMPLES, AUX_TESTS, HISTOGRAM_BINS, IrregularShared, IrregularUniform, JOB_CAPACITY,
-    MAX_FACES, SCAN_BLOCK, binning_words, cells_fitting, grid_of_workgroups, storage_buffer,
+    AUX_SAMPLES, AUX_SEE_THROUGH_DISPATCH, AUX_SEE_THROUGH_JOBS, AUX_TESTS, HISTOGRAM_BINS,
+    IrregularShared, IrregularUniform, MAX_FACES, SCAN_BLOCK, TestPass, grid_of_workgroups,
     workgroups_for,
 };
 use std::sync::Arc;
@@ -188,7 +192,7 @@ impl ListStats {
             samples: w[AUX_SAMPLES],
             pairs: w[AUX_PAIRS],
             tests: w[AUX_TESTS],
-            jobs: w[AUX_JOBS],
+            jobs: w[AUX_JOBS] + w[AUX_SEE_THROUGH_JOBS],
             overflow: w[AUX_OVERFLOW],
             histogram,
             longest: w[AUX_LONGEST],
@@ -219,28 +223,6 @@ impl ListStats {
     }
 }
 
-/// The buffers of one frame size, scene, light shape, grid, sample count and
-/// whether the marks hold optical depths.
-struct Buffers {
-    key: (u32, u32, u64, usize, u32, u32, bool),
-    uniform: wgpu::Buffer,
-    /// Counts, offsets and prefix-sum partials (`cells` of irregular.wgsl).
-    binning: wgpu::Buffer,
-    cell_count: u64,
-    /// Cells per face side.
-    grid: u32,
-    samples: wgpu::Buffer,
-    marks: wgpu::Buffer,
-    triangles: wgpu::Buffer,
-    triangle_count: u32,
-    /// Jobs the job list holds.
-    job_capacity: u32,
-    aux: wgpu::Buffer,
-    /// The job pass's indirect arguments, copied from `aux`.
-    job_args: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
-}
-
 pub struct IrregularZBuffer {
     shared: Arc<IrregularShared>,
     config: IrregularConfig,
@@ -250,34 +232,6 @@ pub struct IrregularZBuffer {
     stats: ListStats,
     /// GPU time of each pass.
     timer: PassTimer,
-}
-
-/// The job list's capacity: four jobs per caster triangle and face, or twice
-/// the jobs a frame asked for where they overflowed, within [`JOB_CAPACITY`].
-fn job_capacity(triangles: u64, faces: u64, asked: u64) -> u64 {
-    (4 * triangles * faces)
-        .max(2 * asked)
-        .clamp(JOB_CAPACITY.0, JOB_CAPACITY.1)
-}
-
-/// Bytes of the sorted samples: 16 a pixel for one sample per pixel (the
-/// origin kept), 4 a sample for sub-pixel samples (the id alone), in whole
-/// 16-byte words (`samples` is an array of `vec4u`).
-fn sample_bytes(pixels: u64, pixel_samples: u32) -> u64 {
-    match pixel_samples {
-        0 | 1 => pixels * 16,
-        n => (pixels * n as u64 * 4).next_multiple_of(16),
-    }
-}
-
-/// The marks' bytes: a word per pixel, then under `transmit` a word of
-/// optical depth per sample.
-fn mark_bytes(pixels: u64, config: &IrregularConfig) -> u64 {
-    let depths = match config.blended {
-        BlendedCrossing::Transmit => pixels * config.pixel_samples.max(1) as u64,
-        _ => 0,
-    };
-    (pixels + depths) * 4
 }
 
 impl IrregularZBuffer {
@@ -295,107 +249,6 @@ impl IrregularZBuffer {
             stats: ListStats::default(),
             timer: PassTimer::new(gpu),
         }
-    }
-
-    /// The buffers for this frame, made again where the frame size, the
-    /// scene, the light's face count or the grid changed, or where the last
-    /// frame's jobs overflowed the list; sizes past the device's
-    /// storage-buffer limit or the memory budget are an error.
-    fn ensure_buffers(&mut self, ctx: &MaskContext, faces: usize) -> Result<&Buffers> {
-        let (w, h) = (ctx.frame.width(), ctx.frame.height());
-        let pixels = w as u64 * h as u64;
-        let limit = ctx.gpu.device.limits().max_storage_buffer_binding_size;
-        let samples = pixels * self.config.pixel_samples as u64;
-        let grid = self.config.grid_side(samples, faces, cells_fitting(limit));
-        let key = (
-            w,
-            h,
-            scene_fingerprint(ctx.scene),
-            faces,
-            grid,
-            self.config.pixel_samples,
-            self.config.blended == BlendedCrossing::Transmit,
-        );
-        let asked = self.stats.jobs as u64;
-        if self
-            .buffers
-            .as_ref()
-            .is_some_and(|b| b.key == key && asked <= b.job_capacity as u64)
-        {
-            return Ok(self.buffers.as_ref().expect("checked"));
-        }
-        let asked = if self.buffers.as_ref().is_some_and(|b| b.key == key) {
-            asked
-        } else {
-            0
-        };
-        self.buffers = None;
-        let gpu = ctx.gpu;
-        let triangles = casters::caster_triangles(ctx.scene);
-        let cell_count = faces as u64 * grid as u64 * grid as u64;
-        let capacity = job_capacity(triangles.len() as u64, faces as u64, asked);
-        let sizes = [
-            (
-                "cell counts and offsets (grid)",
-                binning_words(cell_count) * 4,
-            ),
-            ("samples", sample_bytes(pixels, self.config.pixel_samples)),
-            ("caster triangles", triangles.len() as u64 * 64),
-            ("job list", (AUX_HEADER_WORDS + 4 * capacity) * 4),
-            ("marks", mark_bytes(pixels, &self.config)),
-        ];
-        for (what, bytes) in sizes {
-            if bytes > limit {
-                bail!(
-                    "irregular: the {what} take {:.1} MiB, more than the device's largest storage buffer ({:.1} MiB); choose a smaller grid, frame or pixel_samples",
-                    bytes as f64 / (1u64 << 20) as f64,
-                    limit as f64 / (1u64 << 20) as f64
-                );
-            }
-        }
-        let total = sizes.iter().map(|s| s.1).sum::<u64>();
-        gpu.check_allocation("irregular (grid, samples, casters)", (1, 1, 1), total)?;
-        let uniform = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("irregular uniform"),
-            size: std::mem::size_of::<IrregularUniform>() as u64,
-            usage: crate::gpu::uniform_usage(gpu),
-            mapped_at_creation: false,
-        });
-        let binning = storage_buffer(gpu, "irregular cell counts and offsets", sizes[0].1);
-        let samples = storage_buffer(gpu, "irregular samples", sizes[1].1);
-        let marks = storage_buffer(gpu, "irregular marks", sizes[4].1);
-        let triangle_buffer = storage_buffer(gpu, "irregular casters", sizes[2].1);
-        gpu.queue
-            .write_buffer(&triangle_buffer, 0, bytemuck::cast_slice(&triangles));
-        let aux = storage_buffer(gpu, "irregular header and job list", sizes[3].1);
-        let buffers = [&uniform, &binning, &samples, &marks, &triangle_buffer, &aux];
-        let entries: Vec<_> = (0u32..)
-            .zip(buffers)
-            .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                binding,
-                resource: buffer.as_entire_binding(),
-            })
-            .collect();
-        let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("irregular"),
-            layout: &self.shared.layout,
-            entries: &entries,
-        });
-        Ok(self.buffers.insert(Buffers {
-            key,
-            uniform,
-            binning,
-            cell_count,
-            grid,
-            samples,
-            marks,
-            triangles: triangle_buffer,
-            triangle_count: triangles.len() as u32,
-            job_capacity: capacity as u32,
-            aux,
-            job_args: storage_buffer(gpu, "irregular job dispatch", 12),
-            bind_group,
-        }))
     }
 }
 
@@ -434,7 +287,10 @@ impl ShadowTechnique for IrregularZBuffer {
         let config = self.config;
         let shared = self.shared.clone();
         let stamps = self.timer.begin_frame(ctx.gpu);
-        let transmit = (config.blended == BlendedCrossing::Transmit) as usize;
+        let see_through = match config.blended {
+            BlendedCrossing::Transmit => TestPass::Transmit,
+            _ => TestPass::SeeThrough,
+        };
         let b = self.ensure_buffers(ctx, faces)?;
         let mut uniform = IrregularUniform {
             views: [Mat4::IDENTITY; MAX_FACES],
@@ -450,7 +306,12 @@ impl ShadowTechnique for IrregularZBuffer {
                 b.cell_count as u32,
             ),
             offset: Vec4::new(config.offset_ulps, light.range, 0.0, 0.0),
-            pixel: UVec4::new(config.pixel_samples, config.blended.index() as u32, 0, 0),
+            pixel: UVec4::new(
+                config.pixel_samples,
+                config.blended.index() as u32,
+                b.opaque_triangles,
+                0,
+            ),
             cone: match light.kind {
                 LightType::Spot => light.cone_axis().extend(light.cone_cos()),
                 _ => Vec4::new(0.0, 0.0, 0.0, NO_CONE),
@@ -470,7 +331,7 @@ impl ShadowTechnique for IrregularZBuffer {
             pass.set_pipeline(pipeline);
             pass.draw(0..3, 0..1);
         };
-        let compute = |encoder: &mut wgpu::CommandEncoder, label, pipeline, groups| {
+        let compute = |encoder: &mut wgpu::CommandEncoder, label, pipeline, groups: Dispatch| {
             let mut pass = ctx.gpu.compute_pass(
                 encoder,
                 &wgpu::ComputePassDescriptor {
@@ -481,8 +342,10 @@ impl ShadowTechnique for IrregularZBuffer {
             bind_compute_groups(ctx, &mut pass, &b.bind_group);
             pass.set_pipeline(pipeline);
             match groups {
-                Some((x, y)) => pass.dispatch_workgroups(x, y, 1),
-                None => pass.dispatch_workgroups_indirect(&b.job_args, 0),
+                Dispatch::Direct(x, y) => pass.dispatch_workgroups(x, y, 1),
+                Dispatch::Indirect(offset) => {
+                    pass.dispatch_workgroups_indirect(&b.job_args, offset)
+                }
             }
         };
         stamps.time(encoder, Pass::Bounds, |e| {
@@ -491,33 +354,54 @@ impl ShadowTechnique for IrregularZBuffer {
         stamps.time(encoder, Pass::Counts, |e| {
             fullscreen(e, "irregular counts", &shared.count)
         });
-        let blocks = Some(grid_of_workgroups(b.cell_count.div_ceil(SCAN_BLOCK)));
+        let (x, y) = grid_of_workgroups(b.cell_count.div_ceil(SCAN_BLOCK));
+        let blocks = Dispatch::Direct(x, y);
         stamps.time(encoder, Pass::PrefixSum, |e| {
             compute(e, "irregular prefix sum", &shared.scan_blocks, blocks);
-            compute(e, "irregular partials", &shared.scan_partials, Some((1, 1)));
+            let one = Dispatch::Direct(1, 1);
+            compute(e, "irregular partials", &shared.scan_partials, one);
             compute(e, "irregular offsets", &shared.scan_add, blocks);
         });
         stamps.time(encoder, Pass::Scatter, |e| {
             fullscreen(e, "irregular scatter", &shared.scatter)
         });
-        let per_triangle = Some(workgroups_for(b.triangle_count as u64));
+        // The opaque casters' passes, then the see-through ones' (their
+        // jobs take what room the opaque ones left in the list).
+        let runs = [
+            (TestPass::Opaque, b.opaque_triangles, AUX_DISPATCH),
+            (
+                see_through,
+                b.triangle_count - b.opaque_triangles,
+                AUX_SEE_THROUGH_DISPATCH,
+            ),
+        ];
         stamps.time(encoder, Pass::Triangles, |e| {
-            compute(
-                e,
-                "irregular triangles",
-                &shared.triangles[transmit],
-                per_triangle,
-            );
+            for &(variant, count, _) in runs.iter().filter(|r| r.1 > 0) {
+                let (x, y) = workgroups_for(count as u64);
+                let pipeline = &shared.triangles[variant as usize];
+                compute(e, "irregular triangles", pipeline, Dispatch::Direct(x, y));
+            }
+            let dispatch = &shared.job_dispatch;
             compute(
                 e,
                 "irregular job dispatch",
-                &shared.job_dispatch,
-                Some((1, 1)),
+                dispatch,
+                Dispatch::Direct(1, 1),
             );
-            e.copy_buffer_to_buffer(&b.aux, AUX_DISPATCH as u64 * 4, &b.job_args, 0, 12);
+            for (k, &(_, _, word)) in runs.iter().enumerate() {
+                e.copy_buffer_to_buffer(&b.aux, word as u64 * 4, &b.job_args, 12 * k as u64, 12);
+            }
         });
         stamps.time(encoder, Pass::Jobs, |e| {
-            compute(e, "irregular jobs", &shared.jobs[transmit], None)
+            for (k, &(variant, ..)) in runs.iter().enumerate().filter(|r| r.1.1 > 0) {
+                let pipeline = &shared.jobs[variant as usize];
+                compute(
+                    e,
+                    "irregular jobs",
+                    pipeline,
+                    Dispatch::Indirect(12 * k as u64),
+                );
+            }
         });
         stamps.time(encoder, Pass::MaskWrite, |e| {
             fullscreen(e, "irregular mask", &shared.mask)
@@ -575,6 +459,14 @@ impl ShadowTechnique for IrregularZBuffer {
     }
 }
 
+/// How a compute pass is dispatched: (x, y) workgroups, or the indirect
+/// arguments at this byte offset of the job passes' buffer.
+#[derive(Clone, Copy)]
+enum Dispatch {
+    Direct(u32, u32),
+    Indirect(u64),
+}
+
 /// Binds the frame's groups (frame, objects, G-buffer) and the family's own
 /// to a compute pass.
 fn bind_compute_groups(ctx: &MaskContext, pass: &mut wgpu::ComputePass, own: &wgpu::BindGroup) {
@@ -624,17 +516,6 @@ mod tests {
         );
         assert_eq!(sun.len(), 1);
         assert!(sun[0].transform_vector3(Vec3::NEG_Y).z < -0.999);
-    }
-
-    /// The job list holds four jobs per triangle and face; after a frame
-    /// whose jobs overflowed it, twice what that frame asked for; always
-    /// within its bounds.
-    #[test]
-    fn the_job_list_grows_after_an_overflow() {
-        assert_eq!(job_capacity(10, 1, 0), JOB_CAPACITY.0);
-        assert_eq!(job_capacity(100_000, 6, 0), 2_400_000);
-        assert_eq!(job_capacity(100_000, 6, 1_500_000), 3_000_000);
-        assert_eq!(job_capacity(100_000, 6, 1 << 30), JOB_CAPACITY.1);
     }
 
     /// The automatic grid gives at least one cell per sample over the
