@@ -282,8 +282,9 @@ pub fn frame_depth_read(stencil: wgpu::StencilState) -> wgpu::DepthStencilState 
 }
 
 /// A full-screen pipeline (`vs_fullscreen` of common.wgsl, one triangle)
-/// running `fs` of `module` into `targets`, from the device's cache (the
-/// label names the pass; label, entry point and states are the key).
+/// running `fs` of `module` into `targets`, its pipeline-overridable
+/// constants set to `constants`, from the device's cache (the label names
+/// the pass; label, entry point, states and constants are the key).
 pub fn fullscreen_pipeline(
     gpu: &GpuContext,
     label: &str,
@@ -292,9 +293,11 @@ pub fn fullscreen_pipeline(
     fs: &str,
     targets: &[Option<wgpu::ColorTargetState>],
     depth_stencil: Option<wgpu::DepthStencilState>,
+    constants: &[(&str, f64)],
 ) -> wgpu::RenderPipeline {
+    let constant_bits: Vec<_> = constants.iter().map(|(k, v)| (*k, v.to_bits())).collect();
     gpu.cache
-        .render_pipeline(label, &(fs, targets, &depth_stencil), || {
+        .render_pipeline(label, &(fs, targets, &depth_stencil, constant_bits), || {
             gpu.device
                 .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                     label: Some(label),
@@ -311,7 +314,10 @@ pub fn fullscreen_pipeline(
                     fragment: Some(wgpu::FragmentState {
                         module,
                         entry_point: Some(fs),
-                        compilation_options: Default::default(),
+                        compilation_options: wgpu::PipelineCompilationOptions {
+                            constants,
+                            ..Default::default()
+                        },
                         targets,
                     }),
                     multiview_mask: None,

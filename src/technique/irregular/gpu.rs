@@ -67,7 +67,7 @@ fn module_source() -> String {
 /// `TRANSMIT` of irregular.wgsl), each over its own run of the caster
 /// list. llvmpipe slows a loop by the code it holds even where no lane
 /// runs it, so the opaque casters' tests carry no see-through code.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TestPass {
     /// The opaque casters, which block every ray they meet.
     Opaque,
@@ -78,17 +78,45 @@ pub enum TestPass {
     Transmit,
 }
 
-impl TestPass {
-    const ALL: [TestPass; 3] = [TestPass::Opaque, TestPass::SeeThrough, TestPass::Transmit];
+/// The passes over the pixels' samples, built per sample count (`SUB_PIXEL`
+/// of samples.wgsl: the centre alone carries no sub-pixel code).
+#[derive(Clone, Copy, Debug)]
+pub enum SamplePass {
+    Bounds,
+    Count,
+    Scatter,
+}
 
-    /// Its pipeline constants.
-    fn constants(self) -> [(&'static str, f64); 2] {
-        let on = |b: bool| if b { 1.0 } else { 0.0 };
-        [
-            ("SEE_THROUGH", on(self != TestPass::Opaque)),
-            ("TRANSMIT", on(self == TestPass::Transmit)),
-        ]
+impl SamplePass {
+    fn entry(self) -> &'static str {
+        match self {
+            SamplePass::Bounds => "fs_bounds",
+            SamplePass::Count => "fs_count",
+            SamplePass::Scatter => "fs_scatter",
+        }
     }
+}
+
+/// The passes that test samples against triangles: a thread per triangle,
+/// and a workgroup per job of a large one.
+#[derive(Clone, Copy, Debug)]
+pub enum TestStage {
+    Triangles,
+    Jobs,
+}
+
+impl TestStage {
+    fn entry(self) -> &'static str {
+        match self {
+            TestStage::Triangles => "cs_triangles",
+            TestStage::Jobs => "cs_jobs",
+        }
+    }
+}
+
+/// A pipeline constant's value for a flag.
+fn flag(on: bool) -> f64 {
+    if on { 1.0 } else { 0.0 }
 }
 
 /// `Irregular` of irregular.wgsl.
@@ -104,20 +132,18 @@ pub struct IrregularUniform {
     pub cone: Vec4,
 }
 
-/// The family's layout and pipelines, shared per device.
+/// The family's layout, module and the pipelines every frame runs, shared
+/// per device; the variants of the sample and test passes come from the
+/// device's pipeline cache as they are first asked for.
 pub struct IrregularShared {
     pub layout: wgpu::BindGroupLayout,
-    pub bounds: wgpu::RenderPipeline,
-    pub count: wgpu::RenderPipeline,
-    pub scatter: wgpu::RenderPipeline,
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
     pub mask: wgpu::RenderPipeline,
     pub scan_blocks: wgpu::ComputePipeline,
     pub scan_partials: wgpu::ComputePipeline,
     pub scan_add: wgpu::ComputePipeline,
-    /// The test passes, one per [`TestPass`] (its index).
-    pub triangles: [wgpu::ComputePipeline; 3],
     pub job_dispatch: wgpu::ComputePipeline,
-    pub jobs: [wgpu::ComputePipeline; 3],
 }
 
 impl IrregularShared {
@@ -138,50 +164,108 @@ impl IrregularShared {
         });
         let module = crate::frame::technique_shader(gpu, "irregular", &[&module_source()]);
         let pipeline_layout = super::super::pipeline_layout(gpu, "irregular", &layout);
-        let fullscreen = |fs: &str, write_mask| {
-            super::super::fullscreen_pipeline(
-                gpu,
-                fs,
-                &pipeline_layout,
-                &module,
-                fs,
-                &[Some(wgpu::ColorTargetState {
-                    format: MASK_FORMAT,
-                    blend: None,
-                    write_mask,
-                })],
-                Some(super::super::frame_depth_read(Default::default())),
-            )
-        };
-        let compute_with = |entry: &str, constants: &[(&str, f64)]| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants,
-                    ..Default::default()
-                },
-                cache: None,
-            })
-        };
-        let compute = |entry: &str| compute_with(entry, &[]);
-        let variants = |entry: &str| TestPass::ALL.map(|v| compute_with(entry, &v.constants()));
         IrregularShared {
-            bounds: fullscreen("fs_bounds", wgpu::ColorWrites::empty()),
-            count: fullscreen("fs_count", wgpu::ColorWrites::empty()),
-            scatter: fullscreen("fs_scatter", wgpu::ColorWrites::empty()),
-            mask: fullscreen("fs_mask", wgpu::ColorWrites::RED),
-            scan_blocks: compute("cs_scan_blocks"),
-            scan_partials: compute("cs_scan_partials"),
-            scan_add: compute("cs_scan_add"),
-            triangles: variants("cs_triangles"),
-            job_dispatch: compute("cs_job_dispatch"),
-            jobs: variants("cs_jobs"),
+            mask: fullscreen(gpu, &pipeline_layout, &module, "fs_mask", &[]),
+            scan_blocks: compute(gpu, &pipeline_layout, &module, "cs_scan_blocks", &[]),
+            scan_partials: compute(gpu, &pipeline_layout, &module, "cs_scan_partials", &[]),
+            scan_add: compute(gpu, &pipeline_layout, &module, "cs_scan_add", &[]),
+            job_dispatch: compute(gpu, &pipeline_layout, &module, "cs_job_dispatch", &[]),
             layout,
+            module,
+            pipeline_layout,
         }
     }
+
+    /// `pass` for pixels of one sample or, with `sub_pixel`, several.
+    pub fn sample_pass(
+        &self,
+        gpu: &GpuContext,
+        pass: SamplePass,
+        sub_pixel: bool,
+    ) -> wgpu::RenderPipeline {
+        let constants = [("SUB_PIXEL", flag(sub_pixel))];
+        fullscreen(
+            gpu,
+            &self.pipeline_layout,
+            &self.module,
+            pass.entry(),
+            &constants,
+        )
+    }
+
+    /// `stage` over the casters of `test`, for pixels of one sample or,
+    /// with `sub_pixel`, several.
+    pub fn test_pass(
+        &self,
+        gpu: &GpuContext,
+        stage: TestStage,
+        test: TestPass,
+        sub_pixel: bool,
+    ) -> wgpu::ComputePipeline {
+        let entry = stage.entry();
+        gpu.cache
+            .compute_pipeline(&format!("irregular {entry}"), &(test, sub_pixel), || {
+                let constants = [
+                    ("SUB_PIXEL", flag(sub_pixel)),
+                    ("SEE_THROUGH", flag(test != TestPass::Opaque)),
+                    ("TRANSMIT", flag(test == TestPass::Transmit)),
+                ];
+                compute(gpu, &self.pipeline_layout, &self.module, entry, &constants)
+            })
+    }
+}
+
+/// The full-screen pass `fs` of the family's module (it writes the mask's
+/// red channel where it is `fs_mask`, nothing elsewhere), from the
+/// device's cache.
+fn fullscreen(
+    gpu: &GpuContext,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    fs: &str,
+    constants: &[(&str, f64)],
+) -> wgpu::RenderPipeline {
+    let write_mask = if fs == "fs_mask" {
+        wgpu::ColorWrites::RED
+    } else {
+        wgpu::ColorWrites::empty()
+    };
+    super::super::fullscreen_pipeline(
+        gpu,
+        &format!("irregular {fs}"),
+        layout,
+        module,
+        fs,
+        &[Some(wgpu::ColorTargetState {
+            format: MASK_FORMAT,
+            blend: None,
+            write_mask,
+        })],
+        Some(super::super::frame_depth_read(Default::default())),
+        constants,
+    )
+}
+
+/// The compute pass `entry` of the family's module.
+fn compute(
+    gpu: &GpuContext,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
+    gpu.device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(layout),
+            module,
+            entry_point: Some(entry),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                ..Default::default()
+            },
+            cache: None,
+        })
 }
 
 /// The (x, y) workgroups that cover `n` invocations of [`WORKGROUP`]

@@ -41,6 +41,16 @@ struct CasterTriangle {
     v: vec4f,
 };
 
+// Whether pixels have several samples (`irr.pixel.x` > 1): a pipeline
+// constant, so that the passes over one sample per pixel carry none of
+// the sub-pixel code.
+override SUB_PIXEL: bool = false;
+
+// The samples of each pixel.
+fn samples_per_pixel() -> u32 {
+    return select(1u, irr.pixel.x, SUB_PIXEL);
+}
+
 @group(2) @binding(0) var<uniform> irr: Irregular;
 // The binning's words, three arrays in one buffer (N = irr.work.w cells,
 // face-major, row-major): [0, N) each cell's sample count (then the
@@ -229,7 +239,7 @@ fn faces_away_on_a_solid(t: CasterTriangle) -> bool {
 
 // The sample in `slot`: xyz its shadow-ray origin, w its id (bits).
 fn sample_at(slot: u32) -> vec4f {
-    if irr.pixel.x <= 1u {
+    if !SUB_PIXEL {
         return bitcast<vec4f>(samples[slot]);
     }
     let id = samples[slot / 4u][slot % 4u];

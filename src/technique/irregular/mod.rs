@@ -38,8 +38,8 @@ use glam::{Mat4, UVec4, Vec3, Vec4};
 use gpu::{
     AUX_DISPATCH, AUX_HEADER_WORDS, AUX_HISTOGRAM, AUX_JOBS, AUX_LONGEST, AUX_OVERFLOW, AUX_PAIRS,
     AUX_SAMPLES, AUX_SEE_THROUGH_DISPATCH, AUX_SEE_THROUGH_JOBS, AUX_TESTS, HISTOGRAM_BINS,
-    IrregularShared, IrregularUniform, MAX_FACES, SCAN_BLOCK, TestPass, grid_of_workgroups,
-    workgroups_for,
+    IrregularShared, IrregularUniform, MAX_FACES, SCAN_BLOCK, SamplePass, TestPass, TestStage,
+    grid_of_workgroups, workgroups_for,
 };
 use std::sync::Arc;
 use timing::{Pass, PassTimer};
@@ -287,6 +287,9 @@ impl ShadowTechnique for IrregularZBuffer {
         let config = self.config;
         let shared = self.shared.clone();
         let stamps = self.timer.begin_frame(ctx.gpu);
+        let sub_pixel = config.pixel_samples > 1;
+        let [bounds, count, scatter] = [SamplePass::Bounds, SamplePass::Count, SamplePass::Scatter]
+            .map(|pass| shared.sample_pass(ctx.gpu, pass, sub_pixel));
         let see_through = match config.blended {
             BlendedCrossing::Transmit => TestPass::Transmit,
             _ => TestPass::SeeThrough,
@@ -349,10 +352,10 @@ impl ShadowTechnique for IrregularZBuffer {
             }
         };
         stamps.time(encoder, Pass::Bounds, |e| {
-            fullscreen(e, "irregular bounds", &shared.bounds)
+            fullscreen(e, "irregular bounds", &bounds)
         });
         stamps.time(encoder, Pass::Counts, |e| {
-            fullscreen(e, "irregular counts", &shared.count)
+            fullscreen(e, "irregular counts", &count)
         });
         let (x, y) = grid_of_workgroups(b.cell_count.div_ceil(SCAN_BLOCK));
         let blocks = Dispatch::Direct(x, y);
@@ -363,23 +366,29 @@ impl ShadowTechnique for IrregularZBuffer {
             compute(e, "irregular offsets", &shared.scan_add, blocks);
         });
         stamps.time(encoder, Pass::Scatter, |e| {
-            fullscreen(e, "irregular scatter", &shared.scatter)
+            fullscreen(e, "irregular scatter", &scatter)
         });
         // The opaque casters' passes, then the see-through ones' (their
-        // jobs take what room the opaque ones left in the list).
+        // jobs take what room the opaque ones left in the list): each
+        // run's triangle and job pipelines, its triangles and the words of
+        // its jobs' dispatch.
+        let run = |test, count, word| {
+            let pipeline = |stage| shared.test_pass(ctx.gpu, stage, test, sub_pixel);
+            let pipelines = [TestStage::Triangles, TestStage::Jobs].map(pipeline);
+            (pipelines, count, word)
+        };
         let runs = [
-            (TestPass::Opaque, b.opaque_triangles, AUX_DISPATCH),
-            (
+            run(TestPass::Opaque, b.opaque_triangles, AUX_DISPATCH),
+            run(
                 see_through,
                 b.triangle_count - b.opaque_triangles,
                 AUX_SEE_THROUGH_DISPATCH,
             ),
         ];
         stamps.time(encoder, Pass::Triangles, |e| {
-            for &(variant, count, _) in runs.iter().filter(|r| r.1 > 0) {
-                let (x, y) = workgroups_for(count as u64);
-                let pipeline = &shared.triangles[variant as usize];
-                compute(e, "irregular triangles", pipeline, Dispatch::Direct(x, y));
+            for ([triangles, _], count, _) in runs.iter().filter(|r| r.1 > 0) {
+                let (x, y) = workgroups_for(*count as u64);
+                compute(e, "irregular triangles", triangles, Dispatch::Direct(x, y));
             }
             let dispatch = &shared.job_dispatch;
             compute(
@@ -388,19 +397,13 @@ impl ShadowTechnique for IrregularZBuffer {
                 dispatch,
                 Dispatch::Direct(1, 1),
             );
-            for (k, &(_, _, word)) in runs.iter().enumerate() {
-                e.copy_buffer_to_buffer(&b.aux, word as u64 * 4, &b.job_args, 12 * k as u64, 12);
+            for (k, (_, _, word)) in runs.iter().enumerate() {
+                e.copy_buffer_to_buffer(&b.aux, *word as u64 * 4, &b.job_args, 12 * k as u64, 12);
             }
         });
         stamps.time(encoder, Pass::Jobs, |e| {
-            for (k, &(variant, ..)) in runs.iter().enumerate().filter(|r| r.1.1 > 0) {
-                let pipeline = &shared.jobs[variant as usize];
-                compute(
-                    e,
-                    "irregular jobs",
-                    pipeline,
-                    Dispatch::Indirect(12 * k as u64),
-                );
+            for (k, ([_, jobs], ..)) in runs.iter().enumerate().filter(|r| r.1.1 > 0) {
+                compute(e, "irregular jobs", jobs, Dispatch::Indirect(12 * k as u64));
             }
         });
         stamps.time(encoder, Pass::MaskWrite, |e| {

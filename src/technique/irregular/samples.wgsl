@@ -37,10 +37,10 @@ const PLANE_LIFT: f32 = 0.25;
 // lifted off the plane by PLANE_LIFT of its distance from the centre (the
 // twin of the reference's `pixel_sample_point`, which says why).
 fn sub_sample_point(px: vec2u, k: u32, s: Surface) -> vec3f {
-    let count = irr.pixel.x;
-    if count <= 1u {
+    if !SUB_PIXEL {
         return s.p;
     }
+    let count = irr.pixel.x;
     let q = camera_ray_on_plane(vec2f(px) + pixel_sample_offset(k, count), s.p, s.n);
     return q + s.n * (PLANE_LIFT * length(q - s.p));
 }
@@ -131,7 +131,7 @@ fn raise(word: u32, value: u32) {
 fn fs_bounds(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let px = vec2u(frag.xy);
     let s = surface(px);
-    for (var k = 0u; s.seen && k < irr.pixel.x; k++) {
+    for (var k = 0u; s.seen && k < samples_per_pixel(); k++) {
         let o = sample_origin(px, k, s);
         if !light_reaches(o, s.n) {
             continue;
@@ -182,7 +182,7 @@ fn binned(px: vec2u, k: u32, s: Surface) -> Binned {
 fn fs_count(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let px = vec2u(frag.xy);
     let s = surface(px);
-    for (var k = 0u; s.seen && k < irr.pixel.x; k++) {
+    for (var k = 0u; s.seen && k < samples_per_pixel(); k++) {
         let b = binned(px, k, s);
         if b.cell < irr.work.w {
             atomicAdd(&cells[b.cell], 1u);
@@ -306,13 +306,13 @@ fn fs_scatter(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let px = vec2u(frag.xy);
     let s = surface(px);
     let pixel = px.y * irr.grid.z + px.x;
-    for (var k = 0u; s.seen && k < irr.pixel.x; k++) {
+    for (var k = 0u; s.seen && k < samples_per_pixel(); k++) {
         let b = binned(px, k, s);
         if b.cell < irr.work.w {
             let left = atomicSub(&cells[b.cell], 1u);
             let slot = atomicLoad(&cells[irr.work.w + b.cell]) + left - 1u;
             let id = pixel * 32u + k;
-            if irr.pixel.x <= 1u {
+            if !SUB_PIXEL {
                 samples[slot] = vec4u(bitcast<vec3u>(b.origin), id);
             } else {
                 samples[slot / 4u][slot % 4u] = id;

@@ -197,6 +197,7 @@ impl ProjectiveShared {
                 write_mask: wgpu::ColorWrites::RED,
             })],
             Some(super::frame_depth_read(Default::default())),
+            &[],
         );
         let placeholder = crate::gpu::texture_2d(
             device,

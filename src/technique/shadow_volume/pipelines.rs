@@ -106,6 +106,7 @@ impl VolumeShared {
                     fs,
                     &[Some(target)],
                     Some(crate::technique::frame_depth_read(stencil)),
+                    &[],
                 )
             };
         let not_zero = wgpu::StencilFaceState {
