@@ -194,6 +194,41 @@ fn two_stacked_half_transparent_panes_pass_a_quarter_of_the_light() {
     assert!((hashed - 0.25).abs() < 0.08, "hashed: {hashed}");
 }
 
+/// The two panes as one object (a lens's two sides): `hashed` gives each
+/// side its own screen door (the hash takes the depth as well as the texel
+/// and the object), so the light they pass is still a quarter, not the
+/// half that one door for both would pass.
+#[test]
+fn hashed_panes_of_one_object_multiply_their_transmittances() {
+    let sun = Light::directional(Vec3::new(0.1, -1.0, 0.05), 1.0);
+    let mut s = squares_over_floor(&[], sun, false);
+    let mut lens = scene::Mesh::default();
+    for height in [1.0, 2.0] {
+        lens.append(
+            &shapes::plane(3.0, 3.0, 1),
+            Mat4::from_translation(Vec3::Y * height) * Mat4::from_rotation_x(std::f32::consts::PI),
+        );
+    }
+    let mesh = s.add_mesh(lens);
+    let glass = s.add_material(Material {
+        alpha: 0.5,
+        alpha_mode: AlphaMode::Blend,
+        ..Material::color("glass", Vec3::splat(0.8))
+    });
+    s.add_object("Lens", mesh, glass, Mat4::IDENTITY);
+    s.finalize().unwrap();
+    let (w, h) = (64, 64);
+    let m = mask_of(&s, "shadow-map:pcf", &["blended_casters=hashed"], w, h);
+    let mut sum = 0.0;
+    for y in h / 2 - 4..=h / 2 + 4 {
+        for x in w / 2 - 4..=w / 2 + 4 {
+            sum += m[(y * w + x) as usize];
+        }
+    }
+    let hashed = sum / 81.0;
+    assert!((hashed - 0.25).abs() < 0.08, "hashed: {hashed}");
+}
+
 /// The irregular z-buffer on the same panes: `transmit` keeps the
 /// reference's quarter (the optical depths summed in fixed point), the
 /// other modes draw them as the shadow maps do.

@@ -350,7 +350,7 @@ impl ParamSpec {
     pub const BLENDED_CASTERS: ParamSpec = ParamSpec::choice_of::<BlendedCasters>(
         "blended_casters",
         BlendedCasters::Cutout as usize,
-        "translucent (glTF BLEND) casters: cutout — solid where opacity ≥ ½; hashed — solid where opacity ≥ a per-texel hash (Wyman & McGuire 2017), so filtered lookups see fractional visibility; opaque — solid everywhere; ignore — cast no shadow (the reference lets 1 − opacity of the light through)",
+        "translucent (glTF BLEND) casters: cutout — solid where opacity ≥ ½; hashed — solid where opacity ≥ a hash of the texel, its depth and the object (Wyman & McGuire 2017), so filtered lookups see fractional visibility and stacked surfaces, the two sides of one glass among them, multiply their transmittances; opaque — solid everywhere; ignore — cast no shadow (the reference lets 1 − opacity of the light through)",
     );
 
     /// Parses a textual value (`1.5`, `true`, a choice name) for this

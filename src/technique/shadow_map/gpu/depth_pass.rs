@@ -35,7 +35,8 @@ pub struct DepthPassKey {
     /// Cut-out casters: the fragment stage drops their holes
     /// (`CUTOUT` in depth_pass.wgsl).
     pub cutout: bool,
-    /// Translucent casters against a per-texel hash (`HASHED`).
+    /// Translucent casters against a hash of the texel, its depth and the
+    /// object (`HASHED`).
     pub hashed: bool,
 }
 

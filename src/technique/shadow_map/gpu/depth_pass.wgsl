@@ -4,17 +4,23 @@
 // Cut-out casters: every fragment entry first drops the caster's holes.
 override CUTOUT: bool = false;
 // Translucent casters solid where their opacity reaches a hash of the map
-// texel and the object (hashed alpha testing, Wyman & McGuire 2017): a
-// screen door in the map whose density is the opacity, which the filter's
-// taps average into fractional visibility; stacked casters get independent
-// doors, so their transmittances multiply. Otherwise they are solid where
-// it reaches ½.
+// texel, the fragment's depth and the object (hashed alpha testing, Wyman &
+// McGuire 2017): a screen door in the map whose density is the opacity,
+// which the filter's taps average into fractional visibility; stacked
+// casters, the two sides of one glass among them, get independent doors, so
+// their transmittances multiply. Otherwise they are solid where it reaches
+// ½.
 override HASHED: bool = false;
 
-// A uniform value in [0, 1) per map texel and object (PCG, Jarzynski &
-// Olano 2020).
-fn texel_hash(texel: vec2f, object: u32) -> f32 {
-    var v = u32(texel.x) * 1664525u + u32(texel.y) * 22695477u + object * 2654435761u + 1013904223u;
+// A uniform value in [0, 1) per map texel, depth and object (two rounds of
+// PCG, Jarzynski & Olano 2020). The depth's last 8 bits are dropped, so the
+// coincident faces a double-sided material draws, whose depths may differ
+// by the rounding of their interpolation, share the door.
+fn texel_hash(texel: vec3f, object: u32) -> f32 {
+    var v = u32(texel.x) * 1664525u + u32(texel.y) * 22695477u + object * 2654435761u
+        + (bitcast<u32>(texel.z) >> 8u) * 3266489917u + 1013904223u;
+    v = v * 747796405u + 2891336453u;
+    v = ((v >> ((v >> 28u) + 4u)) ^ v) * 277803737u;
     v = v * 747796405u + 2891336453u;
     let w = ((v >> ((v >> 28u) + 4u)) ^ v) * 277803737u;
     return f32((w >> 22u) ^ w) / 4294967296.0;
@@ -25,7 +31,7 @@ fn texel_hash(texel: vec2f, object: u32) -> f32 {
 fn cut_out(i: DepthOut) {
     if CUTOUT {
         let lod = opacity_lod(i.object, dpdx(i.uv), dpdy(i.uv));
-        let blend_cutoff = select(0.5, texel_hash(i.clip.xy, i.object), HASHED);
+        let blend_cutoff = select(0.5, texel_hash(i.clip.xyz, i.object), HASHED);
         if !is_solid_at(i.object, i.uv, lod, blend_cutoff) {
             discard;
         }
