@@ -2,7 +2,8 @@
 //! device's storage-buffer limit and the memory budget, and their making.
 
 use super::gpu::{
-    AUX_HEADER_WORDS, IrregularUniform, JOB_CAPACITY, binning_words, cells_fitting, storage_buffer,
+    AUX_HEADER_WORDS, IrregularUniform, JOB_CAPACITY, MAX_FACES, binning_words, cells_fitting,
+    storage_buffer,
 };
 use super::{BlendedCrossing, IrregularConfig, IrregularZBuffer, casters};
 use crate::scene::scene_fingerprint;
@@ -28,6 +29,8 @@ pub(super) struct Buffers {
     /// Jobs the job list holds.
     pub(super) job_capacity: u32,
     pub(super) aux: wgpu::Buffer,
+    /// The per-face bounds, copied from `aux` (`face_boxes`).
+    pub(super) face_boxes: wgpu::Buffer,
     /// The job passes' indirect arguments, copied from `aux`: the opaque
     /// casters', then the see-through ones'.
     pub(super) job_args: wgpu::Buffer,
@@ -135,7 +138,21 @@ impl IrregularZBuffer {
         gpu.queue
             .write_buffer(&triangle_buffer, 0, bytemuck::cast_slice(triangles));
         let aux = storage_buffer(gpu, "irregular header and job list", sizes[3].1);
-        let buffers = [&uniform, &binning, &samples, &marks, &triangle_buffer, &aux];
+        let face_boxes = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("irregular face bounds"),
+            size: (MAX_FACES * 16) as u64,
+            usage: crate::gpu::uniform_usage(gpu),
+            mapped_at_creation: false,
+        });
+        let buffers = [
+            &uniform,
+            &binning,
+            &samples,
+            &marks,
+            &triangle_buffer,
+            &aux,
+            &face_boxes,
+        ];
         let entries: Vec<_> = (0u32..)
             .zip(buffers)
             .map(|(binding, buffer)| wgpu::BindGroupEntry {
@@ -161,6 +178,7 @@ impl IrregularZBuffer {
             opaque_triangles: casters.opaque,
             job_capacity: capacity as u32,
             aux,
+            face_boxes,
             job_args: storage_buffer(gpu, "irregular job dispatch", 24),
             bind_group,
         }))

@@ -21,6 +21,9 @@ pub const AUX_JOBS: usize = 3;
 pub const AUX_DISPATCH: usize = 4;
 pub const AUX_OVERFLOW: usize = 7;
 pub const AUX_HISTOGRAM: usize = 8;
+/// Per face, 4 words of its samples' bounds, copied to the `face_boxes`
+/// uniform after the bounds pass.
+pub const AUX_BOUNDS: usize = 40;
 pub const HISTOGRAM_BINS: usize = 32;
 pub const AUX_LONGEST: usize = 64;
 /// The see-through casters' jobs and their indirect dispatch arguments.
@@ -160,6 +163,7 @@ impl IrregularShared {
                 storage(3, false),
                 storage(4, true),
                 storage(5, false),
+                crate::gpu::uniform_entry(gpu, 6, stages, false),
             ],
         });
         let module = crate::frame::technique_shader(gpu, "irregular", &[&module_source()]);
@@ -331,6 +335,7 @@ mod tests {
                 ("AUX_DISPATCH", AUX_DISPATCH as u32),
                 ("AUX_OVERFLOW", AUX_OVERFLOW as u32),
                 ("AUX_HISTOGRAM", AUX_HISTOGRAM as u32),
+                ("AUX_BOUNDS", AUX_BOUNDS as u32),
                 ("HISTOGRAM_BINS", HISTOGRAM_BINS as u32),
                 ("AUX_LONGEST", AUX_LONGEST as u32),
                 ("AUX_SEE_THROUGH_JOBS", AUX_SEE_THROUGH_JOBS as u32),

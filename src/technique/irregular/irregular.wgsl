@@ -72,6 +72,10 @@ fn samples_per_pixel() -> u32 {
 // The header (AUX_* words: counters, list-length histogram, per-face bounds)
 // and then the job list.
 @group(2) @binding(5) var<storage, read_write> aux: array<atomic<u32>>;
+// The per-face bounds of the header (AUX_BOUNDS), copied there after the
+// bounds pass: the passes after it read them as plain words, not atomics
+// (which llvmpipe runs a lane at a time).
+@group(2) @binding(6) var<uniform> face_boxes: array<vec4u, 6>;
 
 const AUX_SAMPLES: u32 = 0u;
 // (AUX_TESTS follows AUX_PAIRS: `count_work` adds both by one index.)
@@ -256,13 +260,16 @@ fn depth_slot(pixel: u32, k: u32) -> u32 {
 
 // Sample `slot` tested against triangle `t`; whether it needed a test. A
 // blocked sample is marked; a translucent crossing adds its optical depth,
-// and marks the sample once the sum passes OPAQUE_DEPTH.
+// and marks the sample once the sum passes OPAQUE_DEPTH. Only then is a
+// marked sample skipped (its sum would grow past the word): elsewhere the
+// test costs less than reading its mark first, an atomic that llvmpipe
+// runs a lane at a time.
 fn test_sample(t: CasterTriangle, slot: u32) -> u32 {
     let sample = sample_at(slot);
     let id = bitcast<u32>(sample.w);
     let pixel = id / 32u;
     let bit = 1u << (id % 32u);
-    if (atomicLoad(&marks[pixel]) & bit) != 0u {
+    if TRANSMIT && (atomicLoad(&marks[pixel]) & bit) != 0u {
         return 0u;
     }
     let opacity = opacity_crossed(t, sample.xyz);

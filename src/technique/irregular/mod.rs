@@ -36,10 +36,10 @@ use anyhow::Result;
 use buffers::Buffers;
 use glam::{Mat4, UVec4, Vec3, Vec4};
 use gpu::{
-    AUX_DISPATCH, AUX_HEADER_WORDS, AUX_HISTOGRAM, AUX_JOBS, AUX_LONGEST, AUX_OVERFLOW, AUX_PAIRS,
-    AUX_SAMPLES, AUX_SEE_THROUGH_DISPATCH, AUX_SEE_THROUGH_JOBS, AUX_TESTS, HISTOGRAM_BINS,
-    IrregularShared, IrregularUniform, MAX_FACES, SCAN_BLOCK, SamplePass, TestPass, TestStage,
-    grid_of_workgroups, workgroups_for,
+    AUX_BOUNDS, AUX_DISPATCH, AUX_HEADER_WORDS, AUX_HISTOGRAM, AUX_JOBS, AUX_LONGEST, AUX_OVERFLOW,
+    AUX_PAIRS, AUX_SAMPLES, AUX_SEE_THROUGH_DISPATCH, AUX_SEE_THROUGH_JOBS, AUX_TESTS,
+    HISTOGRAM_BINS, IrregularShared, IrregularUniform, MAX_FACES, SCAN_BLOCK, SamplePass, TestPass,
+    TestStage, grid_of_workgroups, workgroups_for,
 };
 use std::sync::Arc;
 use timing::{Pass, PassTimer};
@@ -352,7 +352,9 @@ impl ShadowTechnique for IrregularZBuffer {
             }
         };
         stamps.time(encoder, Pass::Bounds, |e| {
-            fullscreen(e, "irregular bounds", &bounds)
+            fullscreen(e, "irregular bounds", &bounds);
+            let at = AUX_BOUNDS as u64 * 4;
+            e.copy_buffer_to_buffer(&b.aux, at, &b.face_boxes, 0, MAX_FACES as u64 * 16);
         });
         stamps.time(encoder, Pass::Counts, |e| {
             fullscreen(e, "irregular counts", &count)

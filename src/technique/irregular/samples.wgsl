@@ -92,13 +92,14 @@ struct FaceBounds {
     empty: bool,
 };
 
+// A face's bounds, from their copy (`face_boxes`) once the bounds pass has
+// raised them.
 fn face_bounds(face: u32) -> FaceBounds {
-    let b = AUX_BOUNDS + face * 4u;
+    let b = face_boxes[face];
     var f: FaceBounds;
-    let hx = atomicLoad(&aux[b + 2u]);
-    f.empty = hx == 0u;
-    f.lo = vec2f(from_ordered(~atomicLoad(&aux[b])), from_ordered(~atomicLoad(&aux[b + 1u])));
-    f.hi = vec2f(from_ordered(hx), from_ordered(atomicLoad(&aux[b + 3u])));
+    f.empty = b.z == 0u;
+    f.lo = vec2f(from_ordered(~b.x), from_ordered(~b.y));
+    f.hi = vec2f(from_ordered(b.z), from_ordered(b.w));
     return f;
 }
 
