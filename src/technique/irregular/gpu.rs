@@ -6,6 +6,7 @@ use crate::gpu::GpuContext;
 use crate::technique::params::Choice;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, UVec4, Vec4};
+use std::sync::OnceLock;
 
 /// Cube faces of a local light's grid; a directional light has one face.
 pub const MAX_FACES: usize = 6;
@@ -70,7 +71,7 @@ fn module_source() -> String {
 /// `TRANSMIT` of irregular.wgsl), each over its own run of the caster
 /// list. llvmpipe slows a loop by the code it holds even where no lane
 /// runs it, so the opaque casters' tests carry no see-through code.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TestPass {
     /// The opaque casters, which block every ray they meet.
     Opaque,
@@ -135,9 +136,10 @@ pub struct IrregularUniform {
     pub cone: Vec4,
 }
 
-/// The family's layout, module and the pipelines every frame runs, shared
-/// per device; the variants of the sample and test passes come from the
-/// device's pipeline cache as they are first asked for.
+/// The family's layout, module and pipelines, shared per device; the
+/// variants of the sample and test passes are built when first asked for
+/// and kept here (not only in the device's cache, whose least recently
+/// used pipelines give way when a report cycles through every technique).
 pub struct IrregularShared {
     pub layout: wgpu::BindGroupLayout,
     module: wgpu::ShaderModule,
@@ -147,6 +149,10 @@ pub struct IrregularShared {
     pub scan_partials: wgpu::ComputePipeline,
     pub scan_add: wgpu::ComputePipeline,
     pub job_dispatch: wgpu::ComputePipeline,
+    /// Indexed by [sub-pixel][`SamplePass`].
+    sample_passes: [[OnceLock<wgpu::RenderPipeline>; 3]; 2],
+    /// Indexed by [sub-pixel][`TestStage`][`TestPass`].
+    test_passes: [[[OnceLock<wgpu::ComputePipeline>; 3]; 2]; 2],
 }
 
 impl IrregularShared {
@@ -177,6 +183,8 @@ impl IrregularShared {
             layout,
             module,
             pipeline_layout,
+            sample_passes: Default::default(),
+            test_passes: Default::default(),
         }
     }
 
@@ -186,15 +194,17 @@ impl IrregularShared {
         gpu: &GpuContext,
         pass: SamplePass,
         sub_pixel: bool,
-    ) -> wgpu::RenderPipeline {
-        let constants = [("SUB_PIXEL", flag(sub_pixel))];
-        fullscreen(
-            gpu,
-            &self.pipeline_layout,
-            &self.module,
-            pass.entry(),
-            &constants,
-        )
+    ) -> &wgpu::RenderPipeline {
+        self.sample_passes[sub_pixel as usize][pass as usize].get_or_init(|| {
+            let constants = [("SUB_PIXEL", flag(sub_pixel))];
+            fullscreen(
+                gpu,
+                &self.pipeline_layout,
+                &self.module,
+                pass.entry(),
+                &constants,
+            )
+        })
     }
 
     /// `stage` over the casters of `test`, for pixels of one sample or,
@@ -205,17 +215,21 @@ impl IrregularShared {
         stage: TestStage,
         test: TestPass,
         sub_pixel: bool,
-    ) -> wgpu::ComputePipeline {
-        let entry = stage.entry();
-        gpu.cache
-            .compute_pipeline(&format!("irregular {entry}"), &(test, sub_pixel), || {
-                let constants = [
-                    ("SUB_PIXEL", flag(sub_pixel)),
-                    ("SEE_THROUGH", flag(test != TestPass::Opaque)),
-                    ("TRANSMIT", flag(test == TestPass::Transmit)),
-                ];
-                compute(gpu, &self.pipeline_layout, &self.module, entry, &constants)
-            })
+    ) -> &wgpu::ComputePipeline {
+        self.test_passes[sub_pixel as usize][stage as usize][test as usize].get_or_init(|| {
+            let constants = [
+                ("SUB_PIXEL", flag(sub_pixel)),
+                ("SEE_THROUGH", flag(test != TestPass::Opaque)),
+                ("TRANSMIT", flag(test == TestPass::Transmit)),
+            ];
+            compute(
+                gpu,
+                &self.pipeline_layout,
+                &self.module,
+                stage.entry(),
+                &constants,
+            )
+        })
     }
 }
 
