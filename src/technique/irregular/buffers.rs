@@ -45,12 +45,13 @@ fn job_capacity(triangles: u64, faces: u64, asked: u64) -> u64 {
         .clamp(JOB_CAPACITY.0, JOB_CAPACITY.1)
 }
 
-/// Bytes of the sorted samples: 16 a pixel for one sample per pixel (the
-/// origin kept), 4 a sample for sub-pixel samples (the id alone), in whole
-/// 16-byte words (`samples` is an array of `vec4u`).
+/// Bytes of the samples: for one sample per pixel, 16 a pixel sorted by
+/// cell (the origin kept) and 16 a pixel staged before the sort; for
+/// sub-pixel samples 4 a sample (the id alone), in whole 16-byte words
+/// (`samples` is an array of `vec4u`).
 fn sample_bytes(pixels: u64, pixel_samples: u32) -> u64 {
     match pixel_samples {
-        0 | 1 => pixels * 16,
+        0 | 1 => pixels * 32,
         n => (pixels * n as u64 * 4).next_multiple_of(16),
     }
 }

@@ -61,9 +61,10 @@ fn samples_per_pixel() -> u32 {
 // The samples sorted by cell, so a cell's, and a row of cells', samples
 // are contiguous. Each is identified by its pixel · 32 plus its index
 // within the pixel. One sample per pixel: four words, the shadow-ray
-// origin's xyz (bits) and the id. Sub-pixel samples: the id alone, the
-// origin found again from the G-buffer (4 bytes a sample, so that 16 of
-// them for a 1280 × 720 frame fit one storage buffer).
+// origin's xyz (bits) and the id; then, one per pixel, the samples staged
+// before the sort (`staged_slot` of samples.wgsl). Sub-pixel samples: the
+// id alone, the origin found again from the G-buffer (4 bytes a sample,
+// so that 16 of them for a 1280 × 720 frame fit one storage buffer).
 @group(2) @binding(2) var<storage, read_write> samples: array<vec4u>;
 // Per pixel: bit k set once a caster blocks its sample k; then, under
 // BLENDED_TRANSMIT, each sample's optical depth (`depth_slot`).

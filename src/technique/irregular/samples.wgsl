@@ -127,68 +127,104 @@ fn raise(word: u32, value: u32) {
     }
 }
 
-// Pass 1, per pixel: the bounds of the samples' images on each face.
+// One sample per pixel: pass 1 keeps each pixel's sample in `samples`
+// past the sorted ones (`staged_slot`), as its origin's bits and in w its
+// face, or NOT_BINNED; pass 2 replaces the face by the face in the top 3
+// bits and the sample's rank in its cell below, and pass 4 moves it to its
+// cell's run. The G-buffer is read and the origin found once, not thrice.
+const NOT_BINNED: u32 = 0xffffffffu;
+const RANK_BITS: u32 = 29u;
+
+fn staged_slot(pixel: u32) -> u32 {
+    return irr.grid.z * irr.grid.w + pixel;
+}
+
+// The face the sample at `o` falls in and the point in that face's view;
+// whether it lies in front of the face (every point does for a
+// directional light).
+struct FacePoint {
+    face: u32,
+    v: vec3f,
+    in_front: bool,
+};
+
+fn face_point(o: vec3f) -> FacePoint {
+    var f: FacePoint;
+    f.face = face_of(o);
+    f.v = (irr.views[f.face] * vec4f(o, 1.0)).xyz;
+    f.in_front = !is_local() || f.v.z < 0.0;
+    return f;
+}
+
+// The cell of the sample at `o` on `face`.
+fn cell_at(o: vec3f, face: u32) -> u32 {
+    let v = (irr.views[face] * vec4f(o, 1.0)).xyz;
+    return cell_index(face, clamp_cell(cell_of(face_bounds(face), image_of(v))));
+}
+
+// Pass 1, per pixel: the bounds of the samples' images on each face;
+// samples the light does not reach marked (and not binned); one sample
+// per pixel staged.
 @fragment
 fn fs_bounds(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let px = vec2u(frag.xy);
+    let pixel = px.y * irr.grid.z + px.x;
     let s = surface(px);
+    var staged = vec4u(0u, 0u, 0u, NOT_BINNED);
     for (var k = 0u; s.seen && k < samples_per_pixel(); k++) {
         let o = sample_origin(px, k, s);
         if !light_reaches(o, s.n) {
+            atomicOr(&marks[pixel], 1u << k);
             continue;
         }
-        let face = face_of(o);
-        let v = (irr.views[face] * vec4f(o, 1.0)).xyz;
-        if !is_local() || v.z < 0.0 {
-            let c = image_of(v);
-            let b = AUX_BOUNDS + face * 4u;
+        let f = face_point(o);
+        if f.in_front {
+            let c = image_of(f.v);
+            let b = AUX_BOUNDS + f.face * 4u;
             raise(b, ~ordered(c.x));
             raise(b + 1u, ~ordered(c.y));
             raise(b + 2u, ordered(c.x));
             raise(b + 3u, ordered(c.y));
+            staged = vec4u(bitcast<vec3u>(o), f.face);
         }
+    }
+    if !SUB_PIXEL {
+        samples[staged_slot(pixel)] = staged;
     }
     return vec4f(1.0);
 }
 
 // The cell sample `k` of a seen pixel is binned in, or N (irr.work.w)
 // where it lies behind a local light's face or the light does not reach
-// it (`hidden`: `light_reaches`).
-struct Binned {
-    origin: vec3f,
-    cell: u32,
-    hidden: bool,
-};
-
-fn binned(px: vec2u, k: u32, s: Surface) -> Binned {
-    var b: Binned;
-    b.cell = irr.work.w;
+// it (sub-pixel samples, found again from the G-buffer).
+fn binned_cell(px: vec2u, k: u32, s: Surface) -> u32 {
     let o = sample_origin(px, k, s);
-    b.hidden = !light_reaches(o, s.n);
-    if b.hidden {
-        return b;
+    let f = face_point(o);
+    if !light_reaches(o, s.n) || !f.in_front {
+        return irr.work.w;
     }
-    let face = face_of(o);
-    let v = (irr.views[face] * vec4f(o, 1.0)).xyz;
-    if !is_local() || v.z < 0.0 {
-        b.origin = o;
-        b.cell = cell_index(face, clamp_cell(cell_of(face_bounds(face), image_of(v))));
-    }
-    return b;
+    return cell_at(o, f.face);
 }
 
-// Pass 2, per pixel: each cell's samples counted; samples the light does
-// not reach marked.
+// Pass 2, per pixel: each cell's samples counted (a staged sample keeps
+// its rank).
 @fragment
 fn fs_count(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let px = vec2u(frag.xy);
+    if !SUB_PIXEL {
+        let slot = staged_slot(px.y * irr.grid.z + px.x);
+        let staged = samples[slot];
+        if staged.w != NOT_BINNED {
+            let rank = atomicAdd(&cells[cell_at(bitcast<vec3f>(staged.xyz), staged.w)], 1u);
+            samples[slot].w = (staged.w << RANK_BITS) | rank;
+        }
+        return vec4f(1.0);
+    }
     let s = surface(px);
     for (var k = 0u; s.seen && k < samples_per_pixel(); k++) {
-        let b = binned(px, k, s);
-        if b.cell < irr.work.w {
-            atomicAdd(&cells[b.cell], 1u);
-        } else if b.hidden {
-            atomicOr(&marks[px.y * irr.grid.z + px.x], 1u << k);
+        let cell = binned_cell(px, k, s);
+        if cell < irr.work.w {
+            atomicAdd(&cells[cell], 1u);
         }
     }
     return vec4f(1.0);
@@ -301,23 +337,31 @@ fn cs_scan_add(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) gro
     }
 }
 
-// Pass 4, per pixel: its samples written to their cells' runs of `samples`.
+// Pass 4, per pixel: its samples written to their cells' runs of `samples`
+// (a staged sample at its rank; sub-pixel samples from the end of their
+// cell's run down).
 @fragment
 fn fs_scatter(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     let px = vec2u(frag.xy);
-    let s = surface(px);
     let pixel = px.y * irr.grid.z + px.x;
+    if !SUB_PIXEL {
+        let staged = samples[staged_slot(pixel)];
+        if staged.w != NOT_BINNED {
+            let o = bitcast<vec3f>(staged.xyz);
+            let cell = cell_at(o, staged.w >> RANK_BITS);
+            let rank = staged.w & ((1u << RANK_BITS) - 1u);
+            let slot = atomicLoad(&cells[irr.work.w + cell]) + rank;
+            samples[slot] = vec4u(staged.xyz, pixel * 32u);
+        }
+        return vec4f(1.0);
+    }
+    let s = surface(px);
     for (var k = 0u; s.seen && k < samples_per_pixel(); k++) {
-        let b = binned(px, k, s);
-        if b.cell < irr.work.w {
-            let left = atomicSub(&cells[b.cell], 1u);
-            let slot = atomicLoad(&cells[irr.work.w + b.cell]) + left - 1u;
-            let id = pixel * 32u + k;
-            if !SUB_PIXEL {
-                samples[slot] = vec4u(bitcast<vec3u>(b.origin), id);
-            } else {
-                samples[slot / 4u][slot % 4u] = id;
-            }
+        let cell = binned_cell(px, k, s);
+        if cell < irr.work.w {
+            let left = atomicSub(&cells[cell], 1u);
+            let slot = atomicLoad(&cells[irr.work.w + cell]) + left - 1u;
+            samples[slot / 4u][slot % 4u] = pixel * 32u + k;
         }
     }
     return vec4f(1.0);
