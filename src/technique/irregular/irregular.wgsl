@@ -53,8 +53,8 @@ fn samples_per_pixel() -> u32 {
 
 @group(2) @binding(0) var<uniform> irr: Irregular;
 // The binning's words, three arrays in one buffer (N = irr.work.w cells,
-// face-major, row-major): [0, N) each cell's sample count (then the
-// scatter's cursor, back to 0 when it is done); [N, 2N] the exclusive
+// face-major, row-major): [0, N) each cell's sample count (for sub-pixel
+// samples then the scatter's cursor, back to 0 when it is done); [N, 2N] the exclusive
 // prefix sum of the counts, the first sample of each cell in `samples`
 // (its last word the total); then the prefix sum's per-block partials.
 @group(2) @binding(1) var<storage, read_write> cells: array<atomic<u32>>;
