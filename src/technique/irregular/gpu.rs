@@ -175,7 +175,14 @@ impl IrregularShared {
         let module = crate::frame::technique_shader(gpu, "irregular", &[&module_source()]);
         let pipeline_layout = super::super::pipeline_layout(gpu, "irregular", &layout);
         IrregularShared {
-            mask: fullscreen(gpu, &pipeline_layout, &module, "fs_mask", &[]),
+            mask: fullscreen(
+                gpu,
+                &pipeline_layout,
+                &module,
+                "fs_mask",
+                wgpu::ColorWrites::RED,
+                &[],
+            ),
             scan_blocks: compute(gpu, &pipeline_layout, &module, "cs_scan_blocks", &[]),
             scan_partials: compute(gpu, &pipeline_layout, &module, "cs_scan_partials", &[]),
             scan_add: compute(gpu, &pipeline_layout, &module, "cs_scan_add", &[]),
@@ -202,6 +209,7 @@ impl IrregularShared {
                 &self.pipeline_layout,
                 &self.module,
                 pass.entry(),
+                wgpu::ColorWrites::empty(),
                 &constants,
             )
         })
@@ -233,21 +241,17 @@ impl IrregularShared {
     }
 }
 
-/// The full-screen pass `fs` of the family's module (it writes the mask's
-/// red channel where it is `fs_mask`, nothing elsewhere), from the
-/// device's cache.
+/// The full-screen pass `fs` of the family's module, writing `write_mask`
+/// of the mask (the sample passes write none of it), from the device's
+/// cache.
 fn fullscreen(
     gpu: &GpuContext,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
     fs: &str,
+    write_mask: wgpu::ColorWrites,
     constants: &[(&str, f64)],
 ) -> wgpu::RenderPipeline {
-    let write_mask = if fs == "fs_mask" {
-        wgpu::ColorWrites::RED
-    } else {
-        wgpu::ColorWrites::empty()
-    };
     super::super::fullscreen_pipeline(
         gpu,
         &format!("irregular {fs}"),
