@@ -295,32 +295,7 @@ impl ShadowTechnique for IrregularZBuffer {
             _ => TestPass::SeeThrough,
         };
         let b = self.ensure_buffers(ctx, faces)?;
-        let mut uniform = IrregularUniform {
-            views: [Mat4::IDENTITY; MAX_FACES],
-            light: match light.kind {
-                LightType::Directional => light.direction.normalize().extend(0.0),
-                _ => light.position.extend(1.0),
-            },
-            grid: UVec4::new(faces as u32, b.grid, ctx.frame.width(), ctx.frame.height()),
-            work: UVec4::new(
-                b.triangle_count,
-                config.large_samples,
-                b.job_capacity,
-                b.cell_count as u32,
-            ),
-            offset: Vec4::new(config.offset_ulps, light.range, 0.0, 0.0),
-            pixel: UVec4::new(
-                config.pixel_samples,
-                config.blended.index() as u32,
-                b.opaque_triangles,
-                0,
-            ),
-            cone: match light.kind {
-                LightType::Spot => light.cone_axis().extend(light.cone_cos()),
-                _ => Vec4::new(0.0, 0.0, 0.0, NO_CONE),
-            },
-        };
-        uniform.views[..faces].copy_from_slice(&views);
+        let uniform = frame_uniform(ctx, &config, b, &views);
         ctx.gpu
             .queue
             .write_buffer(&b.uniform, 0, bytemuck::bytes_of(&uniform));
@@ -462,6 +437,45 @@ impl ShadowTechnique for IrregularZBuffer {
             .sum()
         })
     }
+}
+
+/// The frame's uniform: the light's faces, the grid, the work and the
+/// settings.
+fn frame_uniform(
+    ctx: &MaskContext,
+    config: &IrregularConfig,
+    b: &Buffers,
+    views: &[Mat4],
+) -> IrregularUniform {
+    let light = ctx.light;
+    let faces = views.len();
+    let mut uniform = IrregularUniform {
+        views: [Mat4::IDENTITY; MAX_FACES],
+        light: match light.kind {
+            LightType::Directional => light.direction.normalize().extend(0.0),
+            _ => light.position.extend(1.0),
+        },
+        grid: UVec4::new(faces as u32, b.grid, ctx.frame.width(), ctx.frame.height()),
+        work: UVec4::new(
+            b.triangle_count,
+            config.large_samples,
+            b.job_capacity,
+            b.cell_count as u32,
+        ),
+        offset: Vec4::new(config.offset_ulps, light.range, 0.0, 0.0),
+        pixel: UVec4::new(
+            config.pixel_samples,
+            config.blended.index() as u32,
+            b.opaque_triangles,
+            0,
+        ),
+        cone: match light.kind {
+            LightType::Spot => light.cone_axis().extend(light.cone_cos()),
+            _ => Vec4::new(0.0, 0.0, 0.0, NO_CONE),
+        },
+    };
+    uniform.views[..faces].copy_from_slice(views);
+    uniform
 }
 
 /// How a compute pass is dispatched: (x, y) workgroups, or the indirect
