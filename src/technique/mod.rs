@@ -281,49 +281,70 @@ pub fn frame_depth_read(stencil: wgpu::StencilState) -> wgpu::DepthStencilState 
     }
 }
 
+/// The fragment stage of a full-screen pipeline: an entry point of a
+/// module, with values for the pipeline-overridable constants it reads.
+#[derive(Clone, Copy)]
+pub struct FragmentEntry<'a> {
+    pub module: &'a wgpu::ShaderModule,
+    pub entry: &'a str,
+    pub constants: &'a [(&'a str, f64)],
+}
+
+impl<'a> FragmentEntry<'a> {
+    /// `entry` of `module`, its constants at their defaults.
+    pub fn new(module: &'a wgpu::ShaderModule, entry: &'a str) -> FragmentEntry<'a> {
+        FragmentEntry {
+            module,
+            entry,
+            constants: &[],
+        }
+    }
+}
+
 /// A full-screen pipeline (`vs_fullscreen` of common.wgsl, one triangle)
-/// running `fs` of `module` into `targets`, its pipeline-overridable
-/// constants set to `constants`, from the device's cache (the label names
-/// the pass; label, entry point, states and constants are the key).
+/// running `fragment` into `targets`, from the device's cache (the label
+/// names the pass; label, entry point, constants and states are the key).
 pub fn fullscreen_pipeline(
     gpu: &GpuContext,
     label: &str,
     layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
-    fs: &str,
+    fragment: FragmentEntry,
     targets: &[Option<wgpu::ColorTargetState>],
     depth_stencil: Option<wgpu::DepthStencilState>,
-    constants: &[(&str, f64)],
 ) -> wgpu::RenderPipeline {
-    let constant_bits: Vec<_> = constants.iter().map(|(k, v)| (*k, v.to_bits())).collect();
-    gpu.cache
-        .render_pipeline(label, &(fs, targets, &depth_stencil, constant_bits), || {
-            gpu.device
-                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(layout),
-                    vertex: wgpu::VertexState {
-                        module,
-                        entry_point: Some("vs_fullscreen"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
+    let constant_bits: Vec<_> = fragment
+        .constants
+        .iter()
+        .map(|(k, v)| (*k, v.to_bits()))
+        .collect();
+    let key = (fragment.entry, targets, &depth_stencil, constant_bits);
+    gpu.cache.render_pipeline(label, &key, || {
+        gpu.device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module: fragment.module,
+                    entry_point: Some("vs_fullscreen"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: Default::default(),
+                depth_stencil: depth_stencil.clone(),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: fragment.module,
+                    entry_point: Some(fragment.entry),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: fragment.constants,
+                        ..Default::default()
                     },
-                    primitive: Default::default(),
-                    depth_stencil: depth_stencil.clone(),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module,
-                        entry_point: Some(fs),
-                        compilation_options: wgpu::PipelineCompilationOptions {
-                            constants,
-                            ..Default::default()
-                        },
-                        targets,
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
-        })
+                    targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+    })
 }
 
 /// Begins a render pass on the light's mask layer, cleared to 1 (lit), with

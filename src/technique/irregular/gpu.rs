@@ -256,15 +256,17 @@ fn fullscreen(
         gpu,
         &format!("irregular {fs}"),
         layout,
-        module,
-        fs,
+        super::super::FragmentEntry {
+            module,
+            entry: fs,
+            constants,
+        },
         &[Some(wgpu::ColorTargetState {
             format: MASK_FORMAT,
             blend: None,
             write_mask,
         })],
         Some(super::super::frame_depth_read(Default::default())),
-        constants,
     )
 }
 

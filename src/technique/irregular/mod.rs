@@ -327,12 +327,12 @@ impl ShadowTechnique for IrregularZBuffer {
             }
         };
         stamps.time(encoder, Pass::Bounds, |e| {
-            fullscreen(e, "irregular bounds", &bounds);
+            fullscreen(e, "irregular bounds", bounds);
             let at = AUX_BOUNDS as u64 * 4;
             e.copy_buffer_to_buffer(&b.aux, at, &b.face_boxes, 0, MAX_FACES as u64 * 16);
         });
         stamps.time(encoder, Pass::Counts, |e| {
-            fullscreen(e, "irregular counts", &count)
+            fullscreen(e, "irregular counts", count)
         });
         let (x, y) = grid_of_workgroups(b.cell_count.div_ceil(SCAN_BLOCK));
         let blocks = Dispatch::Direct(x, y);
@@ -343,7 +343,7 @@ impl ShadowTechnique for IrregularZBuffer {
             compute(e, "irregular offsets", &shared.scan_add, blocks);
         });
         stamps.time(encoder, Pass::Scatter, |e| {
-            fullscreen(e, "irregular scatter", &scatter)
+            fullscreen(e, "irregular scatter", scatter)
         });
         // The opaque casters' passes, then the see-through ones' (their
         // jobs take what room the opaque ones left in the list): each

@@ -181,8 +181,7 @@ impl ProjectiveShared {
             gpu,
             "projective project",
             &pl,
-            &module,
-            "fs_project",
+            super::FragmentEntry::new(&module, "fs_project"),
             &[Some(wgpu::ColorTargetState {
                 format: MASK_FORMAT,
                 // Multiply: several casters combine.
@@ -197,7 +196,6 @@ impl ProjectiveShared {
                 write_mask: wgpu::ColorWrites::RED,
             })],
             Some(super::frame_depth_read(Default::default())),
-            &[],
         );
         let placeholder = crate::gpu::texture_2d(
             device,

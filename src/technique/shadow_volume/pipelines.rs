@@ -102,11 +102,9 @@ impl VolumeShared {
                     gpu,
                     label,
                     &pipeline_layout,
-                    &module,
-                    fs,
+                    crate::technique::FragmentEntry::new(&module, fs),
                     &[Some(target)],
                     Some(crate::technique::frame_depth_read(stencil)),
-                    &[],
                 )
             };
         let not_zero = wgpu::StencilFaceState {
