@@ -151,14 +151,18 @@ struct FacePoint {
 fn face_point(o: vec3f) -> FacePoint {
     var f: FacePoint;
     f.face = face_of(o);
-    f.v = (irr.views[f.face] * vec4f(o, 1.0)).xyz;
+    f.v = view_point(f.face, o);
     f.in_front = !is_local() || f.v.z < 0.0;
     return f;
 }
 
-// The cell of the sample at `o` on `face`.
-fn cell_at(o: vec3f, face: u32) -> u32 {
-    let v = (irr.views[face] * vec4f(o, 1.0)).xyz;
+// The point `o` in the view of `face`.
+fn view_point(face: u32, o: vec3f) -> vec3f {
+    return (irr.views[face] * vec4f(o, 1.0)).xyz;
+}
+
+// The cell of the sample at `v` in the view of `face`.
+fn cell_at(face: u32, v: vec3f) -> u32 {
     return cell_index(face, clamp_cell(cell_of(face_bounds(face), image_of(v))));
 }
 
@@ -203,7 +207,7 @@ fn binned_cell(px: vec2u, k: u32, s: Surface) -> u32 {
     if !light_reaches(o, s.n) || !f.in_front {
         return irr.work.w;
     }
-    return cell_at(o, f.face);
+    return cell_at(f.face, f.v);
 }
 
 // Pass 2, per pixel: each cell's samples counted (a staged sample keeps
@@ -215,7 +219,8 @@ fn fs_count(@builtin(position) frag: vec4f) -> @location(0) vec4f {
         let slot = staged_slot(px.y * irr.grid.z + px.x);
         let staged = samples[slot];
         if staged.w != NOT_BINNED {
-            let rank = atomicAdd(&cells[cell_at(bitcast<vec3f>(staged.xyz), staged.w)], 1u);
+            let v = view_point(staged.w, bitcast<vec3f>(staged.xyz));
+            let rank = atomicAdd(&cells[cell_at(staged.w, v)], 1u);
             samples[slot].w = (staged.w << RANK_BITS) | rank;
         }
         return vec4f(1.0);
@@ -347,8 +352,8 @@ fn fs_scatter(@builtin(position) frag: vec4f) -> @location(0) vec4f {
     if !SUB_PIXEL {
         let staged = samples[staged_slot(pixel)];
         if staged.w != NOT_BINNED {
-            let o = bitcast<vec3f>(staged.xyz);
-            let cell = cell_at(o, staged.w >> RANK_BITS);
+            let face = staged.w >> RANK_BITS;
+            let cell = cell_at(face, view_point(face, bitcast<vec3f>(staged.xyz)));
             let rank = staged.w & ((1u << RANK_BITS) - 1u);
             let slot = atomicLoad(&cells[irr.work.w + cell]) + rank;
             samples[slot] = vec4u(staged.xyz, pixel * 32u);
