@@ -1,5 +1,5 @@
 // Virtual shadow maps: per pixel, the level whose texels cover at most one
-// pixel (from the texel footprint of the G-buffer's neighbours, as
+// pixel (from the texel footprint of the pixel on its surface's plane, as
 // `compare` measures it), the pages its kernel needs marked (fs_virtual_mark);
 // the lookup reads each texel through the page table and, where a page is
 // not resident (a pool too small), from the next coarser level that is.
@@ -193,29 +193,15 @@ fn virtual_stored(t: vec2i, l: VirtualLevel) -> f32 {
     return atlas_stored(atlas_texel_in(t, l));
 }
 
-// Texel offset per pixel step `step` at `pixel`, toward the neighbour
-// nearer to p on a receiver (the other one may lie across an edge); 0
-// when neither is a receiver.
-fn neighbour_delta(l: VirtualLevel, pixel: vec2i, p: vec3f, step: vec2i) -> vec2f {
-    // A neighbour outside the frame counts as no receiver.
-    let top = vec2i(frame.size.xy) - 1;
-    let pa = pixel + step;
-    let pb = pixel - step;
-    var a = textureLoad(gbuffer_position, clamp(pa, vec2i(0), top), 0);
-    var b = textureLoad(gbuffer_position, clamp(pb, vec2i(0), top), 0);
-    if any(pa > top) {
-        a.w = 0.0;
-    }
-    if any(pb < vec2i(0)) {
-        b.w = 0.0;
-    }
-    let use_b = a.w < 0.5 || (b.w >= 0.5 && distance(b.xyz, p) < distance(a.xyz, p));
-    let q = select(a, b, use_b);
-    if q.w < 0.5 {
-        return vec2f(0.0);
-    }
-    let d = level_texel(l, q.xyz).xy - level_texel(l, p).xy;
-    return select(d, -d, use_b);
+// Texel offset of level `l` per pixel step `step` at `pixel`: where the
+// camera ray through the neighbouring pixel centre meets the plane of p
+// (normal n). Not the G-buffer neighbour: in foliage or at any silhouette
+// both neighbours may lie on other surfaces, metres away, which would
+// send the pixel to a level far too coarse.
+fn neighbour_delta(l: VirtualLevel, pixel: vec2i, p: vec3f, n: vec3f, step: vec2i) -> vec2f {
+    let centre = vec2f(pixel) + 0.5;
+    let q = camera_ray_on_plane(centre + vec2f(step), p, n);
+    return level_texel(l, q).xy - level_texel(l, p).xy;
 }
 
 // A level found for a pixel: its index (NO_LEVEL for none), its entry and
@@ -244,8 +230,8 @@ fn level_holds(f: FoundLevel) -> bool {
 fn virtual_level_of(pixel: vec2i, p: vec3f, n: vec3f) -> FoundLevel {
     let base = face_of(p) * vsm.view_levels;
     let base_level = level_at(base);
-    let dx = neighbour_delta(base_level, pixel, p, vec2i(1, 0));
-    let dy = neighbour_delta(base_level, pixel, p, vec2i(0, 1));
+    let dx = neighbour_delta(base_level, pixel, p, n, vec2i(1, 0));
+    let dy = neighbour_delta(base_level, pixel, p, n, vec2i(0, 1));
     let footprint = texel_footprint(dx, dy);
     let finer = select(f32(vsm.oversample_levels), 0.0, is_orthographic());
     let steps = clamp(floor(-log2(max(footprint, 1e-12))) - finer, 0.0, f32(vsm.view_levels - 1u));
