@@ -4,7 +4,8 @@
 
 mod common;
 use common::*;
-use glam::Vec3;
+use glam::{Mat4, Vec3};
+use shadowlab::scene::shapes;
 use shadowlab::scene::{Light, Scene, builtin};
 
 /// A sun straight down on the 20×20 floor, the camera 8 above looking
@@ -105,6 +106,43 @@ fn a_virtual_pool_too_small_degrades_to_coarser_pages_without_garbage() {
     assert!(good.mask.all.total_pct <= 0.005 * shadow, "{:?}", good.mask);
     assert!(row.mask.all.total_pct <= 0.01 * shadow, "{:?}", row.mask);
     assert!(good.mask.all.total_pct <= row.mask.all.total_pct + 1e-9);
+}
+
+/// A pixel takes its level from its own surface, not from its G-buffer
+/// neighbours. The hand count's view with one more square, half size 0.01
+/// at height 4, 4 below the camera: there a pixel spans 0.0291 × 4/8 =
+/// 0.01455, so the square is 1.37 pixels wide and its pixels need level 3
+/// (texel 0.00977; level 4's 0.0195 is wider than them), pages no floor
+/// pixel asks for. Their neighbours are floor pixels, 4 farther: measured
+/// from those, the square's pixels took coarser texels than they need.
+#[test]
+fn a_pixel_whose_neighbours_lie_on_another_surface_keeps_its_own_level() {
+    let mut scene = square_under_the_sun(Vec3::new(0.0, 1.0, 0.0));
+    // Facing the camera (the helper's squares face the floor).
+    let quad = scene.add_mesh(shapes::plane(2.0, 2.0, 1));
+    let grey = scene.objects[0].material;
+    let speck =
+        Mat4::from_translation(Vec3::new(0.3, 4.0, 0.3)) * Mat4::from_scale(Vec3::splat(0.01));
+    scene.add_object("Speck", quad, grey, speck);
+    scene.finalize().unwrap();
+    let floor_only = rendered_frame(
+        &square_under_the_sun(Vec3::new(0.0, 1.0, 0.0)),
+        "shadow-map:virtual",
+        &SMALL_CLIPMAP,
+        256,
+        256,
+    );
+    assert_eq!(counter(&floor_only, "pages_needed"), 16.0);
+    let hf = rendered_frame(&scene, "shadow-map:virtual", &SMALL_CLIPMAP, 256, 256);
+    assert!(counter(&hf, "pages_needed") > 16.0);
+    let id = format!("shadow-map:virtual[{}]", SMALL_CLIPMAP.join(","));
+    let row = compare(&scene, &id, (256, 256));
+    let footprint = row.aliasing.expect("a footprint");
+    // Every pixel's texel spans 0.67 of it: the floor's level-4 texels
+    // 0.0195 / 0.0291 and the square's level-3 texels 0.00977 / 0.01457
+    // (a level too coarse would read 1.34 or more there; the neighbours'
+    // rule gave 0.95 at the square's edge).
+    assert!((footprint.max - 0.670).abs() < 0.005, "{footprint:?}");
 }
 
 /// The clipmap of the hand counts: 1024² windows of 128² pages, 6 levels.
