@@ -193,17 +193,6 @@ fn virtual_stored(t: vec2i, l: VirtualLevel) -> f32 {
     return atlas_stored(atlas_texel_in(t, l));
 }
 
-// Texel offset of level `l` per pixel step `step` at `pixel`: where the
-// camera ray through the neighbouring pixel centre meets the plane of p
-// (normal n). Not the G-buffer neighbour: in foliage or at any silhouette
-// both neighbours may lie on other surfaces, metres away, which would
-// send the pixel to a level far too coarse.
-fn neighbour_delta(l: VirtualLevel, pixel: vec2i, p: vec3f, n: vec3f, step: vec2i) -> vec2f {
-    let centre = vec2f(pixel) + 0.5;
-    let q = camera_ray_on_plane(centre + vec2f(step), p, n);
-    return level_texel(l, q).xy - level_texel(l, p).xy;
-}
-
 // A level found for a pixel: its index (NO_LEVEL for none), its entry and
 // the lookup point in it.
 struct FoundLevel {
@@ -230,8 +219,14 @@ fn level_holds(f: FoundLevel) -> bool {
 fn virtual_level_of(pixel: vec2i, p: vec3f, n: vec3f) -> FoundLevel {
     let base = face_of(p) * vsm.view_levels;
     let base_level = level_at(base);
-    let dx = neighbour_delta(base_level, pixel, p, n, vec2i(1, 0));
-    let dy = neighbour_delta(base_level, pixel, p, n, vec2i(0, 1));
+    // The pixel steps over p's own plane, not toward its G-buffer
+    // neighbours: in foliage or at any silhouette both may lie on other
+    // surfaces, metres away, which would send the pixel to a level far
+    // too coarse.
+    set_pixel_steps(vec2f(pixel) + 0.5, p, n);
+    let at = level_texel(base_level, p).xy;
+    let dx = level_texel(base_level, p + pixel_step_x).xy - at;
+    let dy = level_texel(base_level, p + pixel_step_y).xy - at;
     let footprint = texel_footprint(dx, dy);
     let finer = select(f32(vsm.oversample_levels), 0.0, is_orthographic());
     let steps = clamp(floor(-log2(max(footprint, 1e-12))) - finer, 0.0, f32(vsm.view_levels - 1u));
