@@ -19,8 +19,9 @@ struct Irregular {
     // x caster triangles, y samples above which a triangle is left to the
     // job pass, z the job list's capacity, w the cells (faces · R²)
     work: vec4u,
-    // x ray-origin offset in ULPs (the reference's rule), y the light's
-    // range (0: none), zw unused
+    // x ray-origin offset in ULPs and z its lift as a fraction of the
+    // pixel's footprint (the reference's rule), y the light's range (0:
+    // none), w unused
     offset: vec4f,
     // x samples per pixel (1: its centre; up to 32, one mark bit each), y
     // how rays meet translucent casters (BLENDED_*), z the opaque casters'
@@ -409,6 +410,36 @@ fn triangle_cells(t: CasterTriangle, face: u32, f: FaceBounds) -> vec4i {
     return vec4i(c0, c1);
 }
 
+const MAX_FACES: u32 = 6u;
+
+// The cube face of a direction `d` from a local light, where its major
+// axis exceeds the others by a margin (1/1024 of them), else MAX_FACES.
+fn clear_face(d: vec3f) -> u32 {
+    let a = abs(d);
+    let major = max(a.x, max(a.y, a.z));
+    let second = max(min(a.x, a.y), min(max(a.x, a.y), a.z));
+    return select(MAX_FACES, cube_face(d), major > second * (1.0 + 1.0 / 1024.0));
+}
+
+// The one face of a local light whose pyramid holds the whole of `t`, or
+// MAX_FACES (every face may hold some of it). Where the three vertices lie
+// clear of the same face's edges, so does the triangle (the narrowed
+// pyramid is convex), and so does every sample whose ray to the light it
+// meets: no rounding bins such a sample on another face, whose image the
+// triangle need not be projected into (most triangles of a scene: five
+// faces of six saved).
+fn face_holding(t: CasterTriangle) -> u32 {
+    if !is_local() {
+        return MAX_FACES;
+    }
+    let l = irr.light.xyz;
+    let f = clear_face(t.a.xyz - l);
+    if clear_face(t.b.xyz - l) != f || clear_face(t.c.xyz - l) != f {
+        return MAX_FACES;
+    }
+    return f;
+}
+
 // The triangle-cell pairs and sample tests of one workgroup's threads,
 // added to the header once per workgroup (the threads would otherwise
 // contend for the same two words).
@@ -443,7 +474,11 @@ fn triangle_work(index: u32) -> vec2u {
     }
     var tests = 0u;
     var pairs = 0u;
+    let only = face_holding(t);
     for (var face = 0u; face < irr.grid.x; face++) {
+        if only < MAX_FACES && face != only {
+            continue;
+        }
         let box = triangle_cells(t, face, face_bounds(face));
         if box.z < box.x || box.w < box.y {
             continue;
