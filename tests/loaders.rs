@@ -788,3 +788,39 @@ fn gltf_texture_transforms_are_baked_into_the_uvs() {
         );
     }
 }
+
+/// A glTF scene that lists a child as a root (glTF forbids it; Kenney's
+/// models do it): each node is drawn once, with a warning — a child listed
+/// beside its parent under the parent, one whose parent the scene leaves
+/// out from itself, without the parent's transform (as Bevy and three.js
+/// draw it).
+#[test]
+fn scenes_listing_children_as_roots_draw_each_node_once() {
+    let dir = tmpdir("root-is-child");
+    let buffer = "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA=";
+    for (listed, x) in [("[0, 1]", 5.0), ("[1]", 0.0)] {
+        let text = format!(
+            r#"{{"asset": {{"version": "2.0"}},
+            "buffers": [{{"uri": "{buffer}", "byteLength": 44}}],
+            "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 36}}, {{"buffer": 0, "byteOffset": 36, "byteLength": 6}}],
+            "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+                {{"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}}],
+            "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+            "nodes": [{{"name": "tmpParent", "children": [1], "translation": [5, 0, 0]}}, {{"mesh": 0, "translation": [0, 0, 1]}}],
+            "scenes": [{{"nodes": {listed}}}], "scene": 0}}"#
+        );
+        let path = write(&dir, "child.gltf", &text);
+        let s = scene::load(path.to_str().unwrap()).unwrap();
+        assert_eq!(s.objects.len(), 1, "scene {listed}");
+        let at = s.objects[0].transform.w_axis;
+        assert_eq!((at.x, at.z), (x, 1.0), "scene {listed}");
+        let out = dir.join("out");
+        let o = render_file(path.to_str().unwrap(), "32x32", out.to_str().unwrap(), &[]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains("lists node 1 as a root"),
+            "{}",
+            stderr(&o)
+        );
+    }
+}

@@ -8,11 +8,12 @@ use anyhow::{Result, bail};
 use std::path::Path;
 
 /// Checks that the node graph is a forest, as glTF 2.0 requires (§ 3.5.4
-/// "Scenes"): no node is its own descendant, no node has two parents, and
-/// no scene root is another node's child. Checked here rather than trusted
-/// to the importer: a cycle would make the traversal below run forever and
-/// shared children would multiply objects.
-pub(super) fn check_node_forest(file: &str, doc: &gltf::Document) -> Result<()> {
+/// "Scenes"): no node is its own descendant and no node has two parents;
+/// returns each node's parent. Checked here rather than trusted to the
+/// importer: a cycle would make the traversal below run forever and shared
+/// children would multiply objects. (That a scene lists only roots is
+/// left to [`scene_roots`].)
+pub(super) fn check_node_forest(file: &str, doc: &gltf::Document) -> Result<Vec<Option<usize>>> {
     let n = doc.nodes().len();
     let mut parent: Vec<Option<usize>> = vec![None; n];
     for node in doc.nodes() {
@@ -57,18 +58,50 @@ pub(super) fn check_node_forest(file: &str, doc: &gltf::Document) -> Result<()> 
             reaches_root[i] = true;
         }
     }
-    for scene in doc.scenes() {
-        for root in scene.nodes() {
-            if let Some(p) = parent[root.index()] {
-                bail!(
-                    "{file}: scene {} lists node {} as a root, but it is a child of node {p}",
-                    scene.index(),
-                    root.index()
+    Ok(parent)
+}
+
+/// The nodes `scene` is drawn from, given each node's `parent`: the nodes
+/// it lists. glTF requires them to be roots (§ 3.5.4), but exporters write
+/// files that list a child (Kenney's models list the child of a
+/// `tmpParent` node the scene leaves out), which Bevy and three.js draw
+/// from the listed node, its parent's transform left out: so is it drawn
+/// here, with a warning. A listed node that descends from another listed
+/// node, or is listed twice, is drawn once (as that node's descendant).
+pub(super) fn scene_roots(file: &str, scene: &gltf::Scene, parent: &[Option<usize>]) -> Vec<usize> {
+    let listed: Vec<usize> = scene.nodes().map(|n| n.index()).collect();
+    let mut roots: Vec<usize> = vec![];
+    for &node in &listed {
+        if roots.contains(&node) {
+            log::warn!(
+                "{file}: scene {} lists node {node} twice; drawn once",
+                scene.index()
+            );
+            continue;
+        }
+        let Some(p) = parent[node] else {
+            roots.push(node);
+            continue;
+        };
+        let mut above = Some(p);
+        while let Some(a) = above.filter(|a| !listed.contains(a)) {
+            above = parent[a];
+        }
+        match above {
+            Some(a) => log::warn!(
+                "{file}: scene {} lists node {node} as a root, but it descends from node {a}, also listed; drawn once, under node {a}",
+                scene.index()
+            ),
+            None => {
+                log::warn!(
+                    "{file}: scene {} lists node {node} as a root, but it is a child of node {p}, which the scene leaves out; drawn from node {node}, without node {p}'s transform (as Bevy and three.js draw it)",
+                    scene.index()
                 );
+                roots.push(node);
             }
         }
     }
-    Ok(())
+    roots
 }
 
 /// Runs `f`, turning a panic — which the `gltf` crate raises on some

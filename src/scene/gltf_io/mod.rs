@@ -14,7 +14,7 @@ use super::{
 use anyhow::{Context, Result, anyhow, bail};
 use checks::{
     check_accessors, check_attribute_indices, check_external_files, check_glb_layout,
-    check_node_forest, check_primitive_accessors, without_panics,
+    check_node_forest, check_primitive_accessors, scene_roots, without_panics,
 };
 use extras::{PhongExtras, ShadowFlags, extras_field};
 use glam::{Mat4, Vec2, Vec3};
@@ -295,7 +295,7 @@ fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene
     let buffers =
         gltf::import_buffers(&doc, Some(base), blob).map_err(|e| anyhow!("{file}: {e}"))?;
     let images = read_images(&file, &doc, base, &buffers);
-    check_node_forest(&file, &doc)?;
+    let parents = check_node_forest(&file, &doc)?;
     check_accessors(&file, &doc, &buffers)?;
     let mut scene = Scene::new(stem);
     scene.source = file.clone();
@@ -328,8 +328,12 @@ fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| anyhow!("{file}: no scene"))?;
     // Breadth-first in document order, so objects keep the node order.
+    let nodes: Vec<gltf::Node> = doc.nodes().collect();
     let mut queue: std::collections::VecDeque<(gltf::Node, Mat4)> =
-        gscene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+        scene_roots(&file, &gscene, &parents)
+            .into_iter()
+            .map(|i| (nodes[i].clone(), Mat4::IDENTITY))
+            .collect();
     while let Some((node, parent)) = queue.pop_front() {
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         let name = node.name().unwrap_or("node").to_string();
