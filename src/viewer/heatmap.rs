@@ -36,6 +36,7 @@ impl App {
                 normals: gfx.gpu.read_texture(frame.gbuffer_normal(), 0, 8)?,
                 mask: gfx.gpu.read_texture(frame.masks(), li as u32, 2)?,
                 color: frame.read_color_rgba(&gfx.gpu)?,
+                camera: *frame.uniform(),
             })
         };
         let data = match read() {
@@ -91,6 +92,8 @@ struct FrameData {
     normals: Vec<u8>,
     mask: Vec<u8>,
     color: Vec<u8>,
+    /// The frame's camera and size (its uniform).
+    camera: crate::frame::FrameUniform,
 }
 
 /// The work of the heatmap thread.
@@ -101,7 +104,7 @@ fn heatmap_job(
 ) -> Result<(egui::ColorImage, String), String> {
     let (w, h) = (data.width, data.height);
     let (pos, nrm, mask, color) = (&data.positions, &data.normals, &data.mask, &data.color);
-    use crate::technique::raytraced::{PixelSampling, ReferenceSettings, mask_from_gbuffer};
+    use crate::technique::raytraced::ReferenceSettings;
     let positions: &[[f32; 4]] = bytemuck::cast_slice(pos);
     let normals: Vec<glam::Vec3> = bytemuck::cast_slice::<u8, [half::f16; 4]>(nrm)
         .iter()
@@ -115,15 +118,7 @@ fn heatmap_job(
     let bvh = settings
         .casters(scene, None)
         .map_err(|e| format!("{e:#}"))?;
-    let reference = mask_from_gbuffer(
-        &bvh,
-        light,
-        positions,
-        &normals,
-        settings.samples_for(light),
-        settings.offset_ulps,
-        &PixelSampling::CENTRE,
-    );
+    let reference = settings.mask_from_gbuffer_bytes(&bvh, light, (pos, nrm), &data.camera);
     let considered: Vec<bool> = positions
         .iter()
         .zip(bytemuck::cast_slice::<u8, [half::f16; 4]>(nrm))
@@ -226,6 +221,10 @@ mod tests {
             ),
             mask: f16s(&mask),
             color: vec![128; positions.len() * 4],
+            camera: crate::frame::FrameUniform {
+                size: glam::Vec4::new(positions.len() as f32, 1.0, 0.0, 0.0),
+                ..bytemuck::Zeroable::zeroed()
+            },
         };
         let (_, summary) = heatmap_job(&scene, &light, &data).unwrap();
         assert!(

@@ -326,12 +326,10 @@ impl Page {
         let reference = ReferenceSettings::defaults();
         let bvh = reference.casters(&self.scene, None)?;
         let start = crate::clock::Instant::now();
-        let inv_view_proj = frame.uniform().inv_view_proj;
-        let size = glam::UVec2::new(w, h);
         let truths: Vec<Vec<f32>> = self
             .lights
             .iter()
-            .map(|l| reference.mask_from_gbuffer_bytes(&bvh, l, (&pos, &nrm), inv_view_proj, size))
+            .map(|l| reference.mask_from_gbuffer_bytes(&bvh, l, (&pos, &nrm), frame.uniform()))
             .collect();
         let reference_ms = start.elapsed().as_secs_f64() * 1e3;
         let mut rows: Vec<MaskMetrics> = vec![];

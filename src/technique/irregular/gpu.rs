@@ -56,11 +56,13 @@ pub fn cells_fitting(bytes: u64) -> u64 {
 }
 
 /// The family's WGSL: its `blended_casters` choice's constants
-/// (`BLENDED_*`), the interface and triangle passes, then the samples and
-/// their binning.
+/// (`BLENDED_*`) and the reference's least footprint cosine, the interface
+/// and triangle passes, then the samples and their binning.
 fn module_source() -> String {
+    let min_cosine = crate::technique::raytraced::MIN_FOOTPRINT_COSINE;
     [
         super::BlendedCrossing::wgsl_constants("BLENDED").as_str(),
+        &format!("const MIN_FOOTPRINT_COSINE: f32 = {min_cosine:?};"),
         include_str!("irregular.wgsl"),
         include_str!("samples.wgsl"),
     ]

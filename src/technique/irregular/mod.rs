@@ -105,6 +105,7 @@ pub static FAMILY: Family = Family {
         LARGE_SAMPLES,
         super::raytraced::PIXEL_SAMPLES,
         super::raytraced::OFFSET_ULPS,
+        super::raytraced::OFFSET_FOOTPRINT,
         BLENDED_CASTERS,
     ],
     presets: &[
@@ -134,6 +135,7 @@ struct IrregularConfig {
     large_samples: u32,
     pixel_samples: u32,
     offset_ulps: f32,
+    offset_footprint: f32,
     blended: BlendedCrossing,
 }
 
@@ -164,6 +166,7 @@ impl IrregularConfig {
             large_samples: p.int(&LARGE_SAMPLES)?,
             pixel_samples: p.int(&super::raytraced::PIXEL_SAMPLES)?,
             offset_ulps: p.float(&super::raytraced::OFFSET_ULPS)?,
+            offset_footprint: p.float(&super::raytraced::OFFSET_FOOTPRINT)?,
             blended: p.choice(&BLENDED_CASTERS)?,
         })
     }
@@ -462,7 +465,12 @@ fn frame_uniform(
             b.job_capacity,
             b.cell_count as u32,
         ),
-        offset: Vec4::new(config.offset_ulps, light.range, 0.0, 0.0),
+        offset: Vec4::new(
+            config.offset_ulps,
+            light.range,
+            config.offset_footprint,
+            0.0,
+        ),
         pixel: UVec4::new(
             config.pixel_samples,
             config.blended.index() as u32,
@@ -548,6 +556,7 @@ mod tests {
             large_samples: 256,
             pixel_samples: 1,
             offset_ulps: 64.0,
+            offset_footprint: 0.004,
             blended: BlendedCrossing::Cutout,
         };
         let any = u64::MAX;

@@ -45,9 +45,26 @@ fn sub_sample_point(px: vec2u, k: u32, s: Surface) -> vec3f {
     return q + s.n * (PLANE_LIFT * length(q - s.p));
 }
 
+// How far a pixel's ray origins are lifted off its surface `s` besides
+// the ULP offset: `offset_footprint` (irr.offset.z) of its footprint on
+// the surface, its width across the camera ray over the cosine between
+// the ray and the normal (at least MIN_FOOTPRINT_COSINE, prepended from
+// the reference's); the twin of the reference's `footprint_lift`.
+fn footprint_lift(s: Surface) -> f32 {
+    let to_p = s.p - frame.camera_pos.xyz;
+    let distance = length(to_p);
+    let cot_half_fov = frame.proj[1][1];
+    if irr.offset.z <= 0.0 || distance <= 0.0 || cot_half_fov <= 0.0 {
+        return 0.0;
+    }
+    let cosine = max(abs(dot(to_p, s.n)) / distance, MIN_FOOTPRINT_COSINE);
+    return irr.offset.z * distance * (2.0 / (cot_half_fov * frame.size.y)) / cosine;
+}
+
 // The shadow-ray origin of sample `k` of the pixel's surface.
 fn sample_origin(px: vec2u, k: u32, s: Surface) -> vec3f {
-    return offset_origin(sub_sample_point(px, k, s), s.n, irr.offset.x);
+    let lifted = sub_sample_point(px, k, s) + s.n * footprint_lift(s);
+    return offset_origin(lifted, s.n, irr.offset.x);
 }
 
 // Whether the light reaches the sample at `o` on a surface with normal

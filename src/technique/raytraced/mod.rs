@@ -6,10 +6,14 @@
 //! visibility. Ray origins are offset along the geometric normal by a number
 //! of float ULPs of the position (Wächter & Binder, "A Fast and Robust
 //! Method for Avoiding Self-Intersection", Ray Tracing Gems ch. 6), so the
-//! offset scales with the magnitude of the position.
+//! offset scales with the magnitude of the position, and lifted off the
+//! surface by a fraction of the pixel's footprint on it: the G-buffer's
+//! position is the rasterizer's interpolation, whose error grows with the
+//! footprint, not a ray tracer's hit point.
 
 use super::{Family, MaskContext, ParamSpec, ParamValues, Preset, ShadowTechnique};
 use crate::clock::Instant;
+use crate::frame::FrameUniform;
 use crate::scene::area::{concentric_disk, stratified_square};
 use crate::scene::bvh::{CasterBvh, TraceKernel};
 use crate::scene::{Light, LightArea, LightType};
@@ -43,6 +47,17 @@ pub const OFFSET_ULPS: ParamSpec = ParamSpec::float(
     1.0,
     "ray-origin offset along the geometric normal, in float ULPs of the position (scales with its magnitude)",
 );
+/// The ray origins' lift off the surface as a fraction of the pixel's
+/// footprint (shared with `irregular`, which starts its rays where the
+/// reference does).
+pub const OFFSET_FOOTPRINT: ParamSpec = ParamSpec::float(
+    "offset_footprint",
+    0.004,
+    0.0,
+    0.25,
+    0.001,
+    "ray origins also lifted along the geometric normal by this fraction of the pixel's footprint on its surface (its width across the camera ray over the cosine between ray and normal, the cosine at least ⅛): the G-buffer's position is the rasterizer's interpolation, whose error grows with the footprint — without the lift, pixels at the concave creases of a terrain start their rays under the next triangle and shadow themselves (speckles of false shadow); 0: the ULP offset alone",
+);
 
 crate::technique::params::choice_enum! {
     /// Which kernel traces the shadow rays.
@@ -68,7 +83,13 @@ pub static FAMILY: Family = Family {
         curved_receivers: true,
         cutout_casters: true,
     },
-    params: &[SAMPLES, PIXEL_SAMPLES, OFFSET_ULPS, KERNEL],
+    params: &[
+        SAMPLES,
+        PIXEL_SAMPLES,
+        OFFSET_ULPS,
+        OFFSET_FOOTPRINT,
+        KERNEL,
+    ],
     presets: &[
         Preset {
             name: "default",
@@ -107,6 +128,8 @@ pub struct ReferenceSettings {
     pub pixel_samples: u32,
     /// Ray-origin offset in float ULPs of the position.
     pub offset_ulps: f32,
+    /// Ray-origin lift as a fraction of the pixel's footprint.
+    pub offset_footprint: f32,
     pub kernel: Kernel,
 }
 
@@ -116,6 +139,7 @@ impl ReferenceSettings {
             samples: p.int(&SAMPLES)? as usize,
             pixel_samples: p.int(&PIXEL_SAMPLES)?,
             offset_ulps: p.float(&OFFSET_ULPS)?,
+            offset_footprint: p.float(&OFFSET_FOOTPRINT)?,
             kernel: p.choice(&KERNEL)?,
         })
     }
@@ -159,27 +183,23 @@ impl ReferenceSettings {
     }
 
     /// `light`'s mask from the G-buffer as read back (`gbuffer`: positions
-    /// as Rgba32Float, geometric normals as Rgba16Float) of a frame of
-    /// `size` seen through `inv_view_proj`: the reference's render_mask,
-    /// and the browser page's, which can only await its readbacks.
+    /// as Rgba32Float, geometric normals as Rgba16Float) of the frame
+    /// `frame` describes: the reference's render_mask, the viewer's
+    /// heatmap's, and the browser page's, which can only await its
+    /// readbacks.
     pub fn mask_from_gbuffer_bytes(
         &self,
         bvh: &CasterBvh,
         light: &Light,
         gbuffer: (&[u8], &[u8]),
-        inv_view_proj: Mat4,
-        size: UVec2,
+        frame: &FrameUniform,
     ) -> Vec<f32> {
         let positions: &[[f32; 4]] = bytemuck::cast_slice(gbuffer.0);
         let normals: Vec<Vec3> = bytemuck::cast_slice::<u8, [half::f16; 4]>(gbuffer.1)
             .iter()
             .map(|n| Vec3::new(n[0].to_f32(), n[1].to_f32(), n[2].to_f32()).normalize_or_zero())
             .collect();
-        let sampling = PixelSampling {
-            inv_view_proj,
-            size,
-            count: self.pixel_samples,
-        };
+        let sampling = PixelSampling::of_frame(frame, self.pixel_samples, self.offset_footprint);
         mask_from_gbuffer(
             bvh,
             light,
@@ -305,20 +325,79 @@ pub fn visibility(
 
 /// How a pixel is sampled: its centre (`count` 1), or `count` points of
 /// its footprint on its surface plane, for a frame of `size` pixels seen
-/// through `inv_view_proj`.
+/// through `inv_view_proj` from `eye`; and how far its rays' origins are
+/// lifted off the surface ([`footprint_lift`]).
 #[derive(Clone, Copy, Debug)]
 pub struct PixelSampling {
     pub inv_view_proj: Mat4,
     pub size: UVec2,
     pub count: u32,
+    pub eye: Vec3,
+    /// The angle a pixel spans at the frame's centre, in radians.
+    pub pixel_angle: f32,
+    /// The lift as a fraction of the pixel's footprint (`offset_footprint`).
+    pub footprint_fraction: f32,
 }
 
 impl PixelSampling {
+    /// Each pixel's centre, its rays offset by ULPs alone (G-buffers made
+    /// by hand, with no camera).
     pub const CENTRE: PixelSampling = PixelSampling {
         inv_view_proj: Mat4::IDENTITY,
         size: UVec2::ONE,
         count: 1,
+        eye: Vec3::ZERO,
+        pixel_angle: 0.0,
+        footprint_fraction: 0.0,
     };
+
+    /// `count` samples per pixel of the frame `frame` describes, the ray
+    /// origins lifted by `footprint_fraction` of the pixel's footprint.
+    pub fn of_frame(frame: &FrameUniform, count: u32, footprint_fraction: f32) -> PixelSampling {
+        PixelSampling {
+            inv_view_proj: frame.inv_view_proj,
+            size: UVec2::new(frame.size.x as u32, frame.size.y as u32),
+            count,
+            eye: frame.camera_pos.truncate(),
+            pixel_angle: pixel_angle(frame.proj.y_axis.y, frame.size.y),
+            footprint_fraction,
+        }
+    }
+}
+
+/// The angle a pixel spans at the centre of a perspective frame `height`
+/// pixels high whose projection scales y by `cot_half_fov` (0 where there
+/// is no such frame).
+fn pixel_angle(cot_half_fov: f32, height: f32) -> f32 {
+    if cot_half_fov > 0.0 && height > 0.0 {
+        2.0 / (cot_half_fov * height)
+    } else {
+        0.0
+    }
+}
+
+/// The cosine between a camera ray and a surface below which the
+/// footprint lift stops growing (83°: a surface seen edge-on would lift
+/// its rays without bound).
+pub const MIN_FOOTPRINT_COSINE: f32 = 0.125;
+
+/// How far the ray origins of a pixel whose G-buffer surface lies at `p`
+/// with unit normal `n` are lifted along `n`, besides the ULP offset: the
+/// sampling's fraction of the pixel's footprint on the surface, its width
+/// across the camera ray (distance times the pixel's angle) over the
+/// cosine between the ray and the normal. The rasterizer interpolates the
+/// position from screen-space plane equations whose terms grow with the
+/// footprint, so its error does too; a ULP offset covers only the rounding
+/// of the position itself. `footprint_lift` of irregular/samples.wgsl is
+/// its twin.
+pub fn footprint_lift(s: &PixelSampling, p: Vec3, n: Vec3) -> f32 {
+    let to_p = p - s.eye;
+    let distance = to_p.length();
+    if s.footprint_fraction <= 0.0 || distance <= 0.0 {
+        return 0.0;
+    }
+    let cosine = (to_p.dot(n) / distance).abs().max(MIN_FOOTPRINT_COSINE);
+    s.footprint_fraction * distance * s.pixel_angle / cosine
 }
 
 /// Sub-pixel sample `k` of `count` within a pixel, in [0, 1)²: a Hammersley
@@ -390,9 +469,10 @@ pub fn mask_from_gbuffer(
             let px = UVec2::new(i as u32 % width, i as u32 / width);
             let centre = Vec3::new(p[0], p[1], p[2]);
             let count = sampling.count.max(1);
+            let lift = *n * footprint_lift(sampling, centre, *n);
             let through: f32 = (0..count)
                 .map(|k| {
-                    let q = pixel_sample_point(sampling, px, k, centre, *n);
+                    let q = pixel_sample_point(sampling, px, k, centre, *n) + lift;
                     let seed = (i as u32).wrapping_add(k.wrapping_mul(pixels));
                     visibility(bvh, light, q, *n, samples, ulps, seed)
                 })
@@ -431,13 +511,11 @@ impl ShadowTechnique for RayTraced {
         let pos_raw = gpu.read_texture(frame.gbuffer_position(), 0, 16)?;
         let nrm_raw = gpu.read_texture(frame.gbuffer_normal(), 0, 8)?;
         let t = Instant::now();
-        let size = UVec2::new(frame.width(), frame.height());
         let mask = self.settings.mask_from_gbuffer_bytes(
             &bvh,
             ctx.light,
             (&pos_raw, &nrm_raw),
-            frame.uniform().inv_view_proj,
-            size,
+            frame.uniform(),
         );
         self.trace_ms = t.elapsed().as_secs_f64() * 1e3;
         let positions: &[[f32; 4]] = bytemuck::cast_slice(&pos_raw);
@@ -479,6 +557,28 @@ impl ShadowTechnique for RayTraced {
 mod tests {
     use super::*;
     use crate::scene::Scene;
+
+    /// The lift is the fraction of the pixel's width across the ray
+    /// (distance 10 × 0.02 rad) over the cosine to the normal, the cosine
+    /// at least ⅛; none without a camera. A 90° frame 100 pixels high
+    /// spans 0.02 rad a pixel at its centre.
+    #[test]
+    fn the_footprint_lift_follows_distance_and_slant() {
+        let sampling = PixelSampling {
+            pixel_angle: 0.02,
+            footprint_fraction: 0.004,
+            ..PixelSampling::CENTRE
+        };
+        let p = Vec3::new(0.0, 0.0, -10.0);
+        let lift = |n: Vec3| footprint_lift(&sampling, p, n);
+        let slant = Vec3::new(60f32.to_radians().sin(), 0.0, 60f32.to_radians().cos());
+        assert!((lift(Vec3::Z) - 0.0008).abs() < 1e-9);
+        assert!((lift(slant) - 0.0016).abs() < 1e-8);
+        assert!((lift(Vec3::X) - 0.0064).abs() < 1e-8);
+        assert_eq!(footprint_lift(&PixelSampling::CENTRE, p, Vec3::Z), 0.0);
+        assert!((pixel_angle(1.0, 100.0) - 0.02).abs() < 1e-9);
+        assert_eq!(pixel_angle(0.0, 100.0), 0.0);
+    }
 
     #[test]
     fn offset_scales_with_position_magnitude() {
