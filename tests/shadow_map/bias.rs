@@ -165,7 +165,8 @@ fn the_receiver_plane_from_the_normal_keeps_edges_and_clears_corners() {
 /// shadow each other and the trunks under the canopies (separate parts of
 /// one tree) stay shadowed — the receiver plane's failure. A floor is a
 /// flat part: it takes no normal offset, which only moved its shadow edges
-/// (room under the point light: 0.0054 → 0.0036 % total mismatch).
+/// (room under the point light: mean absolute error 0.00025 → 0.00020; the
+/// thresholded mismatch, 7 and 8 pixels of 166,353, cannot tell them apart).
 #[test]
 fn convex_parts_ignore_their_own_texels_and_still_shadow_each_other() {
     let city = preset("city", "street", "sun");
@@ -203,7 +204,7 @@ fn convex_parts_ignore_their_own_texels_and_still_shadow_each_other() {
     )
     .mask;
     assert!(
-        parts.all.total_pct <= 0.8 * without.all.total_pct
+        parts.mean_abs_error <= 0.85 * without.mean_abs_error
             && parts.interior.total_pct <= without.interior.total_pct,
         "part IDs {parts:?}\nwithout {without:?}"
     );
