@@ -105,11 +105,6 @@ fn heatmap_job(
     let (w, h) = (data.width, data.height);
     let (pos, nrm, mask, color) = (&data.positions, &data.normals, &data.mask, &data.color);
     use crate::technique::raytraced::ReferenceSettings;
-    let positions: &[[f32; 4]] = bytemuck::cast_slice(pos);
-    let normals: Vec<glam::Vec3> = bytemuck::cast_slice::<u8, [half::f16; 4]>(nrm)
-        .iter()
-        .map(|n| glam::Vec3::new(n[0].to_f32(), n[1].to_f32(), n[2].to_f32()).normalize_or_zero())
-        .collect();
     let test: Vec<f32> = bytemuck::cast_slice::<u8, half::f16>(mask)
         .iter()
         .map(|v| v.to_f32())
@@ -119,16 +114,12 @@ fn heatmap_job(
         .casters(scene, None)
         .map_err(|e| format!("{e:#}"))?;
     let reference = settings.mask_from_gbuffer_bytes(&bvh, light, (pos, nrm), &data.camera);
-    let considered: Vec<bool> = positions
-        .iter()
-        .zip(bytemuck::cast_slice::<u8, [half::f16; 4]>(nrm))
-        .zip(&normals)
-        .map(|((p, n), nv)| {
-            p[3] > 0.5
-                && n[3].to_f32() > 0.5
-                && light.reaches(glam::Vec3::new(p[0], p[1], p[2]), *nv)
-        })
-        .collect();
+    let considered = crate::measure::quality::considered_from_gbuffer(
+        bytemuck::cast_slice(pos),
+        bytemuck::cast_slice(nrm),
+        std::slice::from_ref(light),
+    )
+    .remove(0);
     let m = crate::measure::quality::mask_metrics(w, h, &considered, &reference, &test);
     let rgba = crate::measure::quality::heatmap(color, &considered, &reference, &test);
     let summary = format!(

@@ -69,10 +69,14 @@ pub(super) fn check_node_forest(file: &str, doc: &gltf::Document) -> Result<Vec<
 /// here, with a warning. A listed node that descends from another listed
 /// node, or is listed twice, is drawn once (as that node's descendant).
 pub(super) fn scene_roots(file: &str, scene: &gltf::Scene, parent: &[Option<usize>]) -> Vec<usize> {
-    let listed: Vec<usize> = scene.nodes().map(|n| n.index()).collect();
+    let mut listed = vec![false; parent.len()];
+    for n in scene.nodes() {
+        listed[n.index()] = true;
+    }
+    let mut drawn = vec![false; parent.len()];
     let mut roots: Vec<usize> = vec![];
-    for &node in &listed {
-        if roots.contains(&node) {
+    for node in scene.nodes().map(|n| n.index()) {
+        if std::mem::replace(&mut drawn[node], true) {
             log::warn!(
                 "{file}: scene {} lists node {node} twice; drawn once",
                 scene.index()
@@ -84,7 +88,7 @@ pub(super) fn scene_roots(file: &str, scene: &gltf::Scene, parent: &[Option<usiz
             continue;
         };
         let mut above = Some(p);
-        while let Some(a) = above.filter(|a| !listed.contains(a)) {
+        while let Some(a) = above.filter(|&a| !listed[a]) {
             above = parent[a];
         }
         match above {
