@@ -4,6 +4,7 @@
 use super::{FrameLayouts, Vertex, textures};
 use crate::gpu::GpuContext;
 use crate::scene::clusters::{CLUSTER_TRIANGLES, Cluster, Clustered, clustered};
+use crate::scene::extent::SceneExtent;
 use crate::scene::opacity::OpacityMaps;
 use crate::scene::topology::{SolidKind, Solidity};
 use crate::scene::{Aabb, AlphaMode, Material, Object, Scene};
@@ -106,6 +107,9 @@ pub struct SceneGpu {
     pub triangle_count: usize,
     pub caster_triangle_count: usize,
     pub bounds: Aabb,
+    /// The world bounds of the clusters the camera can see (every drawn
+    /// object's, not the planes that only receive planar shadows).
+    pub drawn_part_bounds: Vec<Aabb>,
 }
 
 /// The features of a material that select a lighting-pass variant.
@@ -383,6 +387,12 @@ impl SceneGpu {
             .iter()
             .map(|m| material_group(gpu, &layouts, m, &gpu_textures, [&white, &flat_normal]))
             .collect();
+        let drawn_part_bounds = draws
+            .iter()
+            .filter(|d| !d.shadow_plane)
+            .flat_map(|d| &parts[d.first_part as usize..(d.first_part + d.part_count) as usize])
+            .map(|p| p.bounds)
+            .collect();
         Ok(SceneGpu {
             vertex_buffer,
             index_buffer,
@@ -395,7 +405,16 @@ impl SceneGpu {
             triangle_count: scene.triangle_count(),
             caster_triangle_count: scene.caster_triangle_count(),
             bounds: scene.bounds(),
+            drawn_part_bounds,
         })
+    }
+
+    /// The scene as the light's views are fitted to it.
+    pub fn extent(&self) -> SceneExtent<'_> {
+        SceneExtent {
+            bounds: &self.bounds,
+            parts: &self.drawn_part_bounds,
+        }
     }
 
     /// Binds the vertex and index buffers and draws every non-plane object

@@ -9,6 +9,7 @@ pub mod bvh;
 pub mod camera;
 pub mod clusters;
 pub mod embree;
+pub mod extent;
 pub mod gltf_io;
 pub mod landscape;
 pub mod light;

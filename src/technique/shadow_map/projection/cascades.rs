@@ -11,6 +11,8 @@ use super::depth_bounds::SeenBounds;
 use super::setup::MapProjection;
 use super::setup::{CascadeSplit, LightSetup, light_view_of_scene, slice_corners, view_reach};
 use super::stable_window::{Window, quantize_down, quantize_up, widen_for_kernels, xy_box};
+use super::view_depths::geometry_depths;
+use crate::scene::extent::SceneExtent;
 use crate::scene::{Aabb, Camera};
 use crate::technique::shadow_map::config::partition::{Cascades, Fit};
 use glam::{Vec2, Vec3};
@@ -65,15 +67,18 @@ fn within_scene(square: Window, scene_ls: &Aabb, size: u32) -> Window {
     .snapped(size)
 }
 
-/// The view depths the cascades partition (seen with `aspect`): from the
-/// camera's near plane, or the scene's box when the camera is outside it, to the
-/// last split of `cascades` (its `max_distance`, else the camera's view of
-/// the scene), or with SDSM what the camera saw within the same limit
-/// (stabilised: rounded outwards to eighths of an octave).
+/// The view depths the cascades partition (seen with `aspect`): stabilised,
+/// from the camera's near plane, or the scene's box when the camera is
+/// outside it, to the last split of `cascades` (its `max_distance`, else
+/// the far side of the scene's bounding sphere), neither of which turns
+/// with the camera; unstabilised, where the frustum meets the scene's
+/// clusters ([`geometry_depths`]) up to the same limit; or with SDSM what
+/// the camera saw within the same limit (stabilised: rounded outwards to
+/// eighths of an octave).
 pub fn partitioned_depths(
     camera: &Camera,
     aspect: f32,
-    scene_bounds: &Aabb,
+    scene: SceneExtent,
     cascades: &Cascades,
     seen: Option<&SeenBounds>,
 ) -> (f32, f32) {
@@ -91,7 +96,25 @@ pub fn partitioned_depths(
                 (near, far)
             }
         }
+        None if !cascades.stabilize => {
+            // The depths that hold geometry: from a camera standing on a
+            // floor, the nearest is where the floor meets the frustum's
+            // lower plane, not its near plane; looking along a street, the
+            // farthest is the last building's, not the far side of the
+            // city's sphere. They turn with the camera, so stabilised
+            // cascades do not take them.
+            let reach = view_reach(camera, scene.bounds);
+            let (near, reach) =
+                geometry_depths(camera, aspect, scene.parts, reach).unwrap_or((camera.near, reach));
+            let far = if cascades.max_distance > 0.0 {
+                limit
+            } else {
+                reach
+            };
+            (near.min(far), far)
+        }
         None => {
+            let scene_bounds = scene.bounds;
             let reach = view_reach(camera, scene_bounds);
             // Stabilised: the reach rounded up to eighths of an octave, so
             // that the splits (and with them each cascade's size) stay put
@@ -145,7 +168,7 @@ fn frustum_corner_cos(camera: &Camera, aspect: f32) -> f32 {
 /// `seen` (SDSM), to what the camera saw.
 pub fn cascade_setup(
     dir: Vec3,
-    scene_bounds: &Aabb,
+    scene: SceneExtent,
     camera: &Camera,
     aspect: f32,
     cascades: &Cascades,
@@ -153,8 +176,8 @@ pub fn cascade_setup(
     seen: Option<&SeenBounds>,
 ) -> LightSetup {
     use glam::camera::rh::proj::directx::orthographic;
-    let (view, scene_ls) = light_view_of_scene(dir, scene_bounds);
-    let (near, far) = partitioned_depths(camera, aspect, scene_bounds, cascades, seen);
+    let (view, scene_ls) = light_view_of_scene(dir, scene.bounds);
+    let (near, far) = partitioned_depths(camera, aspect, scene, cascades, seen);
     let splits = split_distances(near, far, cascades.count, cascades.split_lambda);
     let samples = seen
         .filter(|_| cascades.fit == Fit::Samples)
@@ -279,7 +302,15 @@ mod tests {
         };
         let size = 512;
         let cam = Camera::new(Vec3::new(0.0, 1.7, 30.0), Vec3::new(0.0, 3.0, 0.0));
-        let a = cascade_setup(dir, &bounds, &cam, 16.0 / 9.0, &stable, size, None);
+        let a = cascade_setup(
+            dir,
+            SceneExtent::of_box(&bounds),
+            &cam,
+            16.0 / 9.0,
+            &stable,
+            size,
+            None,
+        );
         let probe = Vec3::new(0.3, 0.0, 25.0);
         for step in [0.013f32, 0.21, 0.37] {
             let moved = Camera {
@@ -287,7 +318,15 @@ mod tests {
                 target: cam.target + Vec3::new(step, 0.0, -step),
                 ..cam
             };
-            let b = cascade_setup(dir, &bounds, &moved, 16.0 / 9.0, &stable, size, None);
+            let b = cascade_setup(
+                dir,
+                SceneExtent::of_box(&bounds),
+                &moved,
+                16.0 / 9.0,
+                &stable,
+                size,
+                None,
+            );
             let (sa, sb) = (a.cascades.as_ref().unwrap(), b.cascades.as_ref().unwrap());
             assert_eq!(sa.texel_scales, sb.texel_scales);
             // The probe's texel coordinate in cascade 0 moves by whole texels.
@@ -300,13 +339,29 @@ mod tests {
             stabilize: false,
             ..stable
         };
-        let a = cascade_setup(dir, &bounds, &cam, 16.0 / 9.0, &fitted, size, None);
+        let a = cascade_setup(
+            dir,
+            SceneExtent::of_box(&bounds),
+            &cam,
+            16.0 / 9.0,
+            &fitted,
+            size,
+            None,
+        );
         let moved = Camera {
             eye: cam.eye + Vec3::new(0.21, 0.0, -0.21),
             target: cam.target + Vec3::new(0.21, 0.0, -0.21),
             ..cam
         };
-        let b = cascade_setup(dir, &bounds, &moved, 16.0 / 9.0, &fitted, size, None);
+        let b = cascade_setup(
+            dir,
+            SceneExtent::of_box(&bounds),
+            &moved,
+            16.0 / 9.0,
+            &fitted,
+            size,
+            None,
+        );
         let d = texel_of(b.faces[0], probe, size) - texel_of(a.faces[0], probe, size);
         assert!((d - d.round()).abs().max_element() > 1e-2, "{d}");
     }
@@ -363,7 +418,7 @@ mod tests {
         let dir = Vec3::new(0.3, -1.0, 0.2);
         let setup = |eye: Vec3| {
             let cam = Camera::new(eye, Vec3::ZERO);
-            cascade_setup(dir, &bounds, &cam, 1.5, &c, 1024, None)
+            cascade_setup(dir, SceneExtent::of_box(&bounds), &cam, 1.5, &c, 1024, None)
         };
         let a = setup(Vec3::new(0.0, 5.0, 40.0));
         let (_, scene_ls) = light_view_of_scene(dir, &bounds);
@@ -409,7 +464,7 @@ mod tests {
             };
             let s = cascade_setup(
                 Vec3::new(0.2, -1.0, 0.1),
-                &bounds,
+                SceneExtent::of_box(&bounds),
                 &cam,
                 1.5,
                 &c,

@@ -13,6 +13,7 @@ pub(super) mod roll;
 pub mod setup;
 pub(super) mod spot_focus;
 pub(super) mod stable_window;
+pub mod view_depths;
 pub mod warp;
 
 use self::depth_bounds::{DepthReduction, ReduceInputs, SeenBounds, SpotImage};
@@ -80,7 +81,7 @@ impl ShadowMapTechnique {
                 let mut setup = if cascaded {
                     cascades::cascade_setup(
                         l.direction,
-                        &ctx.scene_gpu.bounds,
+                        ctx.scene_gpu.extent(),
                         ctx.fit_camera,
                         aspect,
                         &Cascades {
@@ -183,7 +184,7 @@ impl ShadowMapTechnique {
         Some(cascades::partitioned_depths(
             ctx.fit_camera,
             ctx.fit_frame.width() as f32 / ctx.fit_frame.height() as f32,
-            &ctx.scene_gpu.bounds,
+            ctx.scene_gpu.extent(),
             c,
             Some(seen),
         ))
@@ -206,7 +207,7 @@ impl ShadowMapTechnique {
                 let (near, far) = cascades::partitioned_depths(
                     ctx.fit_camera,
                     ctx.fit_frame.width() as f32 / ctx.fit_frame.height() as f32,
-                    &ctx.scene_gpu.bounds,
+                    ctx.scene_gpu.extent(),
                     c,
                     Some(seen),
                 );
