@@ -1,6 +1,7 @@
 //! The irregular z-buffer: masks against the ray-traced reference under
-//! every light type, cut-outs, the samples binned, large triangles in
-//! jobs, crowded cells, and a grid past the device's limits.
+//! every light type, cut-outs, the casters culled, the samples binned,
+//! large triangles in jobs, crowded cells, and a grid past the device's
+//! limits.
 
 mod common;
 use common::*;
@@ -35,6 +36,23 @@ fn masks_match_the_reference_under_every_light_type() {
             "{scene}/{light}: pcf {:?} against {m:?}",
             pcf.mask
         );
+    }
+}
+
+/// On the landscape from the ground, the casters behind the camera, beside
+/// its view or away from the light cannot shadow what it sees and are not
+/// dispatched (most of the terrain); the mask is still the reference's.
+#[test]
+fn casters_that_cannot_shadow_the_view_are_not_dispatched() {
+    for light in ["point", "sun"] {
+        let s = preset("landscape", "ground", light);
+        let all = s.caster_triangle_count() as f64;
+        let hf = rendered_frame(&s, "irregular", &[], 192, 108);
+        let kept = counter(&hf, "caster_triangles_kept");
+        assert!(kept > 0.0 && kept < 0.5 * all, "{light}: {kept} of {all}");
+        let m = compare(&s, "irregular", (192, 108)).mask;
+        assert!(m.reference_shadowed_pct > 1.0, "{light}: {m:?}");
+        assert!(m.all.total_pct <= 0.02, "{light}: {m:?}");
     }
 }
 

@@ -31,6 +31,24 @@ impl Camera {
             far: 200.0,
         }
     }
+    /// The eight world-space corners of the view between view depths `z0`
+    /// and `z1`, seen with frame `aspect` (bit 0: x side, bit 1: y side,
+    /// bit 2: the far depth).
+    pub fn slice_corners(&self, aspect: f32, z0: f32, z1: f32) -> [Vec3; 8] {
+        let inv_view = self.view().inverse();
+        let ty = (self.fov_y_deg.to_radians() * 0.5).tan();
+        let tx = ty * aspect;
+        let mut out = [Vec3::ZERO; 8];
+        for (k, z) in [z0, z1].into_iter().enumerate() {
+            for (j, (sx, sy)) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)]
+                .into_iter()
+                .enumerate()
+            {
+                out[k * 4 + j] = inv_view.transform_point3(Vec3::new(sx * tx * z, sy * ty * z, -z));
+            }
+        }
+        out
+    }
     /// Right-handed look-at view matrix.
     pub fn view(&self) -> Mat4 {
         glam::camera::rh::view::look_at_mat4(self.eye, self.target, self.up)

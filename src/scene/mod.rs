@@ -11,6 +11,7 @@ pub mod clusters;
 pub mod embree;
 pub mod extent;
 pub mod gltf_io;
+pub mod hull;
 pub mod landscape;
 pub mod light;
 pub mod material;

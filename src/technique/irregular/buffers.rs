@@ -1,6 +1,7 @@
 //! The irregular z-buffer's buffers: their sizes, checked against the
 //! device's storage-buffer limit and the memory budget, and their making.
 
+use super::casters::CasterCluster;
 use super::gpu::{
     AUX_HEADER_WORDS, IrregularUniform, JOB_CAPACITY, MAX_FACES, binning_words, cells_fitting,
     storage_buffer,
@@ -23,9 +24,13 @@ pub(super) struct Buffers {
     pub(super) samples: wgpu::Buffer,
     pub(super) marks: wgpu::Buffer,
     pub(super) triangles: wgpu::Buffer,
-    pub(super) triangle_count: u32,
     /// The opaque casters' triangles, which lead `triangles`.
     pub(super) opaque_triangles: u32,
+    /// The caster list's clusters, culled each frame (`cull`).
+    pub(super) clusters: Vec<CasterCluster>,
+    /// The frame's kept ranges of the list (`kept_ranges` of
+    /// irregular.wgsl): a pair of words per cluster at most.
+    pub(super) kept_ranges: wgpu::Buffer,
     /// Jobs the job list holds.
     pub(super) job_capacity: u32,
     pub(super) aux: wgpu::Buffer,
@@ -43,6 +48,12 @@ fn job_capacity(triangles: u64, faces: u64, asked: u64) -> u64 {
     (4 * triangles * faces)
         .max(2 * asked)
         .clamp(JOB_CAPACITY.0, JOB_CAPACITY.1)
+}
+
+/// Bytes of the kept ranges of a list of `clusters` clusters: two words
+/// each, at least one range's.
+fn kept_range_bytes(clusters: usize) -> u64 {
+    clusters.max(1) as u64 * 8
 }
 
 /// Bytes of the samples: for one sample per pixel, 16 a pixel sorted by
@@ -112,6 +123,7 @@ impl IrregularZBuffer {
             ),
             ("samples", sample_bytes(pixels, self.config.pixel_samples)),
             ("caster triangles", triangles.len() as u64 * 64),
+            ("caster ranges", kept_range_bytes(casters.clusters.len())),
             ("job list", (AUX_HEADER_WORDS + 4 * capacity) * 4),
             ("marks", mark_bytes(pixels, &self.config)),
         ];
@@ -134,11 +146,12 @@ impl IrregularZBuffer {
         });
         let binning = storage_buffer(gpu, "irregular cell counts and offsets", sizes[0].1);
         let samples = storage_buffer(gpu, "irregular samples", sizes[1].1);
-        let marks = storage_buffer(gpu, "irregular marks", sizes[4].1);
+        let marks = storage_buffer(gpu, "irregular marks", sizes[5].1);
         let triangle_buffer = storage_buffer(gpu, "irregular casters", sizes[2].1);
         gpu.queue
             .write_buffer(&triangle_buffer, 0, bytemuck::cast_slice(triangles));
-        let aux = storage_buffer(gpu, "irregular header and job list", sizes[3].1);
+        let kept_ranges = storage_buffer(gpu, "irregular kept casters", sizes[3].1);
+        let aux = storage_buffer(gpu, "irregular header and job list", sizes[4].1);
         let face_boxes = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("irregular face bounds"),
             size: (MAX_FACES * 16) as u64,
@@ -153,6 +166,7 @@ impl IrregularZBuffer {
             &triangle_buffer,
             &aux,
             &face_boxes,
+            &kept_ranges,
         ];
         let entries: Vec<_> = (0u32..)
             .zip(buffers)
@@ -175,8 +189,9 @@ impl IrregularZBuffer {
             samples,
             marks,
             triangles: triangle_buffer,
-            triangle_count: triangles.len() as u32,
             opaque_triangles: casters.opaque,
+            clusters: casters.clusters,
+            kept_ranges,
             job_capacity: capacity as u32,
             aux,
             face_boxes,

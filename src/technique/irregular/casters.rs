@@ -1,10 +1,27 @@
 //! The caster triangles the irregular z-buffer tests its samples against:
 //! every shadow-casting object's triangles in world space, with their
-//! texture coordinates and object (for cut-outs), listed once per scene.
+//! texture coordinates and object (for cut-outs), listed once per scene in
+//! spatially compact clusters, each with its bounds, so that a frame
+//! dispatches only the clusters that can shadow what it sees (`cull`).
 
-use crate::scene::Scene;
+use crate::scene::clusters::clustered;
+use crate::scene::{Aabb, Scene};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
+
+/// The most triangles in one caster cluster: a few hundred keep a
+/// cluster's bounds tight on a terrain or a city block, and the clusters
+/// few enough to test each frame.
+const CASTER_CLUSTER_TRIANGLES: usize = 512;
+
+/// A run of the caster list whose triangles lie within `bounds`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CasterCluster {
+    pub first: u32,
+    pub count: u32,
+    /// World bounds of its triangles.
+    pub bounds: Aabb,
+}
 
 /// One caster triangle as `CasterTriangle` of irregular.wgsl reads it.
 #[repr(C)]
@@ -25,25 +42,31 @@ pub struct Casters {
     /// test passes built without the see-through code run over
     /// (`TestPass::Opaque`).
     pub opaque: u32,
+    /// The list's clusters, in its order (none holds opaque and
+    /// see-through triangles both).
+    pub clusters: Vec<CasterCluster>,
 }
 
 /// The triangles of `scene`'s shadow casters, wound in world space as in
 /// their mesh (an object mirrored by its transform has two corners
 /// swapped), so that a solid's stay wound outward; opaque materials' first,
-/// each part in the scene's order. The back faces a double-sided material
-/// added are left out: the exact test does not depend on a triangle's
-/// winding, so they would test every sample twice.
+/// each object in the scene's order, its triangles in the clusters of
+/// [`clustered`]. The back faces a double-sided material added are left
+/// out: the exact test does not depend on a triangle's winding, so they
+/// would test every sample twice.
 pub fn caster_triangles(scene: &Scene) -> Casters {
-    let (mut opaque, mut see_through) = (vec![], vec![]);
+    let (mut opaque, mut see_through) = (Casters::empty(), Casters::empty());
     for (index, o) in scene.objects.iter().enumerate() {
         if !o.casts_shadow || o.shadow_plane {
             continue;
         }
         let m = &scene.meshes[o.mesh];
-        let front_faces = if m.sides_doubled {
-            m.triangle_count() / 2
+        // A double-sided mesh's back faces use the second half of its
+        // vertices (`Mesh::make_double_sided`).
+        let front_vertices = if m.sides_doubled {
+            m.positions.len() / 2
         } else {
-            m.triangle_count()
+            m.positions.len()
         };
         let object = f32::from_bits(index as u32);
         let mirrored = o.transform.determinant() < 0.0;
@@ -52,30 +75,67 @@ pub fn caster_triangles(scene: &Scene) -> Casters {
         } else {
             &mut opaque
         };
-        for t in m.indices.chunks_exact(3).take(front_faces) {
-            let corner = |k: usize| {
-                let i = t[k] as usize;
-                let uv = m.uvs.get(i).copied().unwrap_or_default();
-                (
-                    o.transform.transform_point3(m.positions[i]).extend(uv.x),
-                    uv.y,
-                )
-            };
-            let (second, third) = if mirrored { (2, 1) } else { (1, 2) };
-            let ((a, va), (b, vb), (c, vc)) = (corner(0), corner(second), corner(third));
-            out.push(CasterTriangle {
-                a,
-                b,
-                c,
-                v: Vec4::new(va, vb, vc, object),
-            });
+        let runs = clustered(m, CASTER_CLUSTER_TRIANGLES);
+        for cluster in &runs.clusters {
+            let range =
+                cluster.first_index as usize..(cluster.first_index + cluster.index_count) as usize;
+            let first = out.triangles.len();
+            for t in runs.indices[range].chunks_exact(3) {
+                if t[0] as usize >= front_vertices {
+                    continue;
+                }
+                let corner = |k: usize| {
+                    let i = t[k] as usize;
+                    let uv = m.uvs.get(i).copied().unwrap_or_default();
+                    (
+                        o.transform.transform_point3(m.positions[i]).extend(uv.x),
+                        uv.y,
+                    )
+                };
+                let (second, third) = if mirrored { (2, 1) } else { (1, 2) };
+                let ((a, va), (b, vb), (c, vc)) = (corner(0), corner(second), corner(third));
+                out.triangles.push(CasterTriangle {
+                    a,
+                    b,
+                    c,
+                    v: Vec4::new(va, vb, vc, object),
+                });
+            }
+            let added = &out.triangles[first..];
+            if !added.is_empty() {
+                out.clusters.push(CasterCluster {
+                    first: first as u32,
+                    count: added.len() as u32,
+                    bounds: Aabb::from_points(
+                        added
+                            .iter()
+                            .flat_map(|t| [t.a, t.b, t.c].map(|p| p.truncate())),
+                    ),
+                });
+            }
         }
     }
-    let count = opaque.len() as u32;
-    opaque.append(&mut see_through);
+    let count = opaque.triangles.len() as u32;
+    opaque
+        .clusters
+        .extend(see_through.clusters.iter().map(|c| CasterCluster {
+            first: c.first + count,
+            ..*c
+        }));
+    opaque.triangles.append(&mut see_through.triangles);
     Casters {
-        triangles: opaque,
         opaque: count,
+        ..opaque
+    }
+}
+
+impl Casters {
+    fn empty() -> Casters {
+        Casters {
+            triangles: vec![],
+            opaque: 0,
+            clusters: vec![],
+        }
     }
 }
 
@@ -103,15 +163,32 @@ mod tests {
             .sum();
         assert_eq!(triangles.len(), expected);
         assert!(scene.meshes.iter().any(|m| m.sides_doubled));
-        let t = &triangles[0];
-        let object = t.v.w.to_bits() as usize;
-        let o = &scene.objects[object];
-        let m = &scene.meshes[o.mesh];
-        let first = o
-            .transform
-            .transform_point3(m.positions[m.indices[0] as usize]);
-        assert!((t.a.truncate() - first).length() < 1e-5);
-        assert!(o.casts_shadow);
+        // Each triangle is one of its object's front faces in world space.
+        for t in triangles {
+            let o = &scene.objects[t.v.w.to_bits() as usize];
+            let m = &scene.meshes[o.mesh];
+            let front = m.triangle_count() / if m.sides_doubled { 2 } else { 1 };
+            let world = |i: u32| o.transform.transform_point3(m.positions[i as usize]);
+            let found = m.indices.chunks_exact(3).take(front).any(|f| {
+                (world(f[0]) - t.a.truncate()).length() < 1e-5
+                    && (world(f[1]) - t.b.truncate()).length() < 1e-5
+                    && (world(f[2]) - t.c.truncate()).length() < 1e-5
+            });
+            assert!(o.casts_shadow && found, "{t:?}");
+        }
+        // The clusters tile the list, each within its bounds.
+        let mut next = 0;
+        for c in &casters.clusters {
+            assert_eq!(c.first, next);
+            next += c.count;
+            for t in &triangles[c.first as usize..next as usize] {
+                for p in [t.a, t.b, t.c] {
+                    let p = p.truncate();
+                    assert!(p.cmpge(c.bounds.min).all() && p.cmple(c.bounds.max).all());
+                }
+            }
+        }
+        assert_eq!(next as usize, triangles.len());
         // Opaque materials' triangles lead, the see-through ones follow.
         let see_through = |t: &CasterTriangle| {
             let o = &scene.objects[t.v.w.to_bits() as usize];

@@ -136,6 +136,7 @@ pub struct IrregularUniform {
     pub offset: Vec4,
     pub pixel: UVec4,
     pub cone: Vec4,
+    pub kept: UVec4,
 }
 
 /// The family's layout, module and pipelines, shared per device; the
@@ -172,6 +173,7 @@ impl IrregularShared {
                 storage(4, true),
                 storage(5, false),
                 crate::gpu::uniform_entry(gpu, 6, stages, false),
+                storage(7, true),
             ],
         });
         let module = crate::frame::technique_shader(gpu, "irregular", &[&module_source()]);
@@ -338,7 +340,7 @@ mod tests {
         assert_struct_matches(
             &source,
             "Irregular",
-            crate::field_offsets!(IrregularUniform; views, light, grid, work, offset, pixel, cone),
+            crate::field_offsets!(IrregularUniform; views, light, grid, work, offset, pixel, cone, kept),
             std::mem::size_of::<IrregularUniform>(),
         );
         assert_struct_matches(

@@ -16,7 +16,7 @@ struct Irregular {
     // x faces, y grid side R (cells per face side), z frame width, w frame
     // height
     grid: vec4u,
-    // x caster triangles, y samples above which a triangle is left to the
+    // x unused, y samples above which a triangle is left to the
     // job pass, z the job list's capacity, w the cells (faces · R²)
     work: vec4u,
     // x ray-origin offset in ULPs and z its lift as a fraction of the
@@ -24,13 +24,15 @@ struct Irregular {
     // none), w unused
     offset: vec4f,
     // x samples per pixel (1: its centre; up to 32, one mark bit each), y
-    // how rays meet translucent casters (BLENDED_*), z the opaque casters'
-    // triangles (they lead `triangles`; the see-through ones follow), w
-    // unused
+    // how rays meet translucent casters (BLENDED_*), zw unused
     pixel: vec4u,
     // xyz a spot light's unit axis, w the cosine of its outer cone (below
     // −1 for other lights: no cone)
     cone: vec4f,
+    // The caster triangles this frame tests (`kept_ranges`): x the opaque
+    // run's ranges (they lead), y all ranges, z the opaque run's kept
+    // triangles, w the see-through run's
+    kept: vec4u,
 };
 
 struct CasterTriangle {
@@ -78,6 +80,11 @@ fn samples_per_pixel() -> u32 {
 // bounds pass: the passes after it read them as plain words, not atomics
 // (which llvmpipe runs a lane at a time).
 @group(2) @binding(6) var<uniform> face_boxes: array<vec4u, 6>;
+// The caster triangles this frame tests, as ranges of `triangles`: (the
+// run's thread that starts the range, its first triangle), the opaque
+// run's first (`irr.kept`); the clusters that cannot shadow a sample are
+// left out (cull.rs).
+@group(2) @binding(7) var<storage, read> kept_ranges: array<vec2u>;
 
 const AUX_SAMPLES: u32 = 0u;
 // (AUX_TESTS follows AUX_PAIRS: `count_work` adds both by one index.)
@@ -502,14 +509,33 @@ fn triangle_work(index: u32) -> vec2u {
     return vec2u(pairs, tests);
 }
 
-// Pass 5, a thread per caster triangle of this pass's run of the list.
+// The triangle that thread `i` of a run tests: in the run's kept ranges
+// [lo, hi) of `kept_ranges`, the last one whose first thread is at most
+// `i` (binary search), and as far into it as `i` is past its start.
+fn kept_triangle(i: u32, lo: u32, hi: u32) -> u32 {
+    var a = lo;
+    var b = hi - 1u;
+    while a < b {
+        let m = (a + b + 1u) / 2u;
+        if kept_ranges[m].x <= i {
+            a = m;
+        } else {
+            b = m - 1u;
+        }
+    }
+    return kept_ranges[a].y + i - kept_ranges[a].x;
+}
+
+// Pass 5, a thread per kept caster triangle of this pass's run.
 @compute @workgroup_size(64)
 fn cs_triangles(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u,
         @builtin(local_invocation_index) lane: u32) {
-    let index = select(0u, irr.pixel.z, SEE_THROUGH) + id.y * groups.x * WORKGROUP + id.x;
+    let i = id.y * groups.x * WORKGROUP + id.x;
+    let lo = select(0u, irr.kept.x, SEE_THROUGH);
+    let hi = select(irr.kept.x, irr.kept.y, SEE_THROUGH);
     var work = vec2u(0u);
-    if index < select(irr.pixel.z, irr.work.x, SEE_THROUGH) {
-        work = triangle_work(index);
+    if i < select(irr.kept.z, irr.kept.w, SEE_THROUGH) {
+        work = triangle_work(kept_triangle(i, lo, hi));
     }
     count_work(lane, work);
 }

@@ -25,6 +25,7 @@
 
 mod buffers;
 mod casters;
+mod cull;
 mod gpu;
 mod timing;
 
@@ -233,6 +234,8 @@ pub struct IrregularZBuffer {
     readback: crate::gpu::AsyncReadback,
     pending: bool,
     stats: ListStats,
+    /// The caster triangles the last frame dispatched (`cull`).
+    kept_triangles: u32,
     /// GPU time of each pass.
     timer: PassTimer,
 }
@@ -250,6 +253,7 @@ impl IrregularZBuffer {
             ),
             pending: false,
             stats: ListStats::default(),
+            kept_triangles: 0,
             timer: PassTimer::new(gpu),
         }
     }
@@ -298,7 +302,20 @@ impl ShadowTechnique for IrregularZBuffer {
             _ => TestPass::SeeThrough,
         };
         let b = self.ensure_buffers(ctx, faces)?;
-        let uniform = frame_uniform(ctx, &config, b, &views);
+        let hull = cull::shadowing_hull(
+            ctx.camera,
+            ctx.frame.width() as f32 / ctx.frame.height() as f32,
+            ctx.frame.height(),
+            &ctx.scene_gpu.bounds,
+            light,
+        );
+        let kept = cull::kept_casters(&b.clusters, b.opaque_triangles, |c| !hull.excludes(c));
+        if !kept.ranges.is_empty() {
+            ctx.gpu
+                .queue
+                .write_buffer(&b.kept_ranges, 0, bytemuck::cast_slice(&kept.ranges));
+        }
+        let uniform = frame_uniform(ctx, &config, b, &views, &kept);
         ctx.gpu
             .queue
             .write_buffer(&b.uniform, 0, bytemuck::bytes_of(&uniform));
@@ -358,12 +375,8 @@ impl ShadowTechnique for IrregularZBuffer {
             (pipelines, count, word)
         };
         let runs = [
-            run(TestPass::Opaque, b.opaque_triangles, AUX_DISPATCH),
-            run(
-                see_through,
-                b.triangle_count - b.opaque_triangles,
-                AUX_SEE_THROUGH_DISPATCH,
-            ),
+            run(TestPass::Opaque, kept.opaque, AUX_DISPATCH),
+            run(see_through, kept.see_through, AUX_SEE_THROUGH_DISPATCH),
         ];
         stamps.time(encoder, Pass::Triangles, |e| {
             for ([triangles, _], count, _) in runs.iter().filter(|r| r.1 > 0) {
@@ -389,6 +402,7 @@ impl ShadowTechnique for IrregularZBuffer {
         stamps.time(encoder, Pass::MaskWrite, |e| {
             fullscreen(e, "irregular mask", &shared.mask)
         });
+        self.kept_triangles = kept.opaque + kept.see_through;
         self.timer.resolve(encoder);
         if let Some(target) = self.readback.target() {
             let aux = &self.buffers.as_ref().expect("made above").aux;
@@ -417,6 +431,7 @@ impl ShadowTechnique for IrregularZBuffer {
             ("list_length_p99", s.length_quantile(0.99) as f64),
             ("triangle_cell_pairs", s.pairs as f64),
             ("sample_tests", s.tests as f64),
+            ("caster_triangles_kept", self.kept_triangles as f64),
             ("list_length_max", s.longest as f64),
             ("large_triangle_jobs", s.jobs as f64),
             ("job_overflow_samples", s.overflow as f64),
@@ -433,6 +448,7 @@ impl ShadowTechnique for IrregularZBuffer {
                 &b.samples,
                 &b.marks,
                 &b.triangles,
+                &b.kept_ranges,
                 &b.aux,
             ]
             .iter()
@@ -449,6 +465,7 @@ fn frame_uniform(
     config: &IrregularConfig,
     b: &Buffers,
     views: &[Mat4],
+    kept: &cull::KeptCasters,
 ) -> IrregularUniform {
     let light = ctx.light;
     let faces = views.len();
@@ -459,23 +476,19 @@ fn frame_uniform(
             _ => light.position.extend(1.0),
         },
         grid: UVec4::new(faces as u32, b.grid, ctx.frame.width(), ctx.frame.height()),
-        work: UVec4::new(
-            b.triangle_count,
-            config.large_samples,
-            b.job_capacity,
-            b.cell_count as u32,
-        ),
+        work: UVec4::new(0, config.large_samples, b.job_capacity, b.cell_count as u32),
         offset: Vec4::new(
             config.offset_ulps,
             light.range,
             config.offset_footprint,
             0.0,
         ),
-        pixel: UVec4::new(
-            config.pixel_samples,
-            config.blended.index() as u32,
-            b.opaque_triangles,
-            0,
+        pixel: UVec4::new(config.pixel_samples, config.blended.index() as u32, 0, 0),
+        kept: UVec4::new(
+            kept.opaque_ranges,
+            kept.ranges.len() as u32,
+            kept.opaque,
+            kept.see_through,
         ),
         cone: match light.kind {
             LightType::Spot => light.cone_axis().extend(light.cone_cos()),

@@ -9,7 +9,7 @@
 
 use super::depth_bounds::SeenBounds;
 use super::setup::MapProjection;
-use super::setup::{CascadeSplit, LightSetup, light_view_of_scene, slice_corners, view_reach};
+use super::setup::{CascadeSplit, LightSetup, light_view_of_scene, view_reach};
 use super::stable_window::{Window, quantize_down, quantize_up, widen_for_kernels, xy_box};
 use super::view_depths::geometry_depths;
 use crate::scene::extent::SceneExtent;
@@ -190,7 +190,9 @@ pub fn cascade_setup(
     let mut faces = vec![];
     let mut texel_scales = vec![];
     for (i, w) in splits.windows(2).enumerate() {
-        let corners = slice_corners(camera, aspect, w[0], w[1]).map(|p| view.transform_point3(p));
+        let corners = camera
+            .slice_corners(aspect, w[0], w[1])
+            .map(|p| view.transform_point3(p));
         // Fitted cascades take the box they need (finer texels along its
         // shorter side); stabilised ones the square of a sphere, which no
         // turn of the camera changes, or the scene's side where it is
@@ -262,7 +264,7 @@ mod tests {
     fn slice_corners_lie_at_their_view_depths() {
         let cam = Camera::new(Vec3::new(1.0, 2.0, 3.0), Vec3::new(4.0, 0.0, -2.0));
         let view = cam.view();
-        let c = slice_corners(&cam, 1.5, 2.0, 7.0);
+        let c = cam.slice_corners(1.5, 2.0, 7.0);
         for (i, p) in c.iter().enumerate() {
             let z = -view.transform_point3(*p).z;
             assert!((z - if i < 4 { 2.0 } else { 7.0 }).abs() < 1e-4, "{i}: {z}");
@@ -476,7 +478,7 @@ mod tests {
             assert!((split.far[3] - 40.0).abs() < 1e-4);
             let d = split_distances(cam.near, 40.0, 4, 0.5);
             for (i, face) in s.faces.iter().enumerate() {
-                for p in slice_corners(&cam, 1.5, d[i], d[i + 1]) {
+                for p in cam.slice_corners(1.5, d[i], d[i + 1]) {
                     let q = project(*face, p);
                     // Inside the map's square (stabilised: the sphere's)
                     // unless clipped to the scene.

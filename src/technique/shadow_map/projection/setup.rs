@@ -79,7 +79,7 @@ pub fn view_in_scene(
     z1: f32,
 ) -> Vec<Vec3> {
     clip_to_bounds(
-        &slice_corners(camera, aspect, z0, z1.max(z0 * 1.001)),
+        &camera.slice_corners(aspect, z0, z1.max(z0 * 1.001)),
         scene_bounds,
     )
 }
@@ -199,26 +199,8 @@ pub enum ViewFit {
     Samples { supports: Supports, size: u32 },
 }
 
-/// The eight world-space corners of the camera's view between view depths
-/// `z0` and `z1`.
-pub fn slice_corners(camera: &Camera, aspect: f32, z0: f32, z1: f32) -> [Vec3; 8] {
-    let inv_view = camera.view().inverse();
-    let ty = (camera.fov_y_deg.to_radians() * 0.5).tan();
-    let tx = ty * aspect;
-    let mut out = [Vec3::ZERO; 8];
-    for (k, z) in [z0, z1].into_iter().enumerate() {
-        for (j, (sx, sy)) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)]
-            .into_iter()
-            .enumerate()
-        {
-            out[k * 4 + j] = inv_view.transform_point3(Vec3::new(sx * tx * z, sy * ty * z, -z));
-        }
-    }
-    out
-}
-
 /// The points spanning the intersection of a hexahedron (corner `i` at
-/// bit 0: x side, bit 1: y side, bit 2: z side, as [`slice_corners`] and
+/// bit 0: x side, bit 1: y side, bit 2: z side, as [`Camera::slice_corners`](crate::scene::Camera::slice_corners) and
 /// [`Aabb::corners`] number them; convex) with `bounds`: each solid's
 /// corners inside the other and each one's edges through the other's faces.
 /// Empty when they do not meet.
@@ -586,7 +568,7 @@ mod tests {
     fn slice() -> [Vec3; 8] {
         let mut cam = Camera::new(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0));
         cam.fov_y_deg = 90.0;
-        slice_corners(&cam, 1.0, 1.0, 10.0)
+        cam.slice_corners(1.0, 1.0, 10.0)
     }
 
     #[test]

@@ -6,7 +6,7 @@
 //! cascades over the view-space depths of the visible receivers
 //! (`computeSceneCascadeParams`' `vsNearFar`).
 
-use super::setup::{clip_to_bounds, slice_corners};
+use super::setup::clip_to_bounds;
 use crate::scene::{Aabb, Camera};
 
 /// The least and greatest view depth, within `[camera.near, reach]`, of the
@@ -20,7 +20,7 @@ pub fn geometry_depths(
 ) -> Option<(f32, f32)> {
     let near = camera.near;
     let reach = reach.max(near * 1.001);
-    let frustum = slice_corners(camera, aspect, near, reach);
+    let frustum = camera.slice_corners(aspect, near, reach);
     let view = camera.view();
     let depth = |p: glam::Vec3| -view.transform_point3(p).z;
     let mut range: Option<(f32, f32)> = None;

@@ -11,9 +11,7 @@ mod tsm;
 
 use self::psm::psm;
 use self::tsm::tsm;
-use super::setup::{
-    LightSetup, clip_to_bounds, light_view_of_scene, linear_depth_row, slice_corners, view_reach,
-};
+use super::setup::{LightSetup, clip_to_bounds, light_view_of_scene, linear_depth_row, view_reach};
 use crate::scene::{Aabb, Camera};
 use crate::technique::shadow_map::config::partition::{Warp, WarpParams};
 use glam::{Mat4, Vec3, Vec4};
@@ -155,7 +153,7 @@ pub fn warp_setup(
     for (face, (z0, z1)) in setup.faces.iter_mut().zip(ranges) {
         // The body: the part of the view inside the scene (Wimmer et al.'s
         // convex body B), and its view depths for n_opt.
-        let body = clip_to_bounds(&slice_corners(camera, aspect, z0, z1), scene);
+        let body = clip_to_bounds(&camera.slice_corners(aspect, z0, z1), scene);
         let depths = body.iter().map(|p| -view.transform_point3(*p).z);
         let near = depths.clone().fold(f32::MAX, f32::min).max(camera.near);
         let far = depths.fold(0.0f32, f32::max).max(near * 1.001);
@@ -245,8 +243,7 @@ pub(super) mod tests {
             max: Vec3::new(50.0, 10.0, 50.0),
         };
         let cam = Camera::new(Vec3::new(0.0, 2.0, 40.0), Vec3::new(0.0, 0.0, 0.0));
-        let body =
-            crate::technique::shadow_map::projection::setup::slice_corners(&cam, 1.5, 0.5, 80.0);
+        let body = cam.slice_corners(1.5, 0.5, 80.0);
         let light = Vec3::new(1.0, -1.0, 0.2);
         let w = lispsm(&cam, light, &scene, &body, (0.5, 80.0), 0.0).unwrap();
         for p in body {
@@ -305,7 +302,7 @@ pub(super) mod tests {
     /// more of it than under the whole view's warp.
     #[test]
     fn one_warped_map_warps_the_seen_depths() {
-        use crate::technique::shadow_map::projection::setup::{MapProjection, slice_corners};
+        use crate::technique::shadow_map::projection::setup::MapProjection;
         let scene = Aabb {
             min: Vec3::new(-50.0, 0.0, -50.0),
             max: Vec3::new(50.0, 10.0, 50.0),
@@ -313,7 +310,7 @@ pub(super) mod tests {
         let cam = Camera::new(Vec3::new(0.0, 2.0, 40.0), Vec3::new(0.0, 0.0, 0.0));
         let light = Vec3::new(1.0, -1.0, 0.2);
         let (z0, z1) = (20.0, 35.0);
-        let slice = clip_to_bounds(&slice_corners(&cam, 1.5, z0, z1), &scene);
+        let slice = clip_to_bounds(&cam.slice_corners(1.5, z0, z1), &scene);
         // The area of the map the slice's image spans (its box in NDC).
         let share = |kind: Warp, seen: Option<(f32, f32)>| {
             let mut setup = LightSetup {

@@ -216,7 +216,6 @@ fn rows(x: DVec4, y: DVec4, w: DVec4) -> DMat4 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::technique::shadow_map::projection::setup::slice_corners;
     use crate::technique::shadow_map::projection::warp::tests::{
         assert_magnifies_near_the_camera, ndc,
     };
@@ -231,7 +230,7 @@ mod tests {
     }
 
     fn body(cam: &Camera, scene: &Aabb) -> Vec<Vec3> {
-        clip_to_bounds(&slice_corners(cam, 1.5, 0.5, 80.0), scene)
+        clip_to_bounds(&cam.slice_corners(1.5, 0.5, 80.0), scene)
     }
 
     /// Covers the body, magnifies near the camera, one texel per light ray,

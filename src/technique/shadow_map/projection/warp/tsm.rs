@@ -120,9 +120,7 @@ pub fn tsm(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::technique::shadow_map::projection::setup::{
-        clip_to_bounds, light_view_of_scene, slice_corners,
-    };
+    use crate::technique::shadow_map::projection::setup::{clip_to_bounds, light_view_of_scene};
     use crate::technique::shadow_map::projection::warp::tests::{
         assert_magnifies_near_the_camera, ndc,
     };
@@ -142,7 +140,7 @@ mod tests {
     #[test]
     fn the_trapezoid_covers_the_body_and_maps_the_focus_to_eighty_percent() {
         let (cam, scene, light) = setting();
-        let body = clip_to_bounds(&slice_corners(&cam, 1.5, 0.5, 80.0), &scene);
+        let body = clip_to_bounds(&cam.slice_corners(1.5, 0.5, 80.0), &scene);
         let (view, _) = light_view_of_scene(light, &scene);
         let w = tsm(&cam, view, &scene, &body, (0.5, 80.0), 0.3).unwrap();
         for p in &body {
