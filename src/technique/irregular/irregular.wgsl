@@ -7,8 +7,9 @@
 // binning. common.wgsl and gbuffer.wgsl are prepended.
 
 struct Irregular {
-    // world → light view of each face: six cube faces for point and spot
-    // lights, one orthographic view for directional ones
+    // world → light view of each face: six cube faces for point lights and
+    // wide spots, one perspective view along a spot's axis (up to 75°), one
+    // orthographic view for directional lights
     views: array<mat4x4f, 6>,
     // xyz the light's position (local lights) or the direction it travels
     // (directional), w 1 for a local light
@@ -436,7 +437,7 @@ fn clear_face(d: vec3f) -> u32 {
 // triangle need not be projected into (most triangles of a scene: five
 // faces of six saved).
 fn face_holding(t: CasterTriangle) -> u32 {
-    if !is_local() {
+    if irr.grid.x == 1u {
         return MAX_FACES;
     }
     let l = irr.light.xyz;

@@ -11,7 +11,8 @@
 //! computed by rasterization-style work.
 //!
 //! Per frame: the samples' bounds on each face (one orthographic view for a
-//! directional light, six cube faces for point and spot lights), the
+//! directional light, one perspective view along a spot light's axis, six
+//! cube faces for point lights and spots wider than 75°), the
 //! samples binned by count, prefix sum and scatter (sorted by cell, so a
 //! row of cells' samples is one contiguous run and the lists cannot
 //! overflow), a triangle pass in which each triangle tests the samples of
@@ -32,7 +33,7 @@ mod timing;
 use super::params::{Choice, choice_enum};
 use super::{Family, MaskContext, ParamSpec, ParamValues, Preset, ShadowTechnique};
 use crate::gpu::GpuContext;
-use crate::scene::LightType;
+use crate::scene::{Light, LightType};
 use anyhow::Result;
 use buffers::Buffers;
 use glam::{Mat4, UVec4, Vec3, Vec4};
@@ -50,7 +51,7 @@ const GRID: ParamSpec = ParamSpec::int(
     0,
     0,
     4096,
-    "cells per side of each light-space face the samples are binned into (directional lights: one face; point and spot lights: six cube faces), at least 64; 0: chosen from the frame, the power of two that gives at least one cell per sample over the faces, within the largest storage buffer (a 1280 × 720 frame: 1024² under a directional light, six faces of 512² under a point light) — more cells shorten the lists, fewer shorten the per-cell passes",
+    "cells per side of each light-space face the samples are binned into (directional lights and spot lights up to 75°: one face; point lights and wider spots: six cube faces), at least 64; 0: chosen from the frame, the power of two that gives at least one cell per sample over the faces, within the largest storage buffer (a 1280 × 720 frame: 1024² under a directional light, six faces of 512² under a point light) — more cells shorten the lists, fewer shorten the per-cell passes",
 );
 /// Cells per sample the automatic grid gives at least, over the faces.
 const CELLS_PER_SAMPLE: f64 = 1.0;
@@ -259,15 +260,38 @@ impl IrregularZBuffer {
     }
 }
 
+/// The widest outer cone (half-angle, degrees) of a spot light whose
+/// samples are binned on one face looking along its axis; a wider spot
+/// takes the six cube faces (an image's coordinates, tan θ, grow without
+/// bound towards 90°).
+const ONE_FACE_SPOT_CONE_DEG: f32 = 75.0;
+
 /// The light views of a light's faces: for a directional light one view
 /// looking along it (its image is orthographic, so where it stands does not
-/// matter); for point and spot lights the six cube faces +x, −x, +y, −y,
-/// +z, −z from its position, each looking down its axis.
-fn face_views(kind: LightType, position: Vec3, direction: Vec3) -> Vec<Mat4> {
-    if kind == LightType::Directional {
-        let dir = direction.normalize();
-        let up = super::light_space::up_for(dir);
-        return vec![glam::camera::rh::view::look_to_mat4(Vec3::ZERO, dir, up)];
+/// matter); for a spot light no wider than [`ONE_FACE_SPOT_CONE_DEG`] one
+/// perspective view along its axis, which every sample its cone reaches
+/// lies in front of (a sixth of a point light's cells and projections);
+/// for other point and spot lights the six cube faces +x, −x, +y, −y, +z,
+/// −z from its position, each looking down its axis.
+fn face_views(light: &Light) -> Vec<Mat4> {
+    use glam::camera::rh::view::look_to_mat4;
+    let dir = light.direction.normalize();
+    match light.kind {
+        LightType::Directional => {
+            return vec![look_to_mat4(
+                Vec3::ZERO,
+                dir,
+                super::light_space::up_for(dir),
+            )];
+        }
+        LightType::Spot if light.outer_cone_deg <= ONE_FACE_SPOT_CONE_DEG => {
+            return vec![look_to_mat4(
+                light.position,
+                dir,
+                super::light_space::up_for(dir),
+            )];
+        }
+        _ => {}
     }
     [
         (Vec3::X, Vec3::Y),
@@ -277,7 +301,7 @@ fn face_views(kind: LightType, position: Vec3, direction: Vec3) -> Vec<Mat4> {
         (Vec3::Z, Vec3::Y),
         (Vec3::NEG_Z, Vec3::Y),
     ]
-    .map(|(axis, up)| glam::camera::rh::view::look_to_mat4(position, axis, up))
+    .map(|(axis, up)| look_to_mat4(light.position, axis, up))
     .to_vec()
 }
 
@@ -289,7 +313,7 @@ impl ShadowTechnique for IrregularZBuffer {
 
     fn render_mask(&mut self, ctx: &MaskContext, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
         let light = ctx.light;
-        let views = face_views(light.kind, light.position, light.direction);
+        let views = face_views(light);
         let faces = views.len();
         let config = self.config;
         let shared = self.shared.clone();
@@ -533,7 +557,7 @@ mod tests {
     #[test]
     fn cube_faces_look_down_their_axes() {
         let p = Vec3::new(1.0, 2.0, 3.0);
-        let views = face_views(LightType::Point, p, Vec3::ZERO);
+        let views = face_views(&Light::point(p, 1.0));
         let axes = [
             Vec3::X,
             Vec3::NEG_X,
@@ -549,13 +573,21 @@ mod tests {
                 "{axis}: {v}"
             );
         }
-        let sun = face_views(
-            LightType::Directional,
-            Vec3::ZERO,
-            Vec3::new(0.0, -1.0, 0.0),
-        );
+        let sun = face_views(&Light::directional(Vec3::new(0.0, -1.0, 0.0), 1.0));
         assert_eq!(sun.len(), 1);
         assert!(sun[0].transform_vector3(Vec3::NEG_Y).z < -0.999);
+        // A spot no wider than 75° looks along its axis from its position;
+        // a wider one takes the cube.
+        let mut spot = Light::spot(p, p + Vec3::new(1.0, -1.0, 0.0), 1.0, 50.0, 60.0);
+        let views = face_views(&spot);
+        assert_eq!(views.len(), 1);
+        let ahead = views[0].transform_point3(p + Vec3::new(1.0, -1.0, 0.0).normalize() * 3.0);
+        assert!(
+            (ahead - Vec3::new(0.0, 0.0, -3.0)).length() < 1e-5,
+            "{ahead}"
+        );
+        spot.outer_cone_deg = 80.0;
+        assert_eq!(face_views(&spot).len(), 6);
     }
 
     /// The automatic grid gives at least one cell per sample over the

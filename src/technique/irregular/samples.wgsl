@@ -85,9 +85,10 @@ fn light_reaches(o: vec3f, n: vec3f) -> bool {
 }
 
 // The cube face a direction from a local light falls in (+x, −x, +y, −y,
-// +z, −z), or 0 for a directional light.
+// +z, −z), or 0 for a light of one face (directional, or a spot along its
+// axis).
 fn face_of(p: vec3f) -> u32 {
-    if !is_local() {
+    if irr.grid.x == 1u {
         return 0u;
     }
     return cube_face(p - irr.light.xyz);
