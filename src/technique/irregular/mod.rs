@@ -326,19 +326,7 @@ impl ShadowTechnique for IrregularZBuffer {
             _ => TestPass::SeeThrough,
         };
         let b = self.ensure_buffers(ctx, faces)?;
-        let hull = cull::shadowing_hull(
-            ctx.camera,
-            ctx.frame.width() as f32 / ctx.frame.height() as f32,
-            ctx.frame.height(),
-            &ctx.scene_gpu.bounds,
-            light,
-        );
-        let kept = cull::kept_casters(&b.clusters, b.opaque_triangles, |c| !hull.excludes(c));
-        if !kept.ranges.is_empty() {
-            ctx.gpu
-                .queue
-                .write_buffer(&b.kept_ranges, 0, bytemuck::cast_slice(&kept.ranges));
-        }
+        let kept = kept_casters(ctx, b);
         let uniform = frame_uniform(ctx, &config, b, &views, &kept);
         ctx.gpu
             .queue
@@ -480,6 +468,25 @@ impl ShadowTechnique for IrregularZBuffer {
             .sum()
         })
     }
+}
+
+/// The casters that can shadow what the frame's camera sees ([`cull`]),
+/// their ranges written to `b.kept_ranges`.
+fn kept_casters(ctx: &MaskContext, b: &Buffers) -> cull::KeptCasters {
+    let hull = cull::shadowing_hull(
+        ctx.camera,
+        ctx.frame.width() as f32 / ctx.frame.height() as f32,
+        ctx.frame.height(),
+        &ctx.scene_gpu.bounds,
+        ctx.light,
+    );
+    let kept = cull::kept_casters(&b.clusters, b.opaque_triangles, |c| !hull.excludes(c));
+    if !kept.ranges.is_empty() {
+        ctx.gpu
+            .queue
+            .write_buffer(&b.kept_ranges, 0, bytemuck::cast_slice(&kept.ranges));
+    }
+    kept
 }
 
 /// The frame's uniform: the light's faces, the grid, the work and the
