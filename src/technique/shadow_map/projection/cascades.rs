@@ -96,57 +96,43 @@ pub fn partitioned_depths(
                 (near, far)
             }
         }
-        None if !cascades.stabilize => {
-            // The depths that hold geometry: from a camera standing on a
-            // floor, the nearest is where the floor meets the frustum's
-            // lower plane, not its near plane; looking along a street, the
-            // farthest is the last building's, not the far side of the
-            // city's sphere. They turn with the camera, so stabilised
-            // cascades do not take them.
-            let reach = view_reach(camera, scene.bounds);
-            let (near, reach) =
-                geometry_depths(camera, aspect, scene.parts, reach).unwrap_or((camera.near, reach));
-            let far = if cascades.max_distance > 0.0 {
-                limit
-            } else {
-                reach
-            };
-            (near.min(far), far)
-        }
         None => {
-            let scene_bounds = scene.bounds;
-            let reach = view_reach(camera, scene_bounds);
-            // Stabilised: the reach rounded up to eighths of an octave, so
-            // that the splits (and with them each cascade's size) stay put
-            // while the camera's distance to the scene changes a little.
-            let reach = if cascades.stabilize {
-                quantize_up(reach).min(camera.far)
+            let (near, reach) = if cascades.stabilize {
+                // Depths that do not turn with the camera. The reach (the
+                // far side of the scene's sphere) rounded up to eighths of
+                // an octave, so that the splits (and with them each
+                // cascade's size) stay put while the camera's distance to
+                // the scene changes a little. From a camera outside the
+                // scene's box, the depths before the box hold nothing to
+                // shadow: the splits start at the least view depth a point
+                // of the box can have inside the frustum, its distance
+                // times the cosine of the frustum's corner ray, rounded
+                // down to a power of two, so that the splits stay put
+                // while the camera moves, as the reach's rounding up keeps
+                // them. No cascade is spent on empty space.
+                let bounds = scene.bounds;
+                let reach = quantize_up(view_reach(camera, bounds)).min(camera.far);
+                let closest = camera
+                    .eye
+                    .clamp(bounds.min, bounds.max)
+                    .distance(camera.eye);
+                let gap = closest * frustum_corner_cos(camera, aspect) - bounds.margin();
+                let octave = 2f32.powf(gap.max(camera.near).log2().floor());
+                (octave.max(camera.near), reach)
             } else {
-                reach
+                // The depths that hold geometry: from a camera standing on
+                // a floor, the nearest is where the floor meets the
+                // frustum's lower plane, not its near plane; looking along
+                // a street, the farthest is the last building's, not the
+                // far side of the city's sphere. They turn with the
+                // camera, so stabilised cascades do not take them.
+                let reach = view_reach(camera, scene.bounds);
+                geometry_depths(camera, aspect, scene.parts, reach).unwrap_or((camera.near, reach))
             };
             let far = if cascades.max_distance > 0.0 {
                 limit
             } else {
                 reach
-            };
-            // From a camera outside the scene's box, the depths before the
-            // box hold nothing to shadow: the splits start at the least
-            // view depth a point of the box can have inside the frustum,
-            // its distance times the cosine of the frustum's corner ray
-            // (stabilised: rounded down to a power of two, so that the
-            // splits stay put while the camera moves, as the reach's
-            // rounding up keeps them). Neither turns with the camera, so
-            // no cascade is spent on empty space.
-            let closest = camera
-                .eye
-                .clamp(scene_bounds.min, scene_bounds.max)
-                .distance(camera.eye);
-            let gap = closest * frustum_corner_cos(camera, aspect) - scene_bounds.margin();
-            let near = if cascades.stabilize {
-                let octave = 2f32.powf(gap.max(camera.near).log2().floor());
-                octave.max(camera.near)
-            } else {
-                gap.max(camera.near)
             };
             (near.min(far), far)
         }
