@@ -1,5 +1,6 @@
 //! The perspective camera and its projections (wgpu's [0, 1] depth).
 
+use super::Aabb;
 use anyhow::{Result, bail};
 use glam::{Mat4, Vec3};
 use serde::{Deserialize, Serialize};
@@ -30,6 +31,12 @@ impl Camera {
             near: 0.1,
             far: 200.0,
         }
+    }
+    /// How far the camera's view of a scene bounded by `scene` can reach:
+    /// to the far side of the scene's bounding sphere, at most the far
+    /// plane (every visible point lies within this view depth).
+    pub fn reach(&self, scene: &Aabb) -> f32 {
+        (self.eye.distance(scene.center()) + scene.bounding_radius()).min(self.far)
     }
     /// The eight world-space corners of the view between view depths `z0`
     /// and `z1`, seen with frame `aspect` (bit 0: x side, bit 1: y side,
@@ -101,5 +108,26 @@ impl Camera {
             );
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The reach is the distance to the scene's centre plus its bounding
+    /// radius (√3 for a box of side 2, widened by its margin), cut at the
+    /// far plane.
+    #[test]
+    fn the_view_reaches_the_far_side_of_the_scene_within_the_far_plane() {
+        let scene = Aabb {
+            min: Vec3::splat(-1.0),
+            max: Vec3::splat(1.0),
+        };
+        let camera = Camera::new(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO);
+        let radius = 3f32.sqrt() + 2.0 * 3f32.sqrt() * 1e-4;
+        assert!((camera.reach(&scene) - (10.0 + radius)).abs() < 1e-4);
+        let near_sighted = Camera { far: 5.0, ..camera };
+        assert_eq!(near_sighted.reach(&scene), 5.0);
     }
 }

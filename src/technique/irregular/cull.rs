@@ -19,10 +19,8 @@ pub fn shadowing_hull(
     light: &Light,
 ) -> ConvexHull {
     // Every visible point lies on the scene's geometry, within this view
-    // depth (the far side of its bounding sphere).
-    let reach = (camera.eye.distance(scene.center()) + scene.bounding_radius())
-        .min(camera.far)
-        .max(camera.near * 1.001);
+    // depth.
+    let reach = camera.reach(scene).max(camera.near * 1.001);
     let view = camera.slice_corners(aspect, camera.near, reach);
     let mut points = view.to_vec();
     match light.kind {

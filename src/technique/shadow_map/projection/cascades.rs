@@ -9,7 +9,7 @@
 
 use super::depth_bounds::SeenBounds;
 use super::setup::MapProjection;
-use super::setup::{CascadeSplit, LightSetup, light_view_of_scene, view_reach};
+use super::setup::{CascadeSplit, LightSetup, light_view_of_scene};
 use super::stable_window::{Window, quantize_down, quantize_up, widen_for_kernels, xy_box};
 use super::view_depths::geometry_depths;
 use crate::scene::extent::SceneExtent;
@@ -111,7 +111,7 @@ pub fn partitioned_depths(
                 // while the camera moves, as the reach's rounding up keeps
                 // them. No cascade is spent on empty space.
                 let bounds = scene.bounds;
-                let reach = quantize_up(view_reach(camera, bounds)).min(camera.far);
+                let reach = quantize_up(camera.reach(bounds)).min(camera.far);
                 let closest = camera
                     .eye
                     .clamp(bounds.min, bounds.max)
@@ -126,7 +126,7 @@ pub fn partitioned_depths(
                 // a street, the farthest is the last building's, not the
                 // far side of the city's sphere. They turn with the
                 // camera, so stabilised cascades do not take them.
-                let reach = view_reach(camera, scene.bounds);
+                let reach = camera.reach(scene.bounds);
                 geometry_depths(camera, aspect, scene.parts, reach).unwrap_or((camera.near, reach))
             };
             let far = if cascades.max_distance > 0.0 {

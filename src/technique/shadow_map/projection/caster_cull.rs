@@ -12,7 +12,7 @@
 //! along the 16 directions of [`Supports`] (a 16-sided outer polygon).
 
 use super::roll::Supports;
-use super::setup::{light_view_of_scene, view_in_scene, view_reach};
+use super::setup::{light_view_of_scene, view_in_scene};
 use crate::scene::{Aabb, Camera};
 use glam::{Mat4, Vec3};
 
@@ -39,7 +39,7 @@ impl CasterCull {
             aspect,
             scene_bounds,
             camera.near,
-            view_reach(camera, scene_bounds),
+            camera.reach(scene_bounds),
         )
         .into_iter()
         .map(|p| view.transform_point3(p))

@@ -293,13 +293,6 @@ pub struct MapFit {
     pub half: Vec2,
 }
 
-/// How far from the camera its view of the scene can reach: to the far
-/// side of the scene's bounding sphere, at most the far plane.
-pub fn view_reach(camera: &Camera, scene_bounds: &Aabb) -> f32 {
-    let r = scene_bounds.bounding_radius();
-    (camera.eye.distance(scene_bounds.center()) + r).min(camera.far)
-}
-
 /// Light matrices: spot (perspective over the cone), point (six faces),
 /// directional (orthographic around the scene, its xy clipped to the
 /// camera's view of the scene).
@@ -442,9 +435,8 @@ pub fn directional_setup(
             hold,
         }
     };
-    let frustum = || {
-        seen(camera.near, view_reach(camera, scene_bounds)).map(|s| window_of(s, None, Hold::VIEW))
-    };
+    let frustum =
+        || seen(camera.near, camera.reach(scene_bounds)).map(|s| window_of(s, None, Hold::VIEW));
     let fitted = match fp.view_fit {
         // The pixels seen, with room to grow; the view of the scene where
         // its longer side fits in that room, which is steadier (asking both

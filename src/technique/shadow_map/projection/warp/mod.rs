@@ -11,7 +11,7 @@ mod tsm;
 
 use self::psm::psm;
 use self::tsm::tsm;
-use super::setup::{LightSetup, clip_to_bounds, light_view_of_scene, linear_depth_row, view_reach};
+use super::setup::{LightSetup, clip_to_bounds, light_view_of_scene, linear_depth_row};
 use crate::scene::{Aabb, Camera};
 use crate::technique::shadow_map::config::partition::{Warp, WarpParams};
 use glam::{Mat4, Vec3, Vec4};
@@ -142,12 +142,10 @@ pub fn warp_setup(
             .windows(2)
             .map(|w| (w[0], w[1]))
             .collect(),
-        None => vec![seen_depths.unwrap_or_else(|| {
-            (
-                camera.near,
-                view_reach(camera, scene).max(camera.near * 1.01),
-            )
-        })],
+        None => vec![
+            seen_depths
+                .unwrap_or_else(|| (camera.near, camera.reach(scene).max(camera.near * 1.01))),
+        ],
     };
     let view = camera.view();
     for (face, (z0, z1)) in setup.faces.iter_mut().zip(ranges) {
