@@ -429,23 +429,26 @@ fn clear_face(d: vec3f) -> u32 {
     return select(MAX_FACES, cube_face(d), major > second * (1.0 + 1.0 / 1024.0));
 }
 
-// The one face of a local light whose pyramid holds the whole of `t`, or
-// MAX_FACES (every face may hold some of it). Where the three vertices lie
-// clear of the same face's edges, so does the triangle (the narrowed
-// pyramid is convex), and so does every sample whose ray to the light it
-// meets: no rounding bins such a sample on another face, whose image the
-// triangle need not be projected into (most triangles of a scene: five
-// faces of six saved).
-fn face_holding(t: CasterTriangle) -> u32 {
+// The faces triangle `t` may be seen in, as bits: every face of the light,
+// or the one face of a local light whose pyramid holds the whole of `t`.
+// Where the three vertices lie clear of the same face's edges, so does the
+// triangle (the narrowed pyramid is convex), and so does every sample
+// whose ray to the light it meets: no rounding bins such a sample on
+// another face, whose image the triangle need not be projected into (most
+// triangles of a scene: five faces of six saved). Looping over the bits
+// set, not over every face, keeps a lane group whose triangles each hold
+// one face from stepping through the other five.
+fn faces_holding(t: CasterTriangle) -> u32 {
+    let every = (1u << irr.grid.x) - 1u;
     if irr.grid.x == 1u {
-        return MAX_FACES;
+        return every;
     }
     let l = irr.light.xyz;
     let f = clear_face(t.a.xyz - l);
-    if clear_face(t.b.xyz - l) != f || clear_face(t.c.xyz - l) != f {
-        return MAX_FACES;
+    if f == MAX_FACES || clear_face(t.b.xyz - l) != f || clear_face(t.c.xyz - l) != f {
+        return every;
     }
-    return f;
+    return 1u << f;
 }
 
 // The triangle-cell pairs and sample tests of one workgroup's threads,
@@ -471,7 +474,7 @@ fn count_work(lane: u32, work: vec2u) {
     }
 }
 
-// Triangle `index` on every face: the samples of the cells its image
+// Triangle `index` on each face it may be seen in: the samples of the cells its image
 // covers tested, or, where they are more than `irr.work.y`, listed as jobs
 // of JOB_SAMPLES for the job pass. Jobs past the list's capacity are
 // counted (AUX_OVERFLOW, in samples) and tested here. Its (pairs, tests).
@@ -482,11 +485,10 @@ fn triangle_work(index: u32) -> vec2u {
     }
     var tests = 0u;
     var pairs = 0u;
-    let only = face_holding(t);
-    for (var face = 0u; face < irr.grid.x; face++) {
-        if only < MAX_FACES && face != only {
-            continue;
-        }
+    var faces = faces_holding(t);
+    while faces != 0u {
+        let face = firstTrailingBit(faces);
+        faces &= faces - 1u;
         let box = triangle_cells(t, face, face_bounds(face));
         if box.z < box.x || box.w < box.y {
             continue;
