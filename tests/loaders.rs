@@ -824,3 +824,75 @@ fn scenes_listing_children_as_roots_draw_each_node_once() {
         );
     }
 }
+
+/// A glTF whose caster, a unit quad standing at z = 0, is drawn as
+/// `mode` (4 triangles, 5 a strip, 6 a fan) with its four vertices in
+/// `order` (of (−1, 1), (1, 1), (1, 2), (−1, 2) in x, y).
+fn quad_gltf(mode: u32, order: [usize; 4]) -> String {
+    use base64::Engine as _;
+    let corners = [[-1f32, 1., 0.], [1., 1., 0.], [1., 2., 0.], [-1., 2., 0.]];
+    let mut bytes: Vec<u8> = order
+        .iter()
+        .flat_map(|&i| corners[i])
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let indices: &[u16] = if mode == 4 {
+        &[0, 1, 2, 0, 2, 3]
+    } else {
+        &[0, 1, 2, 3]
+    };
+    bytes.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bytes)
+    );
+    serde_json::json!({
+        "asset": { "version": "2.0" },
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1, "mode": mode }] }],
+        "buffers": [{ "byteLength": bytes.len(), "uri": uri }],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": 48 },
+            { "buffer": 0, "byteOffset": 48, "byteLength": indices.len() * 2 }
+        ],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+              "min": [-1, 1, 0], "max": [1, 2, 0] },
+            { "bufferView": 1, "componentType": 5123, "count": indices.len(), "type": "SCALAR" }
+        ]
+    })
+    .to_string()
+}
+
+/// Triangle strips and fans are drawn as the triangles they describe (not
+/// skipped): the same quad as a strip, a fan and a triangle list covers the
+/// same area, every triangle facing +z as the list's do.
+#[test]
+fn gltf_strips_and_fans_draw_their_triangles() {
+    let dir = tmpdir("strips-fans");
+    let faces = |mode: u32, order: [usize; 4]| {
+        let path = write(&dir, &format!("quad{mode}.gltf"), &quad_gltf(mode, order));
+        let s = scene::load(path.to_str().unwrap()).unwrap();
+        let mesh = &s.meshes[s.objects[0].mesh];
+        mesh.indices
+            .chunks(3)
+            .map(|t| {
+                let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[t[k] as usize]);
+                (b - a).cross(c - a)
+            })
+            .collect::<Vec<_>>()
+    };
+    // Strip order: bottom left, bottom right, top left, top right.
+    for (mode, order) in [(4, [0, 1, 2, 3]), (5, [0, 1, 3, 2]), (6, [0, 1, 2, 3])] {
+        let normals = faces(mode, order);
+        assert_eq!(normals.len(), 2, "mode {mode}");
+        let area: f32 = normals.iter().map(|n| 0.5 * n.length()).sum();
+        assert!((area - 2.0).abs() < 1e-6, "mode {mode}: area {area}");
+        assert!(
+            normals.iter().all(|n| n.z > 0.0),
+            "mode {mode}: {normals:?}"
+        );
+    }
+}

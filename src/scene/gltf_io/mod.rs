@@ -174,10 +174,11 @@ fn read_mesh(
         })?
         .map(Vec3::from)
         .collect();
-    let indices: Vec<u32> = match reader.read_indices() {
+    let vertices: Vec<u32> = match reader.read_indices() {
         Some(i) => i.into_u32().collect(),
         None => (0..positions.len() as u32).collect(),
     };
+    let indices = triangle_list(prim.mode(), &vertices).expect("triangle modes only");
     let mesh = Mesh {
         name: gmesh.name().unwrap_or(name).to_string(),
         normals: reader
@@ -202,6 +203,30 @@ fn read_mesh(
         ..Default::default()
     };
     Ok(mesh)
+}
+
+/// The triangle list of a primitive's `vertices` drawn in `mode` (glTF 2.0
+/// §3.7.2.1): strip triangle i is (v_i, v_{i+1+i%2}, v_{i+2−i%2}), which
+/// keeps every triangle's winding; fan triangle i is (v_{i+1}, v_{i+2},
+/// v_0). Triangles a strip's repeated vertices make degenerate (its
+/// restarts) are left out. `None` for points and lines.
+fn triangle_list(mode: gltf::mesh::Mode, vertices: &[u32]) -> Option<Vec<u32>> {
+    use gltf::mesh::Mode;
+    let triangles: Vec<[u32; 3]> = match mode {
+        Mode::Triangles => return Some(vertices.to_vec()),
+        Mode::TriangleStrip => (0..vertices.len().saturating_sub(2))
+            .map(|i| {
+                let odd = i % 2;
+                [vertices[i], vertices[i + 1 + odd], vertices[i + 2 - odd]]
+            })
+            .collect(),
+        Mode::TriangleFan => (1..vertices.len().saturating_sub(1))
+            .map(|i| [vertices[i], vertices[i + 1], vertices[0]])
+            .collect(),
+        Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip => return None,
+    };
+    let proper = |t: &[u32; 3]| t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
+    Some(triangles.into_iter().filter(proper).flatten().collect())
 }
 
 /// A perspective camera node at `pos`, turned by `rot`, looking along
@@ -352,10 +377,11 @@ fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene
         let flags: ShadowFlags =
             extras_field(node.extras(), &format!("{file}: node '{name}'"))?.unwrap_or_default();
         for (pi, prim) in gmesh.primitives().enumerate() {
-            if prim.mode() != gltf::mesh::Mode::Triangles {
+            if triangle_list(prim.mode(), &[]).is_none() {
                 log::warn!(
-                    "{file}: mesh '{}' primitive {pi} is not triangles; skipped",
-                    gmesh.name().unwrap_or("")
+                    "{file}: mesh '{}' primitive {pi} is {:?}, not triangles (points and lines cast no shadow); skipped",
+                    gmesh.name().unwrap_or(""),
+                    prim.mode()
                 );
                 continue;
             }
@@ -388,4 +414,37 @@ fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene
     }
     scene.default_light = !had_lights;
     Ok(scene)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gltf::mesh::Mode;
+
+    /// Strips alternate their second and third vertices, so every triangle
+    /// keeps the first one's winding; fans turn about vertex 0; a strip's
+    /// restart (repeated vertices) leaves no degenerate triangle; points
+    /// and lines have none.
+    #[test]
+    fn strips_and_fans_become_triangle_lists_wound_as_drawn() {
+        let strip = triangle_list(Mode::TriangleStrip, &[0, 1, 2, 3, 4]).unwrap();
+        assert_eq!(strip, [0, 1, 2, 1, 3, 2, 2, 3, 4]);
+        let fan = triangle_list(Mode::TriangleFan, &[0, 1, 2, 3]).unwrap();
+        assert_eq!(fan, [1, 2, 0, 2, 3, 0]);
+        // Triangles 1 to 4 repeat a vertex; 5 is odd, so its last two swap.
+        let restarted = triangle_list(Mode::TriangleStrip, &[0, 1, 2, 2, 5, 5, 6, 7, 8]).unwrap();
+        assert_eq!(restarted, [0, 1, 2, 5, 7, 6, 6, 7, 8]);
+        assert!(
+            triangle_list(Mode::TriangleStrip, &[0, 1])
+                .unwrap()
+                .is_empty()
+        );
+        assert_eq!(
+            triangle_list(Mode::Triangles, &[3, 4, 5]).unwrap(),
+            [3, 4, 5]
+        );
+        for mode in [Mode::Points, Mode::Lines, Mode::LineLoop, Mode::LineStrip] {
+            assert!(triangle_list(mode, &[0, 1, 2]).is_none());
+        }
+    }
 }
