@@ -896,3 +896,39 @@ fn gltf_strips_and_fans_draw_their_triangles() {
         );
     }
 }
+
+/// The one texture coordinate set a mesh keeps is the one its base colour
+/// texture reads (`texCoord`, or its KHR_texture_transform's), whose alpha
+/// cuts a cut-out's holes: not always `TEXCOORD_0`.
+#[test]
+fn gltf_meshes_keep_the_uv_set_of_their_base_colour_texture() {
+    let dir = tmpdir("uv-set");
+    let load = |texture: serde_json::Value| {
+        let text = uv_triangle_gltf(
+            serde_json::json!([{ "pbrMetallicRoughness": { "baseColorTexture": texture } }]),
+            serde_json::json!([{ "uri": "missing.png" }]),
+            &uv_triangle_data_uri(),
+        );
+        let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+        // TEXCOORD_1: the first 24 bytes of the positions, read as three
+        // pairs: (0, 0), (0, 1), (0, 0).
+        doc["accessors"].as_array_mut().unwrap().push(
+            serde_json::json!({ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC2" }),
+        );
+        doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = serde_json::json!(2);
+        let path = write(&dir, "tri.gltf", &doc.to_string());
+        let s = scene::load(path.to_str().unwrap()).unwrap();
+        s.meshes[s.objects[0].mesh]
+            .uvs
+            .iter()
+            .map(|v| [v.x, v.y])
+            .collect::<Vec<_>>()
+    };
+    let set0 = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+    let set1 = [[0.0, 0.0], [0.0, 1.0], [0.0, 0.0]];
+    assert_eq!(load(serde_json::json!({ "index": 0 })), set0);
+    assert_eq!(load(serde_json::json!({ "index": 0, "texCoord": 1 })), set1);
+    let transformed = serde_json::json!({ "index": 0,
+        "extensions": { "KHR_texture_transform": { "texCoord": 1 } } });
+    assert_eq!(load(transformed), set1);
+}

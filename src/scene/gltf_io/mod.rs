@@ -186,7 +186,7 @@ fn read_mesh(
             .map(|n| n.map(Vec3::from).collect())
             .unwrap_or_default(),
         uvs: reader
-            .read_tex_coords(0)
+            .read_tex_coords(base_colour_uv_set(prim))
             .map(|t| {
                 let transform = prim
                     .material()
@@ -203,6 +203,19 @@ fn read_mesh(
         ..Default::default()
     };
     Ok(mesh)
+}
+
+/// The texture coordinate set (`TEXCOORD_n`) the primitive's base colour
+/// texture reads (its KHR_texture_transform may name another), whose alpha
+/// is also its opacity: the one set a mesh keeps.
+fn base_colour_uv_set(prim: &gltf::Primitive) -> u32 {
+    prim.material()
+        .pbr_metallic_roughness()
+        .base_color_texture()
+        .map_or(0, |info| {
+            let transform = info.texture_transform().and_then(|t| t.tex_coord());
+            transform.unwrap_or(info.tex_coord())
+        })
 }
 
 /// The triangle list of a primitive's `vertices` drawn in `mode` (glTF 2.0
