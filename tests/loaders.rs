@@ -480,10 +480,22 @@ fn bad_arguments_and_unwritable_places_exit_2_naming_them() {
         + &"[[light]]\ntype = \"point\"\nposition = [0.0, 3.0, 0.0]\n".repeat(5);
     let five = write(&dir, "five-lights.toml", &lights);
     let five_lights = format!("{}: 5 lights; at most 4 are supported", five.display());
-    let checks: [(&[&str], &str); 6] = [
+    let checks: [(&[&str], &str); 7] = [
         (
             &["render", "--scene", five.to_str().unwrap(), "--out", out],
             &five_lights,
+        ),
+        (
+            &[
+                "render",
+                "--light-type",
+                "directional",
+                "--light-dir",
+                "0,0,0",
+                "--out",
+                out,
+            ],
+            "directional light has no direction: it is zero",
         ),
         (
             &["render", "--eye", "1,2", "--out", out],

@@ -128,6 +128,16 @@ impl Light {
     }
 
     pub fn validate(&self) -> Result<()> {
+        // The constructors normalise the direction: a zero one becomes NaN.
+        if !self.direction.is_finite() {
+            match self.kind {
+                LightType::Directional => bail!("directional light has no direction: it is zero"),
+                LightType::Spot => bail!(
+                    "spot light has no direction: it is zero, or the spot is aimed at its own position"
+                ),
+                LightType::Point => {}
+            }
+        }
         let ok = self.position.is_finite()
             && self.direction.is_finite()
             && self.color.is_finite()
