@@ -124,6 +124,9 @@ impl ViewArgs {
         camera.fov_y_deg = self.fov.unwrap_or(camera.fov_y_deg);
         camera.near = self.near.unwrap_or(camera.near);
         camera.far = self.far.unwrap_or(camera.far);
+        if self.up.is_none() {
+            camera = camera.with_usable_up();
+        }
         camera.validate()?;
         if self.light.is_none() && self.light_type.is_none() {
             scene.warn_default_light();

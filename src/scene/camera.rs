@@ -84,6 +84,34 @@ impl Camera {
         m
     }
 
+    /// Whether the camera looks along its up vector, which then defines no
+    /// roll.
+    pub fn looks_along_up(&self) -> bool {
+        (self.target - self.eye).cross(self.up).length_squared() < 1e-12
+    }
+
+    /// The camera with an up it can use where none was given and the
+    /// default one lies along the view: −z (a view straight down shows −z
+    /// up, as a map shows north), or +y for a view along z; with a warning.
+    pub fn with_usable_up(self) -> Camera {
+        if !self.looks_along_up() {
+            return self;
+        }
+        let mut camera = Camera {
+            up: Vec3::NEG_Z,
+            ..self
+        };
+        if camera.looks_along_up() {
+            camera.up = Vec3::Y;
+        }
+        log::warn!(
+            "the camera looks along its up vector {}; up taken as {}",
+            self.up,
+            camera.up
+        );
+        camera
+    }
+
     pub fn validate(&self) -> Result<()> {
         if !(self.eye.is_finite() && self.target.is_finite() && self.up.is_finite()) {
             bail!("camera has a non-finite vector");
@@ -91,7 +119,7 @@ impl Camera {
         if (self.target - self.eye).length_squared() < 1e-12 {
             bail!("camera eye and target coincide");
         }
-        if (self.target - self.eye).cross(self.up).length_squared() < 1e-12 {
+        if self.looks_along_up() {
             bail!("camera up vector is parallel to the view direction");
         }
         if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {
@@ -114,6 +142,29 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A camera looking straight down or up the world's y takes −z as its
+    /// up, one looking along z keeps +y; a usable up is kept as it is.
+    #[test]
+    fn a_camera_looking_along_its_up_takes_another() {
+        let down = Camera::new(Vec3::new(1.0, 5.0, 2.0), Vec3::new(1.0, 0.0, 2.0));
+        assert!(down.looks_along_up() && down.validate().is_err());
+        let fixed = down.with_usable_up();
+        assert_eq!(fixed.up, Vec3::NEG_Z);
+        assert!(fixed.validate().is_ok());
+        // Seen from above, −z is the top of the frame: a point towards −z
+        // projects above the centre.
+        let seen = fixed.view().transform_point3(Vec3::new(1.0, 0.0, 1.0));
+        let clip = fixed.projection(1.0) * seen.extend(1.0);
+        assert!(clip.y / clip.w > 0.0, "{clip}");
+        let up_z = Camera {
+            up: Vec3::Z,
+            ..Camera::new(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO)
+        };
+        assert_eq!(up_z.with_usable_up().up, Vec3::Y);
+        let usable = Camera::new(Vec3::new(0.0, 2.0, 5.0), Vec3::ZERO);
+        assert_eq!(usable.with_usable_up(), usable);
+    }
 
     /// The reach is the distance to the scene's centre plus its bounding
     /// radius (√3 for a box of side 2, widened by its margin), cut at the

@@ -284,13 +284,17 @@ pub fn load(path: &Path, includes: &[PathBuf]) -> Result<Scene> {
         log::info!("{file}: no [[light]]; placed a default point light");
     }
     if let Some(c) = f.camera {
-        scene.camera = Camera {
+        let camera = Camera {
             eye: c.eye.into(),
             target: c.target.into(),
             up: c.up.map(Vec3::from).unwrap_or(Vec3::Y),
             fov_y_deg: c.fov.unwrap_or(50.0),
             near: c.near.unwrap_or(scene.camera.near),
             far: c.far.unwrap_or(scene.camera.far),
+        };
+        scene.camera = match c.up {
+            Some(_) => camera,
+            None => camera.with_usable_up(),
         };
     }
     Ok(scene)
