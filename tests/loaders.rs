@@ -915,26 +915,28 @@ fn gltf_strips_and_fans_draw_their_triangles() {
 #[test]
 fn gltf_meshes_keep_the_uv_set_of_their_base_colour_texture() {
     let dir = tmpdir("uv-set");
-    let load = |texture: serde_json::Value| {
+    // The triangle with a TEXCOORD_1 of `component`s: the first 24 bytes
+    // of the positions, as floats three pairs (0, 0), (0, 1), (0, 0).
+    let gltf = |texture: serde_json::Value, component: u32| {
         let text = uv_triangle_gltf(
             serde_json::json!([{ "pbrMetallicRoughness": { "baseColorTexture": texture } }]),
             serde_json::json!([{ "uri": "missing.png" }]),
             &uv_triangle_data_uri(),
         );
         let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
-        // TEXCOORD_1: the first 24 bytes of the positions, read as three
-        // pairs: (0, 0), (0, 1), (0, 0).
-        doc["accessors"].as_array_mut().unwrap().push(
-            serde_json::json!({ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC2" }),
-        );
+        doc["accessors"]
+            .as_array_mut()
+            .unwrap()
+            .push(serde_json::json!({
+            "bufferView": 0, "componentType": component, "count": 3, "type": "VEC2" }));
         doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = serde_json::json!(2);
-        let path = write(&dir, "tri.gltf", &doc.to_string());
+        write(&dir, "tri.gltf", &doc.to_string())
+    };
+    let load = |texture: serde_json::Value| {
+        let path = gltf(texture, 5126);
         let s = scene::load(path.to_str().unwrap()).unwrap();
-        s.meshes[s.objects[0].mesh]
-            .uvs
-            .iter()
-            .map(|v| [v.x, v.y])
-            .collect::<Vec<_>>()
+        let uvs = &s.meshes[s.objects[0].mesh].uvs;
+        uvs.iter().map(|v| [v.x, v.y]).collect::<Vec<_>>()
     };
     let set0 = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
     let set1 = [[0.0, 0.0], [0.0, 1.0], [0.0, 0.0]];
@@ -943,4 +945,99 @@ fn gltf_meshes_keep_the_uv_set_of_their_base_colour_texture() {
     let transformed = serde_json::json!({ "index": 0,
         "extensions": { "KHR_texture_transform": { "texCoord": 1 } } });
     assert_eq!(load(transformed), set1);
+    // The set read is checked as TEXCOORD_0 is: signed shorts are refused.
+    let shorts = gltf(serde_json::json!({ "index": 0, "texCoord": 1 }), 5122);
+    let e = format!("{:#}", scene::load(shorts.to_str().unwrap()).unwrap_err());
+    assert!(e.contains("TEXCOORD_1 accessor 2 is Vec2 of I16"), "{e}");
+}
+
+/// A glTF of one quad under KHR_mesh_quantization (as gltfpack writes
+/// them): positions normalised signed shorts (stride 8), normals
+/// normalised signed bytes (stride 4), the extension required when
+/// `required`.
+fn quantized_quad_gltf(required: bool) -> String {
+    use base64::Engine as _;
+    let corners: [[i16; 3]; 4] = [
+        [-32767, 16384, 0],
+        [32767, 16384, 0],
+        [32767, 32767, 0],
+        [-32767, 32767, 0],
+    ];
+    let mut bytes: Vec<u8> = corners
+        .iter()
+        .flat_map(|c| [c[0], c[1], c[2], 0])
+        .flat_map(i16::to_le_bytes)
+        .collect();
+    bytes.extend([0u8, 0, 127, 0].repeat(4));
+    bytes.extend([0u16, 1, 2, 0, 2, 3].iter().flat_map(|i| i.to_le_bytes()));
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bytes)
+    );
+    let required: &[&str] = if required {
+        &["KHR_mesh_quantization"]
+    } else {
+        &[]
+    };
+    serde_json::json!({
+        "asset": { "version": "2.0" },
+        "extensionsUsed": ["KHR_mesh_quantization"],
+        "extensionsRequired": required,
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0, "scale": [2.0, 2.0, 2.0] }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0, "NORMAL": 1 }, "indices": 2 }] }],
+        "buffers": [{ "byteLength": bytes.len(), "uri": uri }],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": 32, "byteStride": 8 },
+            { "buffer": 0, "byteOffset": 32, "byteLength": 16, "byteStride": 4 },
+            { "buffer": 0, "byteOffset": 48, "byteLength": 12 }
+        ],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5122, "normalized": true, "count": 4, "type": "VEC3",
+              "min": [-32767, 16384, 0], "max": [32767, 32767, 0] },
+            { "bufferView": 1, "componentType": 5120, "normalized": true, "count": 4, "type": "VEC3" },
+            { "bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR" }
+        ]
+    })
+    .to_string()
+}
+
+/// KHR_mesh_quantization (gltfpack's default output) loads, required or
+/// not: normalised shorts and bytes become floats in [−1, 1], the node's
+/// scale places them, normals are unit. Integer positions in a file that
+/// does not use the extension stay an error.
+#[test]
+fn gltf_quantized_attributes_load_as_floats() {
+    let dir = tmpdir("quantized");
+    for required in [true, false] {
+        let path = write(&dir, "quad.gltf", &quantized_quad_gltf(required));
+        let s = scene::load(path.to_str().unwrap()).unwrap();
+        let mesh = &s.meshes[s.objects[0].mesh];
+        let half = 16384.0 / 32767.0;
+        let want = [
+            [-1.0, half, 0.0],
+            [1.0, half, 0.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, 1.0, 0.0],
+        ];
+        for (got, want) in mesh.positions.iter().zip(want) {
+            assert!(got.distance(want.into()) < 1e-6, "{:?}", mesh.positions);
+        }
+        assert!(
+            mesh.normals
+                .iter()
+                .all(|n| n.distance(glam::Vec3::Z) < 1e-6)
+        );
+        let world = s.objects[0].transform.transform_point3(mesh.positions[2]);
+        assert!(
+            world.distance(glam::Vec3::new(2.0, 2.0, 0.0)) < 1e-5,
+            "{world}"
+        );
+    }
+    let mut plain: serde_json::Value = serde_json::from_str(&quantized_quad_gltf(false)).unwrap();
+    plain.as_object_mut().unwrap().remove("extensionsUsed");
+    let path = write(&dir, "plain.gltf", &plain.to_string());
+    let e = format!("{:#}", scene::load(path.to_str().unwrap()).unwrap_err());
+    assert!(e.contains("POSITION accessor 0 is Vec3 of I16"), "{e}");
 }

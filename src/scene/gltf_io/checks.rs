@@ -129,25 +129,47 @@ pub(super) fn without_panics<T>(file: &str, f: impl FnOnce() -> Result<T>) -> Re
 }
 
 /// Checks that the accessors a primitive is read through have the types
-/// glTF 2.0 requires (§ 3.7.2.1): POSITION and NORMAL `VEC3` of `FLOAT`,
-/// TEXCOORD_0 `VEC2` of `FLOAT` or normalised `UNSIGNED_BYTE`/`SHORT`,
-/// indices `SCALAR` of unsigned integers.
+/// glTF 2.0 requires (§ 3.7.2.1), or, in a file that uses
+/// KHR_mesh_quantization, the integer types it adds: POSITION and NORMAL
+/// `VEC3` of `FLOAT`,
+/// the `uv_set` read (`TEXCOORD_n` of the base colour texture) `VEC2` of
+/// `FLOAT` or normalised `UNSIGNED_BYTE`/`SHORT`, indices `SCALAR` of
+/// unsigned integers.
 pub(super) fn check_primitive_accessors(
     file: &str,
     mesh: &str,
     index: usize,
     prim: &gltf::Primitive,
+    uv_set: u32,
+    quantized: bool,
 ) -> Result<()> {
     use gltf::Semantic;
     use gltf::accessor::{DataType as T, Dimensions as D};
-    let float = [T::F32].as_slice();
-    let uv = [T::F32, T::U8, T::U16].as_slice();
-    let unsigned = [T::U8, T::U16, T::U32].as_slice();
+    // KHR_mesh_quantization's integer types, where the file uses it.
+    let with = |core: &[T], quantization: &[T]| -> Vec<T> {
+        let extra = if quantized { quantization } else { &[] };
+        [core, extra].concat()
+    };
+    let position = with(&[T::F32], &[T::I8, T::U8, T::I16, T::U16]);
+    let normal = with(&[T::F32], &[T::I8, T::I16]);
+    let uv = with(&[T::F32, T::U8, T::U16], &[T::I8, T::I16]);
+    let unsigned = [T::U8, T::U16, T::U32];
+    let texcoord = format!("TEXCOORD_{uv_set}");
     let rules: [(&str, Option<gltf::Accessor>, D, &[T]); 4] = [
-        ("POSITION", prim.get(&Semantic::Positions), D::Vec3, float),
-        ("NORMAL", prim.get(&Semantic::Normals), D::Vec3, float),
-        ("TEXCOORD_0", prim.get(&Semantic::TexCoords(0)), D::Vec2, uv),
-        ("indices", prim.indices(), D::Scalar, unsigned),
+        (
+            "POSITION",
+            prim.get(&Semantic::Positions),
+            D::Vec3,
+            &position,
+        ),
+        ("NORMAL", prim.get(&Semantic::Normals), D::Vec3, &normal),
+        (
+            &texcoord,
+            prim.get(&Semantic::TexCoords(uv_set)),
+            D::Vec2,
+            &uv,
+        ),
+        ("indices", prim.indices(), D::Scalar, &unsigned),
     ];
     for (what, accessor, dims, types) in rules {
         let Some(a) = accessor else { continue };

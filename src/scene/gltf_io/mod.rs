@@ -1,7 +1,8 @@
 //! glTF 2.0 import (meshes, base colour, textures, KHR_lights_punctual,
-//! cameras, `extras.shadowlab` flags) and export of a resolved scene in
+//! KHR_mesh_quantization, cameras, `extras.shadowlab` flags) and export of a resolved scene in
 //! world space (`export`).
 
+mod attributes;
 mod checks;
 mod export;
 mod extras;
@@ -12,6 +13,7 @@ use super::{
     AlphaMode, Camera, Light, Material, Mesh, Object, Scene, Texture, frame_scene_defaults,
 };
 use anyhow::{Context, Result, anyhow, bail};
+use attributes::MESH_QUANTIZATION;
 use checks::{
     check_accessors, check_attribute_indices, check_external_files, check_glb_layout,
     check_node_forest, check_primitive_accessors, scene_roots, without_panics,
@@ -151,6 +153,15 @@ fn light_of(l: &gltf::khr_lights_punctual::Light, pos: Vec3, forward: Vec3) -> R
     Ok(light)
 }
 
+/// What a primitive's attributes are read from: the buffers, each
+/// material's KHR_texture_transform, and whether the file uses
+/// KHR_mesh_quantization (integer attributes).
+struct AttributeSources<'a> {
+    buffers: &'a [gltf::buffer::Data],
+    uv_transforms: &'a [Option<glam::Mat3>],
+    quantized: bool,
+}
+
 /// Primitive `pi` of `gmesh` (on node `name`) as a mesh, its texture
 /// coordinates through its material's KHR_texture_transform.
 fn read_mesh(
@@ -159,50 +170,59 @@ fn read_mesh(
     name: &str,
     pi: usize,
     prim: &gltf::Primitive,
-    buffers: &[gltf::buffer::Data],
-    uv_transforms: &[Option<glam::Mat3>],
+    sources: &AttributeSources,
 ) -> Result<Mesh> {
-    check_primitive_accessors(file, gmesh.name().unwrap_or(name), pi, prim)?;
-    let reader = prim.reader(|b| Some(&buffers[b.index()]));
-    let positions: Vec<Vec3> = reader
-        .read_positions()
-        .ok_or_else(|| {
-            anyhow!(
-                "{file}: mesh '{}' has no POSITION",
-                gmesh.name().unwrap_or("")
-            )
-        })?
+    use attributes::read_floats;
+    use gltf::Semantic;
+    let uv_set = base_colour_uv_set(prim);
+    let mesh_name = gmesh.name().unwrap_or(name);
+    check_primitive_accessors(file, mesh_name, pi, prim, uv_set, sources.quantized)?;
+    let buffers = sources.buffers;
+    let positions: Vec<Vec3> = prim
+        .get(&Semantic::Positions)
+        .and_then(|a| read_floats::<3>(a, buffers))
+        .ok_or_else(|| anyhow!("{file}: mesh '{mesh_name}' has no POSITION"))?
+        .into_iter()
         .map(Vec3::from)
         .collect();
+    let reader = prim.reader(|b| Some(&buffers[b.index()]));
     let vertices: Vec<u32> = match reader.read_indices() {
         Some(i) => i.into_u32().collect(),
         None => (0..positions.len() as u32).collect(),
     };
     let indices = triangle_list(prim.mode(), &vertices).expect("triangle modes only");
-    let mesh = Mesh {
-        name: gmesh.name().unwrap_or(name).to_string(),
-        normals: reader
-            .read_normals()
-            .map(|n| n.map(Vec3::from).collect())
-            .unwrap_or_default(),
-        uvs: reader
-            .read_tex_coords(base_colour_uv_set(prim))
-            .map(|t| {
-                let transform = prim
-                    .material()
-                    .index()
-                    .and_then(|i| uv_transforms[i])
-                    .unwrap_or(glam::Mat3::IDENTITY);
-                t.into_f32()
-                    .map(|uv| transform.transform_point2(Vec2::from(uv)))
-                    .collect()
-            })
-            .unwrap_or_default(),
+    // Quantised normals are unit only up to their rounding.
+    let normals = prim
+        .get(&Semantic::Normals)
+        .and_then(|a| read_floats::<3>(a, buffers))
+        .map(|n| {
+            n.into_iter()
+                .map(|n| Vec3::from(n).normalize_or_zero())
+                .collect()
+        })
+        .unwrap_or_default();
+    let transform = prim
+        .material()
+        .index()
+        .and_then(|i| sources.uv_transforms[i])
+        .unwrap_or(glam::Mat3::IDENTITY);
+    let uvs = prim
+        .get(&Semantic::TexCoords(uv_set))
+        .and_then(|a| read_floats::<2>(a, buffers))
+        .map(|t| {
+            t.into_iter()
+                .map(|uv| transform.transform_point2(Vec2::from(uv)))
+                .collect()
+        })
+        .unwrap_or_default();
+    Ok(Mesh {
+        name: mesh_name.to_string(),
+        normals,
+        uvs,
         positions,
         indices,
         ..Default::default()
-    };
-    Ok(mesh)
+    })
 }
 
 /// The texture coordinate set (`TEXCOORD_n`) the primitive's base colour
@@ -318,18 +338,18 @@ fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene
     if bytes.starts_with(b"glTF") {
         check_glb_layout(&file, bytes)?;
     }
-    // One parse without the importer's validation serves both checks that
-    // must come before it.
-    let root = gltf::Gltf::from_slice_without_validation(bytes)
-        .map_err(|e| anyhow!("{file}: {e}"))?
-        .document
-        .into_json();
+    // One parse without the importer's validation serves the checks that
+    // must come before it. KHR_mesh_quantization, which the `gltf` crate
+    // does not know, is read here (`attributes`), so it leaves the required
+    // extensions before the crate validates the rest.
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| anyhow!("{file}: {e}"))?;
+    let mut root = document.into_json();
     check_attribute_indices(&file, &root)?;
     check_external_files(&file, base, &root)?;
-    let gltf::Gltf {
-        document: doc,
-        blob,
-    } = gltf::Gltf::from_slice(bytes).map_err(|e| anyhow!("{file}: {e}"))?;
+    let quantized = root.extensions_used.iter().any(|e| e == MESH_QUANTIZATION);
+    root.extensions_required.retain(|e| e != MESH_QUANTIZATION);
+    let doc = gltf::Document::from_json(root).map_err(|e| anyhow!("{file}: {e}"))?;
     let buffers =
         gltf::import_buffers(&doc, Some(base), blob).map_err(|e| anyhow!("{file}: {e}"))?;
     let images = read_images(&file, &doc, base, &buffers);
@@ -359,6 +379,11 @@ fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene
         scene.add_material(mat);
     }
     let default_mat = scene.add_material(Material::default());
+    let sources = AttributeSources {
+        buffers: &buffers,
+        uv_transforms: &uv_transforms,
+        quantized,
+    };
     let mut mesh_ids = std::collections::HashMap::new();
     let mut camera = None;
     let gscene = doc
@@ -402,8 +427,7 @@ fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene
             let mesh_id = match mesh_ids.get(&key) {
                 Some(&id) => id,
                 None => {
-                    let mesh =
-                        read_mesh(&file, &gmesh, &name, pi, &prim, &buffers, &uv_transforms)?;
+                    let mesh = read_mesh(&file, &gmesh, &name, pi, &prim, &sources)?;
                     let id = scene.add_mesh(mesh);
                     mesh_ids.insert(key, id);
                     id
