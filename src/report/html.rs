@@ -94,13 +94,13 @@ pub fn write(report: &Report, root: &Path) -> Result<String> {
         "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>shadowlab report</title><style>{STYLE}</style></head><body>\
          <h1>shadowlab: every shadow technique, measured</h1>\
          <p class=\"answer\">{}</p>\
-         <p>{} technique presets × {} views at {} × {}, against <code>{}</code>. Mismatch = pixels whose shadow state (visibility at 0.5) differs from the reference, in % of the pixels that receive shadows and face the light; cost = frame time as a multiple of <code>none</code> measured in the same run, and the mask stage's invocations per pixel. shadowlab {}.</p>",
+         <p>{} technique presets × {} views at {} × {}, against {}. Mismatch = pixels whose shadow state (visibility at 0.5) differs from the reference, in % of the pixels that receive shadows and face the light; cost = frame time as a multiple of <code>none</code> measured in the same run, and the mask stage's invocations per pixel. shadowlab {}.</p>",
         esc(&super::markdown::adapter_note(report).replace("**", "")),
         m.techniques.len(),
         m.views.len(),
         m.size.0,
         m.size.1,
-        esc(&crate::measure::choice_label(&m.reference)),
+        esc(&m.references_label()).replace('`', ""),
         esc(SOURCE_VERSION)
     );
     h += "<h2 id=\"universal\">Is there one universal technique?</h2><div class=\"answer\">";

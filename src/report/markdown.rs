@@ -43,12 +43,12 @@ pub fn write(report: &Report) -> String {
     let m = report.matrix;
     let adapter = adapter_note(report);
     let mut s = format!(
-        "# shadowlab: every shadow technique, measured\n\n{adapter}\n\n{} technique presets × {} views at {} × {}, against `{}`; shadowlab {}. Mismatch: % of the pixels that receive shadows and face the light whose shadow state differs from the reference; cost: frame time × `none` in the same run, and the mask stage's invocations per pixel. `index.html` shows the same with charts and images.\n\n## Is there one universal technique?\n\n",
+        "# shadowlab: every shadow technique, measured\n\n{adapter}\n\n{} technique presets × {} views at {} × {}, against {}; shadowlab {}. Mismatch: % of the pixels that receive shadows and face the light whose shadow state differs from the reference; cost: frame time × `none` in the same run, and the mask stage's invocations per pixel. `index.html` shows the same with charts and images.\n\n## Is there one universal technique?\n\n",
         m.techniques.len(),
         m.views.len(),
         m.size.0,
         m.size.1,
-        crate::measure::choice_label(&m.reference),
+        m.references_label(),
         SOURCE_VERSION
     );
     for (i, line) in report.universal.iter().enumerate() {

@@ -94,7 +94,48 @@ pub fn every_preset() -> Result<Vec<TechniqueChoice>> {
         .collect()
 }
 
+/// Whether `t` gives each pixel the covered fraction of several sub-pixel
+/// samples (`pixel_samples` above 1, `irregular:subpixel`): a point-sampled
+/// reference would charge it for the edges it resolves.
+pub fn is_sub_pixel(t: &TechniqueChoice) -> bool {
+    t.params
+        .get(crate::technique::raytraced::PIXEL_SAMPLES.name)
+        .is_ok_and(|n| n > 1.0)
+}
+
 impl Matrix {
+    /// The reference `t` is measured against: the matrix's, supersampled
+    /// to the most sub-pixel samples (`raytraced:subpixel`) for a sub-pixel
+    /// technique, as issue 52 scores them; the matrix's own where it has no
+    /// such parameter.
+    pub fn reference_for(&self, t: &TechniqueChoice) -> TechniqueChoice {
+        let mut reference = self.reference.clone();
+        if is_sub_pixel(t) {
+            let samples = crate::technique::raytraced::PIXEL_SAMPLES;
+            if reference
+                .params
+                .set_value(samples.name, samples.max)
+                .is_ok()
+            {
+                return reference;
+            }
+        }
+        self.reference.clone()
+    }
+
+    /// The references, as the report's header names them: the matrix's,
+    /// and the supersampled one where it measures sub-pixel techniques.
+    pub fn references_label(&self) -> String {
+        let main = crate::measure::choice_label(&self.reference);
+        match self.techniques.iter().find(|t| is_sub_pixel(t)) {
+            Some(t) => format!(
+                "`{main}` (sub-pixel presets against `{}`, in each view's `sub-pixel/`)",
+                crate::measure::choice_label(&self.reference_for(t))
+            ),
+            None => format!("`{main}`"),
+        }
+    }
+
     /// The matrix of `preset`, restricted to `scenes` when given, over
     /// `techniques` (a technique list, default every preset).
     pub fn of(
@@ -188,6 +229,21 @@ impl Matrix {
 mod tests {
     use super::*;
     use crate::technique::FAMILIES;
+
+    /// Sub-pixel presets are measured against the reference supersampled
+    /// to 32 samples a pixel; every other preset against the reference.
+    #[test]
+    fn sub_pixel_presets_get_the_supersampled_reference() {
+        let m = Matrix::of(ReportPreset::Quick, None, None).unwrap();
+        let samples = |id: &str| {
+            let t = technique::resolve(id).unwrap();
+            m.reference_for(&t).params.get("pixel_samples").unwrap()
+        };
+        assert_eq!(samples("irregular:subpixel"), 32.0);
+        assert_eq!(samples("raytraced:subpixel"), 32.0);
+        assert_eq!(samples("irregular:default"), 1.0);
+        assert_eq!(samples("shadow-map:pcf"), 1.0);
+    }
 
     #[test]
     fn presets_grow_and_scenes_filter() {

@@ -139,7 +139,15 @@ fn measure_view(
         size: matrix.size,
     };
     let mut quality = vec![];
-    let mut comparison = None;
+    // The point-sampled reference's comparison and, for sub-pixel
+    // techniques, the supersampled one's (in `sub-pixel/`), each made when
+    // first needed, with the rows measured against it.
+    let references = [false, true].map(|sub| {
+        let t = techniques.iter().find(|t| matrix::is_sub_pixel(t) == sub);
+        t.map(|t| matrix.reference_for(t))
+    });
+    let dirs = [dir.clone(), dir.join("sub-pixel")];
+    let mut comparisons: [Option<(measure::compare::Comparison, Vec<_>)>; 2] = [None, None];
     for t in techniques {
         let key = matrix.key(view, t);
         if let Some(rows) = cells::load_quality(out, &key) {
@@ -147,20 +155,31 @@ fn measure_view(
             quality.extend(rows);
             continue;
         }
-        if comparison.is_none() {
-            comparison = Some(measure::compare::Comparison::new(
-                gpu,
-                request,
-                &matrix.reference,
-                &dir,
-            )?);
+        let sub = matrix::is_sub_pixel(t) as usize;
+        if comparisons[sub].is_none() {
+            let reference = references[sub].as_ref().expect("a technique asks for it");
+            let c = measure::compare::Comparison::new(gpu, request, reference, &dirs[sub])?;
+            comparisons[sub] = Some((c, vec![]));
         }
-        let rows = comparison.as_mut().expect("made above").measure(t)?;
+        let (comparison, measured) = comparisons[sub].as_mut().expect("made above");
+        let rows = comparison.measure(t)?;
+        measured.extend(rows.iter().cloned());
+        // The cells name their images from the view's folder.
+        let rows: Vec<_> = rows
+            .into_iter()
+            .map(|mut r| {
+                if sub == 1 {
+                    r.image = format!("sub-pixel/{}", r.image);
+                    r.heatmap = format!("sub-pixel/{}", r.heatmap);
+                }
+                r
+            })
+            .collect();
         cells::store_quality(out, &key, &rows)?;
         quality.extend(rows);
     }
-    if let Some(c) = &comparison {
-        c.write_tables(&quality)?;
+    for (c, rows) in comparisons.iter().flatten() {
+        c.write_tables(rows)?;
     }
     let bench = measure::bench::run(
         gpu,
