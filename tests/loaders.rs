@@ -917,7 +917,7 @@ fn gltf_meshes_keep_the_uv_set_of_their_base_colour_texture() {
     let dir = tmpdir("uv-set");
     // The triangle with a TEXCOORD_1 of `component`s: the first 24 bytes
     // of the positions, as floats three pairs (0, 0), (0, 1), (0, 0).
-    let gltf = |texture: serde_json::Value, component: u32| {
+    let gltf = |texture: serde_json::Value, component: u32, view: u32| {
         let text = uv_triangle_gltf(
             serde_json::json!([{ "pbrMetallicRoughness": { "baseColorTexture": texture } }]),
             serde_json::json!([{ "uri": "missing.png" }]),
@@ -928,16 +928,16 @@ fn gltf_meshes_keep_the_uv_set_of_their_base_colour_texture() {
             .as_array_mut()
             .unwrap()
             .push(serde_json::json!({
-            "bufferView": 0, "componentType": component, "count": 3, "type": "VEC2" }));
+            "bufferView": view, "componentType": component, "count": 3, "type": "VEC2" }));
         doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = serde_json::json!(2);
         write(&dir, "tri.gltf", &doc.to_string())
     };
-    let load = |texture: serde_json::Value| {
-        let path = gltf(texture, 5126);
+    let uvs_of = |path: std::path::PathBuf| {
         let s = scene::load(path.to_str().unwrap()).unwrap();
         let uvs = &s.meshes[s.objects[0].mesh].uvs;
         uvs.iter().map(|v| [v.x, v.y]).collect::<Vec<_>>()
     };
+    let load = |texture: serde_json::Value| uvs_of(gltf(texture, 5126, 0));
     let set0 = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
     let set1 = [[0.0, 0.0], [0.0, 1.0], [0.0, 0.0]];
     assert_eq!(load(serde_json::json!({ "index": 0 })), set0);
@@ -945,8 +945,17 @@ fn gltf_meshes_keep_the_uv_set_of_their_base_colour_texture() {
     let transformed = serde_json::json!({ "index": 0,
         "extensions": { "KHR_texture_transform": { "texCoord": 1 } } });
     assert_eq!(load(transformed), set1);
+    // Unsigned shorts are normalised, as core glTF requires, also where the
+    // file forgets the flag: the first 12 bytes of TEXCOORD_0's floats (0,
+    // 0, 1) read as (0, 0), (0, 0), (0, 0x3f80).
+    let ushorts = uvs_of(gltf(
+        serde_json::json!({ "index": 0, "texCoord": 1 }),
+        5123,
+        1,
+    ));
+    assert_eq!(ushorts, [[0.0, 0.0], [0.0, 0.0], [0.0, 16256.0 / 65535.0]]);
     // The set read is checked as TEXCOORD_0 is: signed shorts are refused.
-    let shorts = gltf(serde_json::json!({ "index": 0, "texCoord": 1 }), 5122);
+    let shorts = gltf(serde_json::json!({ "index": 0, "texCoord": 1 }), 5122, 0);
     let e = format!("{:#}", scene::load(shorts.to_str().unwrap()).unwrap_err());
     assert!(e.contains("TEXCOORD_1 accessor 2 is Vec2 of I16"), "{e}");
 }

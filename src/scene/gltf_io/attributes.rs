@@ -21,11 +21,15 @@ fn component(value: f32, max: f32, normalized: bool) -> f32 {
 }
 
 /// The elements of `accessor` (sparse substitutions applied) as float
-/// arrays; `None` where its component type is not one of the five above
-/// or its buffer is missing (the caller's accessor checks come first).
+/// arrays, integers normalised where the accessor says so or
+/// `normalized_anyway` (core glTF's integer texture coordinates, which must
+/// be normalised, also where a file forgets the flag); `None` where its
+/// component type is not one of the five above or its buffer is missing
+/// (the caller's accessor checks come first).
 pub fn read_floats<const N: usize>(
     accessor: gltf::Accessor,
     buffers: &[gltf::buffer::Data],
+    normalized_anyway: bool,
 ) -> Option<Vec<[f32; N]>>
 where
     [f32; N]: Item,
@@ -35,7 +39,7 @@ where
     [u16; N]: Item,
 {
     let data = |b: gltf::Buffer| buffers.get(b.index()).map(|d| d.0.as_slice());
-    let normalized = accessor.normalized();
+    let normalized = accessor.normalized() || normalized_anyway;
     fn floats<T: Copy, const N: usize>(
         items: Iter<'_, [T; N]>,
         to_f32: impl Fn(T) -> f32,

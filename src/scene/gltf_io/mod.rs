@@ -180,7 +180,7 @@ fn read_mesh(
     let buffers = sources.buffers;
     let positions: Vec<Vec3> = prim
         .get(&Semantic::Positions)
-        .and_then(|a| read_floats::<3>(a, buffers))
+        .and_then(|a| read_floats::<3>(a, buffers, false))
         .ok_or_else(|| anyhow!("{file}: mesh '{mesh_name}' has no POSITION"))?
         .into_iter()
         .map(Vec3::from)
@@ -194,7 +194,7 @@ fn read_mesh(
     // Quantised normals are unit only up to their rounding.
     let normals = prim
         .get(&Semantic::Normals)
-        .and_then(|a| read_floats::<3>(a, buffers))
+        .and_then(|a| read_floats::<3>(a, buffers, false))
         .map(|n| {
             n.into_iter()
                 .map(|n| Vec3::from(n).normalize_or_zero())
@@ -208,7 +208,7 @@ fn read_mesh(
         .unwrap_or(glam::Mat3::IDENTITY);
     let uvs = prim
         .get(&Semantic::TexCoords(uv_set))
-        .and_then(|a| read_floats::<2>(a, buffers))
+        .and_then(|a| read_floats::<2>(a, buffers, !sources.quantized))
         .map(|t| {
             t.into_iter()
                 .map(|uv| transform.transform_point2(Vec2::from(uv)))
