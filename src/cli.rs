@@ -319,6 +319,15 @@ fn compare(a: CompareArgs) -> Result<()> {
     let [reference] = reference.as_slice() else {
         bail!("--reference takes one technique, got '{}'", a.reference);
     };
+    if !measure::is_sub_pixel(reference) {
+        for t in techniques.iter().filter(|t| measure::is_sub_pixel(t)) {
+            log::warn!(
+                "{} gives each pixel its covered fraction, which a reference sampling pixel centres ({}) counts as mismatch at every edge: measure it with --reference raytraced:subpixel (as `report` does)",
+                measure::choice_label(t),
+                measure::choice_label(reference)
+            );
+        }
+    }
     let gpu = a.view.gpu()?;
     let view = measure::FrameRequest {
         scene: &scene,

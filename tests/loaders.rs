@@ -1050,3 +1050,32 @@ fn gltf_quantized_attributes_load_as_floats() {
     let e = format!("{:#}", scene::load(path.to_str().unwrap()).unwrap_err());
     assert!(e.contains("POSITION accessor 0 is Vec3 of I16"), "{e}");
 }
+
+/// `compare` warns where a sub-pixel technique is measured against pixel
+/// centres, naming the supersampled reference, and not where it is
+/// measured against that reference.
+#[test]
+fn compare_points_sub_pixel_techniques_to_the_supersampled_reference() {
+    let dir = tmpdir("sub-pixel-reference");
+    let out = dir.to_str().unwrap();
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "compare",
+            "--scene",
+            "room",
+            "--size",
+            "16x16",
+            "--techniques",
+            "irregular:subpixel",
+            "--out",
+            out,
+        ];
+        args.extend_from_slice(extra);
+        let o = shadowlab(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
+    };
+    let hint = "measure it with --reference raytraced:subpixel";
+    assert!(run(&[]).contains(hint));
+    assert!(!run(&["--reference", "raytraced:subpixel"]).contains(hint));
+}

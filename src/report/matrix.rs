@@ -94,15 +94,6 @@ pub fn every_preset() -> Result<Vec<TechniqueChoice>> {
         .collect()
 }
 
-/// Whether `t` gives each pixel the covered fraction of several sub-pixel
-/// samples (`pixel_samples` above 1, `irregular:subpixel`): a point-sampled
-/// reference would charge it for the edges it resolves.
-pub fn is_sub_pixel(t: &TechniqueChoice) -> bool {
-    t.params
-        .get(crate::technique::raytraced::PIXEL_SAMPLES.name)
-        .is_ok_and(|n| n > 1.0)
-}
-
 impl Matrix {
     /// The reference `t` is measured against: the matrix's, supersampled
     /// to the most sub-pixel samples (`raytraced:subpixel`) for a sub-pixel
@@ -110,7 +101,7 @@ impl Matrix {
     /// such parameter.
     pub fn reference_for(&self, t: &TechniqueChoice) -> TechniqueChoice {
         let mut reference = self.reference.clone();
-        if is_sub_pixel(t) {
+        if measure::is_sub_pixel(t) {
             let samples = crate::technique::raytraced::PIXEL_SAMPLES;
             if reference
                 .params
@@ -127,7 +118,7 @@ impl Matrix {
     /// and the supersampled one where it measures sub-pixel techniques.
     pub fn references_label(&self) -> String {
         let main = crate::measure::choice_label(&self.reference);
-        match self.techniques.iter().find(|t| is_sub_pixel(t)) {
+        match self.techniques.iter().find(|t| measure::is_sub_pixel(t)) {
             Some(t) => format!(
                 "`{main}` (sub-pixel presets against `{}`, in each view's `sub-pixel/`)",
                 crate::measure::choice_label(&self.reference_for(t))

@@ -143,7 +143,7 @@ fn measure_view(
     // techniques, the supersampled one's (in `sub-pixel/`), each made when
     // first needed, with the rows measured against it.
     let references = [false, true].map(|sub| {
-        let t = techniques.iter().find(|t| matrix::is_sub_pixel(t) == sub);
+        let t = techniques.iter().find(|t| measure::is_sub_pixel(t) == sub);
         t.map(|t| matrix.reference_for(t))
     });
     let dirs = [dir.clone(), dir.join("sub-pixel")];
@@ -155,7 +155,7 @@ fn measure_view(
             quality.extend(rows);
             continue;
         }
-        let sub = matrix::is_sub_pixel(t) as usize;
+        let sub = measure::is_sub_pixel(t) as usize;
         if comparisons[sub].is_none() {
             let reference = references[sub].as_ref().expect("a technique asks for it");
             let c = measure::compare::Comparison::new(gpu, request, reference, &dirs[sub])?;
