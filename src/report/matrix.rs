@@ -95,35 +95,36 @@ pub fn every_preset() -> Result<Vec<TechniqueChoice>> {
 }
 
 impl Matrix {
-    /// The reference `t` is measured against: the matrix's, supersampled
-    /// to the most sub-pixel samples (`raytraced:subpixel`) for a sub-pixel
-    /// technique, as issue 52 scores them; the matrix's own where it has no
-    /// such parameter.
-    pub fn reference_for(&self, t: &TechniqueChoice) -> TechniqueChoice {
+    /// The reference a technique is measured against: the matrix's, or for
+    /// a `sub_pixel` one (`measure::is_sub_pixel`) the matrix's supersampled
+    /// to the most sub-pixel samples (`raytraced:subpixel`), as issue 52
+    /// scores them, where the reference has that parameter.
+    pub fn reference(&self, sub_pixel: bool) -> TechniqueChoice {
         let mut reference = self.reference.clone();
-        if measure::is_sub_pixel(t) {
+        if sub_pixel {
             let samples = crate::technique::raytraced::PIXEL_SAMPLES;
             if reference
                 .params
                 .set_value(samples.name, samples.max)
-                .is_ok()
+                .is_err()
             {
-                return reference;
+                return self.reference.clone();
             }
         }
-        self.reference.clone()
+        reference
     }
 
     /// The references, as the report's header names them: the matrix's,
     /// and the supersampled one where it measures sub-pixel techniques.
     pub fn references_label(&self) -> String {
         let main = crate::measure::choice_label(&self.reference);
-        match self.techniques.iter().find(|t| measure::is_sub_pixel(t)) {
-            Some(t) => format!(
+        if self.techniques.iter().any(measure::is_sub_pixel) {
+            format!(
                 "`{main}` (sub-pixel presets against `{}`, in each view's `sub-pixel/`)",
-                crate::measure::choice_label(&self.reference_for(t))
-            ),
-            None => format!("`{main}`"),
+                crate::measure::choice_label(&self.reference(true))
+            )
+        } else {
+            format!("`{main}`")
         }
     }
 
@@ -228,7 +229,8 @@ mod tests {
         let m = Matrix::of(ReportPreset::Quick, None, None).unwrap();
         let samples = |id: &str| {
             let t = technique::resolve(id).unwrap();
-            m.reference_for(&t).params.get("pixel_samples").unwrap()
+            let reference = m.reference(measure::is_sub_pixel(&t));
+            reference.params.get("pixel_samples").unwrap()
         };
         assert_eq!(samples("irregular:subpixel"), 32.0);
         assert_eq!(samples("raytraced:subpixel"), 32.0);

@@ -142,10 +142,7 @@ fn measure_view(
     // The point-sampled reference's comparison and, for sub-pixel
     // techniques, the supersampled one's (in `sub-pixel/`), each made when
     // first needed, with the rows measured against it.
-    let references = [false, true].map(|sub| {
-        let t = techniques.iter().find(|t| measure::is_sub_pixel(t) == sub);
-        t.map(|t| matrix.reference_for(t))
-    });
+    let references = [false, true].map(|sub| matrix.reference(sub));
     let dirs = [dir.clone(), dir.join("sub-pixel")];
     let mut comparisons: [Option<(measure::compare::Comparison, Vec<_>)>; 2] = [None, None];
     for t in techniques {
@@ -157,24 +154,19 @@ fn measure_view(
         }
         let sub = measure::is_sub_pixel(t) as usize;
         if comparisons[sub].is_none() {
-            let reference = references[sub].as_ref().expect("a technique asks for it");
-            let c = measure::compare::Comparison::new(gpu, request, reference, &dirs[sub])?;
+            let c = measure::compare::Comparison::new(gpu, request, &references[sub], &dirs[sub])?;
             comparisons[sub] = Some((c, vec![]));
         }
         let (comparison, measured) = comparisons[sub].as_mut().expect("made above");
-        let rows = comparison.measure(t)?;
+        let mut rows = comparison.measure(t)?;
         measured.extend(rows.iter().cloned());
         // The cells name their images from the view's folder.
-        let rows: Vec<_> = rows
-            .into_iter()
-            .map(|mut r| {
-                if sub == 1 {
-                    r.image = format!("sub-pixel/{}", r.image);
-                    r.heatmap = format!("sub-pixel/{}", r.heatmap);
-                }
-                r
-            })
-            .collect();
+        if sub == 1 {
+            for r in &mut rows {
+                r.image = format!("sub-pixel/{}", r.image);
+                r.heatmap = format!("sub-pixel/{}", r.heatmap);
+            }
+        }
         cells::store_quality(out, &key, &rows)?;
         quality.extend(rows);
     }

@@ -129,12 +129,11 @@ pub(super) fn without_panics<T>(file: &str, f: impl FnOnce() -> Result<T>) -> Re
 }
 
 /// Checks that the accessors a primitive is read through have the types
-/// glTF 2.0 requires (§ 3.7.2.1), or, in a file that uses
-/// KHR_mesh_quantization, the integer types it adds: POSITION and NORMAL
-/// `VEC3` of `FLOAT`,
+/// glTF 2.0 requires (§ 3.7.2.1): POSITION and NORMAL `VEC3` of `FLOAT`,
 /// the `uv_set` read (`TEXCOORD_n` of the base colour texture) `VEC2` of
 /// `FLOAT` or normalised `UNSIGNED_BYTE`/`SHORT`, indices `SCALAR` of
-/// unsigned integers.
+/// unsigned integers; in a file that uses KHR_mesh_quantization, also the
+/// byte and short types it adds to each attribute.
 pub(super) fn check_primitive_accessors(
     file: &str,
     mesh: &str,

@@ -474,10 +474,11 @@ fn count_work(lane: u32, work: vec2u) {
     }
 }
 
-// Triangle `index` on each face it may be seen in: the samples of the
-// cells its image covers tested, or, where they are more than
-// `irr.work.y`, listed as jobs of JOB_SAMPLES for the job pass. Jobs past the list's capacity are
-// counted (AUX_OVERFLOW, in samples) and tested here. Its (pairs, tests).
+// Triangle `index` on each face it may be seen in: the samples of the cells
+// its image covers tested, or, where they are more than `irr.work.y`,
+// listed as jobs of JOB_SAMPLES for the job pass. Jobs past the list's
+// capacity are counted (AUX_OVERFLOW, in samples) and tested here. Its
+// (pairs, tests).
 fn triangle_work(index: u32) -> vec2u {
     let t = triangles[index];
     if faces_away_on_a_solid(t) {
