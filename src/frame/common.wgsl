@@ -83,13 +83,35 @@ fn opacity_texel(base: u32, size: vec2i, t: vec2i) -> f32 {
     return f32((opacity_texels[i >> 2u] >> (8u * (i & 3u))) & 255u) / 255.0;
 }
 
-// The mip level of `object`'s opacity map whose texels are the size of the
-// pixel footprint `duv_dx`, `duv_dy` (the derivatives of the unscaled uv).
-fn opacity_lod(object: u32, duv_dx: vec2f, duv_dy: vec2f) -> f32 {
+// The lengths, in texels of `object`'s opacity map, of the pixel
+// footprint's two axes `duv_dx`, `duv_dy` (the derivatives of the unscaled
+// uv).
+fn opacity_footprint(object: u32, duv_dx: vec2f, duv_dy: vec2f) -> vec2f {
     let m = objects[object].opacity_map;
     let texels = vec2f(f32(m.y), f32(m.z)) * bitcast<f32>(objects[object].alpha.w);
-    let footprint = max(length(duv_dx * texels), length(duv_dy * texels));
-    return max(log2(max(footprint, 1e-8)), 0.0);
+    return vec2f(length(duv_dx * texels), length(duv_dy * texels));
+}
+
+// The mip level whose texels are the size of a footprint axis `texels` long.
+fn lod_of(texels: f32) -> f32 {
+    return max(log2(max(texels, 1e-8)), 0.0);
+}
+
+// The mip level of `object`'s opacity map whose texels are the size of the
+// pixel footprint's longer axis (the camera's view, filtered as a sampler
+// without anisotropy would).
+fn opacity_lod(object: u32, duv_dx: vec2f, duv_dy: vec2f) -> f32 {
+    let f = opacity_footprint(object, duv_dx, duv_dy);
+    return lod_of(max(f.x, f.y));
+}
+
+// The mip level of a shadow map texel's footprint's shorter axis: the depth
+// pass point-samples each caster at the map's texel centres, and a card
+// seen obliquely from the light, read at its longer axis's level, would
+// lose across the shorter one the holes the texels resolve.
+fn opacity_lod_across(object: u32, duv_dx: vec2f, duv_dy: vec2f) -> f32 {
+    let f = opacity_footprint(object, duv_dx, duv_dy);
+    return lod_of(min(f.x, f.y));
 }
 
 // The opacity of `object` at `uv` (unscaled): the material's factor times

@@ -27,10 +27,10 @@ fn texel_hash(texel: vec3f, object: u32) -> f32 {
 }
 
 // Drops the fragment where a cut-out caster has a hole, its opacity map read
-// at the mip level of the light's texel footprint on it.
+// at the mip level of the light's texel footprint on it (its shorter axis).
 fn cut_out(i: DepthOut) {
     if CUTOUT {
-        let lod = opacity_lod(i.object, dpdx(i.uv), dpdy(i.uv));
+        let lod = opacity_lod_across(i.object, dpdx(i.uv), dpdy(i.uv));
         let blend_cutoff = select(0.5, texel_hash(i.clip.xyz, i.object), HASHED);
         if !is_solid_at(i.object, i.uv, lod, blend_cutoff) {
             discard;
