@@ -6,7 +6,9 @@
 mod common;
 use common::*;
 use glam::{Mat4, Vec3};
-use shadowlab::scene::{self, AlphaMode, Camera, Light, Material, Scene, Texture, shapes};
+use shadowlab::scene::{
+    self, AlphaMode, Camera, Light, Material, Scene, Texture, TextureWrap, shapes,
+};
 
 /// A texture of `n × n` texels, opaque except the texels `holes`.
 fn holed_texture(n: u32, holes: &[(u32, u32)]) -> Texture {
@@ -18,6 +20,7 @@ fn holed_texture(n: u32, holes: &[(u32, u32)]) -> Texture {
         }),
         srgb: true,
         source: None,
+        wrap: Default::default(),
     }
 }
 
@@ -91,6 +94,52 @@ fn a_texel_sized_hole_in_a_cutout_lights_the_floor_behind_it() {
         flipped <= 40,
         "{flipped} pixels disagree with the reference"
     );
+}
+
+/// A cut-out whose texture is opaque in its left half only, cut at ¼, with
+/// the wrap modes `wrap` on both axes.
+fn half_opaque_cutout(wrap: TextureWrap) -> Scene {
+    let sun = Light::directional(Vec3::new(0.02, -1.0, 0.01), 1.0);
+    let mut s = squares_over_floor(&[(Vec3::new(0.0, 1.0, 0.0), 1.0)], sun, false);
+    s.textures.push(Texture {
+        image: image::RgbaImage::from_fn(8, 8, |x, _| {
+            image::Rgba([200, 200, 200, if x < 4 { 255 } else { 0 }])
+        }),
+        wrap: [wrap; 2],
+        ..holed_texture(8, &[])
+    });
+    with_square_material(
+        s,
+        Material {
+            alpha_cutoff: 0.25,
+            ..cutout(0)
+        },
+    )
+}
+
+/// A sampler's wrap mode decides what the border of a cut-out reads: its
+/// right border's bilinear taps reach the opaque left column where the
+/// texture repeats, and cast a strip of shadow a 32nd of the square wide
+/// (opacity ≥ ¼ over the last quarter-texel); clamped or mirrored, they
+/// read the transparent border column, and cast none. In the reference and
+/// in `pcf` alike.
+#[test]
+fn a_cutouts_wrap_mode_decides_what_its_border_reads() {
+    let (w, h) = (160, 160);
+    let repeated = half_opaque_cutout(TextureWrap::Repeat);
+    let clamped = half_opaque_cutout(TextureWrap::ClampToEdge);
+    let mirrored = half_opaque_cutout(TextureWrap::MirroredRepeat);
+    for technique in ["raytraced", "shadow-map:pcf"] {
+        let clamped_mask = mask_of(&clamped, technique, &[], w, h);
+        let half = shadowed(&clamped_mask);
+        let strip = shadowed(&mask_of(&repeated, technique, &[], w, h)) - half;
+        // The whole square shadows ~1800 pixels (~42 across): half of it is
+        // ~900, and a strip of 1/32 of its width along its side ~55.
+        assert!((700..=1100).contains(&half), "{technique}: {half}");
+        assert!((25..=110).contains(&strip), "{technique}: strip {strip}");
+        let mirrored_mask = mask_of(&mirrored, technique, &[], w, h);
+        assert_eq!(mirrored_mask, clamped_mask, "{technique}");
+    }
 }
 
 /// Shadow volumes shadow a cut-out as a solid (they have no holes), and
@@ -374,9 +423,10 @@ fn foliage_masks_follow_the_reference_per_family() {
     }
 }
 
-/// An OBJ whose MTL gives `map_d` (a grey-level opacity map): a cut-out
-/// whose holes the reference and the shadow map both see (the card faces
-/// down, so the camera above sees the floor through it).
+/// An OBJ whose MTL gives `map_d` (a grey-level opacity map, clamped): a
+/// cut-out whose holes the reference and the shadow map both see (the card
+/// faces down, so the camera above sees the floor through it). Texture
+/// options come off the file names.
 #[test]
 fn mtl_map_d_makes_a_cutout() {
     let dir = tmpdir("map_d");
@@ -385,7 +435,7 @@ fn mtl_map_d_makes_a_cutout() {
         .unwrap();
     std::fs::write(
         dir.join("card.mtl"),
-        "newmtl card\nKd 0.8 0.8 0.8\nmap_d half.png\n",
+        "newmtl card\nKd 0.8 0.8 0.8\nmap_Kd -bm 1.000000 half.png\nmap_d -clamp on half.png\n",
     )
     .unwrap();
     std::fs::write(
@@ -397,6 +447,10 @@ fn mtl_map_d_makes_a_cutout() {
     let card = s.materials.iter().find(|m| m.name == "card").unwrap();
     assert_eq!(card.alpha_mode, AlphaMode::Mask);
     let t = card.alpha_texture.expect("map_d is the opacity map");
+    assert_eq!(s.textures[t].wrap, [TextureWrap::ClampToEdge; 2]);
+    // Options come off the file name.
+    let colour = card.diffuse_texture.expect("map_Kd after its -bm option");
+    assert_eq!(s.textures[colour].wrap, [TextureWrap::Repeat; 2]);
     assert_eq!(s.textures[t].image.get_pixel(0, 0)[3], 255);
     assert_eq!(
         s.textures[t].image.get_pixel(3, 0)[3],
@@ -423,7 +477,11 @@ fn mtl_map_d_makes_a_cutout() {
 /// triangles (a double-sided mesh's back faces are not written).
 #[test]
 fn export_then_import_keeps_the_material_fields() {
-    let s = scene::builtin::by_name("foliage").unwrap().unwrap();
+    let mut s = scene::builtin::by_name("foliage").unwrap().unwrap();
+    // The leaves' texture clamped along u and mirrored along v.
+    let leaves = s.materials.iter().find(|m| m.name == "leaves").unwrap();
+    let leaf_texture = leaves.diffuse_texture.unwrap();
+    s.textures[leaf_texture].wrap = [TextureWrap::ClampToEdge, TextureWrap::MirroredRepeat];
     let path = tmpdir("export-foliage").join("foliage.gltf");
     scene::gltf_io::export(&s, &path).unwrap();
     let json: serde_json::Value =
@@ -457,6 +515,15 @@ fn export_then_import_keeps_the_material_fields() {
             b.alpha_texture.is_some(),
             "{name}"
         );
+        let wrap = |sc: &Scene, m: &Material| m.diffuse_texture.map(|t| sc.textures[t].wrap);
+        assert_eq!(wrap(&s, &a), wrap(&back, &b), "{name}");
     }
+    let samplers = json["samplers"].as_array().unwrap();
+    assert!(
+        samplers
+            .iter()
+            .any(|x| x["wrapS"] == 33071 && x["wrapT"] == 33648),
+        "{samplers:?}"
+    );
     assert_eq!(s.triangle_count(), back.triangle_count());
 }

@@ -41,6 +41,8 @@ struct ObjectGpu {
     alpha: vec4u,
     // x first byte of the opacity map in `opacity_texels` (its mip levels
     // follow, each half the last), y width, z height, w levels (0: no map)
+    // in bits 0..8 and the wrap modes along u and v (WRAP_*) in bits 8..10
+    // and 10..12
     opacity_map: vec4u,
 };
 
@@ -77,8 +79,30 @@ fn part_id(object: u32, part: u32) -> u32 {
 
 // One texel of an opacity level (`base` its first byte, `size` its extent),
 // repeating.
-fn opacity_texel(base: u32, size: vec2i, t: vec2i) -> f32 {
-    let w = ((t % size) + size) % size;
+// A texture's wrap modes (scene::TextureWrap's indices).
+const WRAP_REPEAT: u32 = 0u;
+const WRAP_CLAMP: u32 = 1u;
+const WRAP_MIRROR: u32 = 2u;
+
+// The texel a tap at integer coordinate `i` reads on an axis of `n` texels
+// wrapped by `mode` (TextureWrap::texel's twin).
+fn wrap_texel(i: i32, n: i32, mode: u32) -> i32 {
+    switch mode {
+        case WRAP_CLAMP: {
+            return clamp(i, 0, n - 1);
+        }
+        case WRAP_MIRROR: {
+            let k = ((i % (2 * n)) + 2 * n) % (2 * n);
+            return select(k, 2 * n - 1 - k, k >= n);
+        }
+        default: {
+            return ((i % n) + n) % n;
+        }
+    }
+}
+
+fn opacity_texel(base: u32, size: vec2i, t: vec2i, wrap: vec2u) -> f32 {
+    let w = vec2i(wrap_texel(t.x, size.x, wrap.x), wrap_texel(t.y, size.y, wrap.y));
     let i = base + u32(w.y * size.x + w.x);
     return f32((opacity_texels[i >> 2u] >> (8u * (i & 3u))) & 255u) / 255.0;
 }
@@ -120,10 +144,12 @@ fn opacity_at(object: u32, uv: vec2f, lod: f32) -> f32 {
     let a = objects[object].alpha;
     let m = objects[object].opacity_map;
     let factor = bitcast<f32>(a.z);
-    if m.w == 0u {
+    let levels = m.w & 255u;
+    if levels == 0u {
         return factor;
     }
-    let level = u32(min(round(lod), f32(m.w - 1u)));
+    let wrap = vec2u((m.w >> 8u) & 3u, (m.w >> 10u) & 3u);
+    let level = u32(min(round(lod), f32(levels - 1u)));
     var base = m.x;
     var size = vec2u(m.y, m.z);
     for (var l = 0u; l < level; l++) {
@@ -135,8 +161,8 @@ fn opacity_at(object: u32, uv: vec2f, lod: f32) -> f32 {
     let p0 = floor(p);
     let f = p - p0;
     let t = vec2i(p0);
-    let top = mix(opacity_texel(base, s, t), opacity_texel(base, s, t + vec2i(1, 0)), f.x);
-    let bottom = mix(opacity_texel(base, s, t + vec2i(0, 1)), opacity_texel(base, s, t + vec2i(1, 1)), f.x);
+    let top = mix(opacity_texel(base, s, t, wrap), opacity_texel(base, s, t + vec2i(1, 0), wrap), f.x);
+    let bottom = mix(opacity_texel(base, s, t + vec2i(0, 1), wrap), opacity_texel(base, s, t + vec2i(1, 1), wrap), f.x);
     return factor * mix(top, bottom, f.y);
 }
 

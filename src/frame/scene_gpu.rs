@@ -7,7 +7,7 @@ use crate::scene::clusters::{CLUSTER_TRIANGLES, Cluster, Clustered, clustered};
 use crate::scene::extent::SceneExtent;
 use crate::scene::opacity::OpacityMaps;
 use crate::scene::topology::{SolidKind, Solidity};
-use crate::scene::{Aabb, AlphaMode, Material, Object, Scene};
+use crate::scene::{Aabb, AlphaMode, Material, Object, Scene, Texture};
 use anyhow::{Context, Result, bail};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
@@ -26,7 +26,8 @@ struct ObjectGpu {
     /// (`f32` bits).
     alpha: [u32; 4],
     /// x first byte of its opacity map in the texel buffer, y width, z
-    /// height, w levels (0: no map).
+    /// height, w levels (0: no map) in bits 0..8 and the map's wrap modes
+    /// along u and v in bits 8..10 and 10..12.
     opacity_map: [u32; 4],
 }
 
@@ -216,7 +217,7 @@ fn object_gpu(
                     map_starts[opacity_maps.of_texture[&t]],
                     map.width,
                     map.height,
-                    map.levels.len() as u32,
+                    map.levels.len() as u32 | map.wrap[0].index() << 8 | map.wrap[1].index() << 10,
                 ],
                 _ => [0; 4],
             }
@@ -238,13 +239,21 @@ fn buffer_init(
     })
 }
 
+/// The wrap modes of `texture` (repeat where there is none) as u + 4·v,
+/// for `surface_colors` in scene.wgsl.
+fn wrap_code(texture: Option<usize>, textures: &[Texture]) -> u32 {
+    let [u, v] = texture.map_or(Default::default(), |t| textures[t].wrap);
+    u.index() + 4 * v.index()
+}
+
 /// Material `m`'s bind group: its uniform, its diffuse texture and normal
-/// map (`[white, flat normal]` where it has none).
+/// map (of the scene's `textures`, uploaded as `gpu_textures`; `[white,
+/// flat normal]` where it has none).
 fn material_group(
     gpu: &GpuContext,
     layouts: &FrameLayouts,
     m: &Material,
-    gpu_textures: &[wgpu::TextureView],
+    (textures, gpu_textures): (&[Texture], &[wgpu::TextureView]),
     [white, flat_normal]: [&wgpu::TextureView; 2],
 ) -> wgpu::BindGroup {
     let device = &gpu.device;
@@ -262,7 +271,8 @@ fn material_group(
             m.normal_map.is_some() as u32 as f32,
             p.map_or(0.0, |p| p.octaves as f32),
             m.alpha,
-            0.0,
+            wrap_code(m.diffuse_texture, textures) as f32
+                + 16.0 * wrap_code(m.normal_map, textures) as f32,
         ),
     };
     let buf = buffer_init(
@@ -385,7 +395,10 @@ impl SceneGpu {
         let material_bind_groups = scene
             .materials
             .iter()
-            .map(|m| material_group(gpu, &layouts, m, &gpu_textures, [&white, &flat_normal]))
+            .map(|m| {
+                let textures = (&scene.textures[..], &gpu_textures[..]);
+                material_group(gpu, &layouts, m, textures, [&white, &flat_normal])
+            })
             .collect();
         let drawn_part_bounds = draws
             .iter()

@@ -52,6 +52,7 @@ pub fn solid(gpu: &GpuContext, rgba: [u8; 4], srgb: bool) -> wgpu::TextureView {
             image: image::RgbaImage::from_pixel(1, 1, image::Rgba(rgba)),
             srgb,
             source: None,
+            wrap: Default::default(),
         },
     )
 }

@@ -13,7 +13,9 @@ struct MaterialGpu {
     proc_a: vec4f,
     // rgb procedural colour b, w procedural scale
     proc_b: vec4f,
-    // x 1 if a normal map is bound, y procedural octaves, z opacity factor
+    // x 1 if a normal map is bound, y procedural octaves, z opacity factor,
+    // w the wrap modes (WRAP_*) of the diffuse texture along u, v and of the
+    // normal map along u, v, in base 4
     flags: vec4f,
 };
 
@@ -274,10 +276,50 @@ struct SurfaceColors {
     opacity: f32,
 };
 
+// The wrap modes along u and v of the diffuse texture (`which` 0) or the
+// normal map (1).
+fn material_wrap(which: u32) -> vec2u {
+    let code = u32(material.flags.w) >> (4u * which);
+    return vec2u(code & 3u, (code >> 2u) & 3u);
+}
+
+// One coordinate wrapped by `mode` into [0, 1] for the repeating sampler; a
+// clamped or mirrored one kept `inset` (half a texel of the level read)
+// inside the border, so that the sampler's bilinear taps do not reach the
+// opposite border.
+fn wrap_coordinate(c: f32, mode: u32, inset: f32) -> f32 {
+    switch mode {
+        case WRAP_CLAMP: {
+            return clamp(c, inset, 1.0 - inset);
+        }
+        case WRAP_MIRROR: {
+            return clamp(1.0 - abs(fract(c * 0.5) * 2.0 - 1.0), inset, 1.0 - inset);
+        }
+        default: {
+            return c;
+        }
+    }
+}
+
+// `t` sampled at `uv` wrapped as `wrap` says (a glTF sampler's wrapS,
+// wrapT), at the level the unwrapped coordinates' derivatives choose.
+fn sample_wrapped(t: texture_2d<f32>, uv: vec2f, wrap: vec2u) -> vec4f {
+    let dx = dpdx(uv);
+    let dy = dpdy(uv);
+    if all(wrap == vec2u(WRAP_REPEAT)) {
+        return textureSampleGrad(t, tex_sampler, uv, dx, dy);
+    }
+    let size = vec2f(textureDimensions(t));
+    let level = max(log2(max(length(dx * size), length(dy * size))), 0.0);
+    let inset = 0.5 * exp2(ceil(level)) / size;
+    let w = vec2f(wrap_coordinate(uv.x, wrap.x, inset.x), wrap_coordinate(uv.y, wrap.y, inset.y));
+    return textureSampleGrad(t, tex_sampler, w, dx, dy);
+}
+
 fn surface_colors(uv: vec2f, local_pos: vec3f) -> SurfaceColors {
     var c = SurfaceColors(material.ka.rgb, material.kd.rgb, material.flags.z);
     if DIFFUSE_TEXTURE {
-        let t = textureSample(diffuse_tex, tex_sampler, uv);
+        let t = sample_wrapped(diffuse_tex, uv, material_wrap(0u));
         c.kd *= t.rgb;
         c.ka *= t.rgb;
         c.opacity *= t.a;
@@ -335,7 +377,7 @@ fn fs_lit(i: LitOut) -> @location(0) vec4f {
         if SHADING == SHADING_PIXEL && NORMAL_MAP {
             let t = normalize(i.tangent.xyz - n * dot(n, i.tangent.xyz));
             let b = cross(n, t) * i.tangent.w;
-            let m = textureSample(normal_tex, tex_sampler, uv).xyz * 2.0 - 1.0;
+            let m = sample_wrapped(normal_tex, uv, material_wrap(1u)).xyz * 2.0 - 1.0;
             n = normalize(t * m.x + b * m.y + n * m.z);
         }
     }

@@ -67,6 +67,51 @@ pub struct Texture {
     /// True for colour textures (sampled as sRGB), false for normal maps.
     pub srgb: bool,
     pub source: Option<PathBuf>,
+    /// How coordinates outside [0, 1] read it, along u and along v (the
+    /// glTF sampler's `wrapS`, `wrapT`).
+    pub wrap: [TextureWrap; 2],
+}
+
+/// What a texture coordinate outside [0, 1] reads along one axis (glTF 2.0
+/// sampler `wrapS`/`wrapT`, OpenGL's wrap modes), bilinear taps included.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum TextureWrap {
+    /// The texture tiles (glTF's default, and OBJ/MTL's).
+    #[default]
+    Repeat,
+    /// The border texels extend outwards.
+    ClampToEdge,
+    /// The texture tiles, every other copy mirrored.
+    MirroredRepeat,
+}
+
+impl TextureWrap {
+    /// The texel a tap at integer coordinate `i` reads on an axis of `n`
+    /// texels.
+    pub fn texel(self, i: i64, n: i64) -> i64 {
+        match self {
+            TextureWrap::Repeat => i.rem_euclid(n),
+            TextureWrap::ClampToEdge => i.clamp(0, n - 1),
+            TextureWrap::MirroredRepeat => {
+                let k = i.rem_euclid(2 * n);
+                if k < n { k } else { 2 * n - 1 - k }
+            }
+        }
+    }
+
+    /// The glTF sampler enum (OpenGL's constant).
+    pub fn gl_constant(self) -> u32 {
+        match self {
+            TextureWrap::Repeat => 10497,
+            TextureWrap::ClampToEdge => 33071,
+            TextureWrap::MirroredRepeat => 33648,
+        }
+    }
+
+    /// The index the shaders decode (`wrap_index` in common.wgsl).
+    pub fn index(self) -> u32 {
+        self as u32
+    }
 }
 
 /// How a material's opacity is used (glTF 2.0 `alphaMode`).
@@ -212,5 +257,22 @@ impl Material {
             kd,
             ..Default::default()
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::TextureWrap;
+
+    /// Taps past either border of 4 texels: repeat tiles, clamp holds the
+    /// border texel, mirror reflects about the border (−1 → 0, 4 → 3, and
+    /// the next copy 8 → 0 the right way round).
+    #[test]
+    fn wrap_modes_read_the_texels_gltf_says() {
+        let taps = [-5, -1, 0, 3, 4, 7, 8];
+        let read = |w: TextureWrap| taps.map(|i| w.texel(i, 4));
+        assert_eq!(read(TextureWrap::Repeat), [3, 3, 0, 3, 0, 3, 0]);
+        assert_eq!(read(TextureWrap::ClampToEdge), [0, 0, 0, 3, 3, 3, 3]);
+        assert_eq!(read(TextureWrap::MirroredRepeat), [3, 0, 0, 3, 3, 0, 0]);
     }
 }

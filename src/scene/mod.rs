@@ -16,6 +16,7 @@ pub mod landscape;
 pub mod light;
 pub mod material;
 pub mod mesh;
+pub mod mtl_map;
 pub mod obj;
 pub mod opacity;
 pub mod orbit;
@@ -27,7 +28,9 @@ pub mod topology;
 pub use aabb::Aabb;
 pub use camera::{Camera, INFINITE_FAR_EPSILON};
 pub use light::{Light, LightArea, LightType};
-pub use material::{AlphaMode, MAX_OCTAVES, Material, Procedural, ProceduralKind, Texture};
+pub use material::{
+    AlphaMode, MAX_OCTAVES, Material, Procedural, ProceduralKind, Texture, TextureWrap,
+};
 pub use mesh::{Mesh, compute_tangents, smooth_normals};
 
 use anyhow::{Context, Result, bail};

@@ -3,7 +3,9 @@
 //! the [000] §5 conventions: `…NS` objects cast no shadow, `ShadowPlane…`
 //! objects are shadow planes, `s off` objects are flat-shaded.
 
-use super::{AlphaMode, Material, Mesh, Object, Scene, Texture, frame_scene_defaults};
+use super::{
+    AlphaMode, Material, Mesh, Object, Scene, Texture, TextureWrap, frame_scene_defaults, mtl_map,
+};
 use anyhow::{Context, Result, anyhow, bail};
 use glam::{Mat4, Vec2, Vec3};
 use std::collections::HashMap;
@@ -194,10 +196,30 @@ pub fn parse_single_mesh(name: &str, text: &str) -> Result<Mesh> {
     Ok(out)
 }
 
-/// Loads a texture named by an MTL file. A file that is missing or cannot
-/// be decoded (corrupt, truncated, larger than the image decoder's 512 MiB
+/// Loads a texture named by an MTL statement (options, then the file). A
+/// statement that cannot be parsed, or a file that is missing or cannot be
+/// decoded (corrupt, truncated, larger than the image decoder's 512 MiB
 /// limit) falls back to the flat material colour with a warning naming it.
-fn load_texture(dir: &Path, file: &str, srgb: bool, scene: &mut Scene) -> Result<Option<usize>> {
+fn load_texture(
+    dir: &Path,
+    statement: &str,
+    srgb: bool,
+    scene: &mut Scene,
+) -> Result<Option<usize>> {
+    let map = match mtl_map::parse(statement) {
+        Ok(map) => map,
+        Err(e) => {
+            log::warn!("texture '{statement}': {e}; using the flat material colour");
+            return Ok(None);
+        }
+    };
+    let file = map.file;
+    if !map.ignored.is_empty() {
+        log::warn!(
+            "texture {file}: MTL option(s) {} not applied (read as without them)",
+            map.ignored.join(", ")
+        );
+    }
     let path = dir.join(file.replace('\\', "/"));
     if !path.is_file() {
         log::warn!(
@@ -225,6 +247,11 @@ fn load_texture(dir: &Path, file: &str, srgb: bool, scene: &mut Scene) -> Result
         image: img.to_rgba8(),
         srgb,
         source: Some(path),
+        wrap: [if map.clamp {
+            TextureWrap::ClampToEdge
+        } else {
+            TextureWrap::Repeat
+        }; 2],
     });
     Ok(Some(scene.textures.len() - 1))
 }

@@ -4,7 +4,7 @@
 //! tracing kernels use [`CasterOpacity`]; the GPU passes use the same maps
 //! ([`OpacityMaps::texels`]) at a level chosen for their texel footprint.
 
-use super::{AlphaMode, Material, Object, Scene, Texture};
+use super::{AlphaMode, Material, Object, Scene, Texture, TextureWrap};
 use glam::Vec2;
 use std::collections::HashMap;
 
@@ -15,6 +15,8 @@ pub struct OpacityMap {
     pub height: u32,
     /// Level 0 first; each level half the previous one (at least 1).
     pub levels: Vec<Vec<u8>>,
+    /// Its texture's wrap modes along u and v.
+    pub wrap: [TextureWrap; 2],
 }
 
 impl OpacityMap {
@@ -44,12 +46,13 @@ impl OpacityMap {
             width,
             height,
             levels,
+            wrap: t.wrap,
         }
     }
 
-    /// Bilinear opacity of level 0 at `uv` (repeating), in 0..=1: the
-    /// reference's full-resolution lookup (texel centres at half-integers,
-    /// as GPU samplers place them).
+    /// Bilinear opacity of level 0 at `uv` (wrapped as its texture says),
+    /// in 0..=1: the reference's full-resolution lookup (texel centres at
+    /// half-integers, as GPU samplers place them).
     pub fn sample(&self, uv: Vec2) -> f32 {
         let (w, h) = (self.width as i64, self.height as i64);
         let x = uv.x * w as f32 - 0.5;
@@ -60,8 +63,8 @@ impl OpacityMap {
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let texel = |dx: i64, dy: i64| {
-            let tx = (x0 as i64 + dx).rem_euclid(w);
-            let ty = (y0 as i64 + dy).rem_euclid(h);
+            let tx = self.wrap[0].texel(x0 as i64 + dx, w);
+            let ty = self.wrap[1].texel(y0 as i64 + dy, h);
             self.levels[0][(ty * w + tx) as usize] as f32 / 255.0
         };
         let top = texel(0, 0) * (1.0 - fx) + texel(1, 0) * fx;
@@ -265,6 +268,7 @@ mod tests {
             }),
             srgb: true,
             source: None,
+            wrap: Default::default(),
         }
     }
 

@@ -145,6 +145,7 @@ fn texture(scene: &mut Scene, name: &str, image: image::RgbaImage) -> usize {
         image,
         srgb: true,
         source: None,
+        wrap: Default::default(),
     });
     scene.textures.len() - 1
 }

@@ -90,12 +90,14 @@ pub(super) fn add_textures(
         image: colour,
         srgb: true,
         source: None,
+        wrap: Default::default(),
     });
     scene.textures.push(Texture {
         name: format!("{name}_normal"),
         image: normal_map_from_height(&height, 6.0),
         srgb: false,
         source: None,
+        wrap: Default::default(),
     });
     (scene.textures.len() - 2, scene.textures.len() - 1)
 }

@@ -3,7 +3,7 @@
 //! lights and the camera.
 
 use super::extras::{PhongExtras, ShadowFlags};
-use crate::scene::{Aabb, AlphaMode, Light, LightType, Material, Object, Scene};
+use crate::scene::{Aabb, AlphaMode, Light, LightType, Material, Object, Scene, TextureWrap};
 use anyhow::{Context, Result, anyhow};
 use glam::{Quat, Vec3};
 use serde_json::{Value, json};
@@ -245,12 +245,21 @@ pub fn export(scene: &Scene, out: &Path) -> Result<()> {
     };
     let mut images = vec![];
     let mut textures = vec![];
+    // One sampler per pair of wrap modes the textures use, trilinear.
+    let mut samplers: Vec<[TextureWrap; 2]> = vec![];
     for t in &scene.textures {
         let mut png = std::io::Cursor::new(Vec::new());
         t.image.write_to(&mut png, image::ImageFormat::Png)?;
         let view = w.view(png.get_ref(), None);
         images.push(json!({"bufferView": view, "mimeType": "image/png", "name": t.name}));
-        textures.push(json!({"source": images.len() - 1, "sampler": 0}));
+        let sampler = samplers
+            .iter()
+            .position(|&s| s == t.wrap)
+            .unwrap_or_else(|| {
+                samplers.push(t.wrap);
+                samplers.len() - 1
+            });
+        textures.push(json!({"source": images.len() - 1, "sampler": sampler}));
     }
     let materials: Vec<Value> = scene.materials.iter().map(material_json).collect();
     let mut meshes = vec![];
@@ -301,8 +310,13 @@ pub fn export(scene: &Scene, out: &Path) -> Result<()> {
     if !images.is_empty() {
         doc["images"] = json!(images);
         doc["textures"] = json!(textures);
-        doc["samplers"] =
-            json!([{"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}]);
+        doc["samplers"] = samplers
+            .iter()
+            .map(|[s, t]| {
+                json!({"magFilter": 9729, "minFilter": 9987,
+                    "wrapS": s.gl_constant(), "wrapT": t.gl_constant()})
+            })
+            .collect();
     }
     if !lights.is_empty() {
         doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);

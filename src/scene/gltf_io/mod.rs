@@ -10,7 +10,8 @@ mod extras;
 pub use export::export;
 
 use super::{
-    AlphaMode, Camera, Light, Material, Mesh, Object, Scene, Texture, frame_scene_defaults,
+    AlphaMode, Camera, Light, Material, Mesh, Object, Scene, Texture, TextureWrap,
+    frame_scene_defaults,
 };
 use anyhow::{Context, Result, anyhow, bail};
 use attributes::MESH_QUANTIZATION;
@@ -283,7 +284,19 @@ fn camera_of(c: &gltf::Camera, pos: Vec3, rot: glam::Quat, forward: Vec3) -> Opt
 struct TextureCache<'a> {
     file: &'a str,
     images: &'a [Option<gltf::image::Data>],
-    made: std::collections::HashMap<(usize, bool), usize>,
+    /// Scene textures by image, colour space and wrap modes: two glTF
+    /// textures of one image and sampler are one texture.
+    made: std::collections::HashMap<(usize, bool, [TextureWrap; 2]), usize>,
+}
+
+/// A glTF sampler's wrap mode.
+fn wrap_of(mode: gltf::texture::WrappingMode) -> TextureWrap {
+    use gltf::texture::WrappingMode;
+    match mode {
+        WrappingMode::Repeat => TextureWrap::Repeat,
+        WrappingMode::ClampToEdge => TextureWrap::ClampToEdge,
+        WrappingMode::MirroredRepeat => TextureWrap::MirroredRepeat,
+    }
 }
 
 impl TextureCache<'_> {
@@ -291,7 +304,8 @@ impl TextureCache<'_> {
     /// `None` for an image that is missing or unusable (warned about).
     fn get(&mut self, scene: &mut Scene, t: gltf::Texture, srgb: bool) -> Option<usize> {
         let idx = t.source().index();
-        if let Some(&i) = self.made.get(&(idx, srgb)) {
+        let wrap = [t.sampler().wrap_s(), t.sampler().wrap_t()].map(wrap_of);
+        if let Some(&i) = self.made.get(&(idx, srgb, wrap)) {
             return Some(i);
         }
         // A missing image was reported when it was read.
@@ -303,8 +317,10 @@ impl TextureCache<'_> {
                     image,
                     srgb,
                     source: None,
+                    wrap,
                 });
-                self.made.insert((idx, srgb), scene.textures.len() - 1);
+                self.made
+                    .insert((idx, srgb, wrap), scene.textures.len() - 1);
                 Some(scene.textures.len() - 1)
             }
             Err(e) => {
