@@ -77,8 +77,6 @@ fn part_id(object: u32, part: u32) -> u32 {
 // Every opacity map's mip chain, four one-byte texels per word.
 @group(1) @binding(1) var<storage, read> opacity_texels: array<u32>;
 
-// One texel of an opacity level (`base` its first byte, `size` its extent),
-// repeating.
 // A texture's wrap modes (scene::TextureWrap's indices).
 const WRAP_REPEAT: u32 = 0u;
 const WRAP_CLAMP: u32 = 1u;
@@ -101,6 +99,8 @@ fn wrap_texel(i: i32, n: i32, mode: u32) -> i32 {
     }
 }
 
+// One texel of an opacity level (`base` its first byte, `size` its extent),
+// wrapped along u and v as `wrap` says.
 fn opacity_texel(base: u32, size: vec2i, t: vec2i, wrap: vec2u) -> f32 {
     let w = vec2i(wrap_texel(t.x, size.x, wrap.x), wrap_texel(t.y, size.y, wrap.y));
     let i = base + u32(w.y * size.x + w.x);
