@@ -1079,3 +1079,71 @@ fn compare_points_sub_pixel_techniques_to_the_supersampled_reference() {
     assert!(run(&[]).contains(hint));
     assert!(!run(&["--reference", "raytraced:subpixel"]).contains(hint));
 }
+
+/// The mean red and green of the drawn pixels of `scene` (shadows off), as
+/// linear values.
+fn mean_red_green(scene: &scene::Scene) -> (f64, f64) {
+    let img = render(scene, "none", 96, 96);
+    let drawn: Vec<&[u8]> = img
+        .color
+        .chunks_exact(4)
+        .zip(&img.coverage)
+        .filter(|(_, c)| **c)
+        .map(|(p, _)| p)
+        .collect();
+    let linear = |c: u8| ((c as f64 / 255.0 + 0.055) / 1.055).powf(2.4);
+    let mean = |k: usize| drawn.iter().map(|p| linear(p[k])).sum::<f64>() / drawn.len() as f64;
+    (mean(0), mean(1))
+}
+
+/// Vertex colours (glTF `COLOR_0`, OBJ `v x y z r g b`) multiply the
+/// material's colour: a grey floor whose vertices are pure red renders red
+/// (its green is the specular highlight's and the ambient's alone), and
+/// keeps its colours through export → import.
+#[test]
+fn vertex_colours_tint_the_material_and_survive_export() {
+    use glam::Vec3;
+    let sun = scene::Light::directional(Vec3::new(0.3, -1.0, 0.2), 1.0);
+    let white = squares_over_floor(&[], sun, false);
+    let mut red = white.clone();
+    let floor = red.objects[0].mesh;
+    let n = red.meshes[floor].positions.len();
+    red.meshes[floor].colors = vec![Vec3::new(1.0, 0.0, 0.0); n];
+    let (wr, wg) = mean_red_green(&white);
+    let (rr, rg) = mean_red_green(&red);
+    assert!(
+        (wg - wr).abs() < 0.05 * wr,
+        "white floor: red {wr}, green {wg}"
+    );
+    assert!(
+        rg < 0.15 * wg && (rr - wr).abs() < 0.05 * wr,
+        "red floor: red {rr}, green {rg}; white floor: {wr}, {wg}"
+    );
+
+    let path = tmpdir("vertex-colours").join("red.glb");
+    scene::gltf_io::export(&red, &path).unwrap();
+    let back = scene::load_file(&path).unwrap();
+    let coloured: Vec<&scene::Mesh> = back
+        .meshes
+        .iter()
+        .filter(|m| !m.colors.is_empty())
+        .collect();
+    assert_eq!(coloured.len(), 1);
+    assert!(
+        coloured[0]
+            .colors
+            .iter()
+            .all(|&c| c == Vec3::new(1.0, 0.0, 0.0))
+    );
+
+    let dir = tmpdir("vertex-colours-obj");
+    std::fs::write(
+        dir.join("tri.obj"),
+        "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 0 1 0 0 1\nf 1 2 3\n",
+    )
+    .unwrap();
+    let obj = scene::load_file(&dir.join("tri.obj")).unwrap();
+    let m = &obj.meshes[obj.objects[0].mesh];
+    assert_eq!(m.colors.len(), 3, "{:?}", m.colors);
+    assert!(m.colors.contains(&Vec3::new(0.0, 1.0, 0.0)));
+}

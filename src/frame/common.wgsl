@@ -191,6 +191,8 @@ struct VertexIn {
     @location(3) tangent: vec4f,
     // the mesh's convex part (from 1), 0 for none: `part_id` makes it global
     @location(4) part: u32,
+    // linear RGB multiplying the material's colour (glTF COLOR_0)
+    @location(5) color: vec3f,
     @builtin(instance_index) object: u32,
 };
 

@@ -59,12 +59,15 @@ pub struct Vertex {
     /// The mesh's convex part the vertex lies on (from 1), or 0
     /// ([`crate::scene::topology::Solidity`]).
     pub part: u32,
+    /// Linear RGB that multiplies the material's colour (white where the
+    /// mesh has none).
+    pub color: [f32; 3],
 }
 
 pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     array_stride: std::mem::size_of::<Vertex>() as u64,
     step_mode: wgpu::VertexStepMode::Vertex,
-    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4, 4 => Uint32],
+    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4, 4 => Uint32, 5 => Float32x3],
 };
 
 /// A light as the lighting pass reads it (`LightGpu` in common.wgsl). Its

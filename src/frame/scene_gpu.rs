@@ -326,6 +326,7 @@ impl SceneGpu {
                 uv: m.uvs[i].into(),
                 tangent: m.tangents[i].into(),
                 part: s.vertex_parts[i],
+                color: m.colors.get(i).copied().unwrap_or(Vec3::ONE).into(),
             }));
             indices.extend_from_slice(&c.indices);
             ranges.push((base, first, m.indices.len() as u32));

@@ -132,6 +132,7 @@ struct LitOut {
     @location(3) tangent: vec4f,
     @location(4) local_pos: vec3f,
     @location(5) @interpolate(flat) receives: u32,
+    @location(6) color: vec3f,
 };
 
 // Gouraud: the vertex's lighting terms ride along, per light diffuse (rgb)
@@ -150,6 +151,7 @@ struct GouraudOut {
     @location(9) specular1: vec3f,
     @location(10) specular2: vec3f,
     @location(11) specular3: vec3f,
+    @location(12) color: vec3f,
 };
 
 // Direction to the light (unit) and the radiance reaching `pos`
@@ -230,6 +232,7 @@ fn vs_lit(v: VertexIn) -> LitOut {
     o.tangent = vec4f(normalize((obj.model * vec4f(v.tangent.xyz, 0.0)).xyz), v.tangent.w * mirror);
     o.local_pos = v.position;
     o.receives = obj.info.z;
+    o.color = v.color;
     return o;
 }
 
@@ -242,6 +245,7 @@ fn vs_lit_gouraud(v: VertexIn) -> GouraudOut {
     o.uv = v.uv * material.ka.w;
     o.local_pos = v.position;
     o.receives = obj.info.z;
+    o.color = v.color;
     // Intensities per vertex, interpolated ([004]).
     let n = world_normal(obj, v.normal);
     let view = normalize(frame.camera_pos.xyz - o.world_pos);
@@ -268,8 +272,8 @@ fn vs_lit_gouraud(v: VertexIn) -> GouraudOut {
     return o;
 }
 
-// Surface colours: texture or procedural pattern modulate kd and ka; the
-// opacity is the factor times the texture's alpha.
+// Surface colours: the vertex colour, texture or procedural pattern
+// modulate kd and ka; the opacity is the factor times the texture's alpha.
 struct SurfaceColors {
     ka: vec3f,
     kd: vec3f,
@@ -316,8 +320,8 @@ fn sample_wrapped(t: texture_2d<f32>, uv: vec2f, wrap: vec2u) -> vec4f {
     return textureSampleGrad(t, tex_sampler, w, dx, dy);
 }
 
-fn surface_colors(uv: vec2f, local_pos: vec3f) -> SurfaceColors {
-    var c = SurfaceColors(material.ka.rgb, material.kd.rgb, material.flags.z);
+fn surface_colors(uv: vec2f, local_pos: vec3f, vertex_color: vec3f) -> SurfaceColors {
+    var c = SurfaceColors(material.ka.rgb * vertex_color, material.kd.rgb * vertex_color, material.flags.z);
     if DIFFUSE_TEXTURE {
         let t = sample_wrapped(diffuse_tex, uv, material_wrap(0u));
         c.kd *= t.rgb;
@@ -365,7 +369,7 @@ fn fs_lit(i: LitOut) -> @location(0) vec4f {
     let receives = i.receives != 0u;
     let view = normalize(frame.camera_pos.xyz - i.world_pos);
     let uv = i.uv;
-    let surface = surface_colors(uv, i.local_pos);
+    let surface = surface_colors(uv, i.local_pos, i.color);
     // Normal: face normal (flat) or interpolated, normal-mapped (per-pixel).
     let geo = face_normal(i.world_pos);
     var n = geo;
@@ -393,7 +397,7 @@ fn fs_lit(i: LitOut) -> @location(0) vec4f {
 @fragment
 fn fs_lit_gouraud(i: GouraudOut) -> @location(0) vec4f {
     let receives = i.receives != 0u;
-    let surface = surface_colors(i.uv, i.local_pos);
+    let surface = surface_colors(i.uv, i.local_pos, i.color);
     let px = vec2i(i.clip.xy);
     var acc = Composed(frame.ambient.rgb * surface.ka, 1.0);
     if LIGHT_COUNT > 0u {

@@ -12,6 +12,9 @@ pub struct Mesh {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
     pub uvs: Vec<Vec2>,
+    /// Linear RGB per vertex that multiplies the material's colour (glTF
+    /// `COLOR_0`); empty: white.
+    pub colors: Vec<Vec3>,
     /// xyz tangent, w handedness (±1), derived from the uvs.
     pub tangents: Vec<Vec4>,
     pub indices: Vec<u32>,
@@ -38,6 +41,12 @@ impl Mesh {
                 .map(|&n| nm.transform_vector3(n).normalize_or_zero()),
         );
         self.uvs.extend_from_slice(&other.uvs);
+        if !(self.colors.is_empty() && other.colors.is_empty()) {
+            self.colors.resize(base as usize, Vec3::ONE);
+            self.colors.extend_from_slice(&other.colors);
+            self.colors
+                .resize(base as usize + other.positions.len(), Vec3::ONE);
+        }
         self.tangents.extend(other.tangents.iter().map(|t| {
             m.transform_vector3(t.truncate())
                 .normalize_or_zero()
@@ -49,7 +58,8 @@ impl Mesh {
     /// Validates the mesh and fills in what is missing: an error on NaN or
     /// infinite positions or out-of-range indices; degenerate triangles are
     /// dropped (the count is returned); missing normals become smooth
-    /// area-weighted normals, missing uvs zero, tangents are derived from uvs.
+    /// area-weighted normals, missing uvs zero, colours of another count (or
+    /// not finite) white; tangents are derived from uvs.
     pub fn finalize(&mut self) -> Result<usize> {
         if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
             bail!(
@@ -99,6 +109,9 @@ impl Mesh {
         if self.uvs.len() != self.positions.len() {
             self.uvs = vec![Vec2::ZERO; self.positions.len()];
         }
+        if self.colors.len() != self.positions.len() || self.colors.iter().any(|c| !c.is_finite()) {
+            self.colors.clear();
+        }
         self.tangents = compute_tangents(&self.positions, &self.normals, &self.uvs, &self.indices);
         Ok(degenerate)
     }
@@ -118,6 +131,9 @@ impl Mesh {
                 out.normals.push(n);
                 out.uvs
                     .push(self.uvs.get(i as usize).copied().unwrap_or(Vec2::ZERO));
+                if let Some(&c) = self.colors.get(i as usize) {
+                    out.colors.push(c);
+                }
                 out.indices.push(out.indices.len() as u32);
             }
         }
@@ -133,6 +149,7 @@ impl Mesh {
         let flipped: Vec<Vec3> = self.normals.iter().map(|&v| -v).collect();
         self.normals.extend(flipped);
         self.uvs.extend_from_within(..);
+        self.colors.extend_from_within(..);
         // The back copy's normal is flipped; flipping the handedness keeps
         // its bitangent `cross(n, t)·w` and so its normal map the same.
         let back_tangents: Vec<Vec4> = self
@@ -175,6 +192,7 @@ impl Mesh {
             positions: self.positions[..nv].to_vec(),
             normals: self.normals[..nv].to_vec(),
             uvs: self.uvs[..nv].to_vec(),
+            colors: self.colors[..nv.min(self.colors.len())].to_vec(),
             tangents: self.tangents[..nv.min(self.tangents.len())].to_vec(),
             indices: self.indices[..nt].to_vec(),
             sides_doubled: false,

@@ -168,6 +168,8 @@ fn to_mesh(name: &str, m: &tobj::Mesh) -> Mesh {
         name: name.into(),
         positions: v3(&m.positions),
         normals: v3(&m.normals),
+        // `v x y z r g b`, as MeshLab and photogrammetry tools write them.
+        colors: v3(&m.vertex_color),
         uvs: m
             .texcoords
             .chunks_exact(2)

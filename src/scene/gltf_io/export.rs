@@ -169,6 +169,16 @@ fn mesh_json(w: &mut BinWriter, scene: &Scene, o: &Object) -> Value {
         None,
     );
     let mut attributes = json!({"POSITION": pa, "NORMAL": na, "TEXCOORD_0": ta});
+    if m.colors.len() == m.positions.len() {
+        attributes["COLOR_0"] = json!(w.accessor(
+            bytemuck::cast_slice(&m.colors),
+            m.colors.len(),
+            "VEC3",
+            FLOAT,
+            ARRAY,
+            None
+        ));
+    }
     // Normal-mapped materials get their tangent space (xyz unit, w ±1).
     if scene.materials[o.material].normal_map.is_some() && m.tangents.len() == m.positions.len() {
         let tangents: Vec<glam::Vec4> = m

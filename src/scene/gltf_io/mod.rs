@@ -220,10 +220,53 @@ fn read_mesh(
         name: mesh_name.to_string(),
         normals,
         uvs,
+        colors: vertex_colours(file, mesh_name, pi, prim, buffers),
         positions,
         indices,
         ..Default::default()
     })
+}
+
+/// The primitive's `COLOR_0` as linear RGB, which multiplies its material's
+/// colour; empty where it has none, or one of a type glTF does not allow
+/// (warned about). Its alpha is not read: on a cut-out or translucent
+/// material a warning says so where it is below 1.
+fn vertex_colours(
+    file: &str,
+    mesh: &str,
+    pi: usize,
+    prim: &gltf::Primitive,
+    buffers: &[gltf::buffer::Data],
+) -> Vec<Vec3> {
+    use gltf::accessor::{DataType as T, Dimensions as D};
+    let Some(a) = prim.get(&gltf::Semantic::Colors(0)) else {
+        return vec![];
+    };
+    let allowed = matches!(a.data_type(), T::U8 | T::U16 | T::F32)
+        && matches!(a.dimensions(), D::Vec3 | D::Vec4);
+    if !allowed {
+        log::warn!(
+            "{file}: mesh '{mesh}' primitive {pi}: COLOR_0 is {:?} of {:?}, not VEC3 or VEC4 of FLOAT or normalised UNSIGNED_BYTE or UNSIGNED_SHORT; ignored",
+            a.dimensions(),
+            a.data_type()
+        );
+        return vec![];
+    }
+    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let Some(colours) = reader.read_colors(0) else {
+        return vec![];
+    };
+    let rgba: Vec<[f32; 4]> = colours.into_rgba_f32().collect();
+    if prim.material().alpha_mode() != gltf::material::AlphaMode::Opaque
+        && rgba.iter().any(|c| c[3] < 1.0)
+    {
+        log::warn!(
+            "{file}: mesh '{mesh}' primitive {pi}: COLOR_0's alpha is not applied (the material's opacity alone is)"
+        );
+    }
+    rgba.iter()
+        .map(|&[r, g, b, _]| Vec3::new(r, g, b))
+        .collect()
 }
 
 /// The texture coordinate set (`TEXCOORD_n`) the primitive's base colour
