@@ -1080,6 +1080,39 @@ fn compare_points_sub_pixel_techniques_to_the_supersampled_reference() {
     assert!(!run(&["--reference", "raytraced:subpixel"]).contains(hint));
 }
 
+/// A file that requires KHR_texture_basisu, its texture a KTX2 image only
+/// (which the `image` crate cannot decode), loads and renders: the image is
+/// warned about and the material keeps its flat colour, as for a missing
+/// one; it was refused ("Unsupported extension").
+#[test]
+fn ktx2_only_textures_warn_and_render_flat() {
+    let dir = tmpdir("ktx2-texture");
+    std::fs::create_dir_all(dir.join("textures")).unwrap();
+    std::fs::write(
+        dir.join("textures/base.ktx2"),
+        b"\xABKTX 20\xBB\r\n\x1A\n not a real one",
+    )
+    .unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&uv_triangle_gltf(
+        serde_json::json!([{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }]),
+        serde_json::json!([{ "uri": "textures/base.ktx2", "mimeType": "image/ktx2" }]),
+        &uv_triangle_data_uri(),
+    ))
+    .unwrap();
+    doc["extensionsUsed"] = serde_json::json!(["KHR_texture_basisu"]);
+    doc["extensionsRequired"] = serde_json::json!(["KHR_texture_basisu"]);
+    doc["textures"] =
+        serde_json::json!([{ "extensions": { "KHR_texture_basisu": { "source": 0 } } }]);
+    let path = write(&dir, "tri.gltf", &doc.to_string());
+    let s = scene::load(path.to_str().unwrap()).unwrap();
+    assert!(s.textures.is_empty());
+    assert!(s.materials[s.objects[0].material].diffuse_texture.is_none());
+    let out = dir.join("out");
+    let o = render_file(path.to_str().unwrap(), "32x32", out.to_str().unwrap(), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("image 0"), "{}", stderr(&o));
+}
+
 /// The mean red and green of the drawn pixels of `scene` (shadows off), as
 /// linear values.
 fn mean_red_green(scene: &scene::Scene) -> (f64, f64) {

@@ -332,6 +332,31 @@ struct TextureCache<'a> {
     made: std::collections::HashMap<(usize, bool, [TextureWrap; 2]), usize>,
 }
 
+/// The extension whose textures are KTX2 (Basis Universal) images.
+const TEXTURE_BASISU: &str = "KHR_texture_basisu";
+
+/// A texture that names its image only through KHR_texture_basisu (a file
+/// that requires the extension) is pointed at that image, and the
+/// extension leaves the required ones: the `image` crate cannot decode
+/// KTX2, so each such image is warned about and its materials fall back to
+/// their flat colour, as for a missing image, instead of refusing the file.
+/// A texture that also names a PNG or JPEG keeps it.
+fn ktx2_textures_named(root: &mut gltf::json::Root) {
+    let empty = gltf::json::Index::<gltf::json::Image>::new(u32::MAX);
+    for t in &mut root.textures {
+        let basisu_source = t
+            .extensions
+            .as_ref()
+            .and_then(|e| e.others.get(TEXTURE_BASISU))
+            .and_then(|b| b["source"].as_u64())
+            .and_then(|i| u32::try_from(i).ok());
+        if let (true, Some(i)) = (t.source == empty, basisu_source) {
+            t.source = gltf::json::Index::new(i);
+        }
+    }
+    root.extensions_required.retain(|e| e != TEXTURE_BASISU);
+}
+
 /// A glTF sampler's wrap mode.
 fn wrap_of(mode: gltf::texture::WrappingMode) -> TextureWrap {
     use gltf::texture::WrappingMode;
@@ -408,6 +433,7 @@ fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene
     check_external_files(&file, base, &root)?;
     let quantized = root.extensions_used.iter().any(|e| e == MESH_QUANTIZATION);
     root.extensions_required.retain(|e| e != MESH_QUANTIZATION);
+    ktx2_textures_named(&mut root);
     let doc = gltf::Document::from_json(root).map_err(|e| anyhow!("{file}: {e}"))?;
     let buffers =
         gltf::import_buffers(&doc, Some(base), blob).map_err(|e| anyhow!("{file}: {e}"))?;
