@@ -191,8 +191,9 @@ struct VertexIn {
     @location(3) tangent: vec4f,
     // the mesh's convex part (from 1), 0 for none: `part_id` makes it global
     @location(4) part: u32,
-    // linear RGB multiplying the material's colour (glTF COLOR_0)
-    @location(5) color: vec3f,
+    // the colour multiplying the material's (glTF COLOR_0), sRGB-encoded
+    // (`vertex_color` decodes it)
+    @location(5) color: vec4f,
     @builtin(instance_index) object: u32,
 };
 

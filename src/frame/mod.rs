@@ -59,15 +59,32 @@ pub struct Vertex {
     /// The mesh's convex part the vertex lies on (from 1), or 0
     /// ([`crate::scene::topology::Solidity`]).
     pub part: u32,
-    /// Linear RGB that multiplies the material's colour (white where the
-    /// mesh has none).
-    pub color: [f32; 3],
+    /// The colour that multiplies the material's, sRGB-encoded in 8 bits a
+    /// channel (alpha unused): 4 bytes, not 12, in every vertex fetch; white
+    /// where the mesh has none.
+    pub color: [u8; 4],
+}
+
+impl Vertex {
+    /// A linear RGB colour as [`Vertex::color`] holds it.
+    pub fn encode_color(linear: glam::Vec3) -> [u8; 4] {
+        let srgb = |c: f32| {
+            let c = c.clamp(0.0, 1.0);
+            let s = if c <= 0.003_130_8 {
+                12.92 * c
+            } else {
+                1.055 * c.powf(1.0 / 2.4) - 0.055
+            };
+            (s * 255.0).round() as u8
+        };
+        [srgb(linear.x), srgb(linear.y), srgb(linear.z), 255]
+    }
 }
 
 pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     array_stride: std::mem::size_of::<Vertex>() as u64,
     step_mode: wgpu::VertexStepMode::Vertex,
-    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4, 4 => Uint32, 5 => Float32x3],
+    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4, 4 => Uint32, 5 => Unorm8x4],
 };
 
 /// A light as the lighting pass reads it (`LightGpu` in common.wgsl). Its

@@ -326,7 +326,7 @@ impl SceneGpu {
                 uv: m.uvs[i].into(),
                 tangent: m.tangents[i].into(),
                 part: s.vertex_parts[i],
-                color: m.colors.get(i).copied().unwrap_or(Vec3::ONE).into(),
+                color: Vertex::encode_color(m.colors.get(i).copied().unwrap_or(Vec3::ONE)),
             }));
             indices.extend_from_slice(&c.indices);
             ranges.push((base, first, m.indices.len() as u32));

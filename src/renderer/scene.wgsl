@@ -216,6 +216,12 @@ fn world_normal(obj: ObjectGpu, n: vec3f) -> vec3f {
     return normalize((obj.normal_matrix * vec4f(n, 0.0)).xyz);
 }
 
+// A vertex's colour, linear, from its sRGB encoding.
+fn vertex_color(encoded: vec4f) -> vec3f {
+    let c = encoded.rgb;
+    return select(pow((c + 0.055) / 1.055, vec3f(2.4)), c / 12.92, c <= vec3f(0.04045));
+}
+
 @vertex
 fn vs_lit(v: VertexIn) -> LitOut {
     var o: LitOut;
@@ -232,7 +238,7 @@ fn vs_lit(v: VertexIn) -> LitOut {
     o.tangent = vec4f(normalize((obj.model * vec4f(v.tangent.xyz, 0.0)).xyz), v.tangent.w * mirror);
     o.local_pos = v.position;
     o.receives = obj.info.z;
-    o.color = v.color;
+    o.color = vertex_color(v.color);
     return o;
 }
 
@@ -245,7 +251,7 @@ fn vs_lit_gouraud(v: VertexIn) -> GouraudOut {
     o.uv = v.uv * material.ka.w;
     o.local_pos = v.position;
     o.receives = obj.info.z;
-    o.color = v.color;
+    o.color = vertex_color(v.color);
     // Intensities per vertex, interpolated ([004]).
     let n = world_normal(obj, v.normal);
     let view = normalize(frame.camera_pos.xyz - o.world_pos);
