@@ -99,8 +99,6 @@ pub fn parse_technique_list(spec: &str) -> Result<Vec<TechniqueChoice>> {
         .collect()
 }
 
-/// A label for a technique choice: its id plus any parameter that differs
-/// from the preset, e.g. `raytraced:default[samples=64]`.
 /// Whether `t` gives each pixel the covered fraction of several sub-pixel
 /// samples (`pixel_samples` above 1, `irregular:subpixel`): a point-sampled
 /// reference charges it for the edges it resolves.
@@ -110,6 +108,8 @@ pub fn is_sub_pixel(t: &TechniqueChoice) -> bool {
         .is_ok_and(|n| n > 1.0)
 }
 
+/// A label for a technique choice: its id plus any parameter that differs
+/// from the preset, e.g. `raytraced:default[samples=64]`.
 pub fn choice_label(c: &TechniqueChoice) -> String {
     let preset = technique::resolve(&c.id()).expect("a resolved id resolves again");
     let diffs: Vec<String> = c

@@ -320,7 +320,7 @@ fn sample_wrapped(t: texture_2d<f32>, uv: vec2f, wrap: vec2u) -> vec4f {
         return textureSampleGrad(t, tex_sampler, uv, dx, dy);
     }
     let size = vec2f(textureDimensions(t));
-    let level = max(log2(max(length(dx * size), length(dy * size))), 0.0);
+    let level = lod_of(max(length(dx * size), length(dy * size)));
     let inset = 0.5 * exp2(ceil(level)) / size;
     let w = vec2f(wrap_coordinate(uv.x, wrap.x, inset.x), wrap_coordinate(uv.y, wrap.y, inset.y));
     return textureSampleGrad(t, tex_sampler, w, dx, dy);

@@ -108,7 +108,7 @@ impl TextureWrap {
         }
     }
 
-    /// The index the shaders decode (`wrap_index` in common.wgsl).
+    /// The index the shaders decode (`WRAP_*` in common.wgsl).
     pub fn index(self) -> u32 {
         self as u32
     }

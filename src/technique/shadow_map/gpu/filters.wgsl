@@ -51,12 +51,13 @@ fn receiver_plane(l: VirtualLevel, q: VirtualPoint, p: vec3f, n: vec3f, normal: 
     if !RECEIVER_PLANE || !faces_light(p, normal) {
         return vec2f(0.0);
     }
-    let step = level_texel_world(l, p) * max(kernel_reach(), 1.0);
+    let texel_world = level_texel_world(l, p);
+    let step = texel_world * max(kernel_reach(), 1.0);
     // Steps from the lookup point itself (p moved along n), not moved
     // again: the normal offset changes along the surface (with the distance
     // to the light, and as sinⁿθ), and tilted the plane by its change (a
     // floor a point light grazes came out speckled with partial shadow).
-    let lookup = offset_point(p, n, level_texel_world(l, p));
+    let lookup = offset_point(p, n, texel_world);
     let t = surface_tangent(normal);
     let at = vec3f(q.uv, q.z);
     let qx = virtual_point(l, lookup + t * step, vec3f(0.0));
