@@ -56,6 +56,41 @@ fn casters_that_cannot_shadow_the_view_are_not_dispatched() {
     }
 }
 
+/// Under a point light a frame's samples crowd onto a few of the six cube
+/// faces (the bunny's mostly onto the floor's): with the grid left
+/// automatic each face's cells follow its samples (about one each, none
+/// for an empty face), so the cells number about the samples, not six
+/// faces' worth, and the lists are no longer than under one side for every
+/// face (`grid`, a side giving a cell per pixel were the samples spread
+/// evenly, raised to the least, 64) with more than twice the cells; the
+/// mask is the same.
+#[test]
+fn a_point_lights_cells_follow_its_samples() {
+    let (w, h) = (192, 108);
+    let s = preset("bunny", "default", "point");
+    let counters = |params: &[&str]| {
+        let mut hf = rendered_frame(&s, "irregular", params, w, h);
+        render_again(&mut hf, &s);
+        render_again(&mut hf, &s);
+        let c = |name| counter(&hf, name);
+        (c("samples_binned"), c("grid_cells"), c("list_length_p99"))
+    };
+    let (samples, cells, p99) = counters(&[]);
+    assert!(samples > (w * h / 4) as f64, "{samples} samples");
+    assert!(
+        cells >= samples && cells <= samples + 2.0 * (6.0 * samples).sqrt() + 6.0,
+        "{cells} cells for {samples} samples"
+    );
+    let side = ((w * h) as f64 / 6.0).sqrt().ceil() as u32;
+    let even = format!("grid={}", side.max(64));
+    let (_, even_cells, even_p99) = counters(&[even.as_str()]);
+    assert!(even_cells > 2.0 * cells, "{even_cells} against {cells}");
+    assert!(p99 <= even_p99, "fitted p99 {p99}, one side {even_p99}");
+    let fitted = mask_of(&s, "irregular", &[], w, h);
+    let one_side = mask_of(&s, "irregular", &[even.as_str()], w, h);
+    assert_eq!(fitted, one_side);
+}
+
 /// An opaque solid's faces turned away from the light are not tested:
 /// the mask is the one every face gives (the same solids as cut-outs with
 /// no hole, which are never skipped), with fewer tests.

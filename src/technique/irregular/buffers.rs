@@ -6,7 +6,7 @@ use super::gpu::{
     AUX_HEADER_WORDS, IrregularUniform, JOB_CAPACITY, MAX_FACES, binning_words, cells_fitting,
     storage_buffer,
 };
-use super::{BlendedCrossing, IrregularConfig, IrregularZBuffer, casters};
+use super::{BlendedCrossing, GridCells, IrregularConfig, IrregularZBuffer, casters};
 use crate::scene::scene_fingerprint;
 use crate::technique::MaskContext;
 use anyhow::{Result, bail};
@@ -14,13 +14,11 @@ use anyhow::{Result, bail};
 /// The buffers of one frame size, scene, light shape, grid, sample count and
 /// whether the marks hold optical depths.
 pub(super) struct Buffers {
-    pub(super) key: (u32, u32, u64, usize, u32, u32, bool),
+    pub(super) key: (u32, u32, u64, usize, GridCells, u32, bool),
     pub(super) uniform: wgpu::Buffer,
     /// Counts, offsets and prefix-sum partials (`cells` of irregular.wgsl).
     pub(super) binning: wgpu::Buffer,
-    pub(super) cell_count: u64,
-    /// Cells per face side.
-    pub(super) grid: u32,
+    pub(super) grid: GridCells,
     pub(super) samples: wgpu::Buffer,
     pub(super) marks: wgpu::Buffer,
     pub(super) triangles: wgpu::Buffer,
@@ -34,7 +32,7 @@ pub(super) struct Buffers {
     /// Jobs the job list holds.
     pub(super) job_capacity: u32,
     pub(super) aux: wgpu::Buffer,
-    /// The per-face bounds, copied from `aux` (`face_boxes`).
+    /// The per-face bounds and grids, copied from `aux` (`face_boxes`).
     pub(super) face_boxes: wgpu::Buffer,
     /// The job passes' indirect arguments, copied from `aux`: the opaque
     /// casters', then the see-through ones'.
@@ -87,7 +85,7 @@ impl IrregularZBuffer {
         let pixels = w as u64 * h as u64;
         let limit = ctx.gpu.device.limits().max_storage_buffer_binding_size;
         let samples = pixels * self.config.pixel_samples as u64;
-        let grid = self.config.grid_side(samples, faces, cells_fitting(limit));
+        let grid = self.config.grid_cells(samples, faces, cells_fitting(limit));
         let key = (
             w,
             h,
@@ -114,12 +112,11 @@ impl IrregularZBuffer {
         let gpu = ctx.gpu;
         let casters = casters::caster_triangles(ctx.scene);
         let triangles = &casters.triangles;
-        let cell_count = faces as u64 * grid as u64 * grid as u64;
         let capacity = job_capacity(triangles.len() as u64, faces as u64, asked);
         let sizes = [
             (
                 "cell counts and offsets (grid)",
-                binning_words(cell_count) * 4,
+                binning_words(grid.cells) * 4,
             ),
             ("samples", sample_bytes(pixels, self.config.pixel_samples)),
             ("caster triangles", triangles.len() as u64 * 64),
@@ -154,7 +151,7 @@ impl IrregularZBuffer {
         let aux = storage_buffer(gpu, "irregular header and job list", sizes[4].1);
         let face_boxes = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("irregular face bounds"),
-            size: (MAX_FACES * 16) as u64,
+            size: (2 * MAX_FACES * 16) as u64,
             usage: crate::gpu::uniform_usage(gpu),
             mapped_at_creation: false,
         });
@@ -184,7 +181,6 @@ impl IrregularZBuffer {
             key,
             uniform,
             binning,
-            cell_count,
             grid,
             samples,
             marks,

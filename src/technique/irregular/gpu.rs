@@ -12,7 +12,7 @@ use std::sync::OnceLock;
 pub const MAX_FACES: usize = 6;
 /// Words of the `aux` buffer's header (`AUX_JOB_LIST` of irregular.wgsl):
 /// counters, the list-length histogram, the per-face bounds, the longest list.
-pub const AUX_HEADER_WORDS: u64 = 80;
+pub const AUX_HEADER_WORDS: u64 = 112;
 /// The header's counters and histogram (`AUX_*` of irregular.wgsl).
 pub const AUX_SAMPLES: usize = 0;
 pub const AUX_PAIRS: usize = 1;
@@ -30,10 +30,16 @@ pub const AUX_LONGEST: usize = 64;
 /// The see-through casters' jobs and their indirect dispatch arguments.
 pub const AUX_SEE_THROUGH_JOBS: usize = 65;
 pub const AUX_SEE_THROUGH_DISPATCH: usize = 66;
+/// Per face, 4 words of its grid (side, first cell, cells used, 0), copied
+/// to the `face_boxes` uniform after the bounds.
+pub const AUX_LAYOUT: usize = 88;
 /// Samples of one job of a large triangle (`JOB_SAMPLES`), checked against
 /// the WGSL.
 #[cfg(test)]
 pub const JOB_SAMPLES: u32 = 1024;
+/// Pixels along a row that one invocation of the bounds pass visits
+/// (`BOUNDS_RUN`).
+pub const BOUNDS_RUN: u32 = 8;
 /// Counts summed by one workgroup of the prefix sum (`SCAN_BLOCK`).
 pub const SCAN_BLOCK: u64 = 1024;
 /// Threads per workgroup of every compute pass.
@@ -63,6 +69,7 @@ fn module_source() -> String {
     [
         super::BlendedCrossing::wgsl_constants("BLENDED").as_str(),
         &format!("const MIN_FOOTPRINT_COSINE: f32 = {min_cosine:?};"),
+        &format!("const BOUNDS_RUN: u32 = {BOUNDS_RUN}u;"),
         include_str!("irregular.wgsl"),
         include_str!("samples.wgsl"),
     ]
@@ -84,11 +91,11 @@ pub enum TestPass {
     Transmit,
 }
 
-/// The passes over the pixels' samples, built per sample count (`SUB_PIXEL`
-/// of samples.wgsl: the centre alone carries no sub-pixel code).
+/// The full-screen passes over the pixels' samples after their bounds,
+/// built per sample count (`SUB_PIXEL` of samples.wgsl: the centre alone
+/// carries no sub-pixel code).
 #[derive(Clone, Copy, Debug)]
 pub enum SamplePass {
-    Bounds,
     Count,
     Scatter,
 }
@@ -96,7 +103,6 @@ pub enum SamplePass {
 impl SamplePass {
     fn entry(self) -> &'static str {
         match self {
-            SamplePass::Bounds => "fs_bounds",
             SamplePass::Count => "fs_count",
             SamplePass::Scatter => "fs_scatter",
         }
@@ -152,8 +158,11 @@ pub struct IrregularShared {
     pub scan_partials: wgpu::ComputePipeline,
     pub scan_add: wgpu::ComputePipeline,
     pub job_dispatch: wgpu::ComputePipeline,
+    pub face_layout: wgpu::ComputePipeline,
+    /// Indexed by [sub-pixel].
+    bounds_passes: [OnceLock<wgpu::ComputePipeline>; 2],
     /// Indexed by [sub-pixel][`SamplePass`].
-    sample_passes: [[OnceLock<wgpu::RenderPipeline>; 3]; 2],
+    sample_passes: [[OnceLock<wgpu::RenderPipeline>; 2]; 2],
     /// Indexed by [sub-pixel][`TestStage`][`TestPass`].
     test_passes: [[[OnceLock<wgpu::ComputePipeline>; 3]; 2]; 2],
 }
@@ -191,9 +200,11 @@ impl IrregularShared {
             scan_partials: compute(gpu, &pipeline_layout, &module, "cs_scan_partials", &[]),
             scan_add: compute(gpu, &pipeline_layout, &module, "cs_scan_add", &[]),
             job_dispatch: compute(gpu, &pipeline_layout, &module, "cs_job_dispatch", &[]),
+            face_layout: compute(gpu, &pipeline_layout, &module, "cs_face_layout", &[]),
             layout,
             module,
             pipeline_layout,
+            bounds_passes: Default::default(),
             sample_passes: Default::default(),
             test_passes: Default::default(),
         }
@@ -214,6 +225,21 @@ impl IrregularShared {
                 &self.module,
                 pass.entry(),
                 wgpu::ColorWrites::empty(),
+                &constants,
+            )
+        })
+    }
+
+    /// The bounds pass (a thread per run of [`BOUNDS_RUN`] pixels) for
+    /// pixels of one sample or, with `sub_pixel`, several.
+    pub fn bounds_pass(&self, gpu: &GpuContext, sub_pixel: bool) -> &wgpu::ComputePipeline {
+        self.bounds_passes[sub_pixel as usize].get_or_init(|| {
+            let constants = [("SUB_PIXEL", flag(sub_pixel))];
+            compute(
+                gpu,
+                &self.pipeline_layout,
+                &self.module,
+                "cs_bounds",
                 &constants,
             )
         })
@@ -364,6 +390,7 @@ mod tests {
                 ("AUX_LONGEST", AUX_LONGEST as u32),
                 ("AUX_SEE_THROUGH_JOBS", AUX_SEE_THROUGH_JOBS as u32),
                 ("AUX_SEE_THROUGH_DISPATCH", AUX_SEE_THROUGH_DISPATCH as u32),
+                ("AUX_LAYOUT", AUX_LAYOUT as u32),
                 ("AUX_JOB_LIST", AUX_HEADER_WORDS as u32),
                 ("WORKGROUP", WORKGROUP),
                 ("JOB_SAMPLES", JOB_SAMPLES),

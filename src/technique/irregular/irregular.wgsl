@@ -14,15 +14,17 @@ struct Irregular {
     // xyz the light's position (local lights) or the direction it travels
     // (directional), w 1 for a local light
     light: vec4f,
-    // x faces, y grid side R (cells per face side), z frame width, w frame
-    // height
+    // x faces, y the grid side asked for (`grid`: cells per face side on
+    // every face), or 0: each face's side fitted to its samples
+    // (`cs_face_layout`), z frame width, w frame height
     grid: vec4u,
     // x unused, y samples above which a triangle is left to the
-    // job pass, z the job list's capacity, w the cells (faces · R²)
+    // job pass, z the job list's capacity, w the cells the binning buffer
+    // holds (N)
     work: vec4u,
     // x ray-origin offset in ULPs and z its lift as a fraction of the
     // pixel's footprint (the reference's rule), y the light's range (0:
-    // none), w unused
+    // none), w the cells per sample a fitted face is given
     offset: vec4f,
     // x samples per pixel (1: its centre; up to 32, one mark bit each), y
     // how rays meet translucent casters (BLENDED_*), zw unused
@@ -77,10 +79,11 @@ fn samples_per_pixel() -> u32 {
 // The header (AUX_* words: counters, list-length histogram, per-face bounds)
 // and then the job list.
 @group(2) @binding(5) var<storage, read_write> aux: array<atomic<u32>>;
-// The per-face bounds of the header (AUX_BOUNDS), copied there after the
-// bounds pass: the passes after it read them as plain words, not atomics
-// (which llvmpipe runs a lane at a time).
-@group(2) @binding(6) var<uniform> face_boxes: array<vec4u, 6>;
+// The per-face bounds of the header (AUX_BOUNDS), then the faces' grids
+// (AUX_LAYOUT), copied there after the layout pass: the passes after it
+// read them as plain words, not atomics (which llvmpipe runs a lane at a
+// time).
+@group(2) @binding(6) var<uniform> face_boxes: array<vec4u, 12>;
 // The caster triangles this frame tests, as ranges of `triangles`: (the
 // run's thread that starts the range, its first triangle), the opaque
 // run's first (`irr.kept`); the clusters that cannot shadow a sample are
@@ -107,9 +110,14 @@ const AUX_LONGEST: u32 = 64u;
 // indirect dispatch of their job pass.
 const AUX_SEE_THROUGH_JOBS: u32 = 65u;
 const AUX_SEE_THROUGH_DISPATCH: u32 = 66u;
+// Per face, the samples the bounds pass found on it.
+const AUX_FACE_SAMPLES: u32 = 80u;
+// Per face, 4 words of its grid (`cs_face_layout`): cells per side, its
+// first cell, the cells all faces use, 0.
+const AUX_LAYOUT: u32 = 88u;
 // The jobs, four words each: triangle · 8 + face, job, the box row its
 // first sample lies in, the box's samples before that row.
-const AUX_JOB_LIST: u32 = 80u;
+const AUX_JOB_LIST: u32 = 112u;
 // Threads of every workgroup; samples of one job (so that no invocation
 // loops long: llvmpipe ends a shader's loops after 65535 iterations in
 // all, and GPUs have watchdogs); counts summed by one prefix-sum block.
@@ -296,7 +304,8 @@ fn test_sample(t: CasterTriangle, slot: u32) -> u32 {
     return 1u;
 }
 
-// The run of `samples` of row y of the box's cells.
+// The run of `samples` of row y of the box's cells (the row's cells are
+// consecutive, so their samples are).
 fn row_run(face: u32, box: vec4i, y: i32) -> vec2u {
     let n = irr.work.w;
     let a = atomicLoad(&cells[n + cell_index(face, vec2i(box.x, y))]);
@@ -413,8 +422,8 @@ fn triangle_cells(t: CasterTriangle, face: u32, f: FaceBounds) -> vec4i {
     if kept == 0u || any(hi < f.lo) || any(lo > f.hi) {
         return vec4i(0, 0, -1, -1);
     }
-    let c0 = clamp_cell(cell_of(f, max(lo, f.lo)));
-    let c1 = clamp_cell(cell_of(f, min(hi, f.hi)));
+    let c0 = clamp_cell(f, cell_of(f, max(lo, f.lo)));
+    let c1 = clamp_cell(f, cell_of(f, min(hi, f.hi)));
     return vec4i(c0, c1);
 }
 

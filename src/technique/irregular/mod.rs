@@ -12,8 +12,9 @@
 //!
 //! Per frame: the samples' bounds on each face (one orthographic view for a
 //! directional light, one perspective view along a spot light's axis, six
-//! cube faces for point lights and spots wider than 75°), the
-//! samples binned by count, prefix sum and scatter (sorted by cell, so a
+//! cube faces for point lights and spots wider than 75°) and each face's
+//! grid, fitted to the samples it holds (a point light's crowd onto one or
+//! two faces), the samples binned by count, prefix sum and scatter (sorted by cell, so a
 //! row of cells' samples is one contiguous run and the lists cannot
 //! overflow), a triangle pass in which each triangle tests the samples of
 //! its cells, the opaque casters first and the see-through ones after,
@@ -38,10 +39,10 @@ use anyhow::Result;
 use buffers::Buffers;
 use glam::{Mat4, UVec4, Vec3, Vec4};
 use gpu::{
-    AUX_BOUNDS, AUX_DISPATCH, AUX_HEADER_WORDS, AUX_HISTOGRAM, AUX_JOBS, AUX_LONGEST, AUX_OVERFLOW,
-    AUX_PAIRS, AUX_SAMPLES, AUX_SEE_THROUGH_DISPATCH, AUX_SEE_THROUGH_JOBS, AUX_TESTS,
-    HISTOGRAM_BINS, IrregularShared, IrregularUniform, MAX_FACES, SCAN_BLOCK, SamplePass, TestPass,
-    TestStage, grid_of_workgroups, workgroups_for,
+    AUX_BOUNDS, AUX_DISPATCH, AUX_HEADER_WORDS, AUX_HISTOGRAM, AUX_JOBS, AUX_LAYOUT, AUX_LONGEST,
+    AUX_OVERFLOW, AUX_PAIRS, AUX_SAMPLES, AUX_SEE_THROUGH_DISPATCH, AUX_SEE_THROUGH_JOBS,
+    AUX_TESTS, BOUNDS_RUN, HISTOGRAM_BINS, IrregularShared, IrregularUniform, MAX_FACES,
+    SCAN_BLOCK, SamplePass, TestPass, TestStage, grid_of_workgroups, workgroups_for,
 };
 use std::sync::Arc;
 use timing::{Pass, PassTimer};
@@ -51,9 +52,9 @@ const GRID: ParamSpec = ParamSpec::int(
     0,
     0,
     4096,
-    "cells per side of each light-space face the samples are binned into (directional lights and spot lights up to 75°: one face; point lights and wider spots: six cube faces), at least 64; 0: chosen from the frame, the power of two that gives at least one cell per sample over the faces, within the largest storage buffer (a 1280 × 720 frame: 1024² under a directional light, six faces of 512² under a point light) — more cells shorten the lists, fewer shorten the per-cell passes",
+    "cells per side of each light-space face the samples are binned into (directional lights and spot lights up to 75°: one face; point lights and wider spots: six cube faces), at least 64; 0: each face's grid fitted to the samples it holds, a cell per sample (a point light's samples crowd onto one or two faces, which then get the cells), within the largest storage buffer — more cells shorten the lists, fewer shorten the per-cell passes",
 );
-/// Cells per sample the automatic grid gives at least, over the faces.
+/// Cells per sample a face fitted to its samples is given.
 const CELLS_PER_SAMPLE: f64 = 1.0;
 /// The uniform's cone cosine for a light without a cone: below every
 /// cosine, so every direction is inside.
@@ -142,24 +143,27 @@ struct IrregularConfig {
 }
 
 impl IrregularConfig {
-    /// The grid's side for `samples` samples over `faces` faces: `grid`, or
-    /// with `grid` 0 the power of two that gives each face at least
-    /// [`CELLS_PER_SAMPLE`] cells per sample it may hold on average, halved
-    /// while the faces would hold more than `max_cells` (the largest
-    /// storage buffer's worth).
-    fn grid_side(&self, samples: u64, faces: usize, max_cells: u64) -> u32 {
-        if self.grid != 0 {
-            return self.grid.clamp(GRID_MIN, GRID.max as u32);
-        }
+    /// The grid for at most `samples` samples over `faces` faces: `grid`
+    /// on every face, or with `grid` 0 the faces' sides left to the GPU
+    /// (`cs_face_layout` of samples.wgsl: ⌈√(n_f · c)⌉ for the n_f samples
+    /// a face holds, c = [`CELLS_PER_SAMPLE`]), with room for them: the
+    /// sides' squares sum to at most Σ(√(n_f c) + 1)² ≤ c·n + 2√(F·c·n) + F
+    /// over F faces and n samples (Cauchy–Schwarz), within `max_cells`
+    /// (the largest storage buffer's worth; past it the crowded faces get
+    /// fewer cells).
+    fn grid_cells(&self, samples: u64, faces: usize, max_cells: u64) -> GridCells {
         let faces = faces.max(1) as u64;
-        let cells = CELLS_PER_SAMPLE * samples as f64 / faces as f64;
-        let mut side = (cells.sqrt().ceil() as u32)
-            .next_power_of_two()
-            .clamp(GRID_MIN, GRID.max as u32);
-        while side > GRID_MIN && faces * side as u64 * side as u64 > max_cells {
-            side /= 2;
+        if self.grid != 0 {
+            let side = self.grid.clamp(GRID_MIN, GRID.max as u32);
+            let cells = faces * side as u64 * side as u64;
+            return GridCells { side, cells };
         }
-        side
+        let wanted = CELLS_PER_SAMPLE * samples as f64;
+        let bound = wanted + 2.0 * (faces as f64 * wanted).sqrt() + faces as f64;
+        GridCells {
+            side: 0,
+            cells: (bound.ceil() as u64).clamp(faces, max_cells.max(faces)),
+        }
     }
 
     fn parse(p: &ParamValues) -> Result<IrregularConfig> {
@@ -172,6 +176,16 @@ impl IrregularConfig {
             blended: p.choice(&BLENDED_CASTERS)?,
         })
     }
+}
+
+/// The grid a frame's buffers are made for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct GridCells {
+    /// Cells per side of every face (`grid`), or 0: each face's side fitted
+    /// to its samples on the GPU.
+    side: u32,
+    /// The cells the binning buffer holds.
+    cells: u64,
 }
 
 /// What the last frame counted (read back a frame late).
@@ -187,6 +201,8 @@ struct ListStats {
     /// octave (`histogram_bin` of samples.wgsl), the last one open.
     histogram: [u32; HISTOGRAM_BINS],
     longest: u32,
+    /// Cells the faces' grids took.
+    cells: u32,
 }
 
 impl ListStats {
@@ -201,6 +217,7 @@ impl ListStats {
             overflow: w[AUX_OVERFLOW],
             histogram,
             longest: w[AUX_LONGEST],
+            cells: w[AUX_LAYOUT + 2],
         }
     }
 
@@ -319,8 +336,9 @@ impl ShadowTechnique for IrregularZBuffer {
         let shared = self.shared.clone();
         let stamps = self.timer.begin_frame(ctx.gpu);
         let sub_pixel = config.pixel_samples > 1;
-        let [bounds, count, scatter] = [SamplePass::Bounds, SamplePass::Count, SamplePass::Scatter]
+        let [count, scatter] = [SamplePass::Count, SamplePass::Scatter]
             .map(|pass| shared.sample_pass(ctx.gpu, pass, sub_pixel));
+        let bounds = shared.bounds_pass(ctx.gpu, sub_pixel);
         let see_through = match config.blended {
             BlendedCrossing::Transmit => TestPass::Transmit,
             _ => TestPass::SeeThrough,
@@ -331,7 +349,7 @@ impl ShadowTechnique for IrregularZBuffer {
         ctx.gpu
             .queue
             .write_buffer(&b.uniform, 0, bytemuck::bytes_of(&uniform));
-        encoder.clear_buffer(&b.binning, 0, Some(b.cell_count * 4));
+        encoder.clear_buffer(&b.binning, 0, Some(b.grid.cells * 4));
         encoder.clear_buffer(&b.marks, 0, None);
         encoder.clear_buffer(&b.aux, 0, Some(AUX_HEADER_WORDS * 4));
         let fullscreen = |encoder: &mut wgpu::CommandEncoder, label, pipeline| {
@@ -358,15 +376,21 @@ impl ShadowTechnique for IrregularZBuffer {
                 }
             }
         };
+        let runs = ctx.frame.width().div_ceil(BOUNDS_RUN) as u64 * ctx.frame.height() as u64;
+        let (x, y) = workgroups_for(runs);
         stamps.time(encoder, Pass::Bounds, |e| {
-            fullscreen(e, "irregular bounds", bounds);
-            let at = AUX_BOUNDS as u64 * 4;
-            e.copy_buffer_to_buffer(&b.aux, at, &b.face_boxes, 0, MAX_FACES as u64 * 16);
+            compute(e, "irregular bounds", bounds, Dispatch::Direct(x, y));
+            let one = Dispatch::Direct(1, 1);
+            compute(e, "irregular face layout", &shared.face_layout, one);
+            let face_bytes = MAX_FACES as u64 * 16;
+            let (boxes, grids) = (AUX_BOUNDS as u64 * 4, AUX_LAYOUT as u64 * 4);
+            e.copy_buffer_to_buffer(&b.aux, boxes, &b.face_boxes, 0, face_bytes);
+            e.copy_buffer_to_buffer(&b.aux, grids, &b.face_boxes, face_bytes, face_bytes);
         });
         stamps.time(encoder, Pass::Counts, |e| {
             fullscreen(e, "irregular counts", count)
         });
-        let (x, y) = grid_of_workgroups(b.cell_count.div_ceil(SCAN_BLOCK));
+        let (x, y) = grid_of_workgroups(b.grid.cells.div_ceil(SCAN_BLOCK));
         let blocks = Dispatch::Direct(x, y);
         stamps.time(encoder, Pass::PrefixSum, |e| {
             compute(e, "irregular prefix sum", &shared.scan_blocks, blocks);
@@ -447,6 +471,7 @@ impl ShadowTechnique for IrregularZBuffer {
             ("list_length_max", s.longest as f64),
             ("large_triangle_jobs", s.jobs as f64),
             ("job_overflow_samples", s.overflow as f64),
+            ("grid_cells", s.cells as f64),
         ];
         counters.extend(self.timer.counters());
         counters
@@ -506,13 +531,18 @@ fn frame_uniform(
             LightType::Directional => light.direction.normalize().extend(0.0),
             _ => light.position.extend(1.0),
         },
-        grid: UVec4::new(faces as u32, b.grid, ctx.frame.width(), ctx.frame.height()),
-        work: UVec4::new(0, config.large_samples, b.job_capacity, b.cell_count as u32),
+        grid: UVec4::new(
+            faces as u32,
+            b.grid.side,
+            ctx.frame.width(),
+            ctx.frame.height(),
+        ),
+        work: UVec4::new(0, config.large_samples, b.job_capacity, b.grid.cells as u32),
         offset: Vec4::new(
             config.offset_ulps,
             light.range,
             config.offset_footprint,
-            0.0,
+            CELLS_PER_SAMPLE as f32,
         ),
         pixel: UVec4::new(config.pixel_samples, config.blended.index() as u32, 0, 0),
         kept: UVec4::new(
@@ -612,20 +642,27 @@ mod tests {
             blended: BlendedCrossing::Cutout,
         };
         let any = u64::MAX;
-        assert_eq!(auto.grid_side(1280 * 720, 1, any), 1024);
-        assert_eq!(auto.grid_side(1280 * 720, 6, any), 512);
-        assert_eq!(auto.grid_side(640 * 360, 1, any), 512);
-        assert_eq!(auto.grid_side(640 * 360, 6, any), 256);
-        assert_eq!(auto.grid_side(16, 6, any), 64);
-        assert_eq!(auto.grid_side(1 << 40, 1, any), 4096);
-        // 16 samples a pixel of 1280 × 720 would ask for 4096², past a
-        // 128 MiB buffer's 16.7 M cells of counts and offsets.
+        let fitted = |cells| GridCells { side: 0, cells };
+        // 921 600 samples: 921 600 + 2·960 + 1 cells on one face, and
+        // 2·√(6 · 921 600) + 6 more over six.
+        assert_eq!(auto.grid_cells(1280 * 720, 1, any), fitted(923_521));
+        assert_eq!(auto.grid_cells(1280 * 720, 6, any), fitted(926_310));
+        assert_eq!(auto.grid_cells(0, 6, any), fitted(6));
+        // 32 samples a pixel of 1280 × 720 would ask for 29.5 M cells, past
+        // a 128 MiB buffer's 16.7 M cells of counts and offsets.
         let max_cells = gpu::cells_fitting(128 << 20);
-        assert_eq!(auto.grid_side(16 * 1280 * 720, 1, max_cells), 2048);
+        assert_eq!(
+            auto.grid_cells(32 * 1280 * 720, 1, max_cells),
+            fitted(max_cells)
+        );
         let fixed = IrregularConfig { grid: 32, ..auto };
-        assert_eq!(fixed.grid_side(1280 * 720, 1, any), 64);
+        let side = |side, cells| GridCells { side, cells };
+        assert_eq!(fixed.grid_cells(1280 * 720, 1, any), side(64, 64 * 64));
         let fixed = IrregularConfig { grid: 4096, ..auto };
-        assert_eq!(fixed.grid_side(1280 * 720, 6, max_cells), 4096);
+        assert_eq!(
+            fixed.grid_cells(1280 * 720, 6, max_cells),
+            side(4096, 6 << 24)
+        );
     }
 
     /// The list-length quantiles come from the histogram of non-empty cells.

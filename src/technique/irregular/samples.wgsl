@@ -103,38 +103,48 @@ fn image_of(v: vec3f) -> vec2f {
     return v.xy;
 }
 
-// A face's samples: their images' bounds.
+// A face's samples: their images' bounds, and the cells per side of its
+// grid over them.
 struct FaceBounds {
     lo: vec2f,
     hi: vec2f,
+    side: u32,
     empty: bool,
 };
 
-// A face's bounds, from their copy (`face_boxes`) once the bounds pass has
-// raised them.
+// A face's bounds and grid, from their copy (`face_boxes`) once the bounds
+// and layout passes have found them.
 fn face_bounds(face: u32) -> FaceBounds {
     let b = face_boxes[face];
     var f: FaceBounds;
     f.empty = b.z == 0u;
     f.lo = vec2f(from_ordered(~b.x), from_ordered(~b.y));
     f.hi = vec2f(from_ordered(b.z), from_ordered(b.w));
+    f.side = face_boxes[MAX_FACES + face].x;
     return f;
 }
 
 // The grid cell (x, y) of an image point in `f`, unclamped.
 fn cell_of(f: FaceBounds, c: vec2f) -> vec2i {
-    let r = f32(irr.grid.y);
+    let r = f32(f.side);
     let extent = max(f.hi - f.lo, vec2f(1e-30));
     return vec2i(floor((c - f.lo) / extent * r));
 }
 
-fn clamp_cell(c: vec2i) -> vec2i {
-    return clamp(c, vec2i(0), vec2i(i32(irr.grid.y) - 1));
+fn clamp_cell(f: FaceBounds, c: vec2i) -> vec2i {
+    return clamp(c, vec2i(0), vec2i(i32(f.side) - 1));
 }
 
+// Cell (x, y) of a face: the faces' grids follow one another, each
+// row-major.
 fn cell_index(face: u32, c: vec2i) -> u32 {
-    let r = irr.grid.y;
-    return (face * r + u32(c.y)) * r + u32(c.x);
+    let grid = face_boxes[MAX_FACES + face];
+    return grid.y + u32(c.y) * grid.x + u32(c.x);
+}
+
+// The cells the faces' grids use, of the N the buffer holds.
+fn cells_used() -> u32 {
+    return face_boxes[MAX_FACES].z;
 }
 
 // aux[word] raised to `value`, read first: after the first samples few
@@ -181,39 +191,109 @@ fn view_point(face: u32, o: vec3f) -> vec3f {
 
 // The cell of the sample at `v` in the view of `face`.
 fn cell_at(face: u32, v: vec3f) -> u32 {
-    return cell_index(face, clamp_cell(cell_of(face_bounds(face), image_of(v))));
+    let f = face_bounds(face);
+    return cell_index(face, clamp_cell(f, cell_of(f, image_of(v))));
 }
 
-// Pass 1, per pixel: the bounds of the samples' images on each face;
-// samples the light does not reach marked (and not binned); one sample
-// per pixel staged.
-@fragment
-fn fs_bounds(@builtin(position) frag: vec4f) -> @location(0) vec4f {
-    let px = vec2u(frag.xy);
-    let pixel = px.y * irr.grid.z + px.x;
-    let s = surface(px);
-    var staged = vec4u(0u, 0u, 0u, NOT_BINNED);
-    for (var k = 0u; s.seen && k < samples_per_pixel(); k++) {
-        let o = sample_origin(px, k, s);
-        if !light_reaches(o, s.n) {
-            atomicOr(&marks[pixel], 1u << k);
-            continue;
+// A run of samples on one face: their images' bounds and count.
+struct FaceRun {
+    face: u32,
+    lo: vec2f,
+    hi: vec2f,
+    count: u32,
+};
+
+// The run's bounds raised into the header's and its count added to its
+// face's.
+fn add_face_run(r: FaceRun) {
+    if r.count == 0u {
+        return;
+    }
+    let b = AUX_BOUNDS + r.face * 4u;
+    raise(b, ~ordered(r.lo.x));
+    raise(b + 1u, ~ordered(r.lo.y));
+    raise(b + 2u, ordered(r.hi.x));
+    raise(b + 3u, ordered(r.hi.y));
+    atomicAdd(&aux[AUX_FACE_SAMPLES + r.face], r.count);
+}
+
+// Pass 1, a thread per run of BOUNDS_RUN pixels along a row (prepended
+// from gpu.rs): the bounds of the samples' images on each face, and the
+// samples each face holds, gathered in registers while the samples stay
+// on one face and added to the header when they leave it (a global atomic
+// per sample would contend for the header's few words); samples the light
+// does not reach marked (and not binned); one sample per pixel staged.
+@compute @workgroup_size(64)
+fn cs_bounds(@builtin(global_invocation_id) id: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let runs_per_row = (irr.grid.z + BOUNDS_RUN - 1u) / BOUNDS_RUN;
+    let run = id.y * groups.x * WORKGROUP + id.x;
+    let y = run / runs_per_row;
+    if y >= irr.grid.w {
+        return;
+    }
+    let x0 = (run % runs_per_row) * BOUNDS_RUN;
+    var r = FaceRun(0u, vec2f(0.0), vec2f(0.0), 0u);
+    for (var x = x0; x < min(x0 + BOUNDS_RUN, irr.grid.z); x++) {
+        let px = vec2u(x, y);
+        let pixel = y * irr.grid.z + x;
+        let s = surface(px);
+        var staged = vec4u(0u, 0u, 0u, NOT_BINNED);
+        for (var k = 0u; s.seen && k < samples_per_pixel(); k++) {
+            let o = sample_origin(px, k, s);
+            if !light_reaches(o, s.n) {
+                atomicOr(&marks[pixel], 1u << k);
+                continue;
+            }
+            let f = face_point(o);
+            if f.in_front {
+                let c = image_of(f.v);
+                if f.face != r.face || r.count == 0u {
+                    add_face_run(r);
+                    r = FaceRun(f.face, c, c, 0u);
+                }
+                r.lo = min(r.lo, c);
+                r.hi = max(r.hi, c);
+                r.count += 1u;
+                staged = vec4u(bitcast<vec3u>(o), f.face);
+            }
         }
-        let f = face_point(o);
-        if f.in_front {
-            let c = image_of(f.v);
-            let b = AUX_BOUNDS + f.face * 4u;
-            raise(b, ~ordered(c.x));
-            raise(b + 1u, ~ordered(c.y));
-            raise(b + 2u, ordered(c.x));
-            raise(b + 3u, ordered(c.y));
-            staged = vec4u(bitcast<vec3u>(o), f.face);
+        if !SUB_PIXEL {
+            samples[staged_slot(pixel)] = staged;
         }
     }
-    if !SUB_PIXEL {
-        samples[staged_slot(pixel)] = staged;
+    add_face_run(r);
+}
+
+// Pass 1b, one invocation: each face's grid. A side asked for (`grid`) is
+// every face's; else a face's side is fitted to its samples, so that it
+// has about `irr.offset.w` cells per sample (a point light's samples
+// crowd onto one or two of its six faces, whose cells they need; an empty
+// face takes none). The faces' grids follow one another in the buffer's
+// N cells; a face never takes the cells the faces after it need, one at
+// least (mod.rs sizes N for the fitted sides).
+@compute @workgroup_size(1)
+fn cs_face_layout() {
+    let faces = irr.grid.x;
+    var first = 0u;
+    for (var face = 0u; face < faces; face++) {
+        let n = atomicLoad(&aux[AUX_FACE_SAMPLES + face]);
+        var side = irr.grid.y;
+        if side == 0u {
+            side = select(0u, u32(ceil(sqrt(f32(n) * irr.offset.w))), n > 0u);
+            let room = irr.work.w - first - (faces - 1u - face);
+            side = clamp(side, min(n, 1u), u32(sqrt(f32(room))));
+            if side * side > room {
+                side -= 1u;
+            }
+        }
+        let w = AUX_LAYOUT + face * 4u;
+        atomicStore(&aux[w], side);
+        atomicStore(&aux[w + 1u], first);
+        first += side * side;
     }
-    return vec4f(1.0);
+    for (var face = 0u; face < faces; face++) {
+        atomicStore(&aux[AUX_LAYOUT + face * 4u + 2u], first);
+    }
 }
 
 // The cell sample `k` of a seen pixel is binned in, or N (irr.work.w)
@@ -291,6 +371,13 @@ fn cs_scan_blocks(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) 
     let n = irr.work.w;
     let block = group.y * groups.x + group.x;
     let start = min(block * SCAN_BLOCK, n);
+    if start > cells_used() {
+        // Past the faces' grids every count is 0 and no offset is read.
+        if lane == 0u && start < n {
+            atomicStore(&cells[2u * n + 1u + block], 0u);
+        }
+        return;
+    }
     let total = scan_in_workgroup(lane, start, min(start + SCAN_BLOCK, n), SCAN_BLOCK / WORKGROUP, n);
     if lane == WORKGROUP - 1u && start < n {
         atomicStore(&cells[2u * n + 1u + block], total);
@@ -337,6 +424,9 @@ fn cs_scan_add(@builtin(workgroup_id) group: vec3u, @builtin(num_workgroups) gro
     let n = irr.work.w;
     let block = group.y * groups.x + group.x;
     let start = min(block * SCAN_BLOCK, n);
+    if start > cells_used() {
+        return;
+    }
     let end = min(start + SCAN_BLOCK, n);
     let partial = atomicLoad(&cells[2u * n + 1u + block]);
     for (var cell = start + lane; cell < end; cell += WORKGROUP) {
