@@ -330,7 +330,7 @@ fn sub_pixel_samples_converge_to_the_covered_fraction() {
     let inv = view_proj.inverse();
     let lit_at = |fx: f32, fy: f32| {
         let ndc = Vec2::new(fx / w as f32 * 2.0 - 1.0, 1.0 - fy / h as f32 * 2.0);
-        let a = inv.project_point3(ndc.extend(0.0));
+        let a = inv.project_point3(ndc.extend(1.0));
         let b = inv.project_point3(ndc.extend(0.5));
         let p = a + (b - a) * (a.y / (a.y - b.y));
         let q = Mat4::from_rotation_y(-turn).transform_point3(p);

@@ -1,11 +1,11 @@
 //! Camera and light matrices against hand-derived values (wgpu: right-handed
-//! view space, NDC depth in [0, 1]).
+//! view space, NDC depth in [0, 1], reversed: near 1, far 0).
 
 use glam::{Vec3, Vec4};
 use shadowlab::scene::{Camera, Light};
 
 #[test]
-fn perspective_maps_near_to_0_and_far_to_1() {
+fn perspective_maps_near_to_1_and_far_to_0() {
     let cam = Camera {
         fov_y_deg: 90.0,
         near: 1.0,
@@ -13,17 +13,17 @@ fn perspective_maps_near_to_0_and_far_to_1() {
         ..Camera::new(Vec3::ZERO, Vec3::NEG_Z)
     };
     let p = cam.projection(1.0);
-    // Hand-derived: x' = x·cot(45°) = x, z_ndc = (far/(near−far)·z + near·far/(near−far)) / −z.
+    // Hand-derived: x' = x·cot(45°) = x, z_ndc = near/(far−near)·(far + z)/(−z).
     let near = p * Vec4::new(0.0, 0.0, -1.0, 1.0);
     let far = p * Vec4::new(0.0, 0.0, -10.0, 1.0);
-    assert!((near.z / near.w).abs() < 1e-6);
-    assert!((far.z / far.w - 1.0).abs() < 1e-6);
+    assert!((near.z / near.w - 1.0).abs() < 1e-6);
+    assert!((far.z / far.w).abs() < 1e-6);
     // A point at 45° up on the near plane lands on the top edge.
     let top = p * Vec4::new(0.0, 1.0, -1.0, 1.0);
     assert!((top.y / top.w - 1.0).abs() < 1e-6);
-    // z = −5.5 (midway): (10/(−9)·(−5.5) − 10/9)/5.5 = (55/9 − 10/9)/5.5 = 5/5.5.
+    // z = −5.5 (midway): 1/9 · (10 − 5.5)/5.5 = 0.5/5.5 = 1/11.
     let mid = p * Vec4::new(0.0, 0.0, -5.5, 1.0);
-    assert!((mid.z / mid.w - 5.0 / 5.5).abs() < 1e-6);
+    assert!((mid.z / mid.w - 1.0 / 11.0).abs() < 1e-6);
 }
 
 #[test]
@@ -60,12 +60,12 @@ fn bad_cameras_are_rejected() {
 fn the_infinite_projection_keeps_points_at_infinity_inside_the_depth_range() {
     let cam = shadowlab::scene::Camera::new(Vec3::new(1.0, 2.0, 3.0), Vec3::ZERO);
     let (finite, infinite) = (cam.projection(1.5), cam.projection_infinite(1.5));
-    // Same x and y; the near plane still maps to 0.
+    // Same x and y; the near plane still maps to 1.
     assert_eq!(finite.x_axis, infinite.x_axis);
     assert_eq!(finite.y_axis, infinite.y_axis);
     let near = infinite * glam::Vec4::new(0.0, 0.0, -cam.near, 1.0);
-    assert!((near.z / near.w).abs() < 1e-6);
-    // Directions (w = 0) in front of the camera: depth 1 − 2^-20, inside [0, 1).
+    assert!((near.z / near.w - 1.0).abs() < 1e-6);
+    // Directions (w = 0) in front of the camera: depth 2^-20, inside (0, 1].
     let view = cam.view();
     for d in [
         Vec3::new(0.0, 0.0, -1.0),
@@ -75,15 +75,18 @@ fn the_infinite_projection_keeps_points_at_infinity_inside_the_depth_range() {
         let c = infinite * view * d.extend(0.0);
         assert!(c.w > 0.0);
         let z = c.z / c.w;
-        assert!((1.0 - 2e-6..1.0).contains(&z), "{z}");
+        assert!(
+            (z - shadowlab::scene::INFINITE_FAR_EPSILON).abs() < 1e-9 && z > 0.0,
+            "{z}"
+        );
     }
-    // Far points approach that depth from below, monotonically.
-    let mut last = 0.0;
+    // Far points approach that depth from above, monotonically.
+    let mut last = 1.0 + 1e-6;
     for dist in [1.0f32, 10.0, 1e3, 1e6] {
         let c = infinite * glam::Vec4::new(0.0, 0.0, -dist, 1.0);
         let z = c.z / c.w;
         assert!(
-            z > last && z < 1.0 - shadowlab::scene::INFINITE_FAR_EPSILON * 0.99,
+            z < last && z > shadowlab::scene::INFINITE_FAR_EPSILON * 1.01,
             "{dist}: {z}"
         );
         last = z;

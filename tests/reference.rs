@@ -42,8 +42,8 @@ fn floor_point_at(view_proj: Mat4, w: u32, h: u32, fx: f32, fy: f32) -> Vec3 {
     let inv = view_proj.inverse();
     let ndc_x = 2.0 * fx / w as f32 - 1.0;
     let ndc_y = 1.0 - 2.0 * fy / h as f32;
-    let a = inv * Vec4::new(ndc_x, ndc_y, 0.0, 1.0);
-    let b = inv * Vec4::new(ndc_x, ndc_y, 1.0, 1.0);
+    let a = inv * Vec4::new(ndc_x, ndc_y, 1.0, 1.0);
+    let b = inv * Vec4::new(ndc_x, ndc_y, 0.5, 1.0);
     let (a, b) = (a.truncate() / a.w, b.truncate() / b.w);
     let t = a.y / (a.y - b.y);
     a + (b - a) * t

@@ -21,8 +21,15 @@ use std::sync::Arc;
 pub const MAX_LIGHTS: usize = 4;
 /// Visibility masks: one layer per light, 1 = fully lit.
 pub const MASK_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R16Float;
-/// Scene depth with a stencil for the stencil-based techniques.
-pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth24PlusStencil8;
+/// The camera's depth is reversed (near 1, far or infinity 0: the float
+/// format's dense values near 0 then balance the projection's loss of
+/// precision with distance; Reed 2015, "Depth precision visualized"): a
+/// nearer fragment has the greater depth, and the buffer clears to 0.
+pub const DEPTH_NEARER: wgpu::CompareFunction = wgpu::CompareFunction::Greater;
+/// [`DEPTH_NEARER`] or at the same depth.
+pub const DEPTH_NEARER_OR_EQUAL: wgpu::CompareFunction = wgpu::CompareFunction::GreaterEqual;
+/// The depth of nothing drawn (the far end of the reversed range).
+pub const DEPTH_CLEAR: f32 = 0.0;
 pub const GBUFFER_POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const GBUFFER_NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// The G-buffer's convex part IDs (`part_id` in common.wgsl; 0: none).
@@ -253,7 +260,7 @@ impl FrameLayouts {
 /// device cannot render to.
 pub fn check_formats(gpu: &GpuContext) -> anyhow::Result<()> {
     for (format, what) in [
-        (DEPTH_FORMAT, "the depth buffer"),
+        (gpu.depth_format, "the depth buffer"),
         (GBUFFER_POSITION_FORMAT, "the G-buffer's positions"),
         (GBUFFER_NORMAL_FORMAT, "the G-buffer's normals"),
         (GBUFFER_PART_FORMAT, "the G-buffer's convex parts"),

@@ -4,7 +4,7 @@
 //! the uniform.
 
 use super::{
-    COLOR_FORMAT, COLOR_FORMATS, DEPTH_FORMAT, FrameLayouts, FrameUniform, GBUFFER_NORMAL_FORMAT,
+    COLOR_FORMAT, COLOR_FORMATS, FrameLayouts, FrameUniform, GBUFFER_NORMAL_FORMAT,
     GBUFFER_PART_FORMAT, GBUFFER_POSITION_FORMAT, MASK_FORMAT, MAX_LIGHTS,
 };
 use crate::gpu::GpuContext;
@@ -73,7 +73,7 @@ impl FrameTargets {
         let depth = target(
             "depth",
             1,
-            DEPTH_FORMAT,
+            gpu.depth_format,
             U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
         );
         let depth_view = depth.create_view(&Default::default());

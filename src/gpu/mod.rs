@@ -54,6 +54,11 @@ pub struct GpuContext {
     pub pipeline_statistics: bool,
     /// `unclipped_depth` (depth clamp) is available.
     pub depth_clamp: bool,
+    /// The camera's depth-stencil format: 32-bit float depth where the
+    /// adapter has `DEPTH32FLOAT_STENCIL8` (with the camera's reversed
+    /// depth, nearly uniform relative precision to any distance), else
+    /// `Depth24PlusStencil8`.
+    pub depth_format: wgpu::TextureFormat,
     /// Where shaders read their parameter blocks from on this device.
     pub uniform_space: UniformSpace,
     /// Bytes one frame's targets or one technique instance's resources may
@@ -220,6 +225,7 @@ impl GpuContext {
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
             | wgpu::Features::PIPELINE_STATISTICS_QUERY
             | wgpu::Features::DEPTH_CLIP_CONTROL
+            | wgpu::Features::DEPTH32FLOAT_STENCIL8
             | wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
         let features = adapter.features() & wanted;
         let (device, queue) = adapter
@@ -255,6 +261,12 @@ impl GpuContext {
             ),
             pipeline_statistics: features.contains(wgpu::Features::PIPELINE_STATISTICS_QUERY),
             depth_clamp: features.contains(wgpu::Features::DEPTH_CLIP_CONTROL),
+            depth_format: if features.contains(wgpu::Features::DEPTH32FLOAT_STENCIL8) {
+                wgpu::TextureFormat::Depth32FloatStencil8
+            } else {
+                log::info!("no DEPTH32FLOAT_STENCIL8: the camera's depth is Depth24PlusStencil8");
+                wgpu::TextureFormat::Depth24PlusStencil8
+            },
             uniform_space: UniformSpace::for_adapter(&info),
             memory_budget: DEFAULT_MEMORY_BUDGET_MIB << 20,
             cache: DeviceCache::default(),

@@ -212,6 +212,7 @@ fn write_tables(
         "cpu_adapter": gpu.is_cpu_adapter(),
         "gpu_timestamps": gpu.timestamps,
         "pipeline_statistics": gpu.pipeline_statistics,
+        "depth_format": format!("{:?}", gpu.depth_format),
     });
     std::fs::write(
         out.join("bench.json"),

@@ -427,8 +427,8 @@ mod tests {
             .map(|i| {
                 let ndc_x = ((i % w) as f32 + 0.5) / w as f32 * 2.0 - 1.0;
                 let ndc_y = 1.0 - ((i / w) as f32 + 0.5) / h as f32 * 2.0;
-                let far = inverse.project_point3(Vec3::new(ndc_x, ndc_y, 1.0));
-                let dir = far - c.eye;
+                let on_ray = inverse.project_point3(Vec3::new(ndc_x, ndc_y, 0.5));
+                let dir = on_ray - c.eye;
                 let p = c.eye + dir * ((z - c.eye.z) / dir.z);
                 [p.x, p.y, p.z, 1.0]
             })

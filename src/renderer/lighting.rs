@@ -261,10 +261,10 @@ impl Lighting {
                         // Opaque surfaces shade the prepass's depth; translucent
                         // ones (not in it) are blended over what lies behind.
                         depth_stencil: Some(wgpu::DepthStencilState {
-                            format: frame::DEPTH_FORMAT,
+                            format: gpu.depth_format,
                             depth_write_enabled: Some(false),
                             depth_compare: Some(if key.material.translucent {
-                                wgpu::CompareFunction::Less
+                                frame::DEPTH_NEARER
                             } else {
                                 wgpu::CompareFunction::Equal
                             }),

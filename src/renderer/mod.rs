@@ -207,9 +207,9 @@ impl Renderer {
                             ..Default::default()
                         },
                         depth_stencil: Some(wgpu::DepthStencilState {
-                            format: frame::DEPTH_FORMAT,
+                            format: gpu.depth_format,
                             depth_write_enabled: Some(true),
-                            depth_compare: Some(wgpu::CompareFunction::Less),
+                            depth_compare: Some(frame::DEPTH_NEARER),
                             stencil: Default::default(),
                             bias: Default::default(),
                         }),
@@ -442,7 +442,7 @@ impl Renderer {
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: frame.depth_view(),
                     depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
+                        load: wgpu::LoadOp::Clear(frame::DEPTH_CLEAR),
                         store: wgpu::StoreOp::Store,
                     }),
                     stencil_ops: Some(wgpu::Operations {

@@ -2,7 +2,6 @@
 //! rendered frame, depth-tested against the scene (LESS_EQUAL, no depth
 //! writes), into a colour image of a given format.
 
-use crate::frame::DEPTH_FORMAT;
 use crate::gpu::GpuContext;
 
 /// The parts of an overlay pipeline that differ between overlays.
@@ -37,9 +36,9 @@ impl OverlayPipeline<'_> {
                         ..Default::default()
                     },
                     depth_stencil: Some(wgpu::DepthStencilState {
-                        format: DEPTH_FORMAT,
+                        format: gpu.depth_format,
                         depth_write_enabled: Some(false),
-                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                        depth_compare: Some(crate::frame::DEPTH_NEARER_OR_EQUAL),
                         stencil: Default::default(),
                         bias: Default::default(),
                     }),

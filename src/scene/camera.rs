@@ -1,11 +1,12 @@
-//! The perspective camera and its projections (wgpu's [0, 1] depth).
+//! The perspective camera and its projections (wgpu's [0, 1] depth,
+//! reversed: the near plane at 1).
 
 use super::Aabb;
 use anyhow::{Result, bail};
 use glam::{Mat4, Vec3};
 use serde::{Deserialize, Serialize};
 
-/// How far below 1 points at infinity land with
+/// How far above 0 points at infinity land with
 /// [`Camera::projection_infinite`]: 2^-20, sixteen steps of a 24-bit depth buffer.
 pub const INFINITE_FAR_EPSILON: f32 = 1.0 / (1u32 << 20) as f32;
 
@@ -60,27 +61,30 @@ impl Camera {
     pub fn view(&self) -> Mat4 {
         glam::camera::rh::view::look_at_mat4(self.eye, self.target, self.up)
     }
-    /// Perspective projection onto wgpu's [0,1] depth range:
-    /// `z_ndc = far/(near−far) · z_view/(−z_view) + near·far/(near−far)/(−z_view)`.
+    /// Perspective projection onto wgpu's [0,1] depth range, reversed (the
+    /// near plane at depth 1, the far plane at 0: with a float depth buffer
+    /// the relative precision stays nearly uniform to any distance):
+    /// `z_ndc = near/(far−near) · (far + z_view)/(−z_view)`.
     pub fn projection(&self, aspect: f32) -> Mat4 {
         glam::camera::rh::proj::directx::perspective(
             self.fov_y_deg.to_radians(),
             aspect,
-            self.near,
             self.far,
+            self.near,
         )
     }
     /// [`Camera::projection`] with the far plane at infinity, re-derived for
-    /// [0,1] depth: with clip z = a·z_e + b and w = −z_e (z_e < 0 in front),
-    /// z_ndc = −a − b/z_e; z_ndc(−near) = 0 gives b = a·near, and z_ndc → −a
-    /// as z_e → −∞. Taking −a = 1 − [`INFINITE_FAR_EPSILON`] keeps points at
-    /// infinity (w = 0 in, e.g. shadow-volume extrusions) inside the clip
-    /// volume and in front of the cleared depth 1 despite rounding.
+    /// reversed [0,1] depth: with clip z = a·z_e + b and w = −z_e (z_e < 0
+    /// in front), z_ndc = −a − b/z_e, which tends to −a as z_e → −∞ and is 1
+    /// at z_e = −near when b = near·(1 + a). Taking −a =
+    /// [`INFINITE_FAR_EPSILON`] keeps points at infinity (w = 0 in, e.g.,
+    /// shadow-volume extrusions) inside the clip volume and in front of the
+    /// cleared depth 0 despite rounding.
     pub fn projection_infinite(&self, aspect: f32) -> Mat4 {
         let mut m = self.projection(aspect);
-        let a = -(1.0 - INFINITE_FAR_EPSILON);
+        let a = -INFINITE_FAR_EPSILON;
         m.z_axis.z = a;
-        m.w_axis.z = a * self.near;
+        m.w_axis.z = self.near * (1.0 + a);
         m
     }
 

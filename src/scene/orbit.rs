@@ -52,8 +52,10 @@ pub fn fly(c: &mut Camera, forward: f32, right: f32, up: f32) {
 pub fn pixel_ray(view_proj: Mat4, size: Vec2, p: Vec2) -> (Vec3, Vec3) {
     let inv = view_proj.inverse();
     let ndc = Vec2::new(2.0 * p.x / size.x - 1.0, 1.0 - 2.0 * p.y / size.y);
-    let a = inv * Vec4::new(ndc.x, ndc.y, 0.0, 1.0);
-    let b = inv * Vec4::new(ndc.x, ndc.y, 1.0, 1.0);
+    // On the near plane (reversed depth 1) and farther along (0.5): both
+    // finite with a far plane at infinity too.
+    let a = inv * Vec4::new(ndc.x, ndc.y, 1.0, 1.0);
+    let b = inv * Vec4::new(ndc.x, ndc.y, 0.5, 1.0);
     let (a, b) = (a.truncate() / a.w, b.truncate() / b.w);
     (a, (b - a).normalize())
 }

@@ -271,9 +271,9 @@ pub fn pipeline_layout(
 
 /// Depth-stencil state of a pass over the frame's depth: read only,
 /// compare Always, with `stencil` (default: untouched).
-pub fn frame_depth_read(stencil: wgpu::StencilState) -> wgpu::DepthStencilState {
+pub fn frame_depth_read(gpu: &GpuContext, stencil: wgpu::StencilState) -> wgpu::DepthStencilState {
     wgpu::DepthStencilState {
-        format: crate::frame::DEPTH_FORMAT,
+        format: gpu.depth_format,
         depth_write_enabled: Some(false),
         depth_compare: Some(wgpu::CompareFunction::Always),
         stencil,

@@ -296,7 +296,7 @@ fn fullscreen(
             blend: None,
             write_mask,
         })],
-        Some(super::super::frame_depth_read(Default::default())),
+        Some(super::super::frame_depth_read(gpu, Default::default())),
     )
 }
 

@@ -10,7 +10,7 @@
 
 use super::light_space::shadow_matrix;
 use super::{Family, MaskContext, ParamSpec, ParamValues, Preset, ShadowTechnique};
-use crate::frame::{Compose, DEPTH_FORMAT, MASK_FORMAT, VERTEX_LAYOUT};
+use crate::frame::{Compose, MASK_FORMAT, VERTEX_LAYOUT};
 use crate::gpu::GpuContext;
 use crate::scene::planes::{MAX_PLANES, ReceiverPlane, receiver_planes};
 use anyhow::Result;
@@ -187,13 +187,16 @@ impl PlanarShared {
             "vs_fullscreen",
             "fs_tag",
             &[],
-            super::frame_depth_read(stencil(
-                stencil_face(
-                    wgpu::CompareFunction::Always,
-                    wgpu::StencilOperation::Replace,
+            super::frame_depth_read(
+                gpu,
+                stencil(
+                    stencil_face(
+                        wgpu::CompareFunction::Always,
+                        wgpu::StencilOperation::Replace,
+                    ),
+                    0xff,
                 ),
-                0xff,
-            )),
+            ),
             wgpu::ColorTargetState {
                 format: MASK_FORMAT,
                 blend: None,
@@ -220,9 +223,9 @@ impl PlanarShared {
                 "fs_flatten",
                 &[Some(VERTEX_LAYOUT)],
                 wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
+                    format: gpu.depth_format,
                     depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                    depth_compare: Some(crate::frame::DEPTH_NEARER_OR_EQUAL),
                     stencil: stencil(face, if with_stencil { 0xff } else { 0 }),
                     bias: Default::default(),
                 },

@@ -40,7 +40,8 @@ fn vs_flatten(v: VertexIn) -> FlatOut {
     let world = objects[v.object].model * vec4f(v.position, 1.0);
     var o: FlatOut;
     o.clip = frame.view_proj * (planar.shadow * world);
-    o.clip.z -= planar.params.y * o.clip.w;
+    // Towards the camera: up, in the frame's reversed depth.
+    o.clip.z += planar.params.y * o.clip.w;
     o.height = dot(planar.plane, world);
     o.uv = v.uv;
     o.object = v.object;

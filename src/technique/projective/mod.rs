@@ -195,7 +195,7 @@ impl ProjectiveShared {
                 }),
                 write_mask: wgpu::ColorWrites::RED,
             })],
-            Some(super::frame_depth_read(Default::default())),
+            Some(super::frame_depth_read(gpu, Default::default())),
         );
         let placeholder = crate::gpu::texture_2d(
             device,

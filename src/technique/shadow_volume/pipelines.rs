@@ -3,7 +3,7 @@
 //! their layouts and fixed pipelines ([`VolumeShared`]), and the
 //! stencil-counting pipelines keyed by [`VolumeKey`] from the device's cache.
 
-use crate::frame::{DEPTH_FORMAT, MASK_FORMAT};
+use crate::frame::MASK_FORMAT;
 use crate::gpu::GpuContext;
 
 /// What a volume pipeline depends on.
@@ -104,7 +104,7 @@ impl VolumeShared {
                     &pipeline_layout,
                     crate::technique::FragmentEntry::new(&module, fs),
                     &[Some(target)],
-                    Some(crate::technique::frame_depth_read(stencil)),
+                    Some(crate::technique::frame_depth_read(gpu, stencil)),
                 )
             };
         let not_zero = wgpu::StencilFaceState {
@@ -196,9 +196,9 @@ impl VolumeShared {
                     ..Default::default()
                 },
                 depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
+                    format: gpu.depth_format,
                     depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    depth_compare: Some(crate::frame::DEPTH_NEARER),
                     stencil,
                     bias: Default::default(),
                 }),
@@ -239,9 +239,9 @@ impl VolumeShared {
                         ..Default::default()
                     },
                     depth_stencil: Some(wgpu::DepthStencilState {
-                        format: DEPTH_FORMAT,
+                        format: gpu.depth_format,
                         depth_write_enabled: Some(false),
-                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        depth_compare: Some(crate::frame::DEPTH_NEARER),
                         stencil: Default::default(),
                         bias: Default::default(),
                     }),

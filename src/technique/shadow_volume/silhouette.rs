@@ -189,12 +189,19 @@ impl CasterPlan {
     }
 }
 
-/// Frustum planes `(n, d)`, inside where `n·p + d ≥ 0`, of a [0,1]-depth
-/// view-projection (Gribb & Hartmann 2001): left, right, bottom, top, near.
+/// Frustum planes `(n, d)`, inside where `n·p + d ≥ 0`, of a reversed
+/// [0,1]-depth view-projection (Gribb & Hartmann 2001): left, right,
+/// bottom, top, near (z_ndc ≤ 1).
 /// The far plane is left out: volumes reach it by design.
 pub fn frustum_planes(view_proj: Mat4) -> [Vec4; 5] {
     let r = |i| view_proj.row(i);
-    [r(3) + r(0), r(3) - r(0), r(3) + r(1), r(3) - r(1), r(2)]
+    [
+        r(3) + r(0),
+        r(3) - r(0),
+        r(3) + r(1),
+        r(3) - r(1),
+        r(3) - r(2),
+    ]
 }
 
 fn outside(plane: Vec4, corners: &[Vec3; 8]) -> bool {

@@ -260,7 +260,7 @@ impl ShadowMapShared {
             "fs_lookup",
             key,
             &[Some(target)],
-            Some(crate::technique::frame_depth_read(Default::default())),
+            Some(crate::technique::frame_depth_read(gpu, Default::default())),
         )
     }
 
@@ -288,7 +288,7 @@ impl ShadowMapShared {
                 blend: None,
                 write_mask: wgpu::ColorWrites::empty(),
             })],
-            Some(crate::technique::frame_depth_read(Default::default())),
+            Some(crate::technique::frame_depth_read(gpu, Default::default())),
         )
     }
 
