@@ -223,7 +223,8 @@ fn render_writes_image_masks_and_frame_json() {
     assert_eq!(j["size"]["width"], 160);
     assert_eq!(j["techniques"][0]["id"], "none:default");
     assert_eq!(j["camera"]["fov_y_deg"], 60.0);
-    // The projection recorded is wgpu's [0,1]-depth perspective for the camera.
+    // The projection recorded is wgpu's [0,1]-depth perspective for the
+    // camera, reversed: z_ndc = n/(far−n)·(far + z)/(−z).
     let p: Vec<f32> = j["matrices"]["projection"]
         .as_array()
         .unwrap()
@@ -246,11 +247,11 @@ fn render_writes_image_masks_and_frame_json() {
         0.0,
         0.0,
         0.0,
-        far / (n - far),
+        n / (far - n),
         -1.0,
         0.0,
         0.0,
-        n * far / (n - far),
+        n * far / (far - n),
         0.0,
     ];
     for (a, b) in p.iter().zip(expect) {
