@@ -35,6 +35,14 @@ const CASES: &[FailureCase] = &[
         contrast: "shadow-map:pcf",
     },
     FailureCase {
+        name: "hard-staircase",
+        scene: "city",
+        camera: "street",
+        light: "spot",
+        failing: "shadow-map:hard",
+        contrast: "shadow-map:pcf",
+    },
+    FailureCase {
         name: "planar-curved",
         scene: "curved",
         camera: "default",

@@ -17,7 +17,7 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "hard",
-        summary: "nearest texel, no filtering",
+        summary: "nearest texel, no filtering: a failure demonstration of the texel staircase wherever one texel covers many pixels (unfiltered, its steps reach past any edge band)",
         values: &[(FILTER.name, "hard")],
     },
     Preset {
