@@ -55,6 +55,8 @@ const ALPHA_BLEND: u32 = 2u;
 fn camera_ray_on_plane(at: vec2f, p: vec3f, n: vec3f) -> vec3f {
     let uv = at / frame.size.xy;
     let ndc = vec2f(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
+    // On the near plane (reversed depth 1, the Rust side's NEAR_PLANE_DEPTH)
+    // and farther along.
     let a = frame.inv_view_proj * vec4f(ndc, 1.0, 1.0);
     let b = frame.inv_view_proj * vec4f(ndc, 0.5, 1.0);
     let near = a.xyz / a.w;

@@ -6,6 +6,10 @@ use anyhow::{Result, bail};
 use glam::{Mat4, Vec3};
 use serde::{Deserialize, Serialize};
 
+/// The NDC depth of the near plane under [`Camera::projection`] (reversed:
+/// the far plane lies at 0); a camera ray starts there.
+pub const NEAR_PLANE_DEPTH: f32 = 1.0;
+
 /// How far above 0 points at infinity land with
 /// [`Camera::projection_infinite`]: 2^-20, sixteen steps of a 24-bit depth buffer.
 pub const INFINITE_FAR_EPSILON: f32 = 1.0 / (1u32 << 20) as f32;

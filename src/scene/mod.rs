@@ -26,7 +26,7 @@ pub mod toml_scene;
 pub mod topology;
 
 pub use aabb::Aabb;
-pub use camera::{Camera, INFINITE_FAR_EPSILON};
+pub use camera::{Camera, INFINITE_FAR_EPSILON, NEAR_PLANE_DEPTH};
 pub use light::{Light, LightArea, LightType};
 pub use material::{
     AlphaMode, MAX_OCTAVES, Material, Procedural, ProceduralKind, Texture, TextureWrap,

@@ -2,7 +2,7 @@
 //! (left drag), zoom (middle drag or wheel), pan (right drag) as in the
 //! source documents' demos, WASD fly, and moving a light in the view plane.
 
-use crate::scene::Camera;
+use crate::scene::{Camera, NEAR_PLANE_DEPTH};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
 /// Rotates the eye around the target: `dx`, `dy` in radians (yaw, pitch).
@@ -52,9 +52,9 @@ pub fn fly(c: &mut Camera, forward: f32, right: f32, up: f32) {
 pub fn pixel_ray(view_proj: Mat4, size: Vec2, p: Vec2) -> (Vec3, Vec3) {
     let inv = view_proj.inverse();
     let ndc = Vec2::new(2.0 * p.x / size.x - 1.0, 1.0 - 2.0 * p.y / size.y);
-    // On the near plane (reversed depth 1) and farther along (0.5): both
-    // finite with a far plane at infinity too.
-    let a = inv * Vec4::new(ndc.x, ndc.y, 1.0, 1.0);
+    // On the near plane and farther along (depth 0.5): both finite with a
+    // far plane at infinity too.
+    let a = inv * Vec4::new(ndc.x, ndc.y, NEAR_PLANE_DEPTH, 1.0);
     let b = inv * Vec4::new(ndc.x, ndc.y, 0.5, 1.0);
     let (a, b) = (a.truncate() / a.w, b.truncate() / b.w);
     (a, (b - a).normalize())

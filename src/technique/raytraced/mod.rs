@@ -424,7 +424,9 @@ pub fn pixel_sample_point(s: &PixelSampling, px: UVec2, k: u32, p: Vec3, n: Vec3
     }
     let uv = (px.as_vec2() + pixel_sample_offset(k, s.count)) / s.size.as_vec2();
     let ndc = Vec2::new(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
-    let near = s.inv_view_proj.project_point3(ndc.extend(1.0));
+    let near = s
+        .inv_view_proj
+        .project_point3(ndc.extend(crate::scene::NEAR_PLANE_DEPTH));
     let mid = s.inv_view_proj.project_point3(ndc.extend(0.5));
     let d = (mid - near).normalize_or_zero();
     let along = d.dot(n);

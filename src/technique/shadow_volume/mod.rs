@@ -236,7 +236,7 @@ impl ShadowVolumeRenderer {
         let light = ctx.light.homogeneous();
         let inv = ctx.frame.uniform().inv_view_proj;
         let near = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)].map(|(x, y)| {
-            let c = inv * Vec4::new(x, y, 1.0, 1.0);
+            let c = inv * Vec4::new(x, y, crate::scene::NEAR_PLANE_DEPTH, 1.0);
             c.truncate() / c.w
         });
         let region = silhouette::near_clip_region(near, light);
