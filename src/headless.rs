@@ -169,7 +169,7 @@ pub fn frame_json(r: &FrameRecord) -> serde_json::Value {
             "pixel_centre": "pixel (x, y) covers [x, x+1) × [y, y+1); its centre is (x + 0.5, y + 0.5)",
             "y_axis": "pixel y grows downwards; NDC y grows upwards",
             "ndc_from_pixel": "ndc_x = 2 (x + 0.5) / width − 1, ndc_y = 1 − 2 (y + 0.5) / height",
-            "depth_range": "NDC z in [0, 1] (0 = near plane), right-handed view space looking down −z",
+            "depth_range": "NDC z in [0, 1], reversed: 1 = near plane, 0 = far plane (2^-20 at infinity under an infinite projection); right-handed view space looking down −z",
             "gbuffer": "world position (w = object index + 1, 0 = background) and geometric normal facing the camera (w = receives shadows)",
             "visibility_png": "16-bit grey, 65535 = fully lit, background pixels 65535",
         },

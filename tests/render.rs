@@ -260,6 +260,9 @@ fn render_writes_image_masks_and_frame_json() {
             "{p:?} vs {expect:?}"
         );
     }
+    // The conventions written beside it say the same (1 at the near plane).
+    let depth = j["conventions"]["depth_range"].as_str().unwrap();
+    assert!(depth.contains("1 = near plane"), "{depth}");
     assert!(j["triangles"]["drawn"].as_u64().unwrap() > 1000);
     assert!(j["timings_ms"]["frame"].as_f64().unwrap() > 0.0);
     assert_eq!(j["lights"][0]["type"], "point");
