@@ -28,11 +28,16 @@ struct Frame {
     lights: array<LightGpu, 4>,
 };
 
+// `ObjectGpu::info.w`: what an object's mesh encloses (`SolidKind`).
+const SOLID_NONE: u32 = 0u;
+const SOLID_CONCAVE: u32 = 2u;
+
 struct ObjectGpu {
     model: mat4x4f,
     normal_matrix: mat4x4f,
     // x material, y casts shadow, z receives shadow, w bounds a solid (closed,
-    // wound outward: its back faces lie behind its front faces)
+    // wound outward: its back faces lie behind its front faces): 0 no, 1 a
+    // convex one, 2 a concave one (SOLID_*)
     info: vec4u,
     // x the global ID of the object's convex parts less one (IDs are unique
     // in the scene; 0 is no part), yzw unused

@@ -198,7 +198,11 @@ fn object_gpu(
             o.material as u32,
             o.casts_shadow as u32,
             o.receives_shadow as u32,
-            (solidity[o.mesh].kind != SolidKind::NotSolid) as u32,
+            match solidity[o.mesh].kind {
+                SolidKind::NotSolid => 0,
+                SolidKind::Convex => 1,
+                SolidKind::Concave => 2,
+            },
         ],
         parts: [part_base, 0, 0, 0],
         alpha: {

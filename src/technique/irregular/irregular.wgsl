@@ -249,7 +249,7 @@ fn see_through_opacity(t: CasterTriangle, object: u32, blended: bool, u: f32, w:
 // `caster_triangles` keeps every solid's triangles wound outward.
 fn faces_away_on_a_solid(t: CasterTriangle) -> bool {
     let object = bitcast<u32>(t.v.w);
-    if objects[object].info.w == 0u || objects[object].alpha.x != ALPHA_OPAQUE {
+    if objects[object].info.w == SOLID_NONE || objects[object].alpha.x != ALPHA_OPAQUE {
         return false;
     }
     var to_light = -irr.light.xyz;

@@ -50,7 +50,7 @@ pub const NORMAL_OFFSET_DIRECTIONAL: ParamSpec = ParamSpec::float(
     0.0,
     10.0,
     0.05,
-    "directional lights: lookup point moved along the geometric normal, in shadow-map texels, × sinⁿθ (`normal_offset_power`); near a concave surface's terminator a receiver lies within a texel of its own silhouette in the map, where a 2×2 comparison straddles it and reads the ground past it as lit: the offset moves the lookup to the surface's side; more moves shadow edges on receivers lit at grazing angles; none on solids under cull=solids and on receivers with a part (part_ids)",
+    "directional lights: lookup point moved along the geometric normal, in shadow-map texels, × sinⁿθ (`normal_offset_power`); near a concave surface's terminator a receiver lies within a texel of its own silhouette in the map, where a 2×2 comparison straddles it and reads the ground past it as lit: the offset moves the lookup to the surface's side; more moves shadow edges on receivers lit at grazing angles; none on receivers with a part (part_ids) and, under cull=solids, on solids whose lit faces the map does not store (convex ones; every one with solid_front_bias=0), half on concave solids whose front faces it stores",
 )
 .for_lights(LightKinds::DIRECTIONAL);
 
@@ -69,7 +69,7 @@ pub const NORMAL_OFFSET_LOCAL: ParamSpec = ParamSpec::float(
     0.0,
     10.0,
     0.1,
-    "point and spot lights: lookup point moved along the geometric normal, in shadow-map texels at the point's distance, × sinⁿθ (`normal_offset_power`; see normal_offset_directional); none on solids under cull=solids and on receivers with a part (part_ids)",
+    "point and spot lights: lookup point moved along the geometric normal, in shadow-map texels at the point's distance, × sinⁿθ (`normal_offset_power`; see normal_offset_directional); none on receivers with a part (part_ids) and, under cull=solids, on solids whose lit faces the map does not store (convex ones; every one with solid_front_bias=0), half on concave solids whose front faces it stores",
 )
 .for_lights(LightKinds::LOCAL);
 
@@ -79,3 +79,13 @@ pub const RECEIVER_PLANE: ParamSpec = ParamSpec::boolean(
     "receiver-plane depth bias (Isidoro 2006) on receivers without a convex part (part_ids): each kernel tap is compared against the receiver's plane (from its geometric normal) at the tap's centre, not against one depth, so that a kernel wider than the slope bias covers does not reach the receiver's own curved surface (grid, disk, pcss, varwidth); pcf2x2 and hard compare each texel at its centre; a receiver with a part ignores its own texels instead, and keeps one depth, which a plane carried past its edge would pass under a surface that meets it there; the plane passes in front of a caster that touches the receiver at a steep angle (a trunk under its canopy); every map takes the plane from the surface's normal over the kernel's reach",
 )
 .when(Condition::IsNot("filter", &["vsm", "esm", "evsm2", "evsm4", "msm"]));
+
+pub const CREASE_ANGLE: ParamSpec = ParamSpec::float(
+    "crease_angle",
+    15.0,
+    0.0,
+    45.0,
+    0.5,
+    "receiver_plane: the angle, in degrees, by which a kernel tap's compared depth may sink below the receiver's plane per unit of its distance from the lookup point (a cone about the plane): a faceted surface (a terrain mesh, a tessellated sphere) rises out of the plane of its own facet at a concave crease within the kernel's reach, where taps read it as a caster and speckle the surface with partial shadow; a caster within this angle of the receiver's plane no longer shadows the texels next to where it touches; 0 = the plane alone",
+)
+.when(Condition::Is("receiver_plane", &["true"]));

@@ -15,7 +15,7 @@ use crate::technique::{ParamSpec, ParamValues};
 use anyhow::Result;
 
 use self::bias::{
-    DEPTH_BIAS, NORMAL_OFFSET_DIRECTIONAL, NORMAL_OFFSET_LOCAL, NORMAL_OFFSET_POWER,
+    CREASE_ANGLE, DEPTH_BIAS, NORMAL_OFFSET_DIRECTIONAL, NORMAL_OFFSET_LOCAL, NORMAL_OFFSET_POWER,
     RECEIVER_PLANE, SLOPE_BIAS, SLOPE_BIAS_CLAMP, SLOPE_BIAS_CLAMP_LOCAL,
 };
 use self::filter::{
@@ -191,7 +191,7 @@ pub const EDGE_RAMP_PIXELS: ParamSpec = ParamSpec::float(
 pub const CULL: ParamSpec = ParamSpec::choice_of::<CullFace>(
     "cull",
     CullFace::Solids as usize,
-    "faces culled in the depth pass — solids: casters that bound a solid (closed, wound outward) store their back faces without bias, so a lit surface is never compared against itself and takes no normal offset, while its shadow edges stay where its silhouette puts them (second-depth shadow maps, Wang & Molnar 1994); other casters store both faces with the bias; back or front culling for every caster leaks light through open meshes (bunny, teapot)",
+    "faces culled in the depth pass — solids: casters that bound a solid (closed, wound outward) store their back faces without bias, so a lit surface is never compared against itself and takes no normal offset (a concave solid's takes half of it where solid_front_bias stores its front faces too), while its shadow edges stay where its silhouette puts them (second-depth shadow maps, Wang & Molnar 1994); other casters store both faces with the bias; back or front culling for every caster leaks light through open meshes (bunny, teapot)",
 );
 
 pub const SOLID_FRONT_BIAS: ParamSpec = ParamSpec::float(
@@ -200,7 +200,7 @@ pub const SOLID_FRONT_BIAS: ParamSpec = ParamSpec::float(
     0.0,
     64.0,
     0.5,
-    "cull=solids, maps whose bias is capped (unwarped directional: one map, cascades, clipmap levels; spot maps and cube faces under slope_bias_clamp_local): concave solids (a convex one never shadows its own lit side) also store their front faces, with this many times the slope bias and its cap: where a back face lies too close before a receiver to shadow it (a smooth solid shadowing itself near its terminator), the pushed front face still does; 0 = back faces only",
+    "cull=solids, maps whose bias is capped (unwarped directional: one map, cascades, clipmap levels; spot maps and cube faces under slope_bias_clamp_local): concave solids (a convex one never shadows its own lit side) also store their front faces, with this many times the slope bias and its cap: where a back face lies too close before a receiver to shadow it (a smooth solid shadowing itself near its terminator), the pushed front face still does; at grazing light the capped push still meets the lit face it came from, so a concave solid's receivers then take half the normal offset; 0 = back faces only",
 )
 .when(Condition::Is("cull", &["solids"]));
 
@@ -288,6 +288,7 @@ pub const PARAMS: &[ParamSpec] = &[
     NORMAL_OFFSET_LOCAL,
     NORMAL_OFFSET_POWER,
     RECEIVER_PLANE,
+    CREASE_ANGLE,
     EDGE_RAMP_PIXELS,
     EDGE_MASK,
     CULL,
@@ -353,6 +354,9 @@ pub struct ShadowMapConfig {
     /// Normal offset × sinⁿθ between normal and light, n this power.
     pub normal_offset_power: f32,
     pub receiver_plane: bool,
+    /// Degrees a tap's compared depth may sink below the receiver plane
+    /// per unit of distance (`crease_angle`).
+    pub crease_angle: f32,
     /// The widest a shadow edge's ramp may be on screen (pixels; 0: off).
     pub edge_ramp_pixels: f32,
     /// The kernel only at shadow edges (the edge mask's bounds chain).
@@ -426,6 +430,17 @@ impl ShadowMapConfig {
         }
     }
 
+    /// The depth a tap may lie below the receiver's plane per unit of
+    /// its distance from the lookup point, as a slope (the lookup's
+    /// `sm.screen.z`): tan `crease_angle` with the receiver plane, else 0.
+    pub fn crease_slope(&self) -> f32 {
+        if self.receiver_plane {
+            self.crease_angle.to_radians().tan()
+        } else {
+            0.0
+        }
+    }
+
     /// The reach in texels of the ramp `edge_ramp_pixels` steepens (the
     /// lookup's `sm.screen.y`): the kernel's for grid, disk and pcf2x2; for
     /// pcss and varwidth under a light without an area (and no
@@ -469,6 +484,7 @@ impl ShadowMapConfig {
             normal_offset_local: p.float(&NORMAL_OFFSET_LOCAL)?,
             normal_offset_power: p.float(&NORMAL_OFFSET_POWER)?,
             receiver_plane: p.flag(&RECEIVER_PLANE)?,
+            crease_angle: p.float(&CREASE_ANGLE)?,
             edge_ramp_pixels: p.float(&EDGE_RAMP_PIXELS)?,
             edge_mask: p.flag(&EDGE_MASK)?,
             cull: p.choice(&CULL)?,

@@ -19,6 +19,9 @@ fn stored(texel: vec2i, face: u32) -> f32 {
 // plane, and the uv it was measured at; taps compare against that plane.
 var<private> rp_gradient: vec2f;
 var<private> rp_origin: vec2f;
+// The depth a tap's compared depth sinks below the plane per unit of uv
+// from rp_origin (`crease_tolerance`).
+var<private> rp_crease: f32;
 // The receiver's compared depth at rp_origin.
 var<private> rp_depth: f32;
 
@@ -65,9 +68,10 @@ fn receiver_plane(l: VirtualLevel, q: VirtualPoint, p: vec3f, n: vec3f, normal: 
     return solve_plane(vec3f(qx.uv, qx.z) - at, vec3f(qy.uv, qy.z) - at, 4.0);
 }
 
-// The receiver depth to compare at a tap's uv.
+// The receiver depth to compare at a tap's uv: along its plane, less the
+// crease tolerance.
 fn tap_z(z: f32, uv: vec2f) -> f32 {
-    return z + dot(uv - rp_origin, rp_gradient);
+    return z + dot(uv - rp_origin, rp_gradient) - rp_crease * length(uv - rp_origin);
 }
 
 // `part_ids`: the receiver's convex part where it faces the light, else
@@ -306,6 +310,21 @@ fn blockers(uv: vec2f, face: u32, z: f32, radius_texels: f32, n: u32, phi: f32) 
 // it finds an edge and the kernel is narrow, the texels themselves
 // (`footprint_class`).
 fn edge_class(uv: vec2f, face: u32, z: f32, slope: vec2f, reach: f32) -> f32 {
+    let known = class_at_depth(uv, face, z, slope, reach);
+    // The crease tolerance only lowers the depth a tap compares (`tap_z`),
+    // by at most its slope over the farthest texel centre a tap reads: a
+    // pixel lit along the plane stays lit, but one shadowed along it must
+    // be shadowed at that much less.
+    var shadowed_below = true;
+    for (var recheck = known == 0.0 && rp_crease > 0.0; recheck; recheck = false) {
+        let low = z - rp_crease * (reach + 1.5) * sm.map.y;
+        shadowed_below = class_at_depth(uv, face, low, slope, reach) == 0.0;
+    }
+    return select(-1.0, known, shadowed_below);
+}
+
+// `edge_class` at one compared depth z (along the plane).
+fn class_at_depth(uv: vec2f, face: u32, z: f32, slope: vec2f, reach: f32) -> f32 {
     var known = chain_class(uv, face, z, slope, reach);
     // A loop, not a branch (see `filtered`).
     for (var refine = known < 0.0 && reach <= FOOTPRINT_REACH; refine; refine = false) {

@@ -194,15 +194,30 @@ fn warped_texel_world(face: u32, p: vec3f) -> f32 {
 }
 
 // The direction the normal offset moves G-buffer point g (w: object index
-// + 1) along: its geometric normal n, or none on a solid when `sm.light.w`
-// is set (`cull=solids`: its own surface is not in the map) and on a
-// receiver with a convex part (it ignores its own texels).
+// + 1) along, its length the share of the offset it takes: its geometric
+// normal n, CONCAVE_SOLID_OFFSET of it on a concave solid whose front
+// faces are stored, or none where its own lit surface is not in the map — on a solid when `sm.light.w` is 1 (`cull=solids`: back
+// faces alone), on a convex one when it is 2 (concave solids also store
+// their front faces, pushed back by `solid_front_bias` times a capped
+// bias, which at grazing light still meets the lit face it came from) —
+// and on a receiver with a convex part (it ignores its own texels).
 fn offset_direction(g: vec4f, n: vec3f) -> vec3f {
-    if receiver_part != 0u || (sm.light.w > 0.5 && g.w >= 0.5 && objects[u32(g.w) - 1u].info.w != 0u) {
+    var solid = SOLID_NONE;
+    if g.w >= 0.5 {
+        solid = objects[u32(g.w) - 1u].info.w;
+    }
+    let own_surface_stored = solid == SOLID_NONE || (solid == SOLID_CONCAVE && sm.light.w > 1.5);
+    if receiver_part != 0u || (sm.light.w > 0.5 && !own_surface_stored) {
         return vec3f(0.0);
     }
-    return n;
+    return n * select(1.0, CONCAVE_SOLID_OFFSET, solid == SOLID_CONCAVE && sm.light.w > 0.5);
 }
+
+// The share of the normal offset a concave solid's receivers take where
+// its front faces are stored: they lie behind a bias `solid_front_bias`
+// times an open caster's, so less of the offset clears them, and more
+// moves the edges of the shadows it casts on itself.
+const CONCAVE_SOLID_OFFSET: f32 = 0.5;
 
 // The unit direction from world point p towards the light.
 fn to_light(p: vec3f) -> vec3f {
@@ -226,12 +241,12 @@ fn receiver_part_of(pixel: vec2i, g: vec3f, normal: vec3f) -> u32 {
     return textureLoad(gbuffer_part, pixel, 0).r;
 }
 
-// G-buffer point g moved along `offset_direction` n by `sm.kernel.y`
+// G-buffer point g moved along `offset_direction` n by |n| × `sm.kernel.y`
 // texels of world size `texel_world`, × sinⁿθ between normal and light
 // for n = `sm.kernel.w` (`normal_offset_power`: full at grazing light, none
 // facing it).
 fn offset_point(g: vec3f, n: vec3f, texel_world: f32) -> vec3f {
-    let cos_theta = clamp(dot(n, to_light(g)), 0.0, 1.0);
+    let cos_theta = clamp(dot(n, to_light(g)) / max(length(n), 1e-12), 0.0, 1.0);
     // pow(0, 0) is undefined in WGSL: power 0 is the whole offset.
     let sin_power = select(pow(max(1.0 - cos_theta * cos_theta, 1e-12), 0.5 * sm.kernel.w), 1.0, sm.kernel.w == 0.0);
     return g + n * (sm.kernel.y * texel_world * sin_power);
@@ -245,6 +260,7 @@ struct Projected {
     uv: vec2f,
     z: f32,
     gradient: vec2f,
+    crease: f32,
     // The fewest map texels one pixel step crosses, in any direction
     // (`texels_per_pixel`).
     texels_per_pixel: f32,
@@ -285,6 +301,19 @@ fn receiver_plane_at(face: u32, p: vec3f, normal: vec3f, at: vec3f, step: f32) -
     return solve_plane(dx, dy, 4.0);
 }
 
+// The crease tolerance of a receiver at p (unit geometric normal `normal`)
+// whose compared depth is z: the depth a tap may lie below the receiver's
+// plane per unit of uv from the lookup point, `sm.screen.z` (tan of
+// `crease_angle`) times the depth change over a step towards the light
+// (z_toward) as long as a texel. A facet's plane leaves a curved surface
+// behind within the kernel's reach at a concave crease; 0 off the plane.
+fn crease_tolerance(p: vec3f, normal: vec3f, z: f32, z_toward: f32) -> f32 {
+    if !RECEIVER_PLANE || !faces_light(p, normal) {
+        return 0.0;
+    }
+    return sm.screen.z * abs(z_toward - z) * sm.map.x;
+}
+
 // Projects G-buffer point g into `face`, moved along `offset_n` (its normal,
 // or none), with the receiver plane of its geometric `normal`.
 fn projected(face: u32, g: vec4f, offset_n: vec3f, normal: vec3f) -> Projected {
@@ -303,6 +332,7 @@ fn projected(face: u32, g: vec4f, offset_n: vec3f, normal: vec3f) -> Projected {
     let c = clip_of(face, p);
     let at = map_point(face, p);
     let gradient = receiver_plane_at(face, p, normal, at, texel_world * max(kernel_reach(), 1.0));
+    let crease = crease_tolerance(p, normal, at.z, map_point(face, p + to_light(p) * texel_world).z);
     // Outside the map counts as lit.
     let inside = g.w >= 0.5 && c.w > 0.0 && all(at.xy >= vec2f(0.0)) && all(at.xy <= vec2f(1.0))
         && at.z <= 1.0 && at.z >= 0.0;
@@ -312,7 +342,7 @@ fn projected(face: u32, g: vec4f, offset_n: vec3f, normal: vec3f) -> Projected {
         let jy = map_point(face, p + pixel_step_y).xy - at.xy;
         footprint = texels_per_pixel(jx, jy);
     }
-    return Projected(c, at.xy, at.z, gradient, footprint, inside);
+    return Projected(c, at.xy, at.z, gradient, crease, footprint, inside);
 }
 
 // The filtered visibility of a projected point in `face`.
@@ -320,8 +350,10 @@ fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
     if !pr.inside {
         return 1.0;
     }
+    // A receiver with its own part keeps one depth (`receiver_plane`).
     rp_gradient = select(pr.gradient, vec2f(0.0), has_own_part());
     rp_origin = pr.uv;
+    rp_crease = select(pr.crease, 0.0, has_own_part());
     rp_depth = pr.z;
     if FILTER_KIND >= FILTER_VSM {
         return sharpened(moment_visibility(moments_at(pr.uv, face), moment_depth_of(select(linear01(pr.clip), pr.z, is_warped()))), pr.texels_per_pixel);

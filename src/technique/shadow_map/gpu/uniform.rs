@@ -20,8 +20,8 @@ pub const MAX_FACES: usize = 8;
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct ShadowMapUniform {
     pub faces: [Mat4; MAX_FACES],
-    /// xyz the light's position, w 1 where receivers on solids take no
-    /// normal offset (`cull=solids`).
+    /// xyz the light's position, w which solids' lit faces the maps store
+    /// ([`solids_stored`]): receivers on the others take no normal offset.
     pub light: Vec4,
     pub kernel: Vec4,
     pub map: Vec4,
@@ -49,7 +49,8 @@ pub struct ShadowMapUniform {
     pub moment_depth: Vec4,
     /// x the widest a shadow edge's ramp may be on screen, in pixels
     /// (`edge_ramp_pixels`), y the reach in texels of the ramp it steepens
-    /// (`ShadowMapConfig::ramp_reach`; 0: none), zw unused.
+    /// (`ShadowMapConfig::ramp_reach`; 0: none), z the tangent of the
+    /// receiver plane's crease angle (0 without a receiver plane), w unused.
     pub screen: Vec4,
 }
 
@@ -73,7 +74,7 @@ impl ShadowMapUniform {
         ShadowMapUniform {
             light: light
                 .position
-                .extend((cull == CullFace::Solids) as u32 as f32),
+                .extend(solids_stored(cull, c.solid_front_bias)),
             kernel: Vec4::new(c.radius, normal_offset, c.slope_bias, c.normal_offset_power),
             soft: Vec4::new(
                 c.light_size * penumbra,
@@ -95,11 +96,22 @@ impl ShadowMapUniform {
             screen: Vec4::new(
                 c.edge_ramp_pixels,
                 c.ramp_reach(light.area.is_some()),
-                0.0,
+                c.crease_slope(),
                 0.0,
             ),
             ..ShadowMapUniform::zeroed()
         }
+    }
+}
+
+/// `ShadowMapUniform::light.w`: 0 where every caster stores both faces, 1
+/// where solids store their back faces alone (`cull=solids`), 2 where
+/// concave solids also store their front faces (`solid_front_bias` > 0).
+fn solids_stored(cull: CullFace, solid_front_bias: f32) -> f32 {
+    match cull {
+        CullFace::Solids if solid_front_bias > 0.0 => 2.0,
+        CullFace::Solids => 1.0,
+        _ => 0.0,
     }
 }
 

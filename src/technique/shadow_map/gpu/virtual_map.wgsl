@@ -522,7 +522,10 @@ fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f, normal: vec3f) -> f32 {
         let jy = virtual_point(filtered_level, g.xyz + pixel_step_y, n).uv - q.uv;
         footprint = texels_per_pixel(jx, jy);
     }
-    let pr = Projected(vec4f(0.0, 0.0, q.z, 1.0), q.uv, q.z, gradient, footprint, q.inside);
+    let lookup = offset_point(g.xyz, n, virtual_texel_world);
+    let toward = virtual_point(filtered_level, lookup + to_light(lookup) * virtual_texel_world, vec3f(0.0));
+    let crease = crease_tolerance(g.xyz, normal, q.z, toward.z);
+    let pr = Projected(vec4f(0.0, 0.0, q.z, 1.0), q.uv, q.z, gradient, crease, footprint, q.inside);
     return filtered(found.index, pr, frag);
 }
 
