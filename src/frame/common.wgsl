@@ -40,7 +40,8 @@ struct ObjectGpu {
     // convex one, 2 a concave one (SOLID_*)
     info: vec4u,
     // x the global ID of the object's convex parts less one (IDs are unique
-    // in the scene; 0 is no part), yzw unused
+    // in the scene; 0 is no part), y 1 where they are not used (a part goes
+    // on in another mesh placed with the same transform), zw unused
     parts: vec4u,
     // x alpha mode (ALPHA_*), y cutoff, z opacity factor, w uv scale (f32 bits)
     alpha: vec4u,
@@ -74,9 +75,11 @@ fn camera_ray_on_plane(at: vec2f, p: vec3f, n: vec3f) -> vec3f {
     return p + to_near - d * (dot(to_near, n) / along);
 }
 
-// The scene-wide ID of `object`'s convex part `part` (0: none).
+// The scene-wide ID of `object`'s convex part `part` (0: none, and where
+// the object's parts are not used).
 fn part_id(object: u32, part: u32) -> u32 {
-    return select(0u, objects[object].parts.x + part, part != 0u);
+    let parts = objects[object].parts;
+    return select(0u, parts.x + part, part != 0u && parts.y == 0u);
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;

@@ -6,7 +6,7 @@ use crate::gpu::GpuContext;
 use crate::scene::clusters::{CLUSTER_TRIANGLES, Cluster, Clustered, clustered};
 use crate::scene::extent::SceneExtent;
 use crate::scene::opacity::OpacityMaps;
-use crate::scene::topology::{SolidKind, Solidity};
+use crate::scene::topology::{SolidKind, Solidity, parts_meeting_other_meshes};
 use crate::scene::{Aabb, AlphaMode, Material, Object, Scene, Texture};
 use anyhow::{Context, Result, bail};
 use bytemuck::{Pod, Zeroable};
@@ -20,7 +20,8 @@ struct ObjectGpu {
     model: Mat4,
     normal_matrix: Mat4,
     info: [u32; 4],
-    /// x: the global ID of the object's convex parts less one.
+    /// x: the global ID of the object's convex parts less one, y: 1 where
+    /// they are not used ([`parts_meeting_other_meshes`]).
     parts: [u32; 4],
     /// x [`AlphaMode`] as index, y cutoff, z opacity factor, w uv scale
     /// (`f32` bits).
@@ -182,11 +183,12 @@ fn draw_calls(
 }
 
 /// Object `o`'s row of the object table: transforms, flags, its parts'
-/// first ID, its material's alpha terms and its opacity map.
+/// first ID and whether they are used, its material's alpha terms and its
+/// opacity map.
 fn object_gpu(
     scene: &Scene,
     o: &Object,
-    part_base: u32,
+    parts: [u32; 4],
     solidity: &[Solidity],
     opacity_maps: &OpacityMaps,
     map_starts: &[u32],
@@ -204,7 +206,7 @@ fn object_gpu(
                 SolidKind::Concave => 2,
             },
         ],
-        parts: [part_base, 0, 0, 0],
+        parts,
         alpha: {
             let m = &scene.materials[o.material];
             [
@@ -352,12 +354,15 @@ impl SceneGpu {
         }
         let opacity_maps = OpacityMaps::of(scene);
         let (texels, map_starts) = opacity_texels(&opacity_maps);
+        let parts_unused = parts_meeting_other_meshes(scene, &solidity);
         let objects: Vec<ObjectGpu> = scene
             .objects
             .iter()
             .zip(&part_bases)
-            .map(|(o, &part_base)| {
-                object_gpu(scene, o, part_base, &solidity, &opacity_maps, &map_starts)
+            .zip(&parts_unused)
+            .map(|((o, &part_base), &unused)| {
+                let parts = [part_base, unused as u32, 0, 0];
+                object_gpu(scene, o, parts, &solidity, &opacity_maps, &map_starts)
             })
             .collect();
         let (draws, parts) = draw_calls(scene, &ranges, &clustered, &solidity);

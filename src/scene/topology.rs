@@ -2,7 +2,7 @@
 //! that meshes split by normals or uvs are still seen as connected), and
 //! whether a mesh bounds a solid.
 
-use super::Mesh;
+use super::{Mesh, Scene};
 use glam::{DVec3, Vec3};
 use std::collections::HashMap;
 
@@ -83,6 +83,9 @@ pub struct Solidity {
     pub vertex_parts: Vec<u32>,
     /// The number of convex parts.
     pub parts: u32,
+    /// Per part (ID − 1), whether it is flat (an open sheet, such as a
+    /// floor), not closed around a volume.
+    pub flat_parts: Vec<bool>,
 }
 
 impl Mesh {
@@ -122,6 +125,7 @@ impl Mesh {
                 kind: SolidKind::NotSolid,
                 vertex_parts: vec![0; self.positions.len()],
                 parts: 0,
+                flat_parts: vec![],
             };
         }
         let p = |i: u32| welded.positions[i as usize].as_dvec3();
@@ -181,6 +185,7 @@ impl Mesh {
         }
         let mut id_of = vec![0u32; triangles.len()];
         let mut parts = 0;
+        let mut flat_parts = vec![];
         let mut vertex_parts = vec![0; self.positions.len()];
         for (t, &c) in component.iter().enumerate() {
             let closed_convex = convex[c] && volume[c] > least_volume;
@@ -190,6 +195,7 @@ impl Mesh {
             if id_of[c] == 0 {
                 parts += 1;
                 id_of[c] = parts;
+                flat_parts.push(!closed_convex);
             }
             for &v in &self.indices[sources[t] * 3..sources[t] * 3 + 3] {
                 vertex_parts[v as usize] = id_of[c];
@@ -199,6 +205,7 @@ impl Mesh {
             kind,
             vertex_parts,
             parts,
+            flat_parts,
         }
     }
 }
@@ -266,6 +273,112 @@ fn edge_shape(triangles: &[[u32; 3]], p: &impl Fn(u32) -> DVec3, tolerance: f64)
     shape
 }
 
+/// How far above a flat part's plane (the sine of the angle) another
+/// mesh's triangle may rise across an edge they share and still count as
+/// going on level with it or falling away: about 0.06°.
+const RISES_ABOVE: f32 = 1e-3;
+
+/// Per object of `scene`, whether one of its flat parts (`solidity`, per
+/// mesh) shares an edge with a triangle of another drawn mesh placed with
+/// the same transform that goes on level with the part or falls away from
+/// it: a glTF mesh's primitives (one per material) are separate meshes of
+/// one surface, so a face cut at a material's border, or a box's top whose
+/// sides are another primitive, meets its neighbour there, and a receiver
+/// with that part compares the neighbour's texels against one depth, not
+/// along its plane: where the plane rises towards the light, the neighbour
+/// lies nearer the light than that depth (acne along the edge). Such an
+/// object's parts are not used. A neighbour that rises above the part (a
+/// wall on a floor) keeps them: one depth is what spares the floor the
+/// wall's foot (`receiver_plane`).
+pub fn parts_meeting_other_meshes(scene: &Scene, solidity: &[Solidity]) -> Vec<bool> {
+    let mut placed: HashMap<[u32; 16], Vec<usize>> = HashMap::new();
+    for (i, o) in scene
+        .objects
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| !o.shadow_plane)
+    {
+        let transform = o.transform.to_cols_array().map(|c| (c + 0.0).to_bits());
+        placed.entry(transform).or_default().push(i);
+    }
+    let mut meets = vec![false; scene.objects.len()];
+    for members in placed.values() {
+        let mut meshes: Vec<usize> = members.iter().map(|&i| scene.objects[i].mesh).collect();
+        meshes.sort_unstable();
+        meshes.dedup();
+        if meshes.len() < 2
+            || meshes
+                .iter()
+                .all(|&m| !solidity[m].flat_parts.contains(&true))
+        {
+            continue;
+        }
+        let edges = edge_opposites(scene, &meshes);
+        for &i in members {
+            let m = scene.objects[i].mesh;
+            meets[i] = flat_part_edges(&scene.meshes[m], &solidity[m]).any(|(edge, at, normal)| {
+                edges.get(&edge).is_some_and(|opposite| {
+                    opposite.iter().any(|&(other, corner)| {
+                        let away = (corner - at).normalize_or_zero();
+                        other != m && away != Vec3::ZERO && away.dot(normal) <= RISES_ABOVE
+                    })
+                })
+            });
+        }
+    }
+    meets
+}
+
+/// An edge between two positions, the same either way round.
+type EdgeKey = ([u32; 3], [u32; 3]);
+
+fn edge_key(a: Vec3, b: Vec3) -> EdgeKey {
+    let key = |p: Vec3| p.to_array().map(|c| (c + 0.0).to_bits());
+    let (a, b) = (key(a), key(b));
+    if a <= b { (a, b) } else { (b, a) }
+}
+
+/// `mesh`'s triangles with an area: corners and unit normal.
+fn triangles_with_normals(mesh: &Mesh) -> impl Iterator<Item = ([Vec3; 3], Vec3)> + '_ {
+    mesh.indices
+        .chunks_exact(3)
+        .map(|t| [t[0], t[1], t[2]].map(|v| mesh.positions[v as usize]))
+        .filter_map(|c| Some((c, (c[1] - c[0]).cross(c[2] - c[0]).try_normalize()?)))
+}
+
+/// The triangles' edges of `meshes`, each with the mesh and the third
+/// corner of every triangle along it.
+fn edge_opposites(scene: &Scene, meshes: &[usize]) -> HashMap<EdgeKey, Vec<(usize, Vec3)>> {
+    let mut edges: HashMap<EdgeKey, Vec<(usize, Vec3)>> = HashMap::new();
+    for &m in meshes {
+        for (c, _) in triangles_with_normals(&scene.meshes[m]) {
+            for k in 0..3 {
+                let edge = edge_key(c[k], c[(k + 1) % 3]);
+                edges.entry(edge).or_default().push((m, c[(k + 2) % 3]));
+            }
+        }
+    }
+    edges
+}
+
+/// The edges of `mesh`'s triangles in flat parts, each with a point on it
+/// and the triangle's unit normal.
+fn flat_part_edges<'a>(
+    mesh: &'a Mesh,
+    solidity: &'a Solidity,
+) -> impl Iterator<Item = (EdgeKey, Vec3, Vec3)> + 'a {
+    let flat = |v: u32| {
+        let part = solidity.vertex_parts[v as usize];
+        part != 0 && solidity.flat_parts[part as usize - 1]
+    };
+    mesh.indices
+        .chunks_exact(3)
+        .filter(move |t| flat(t[0]))
+        .map(|t| [t[0], t[1], t[2]].map(|v| mesh.positions[v as usize]))
+        .filter_map(|c| Some((c, (c[1] - c[0]).cross(c[2] - c[0]).try_normalize()?)))
+        .flat_map(|(c, n)| (0..3).map(move |k| (edge_key(c[k], c[(k + 1) % 3]), c[k], n)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -322,6 +435,43 @@ mod tests {
         let cube = shapes::cuboid(Vec3::ONE);
         let two = joined(&cube, &cube, Vec3::X * 3.0);
         assert_eq!(two.solid_kind(), SolidKind::Convex);
+    }
+
+    /// A sheet's flat part loses its ID where another mesh placed with the
+    /// same transform shares an edge with it and goes on level with it or
+    /// falls away (a box top whose sides are another primitive), not where
+    /// it rises (a wall on a floor) or is placed elsewhere.
+    #[test]
+    fn flat_parts_meeting_a_level_or_falling_neighbour_are_not_used() {
+        use crate::scene::{Material, Scene};
+        use glam::Mat4;
+        let quad = |far: Vec3| Mesh {
+            name: "neighbour".into(),
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::X + far, far],
+            indices: vec![0, 1, 2, 0, 2, 3],
+            ..Default::default()
+        };
+        let cases = [
+            (Vec3::Y, Mat4::IDENTITY, false),
+            (-Vec3::Y, Mat4::IDENTITY, true),
+            (-Vec3::Z, Mat4::IDENTITY, true),
+            (-Vec3::Y, Mat4::from_translation(Vec3::Z * 5.0), false),
+        ];
+        for (far, placed, meets) in cases {
+            let mut scene = Scene::new("edges");
+            let grey = scene.add_material(Material::color("grey", Vec3::ONE));
+            let floor = scene.add_mesh(sheet());
+            scene.add_object("Floor", floor, grey, Mat4::IDENTITY);
+            let neighbour = scene.add_mesh(quad(far));
+            scene.add_object("Neighbour", neighbour, grey, placed);
+            let solidity: Vec<Solidity> = scene.meshes.iter().map(|m| m.solidity()).collect();
+            assert_eq!(solidity[0].flat_parts, vec![true]);
+            let flagged = parts_meeting_other_meshes(&scene, &solidity);
+            assert_eq!(
+                flagged[0], meets,
+                "neighbour towards {far}, placed {placed}"
+            );
+        }
     }
 
     /// `a` with `b`'s triangles appended, moved by `shift`.

@@ -207,7 +207,7 @@ pub const SOLID_FRONT_BIAS: ParamSpec = ParamSpec::float(
 pub const PART_IDS: ParamSpec = ParamSpec::boolean(
     "part_ids",
     true,
-    "cull=solids, depth-compared filters (hard, pcf2x2, grid, disk, pcss, varwidth) of unwarped maps and cube faces: every texel also stores the convex part its depth came from (a closed, outward-wound piece of a mesh convex at every edge, or a flat one such as a floor), and a receiver facing the light ignores its own part's texels and takes no normal offset — a convex part never shadows its own lit side, so a lit wall is not compared against the back face that meets it at its corner (priority buffers, Hourcade & Nicolas 1985); 4 more bytes per texel",
+    "cull=solids, depth-compared filters (hard, pcf2x2, grid, disk, pcss, varwidth) of unwarped maps and cube faces: every texel also stores the convex part its depth came from (a closed, outward-wound piece of a mesh convex at every edge, or a flat one such as a floor, unless another mesh placed with it goes on from one of its edges level or falling away, as a glTF mesh's primitive of another material does), and a receiver facing the light ignores its own part's texels and takes no normal offset — a convex part never shadows its own lit side, so a lit wall is not compared against the back face that meets it at its corner (priority buffers, Hourcade & Nicolas 1985); 4 more bytes per texel",
 )
 .when(Condition::Is("cull", &["solids"]));
 
