@@ -86,6 +86,6 @@ pub const CREASE_ANGLE: ParamSpec = ParamSpec::float(
     0.0,
     45.0,
     0.5,
-    "receiver_plane: the angle, in degrees, by which a kernel tap's compared depth may sink below the receiver's plane per unit of its distance from the lookup point (a cone about the plane): a faceted surface (a terrain mesh, a tessellated sphere) rises out of the plane of its own facet at a concave crease within the kernel's reach, where taps read it as a caster and speckle the surface with partial shadow; a caster within this angle of the receiver's plane no longer shadows the texels next to where it touches; 0 = the plane alone",
+    "receiver_plane: the angle, in degrees, that a surface may rise out of the receiver's plane (a concave crease between facets) before a kernel tap reads it as a caster: each tap's compared depth sinks below the plane by what such a rise over the tap's distance from the lookup point comes to along the light's ray (1/(N·L) as much as along the normal, at most 5 times); a faceted surface (a terrain mesh, a tessellated body) rises out of its own facet's plane within the kernel's reach, where taps read it as a caster and speckle the surface with partial shadow; a caster within this angle of the receiver's plane no longer shadows the texels next to where it touches; 0 = the plane alone",
 )
 .when(Condition::Is("receiver_plane", &["true"]));

@@ -303,16 +303,26 @@ fn receiver_plane_at(face: u32, p: vec3f, normal: vec3f, at: vec3f, step: f32) -
 
 // The crease tolerance of a receiver at p (unit geometric normal `normal`)
 // whose compared depth is z: the depth a tap may lie below the receiver's
-// plane per unit of uv from the lookup point, `sm.screen.z` (tan of
-// `crease_angle`) times the depth change over a step towards the light
-// (z_toward) as long as a texel. A facet's plane leaves a curved surface
-// behind within the kernel's reach at a concave crease; 0 off the plane.
+// plane per unit of uv from the lookup point. A facet's plane leaves a
+// curved surface behind within the kernel's reach at a concave crease; a
+// neighbour rising tan(`crease_angle`) (`sm.screen.z`) per unit of distance
+// out of the plane, along its normal, meets the light's ray that far
+// before the plane over 1/(N·L) as much (up to CREASE_GRAZING_GAIN times),
+// in depth the change over a step towards the light (z_toward) as long as
+// a texel; 0 off the plane.
 fn crease_tolerance(p: vec3f, normal: vec3f, z: f32, z_toward: f32) -> f32 {
     if !RECEIVER_PLANE || !faces_light(p, normal) {
         return 0.0;
     }
-    return sm.screen.z * abs(z_toward - z) * sm.map.x;
+    let rise = max(dot(normal, to_light(p)), 1.0 / CREASE_GRAZING_GAIN);
+    return sm.screen.z * abs(z_toward - z) * sm.map.x / rise;
 }
+
+// The most the crease tolerance grows as the light grazes the receiver
+// (1/(N·L) capped): at grazing light any rise along the normal is a long
+// way along the light's ray, and an uncapped tolerance would pass every
+// caster near the receiver.
+const CREASE_GRAZING_GAIN: f32 = 5.0;
 
 // Projects G-buffer point g into `face`, moved along `offset_n` (its normal,
 // or none), with the receiver plane of its geometric `normal`.
