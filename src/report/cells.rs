@@ -159,9 +159,19 @@ pub fn load(root: &Path, key: &CellKey) -> Option<Cell> {
 }
 
 pub fn store(root: &Path, cell: &Cell) -> Result<()> {
-    let path = cell_path(root, &cell.key);
-    std::fs::write(&path, serde_json::to_string_pretty(cell)?)
-        .with_context(|| format!("writing {}", path.display()))
+    write_whole(
+        &cell_path(root, &cell.key),
+        &serde_json::to_string_pretty(cell)?,
+    )
+}
+
+/// Writes `text` to `path` whole or not at all: to a file beside it, then
+/// renamed over it, so that a run stopped mid-write leaves no truncated
+/// cell for the next run to discard (the report resumes stopped runs).
+fn write_whole(path: &Path, text: &str) -> Result<()> {
+    let partial = path.with_extension("partial");
+    std::fs::write(&partial, text).with_context(|| format!("writing {}", partial.display()))?;
+    std::fs::rename(&partial, path).with_context(|| format!("writing {}", path.display()))
 }
 
 /// A cell's `compare` rows, kept as soon as they are measured so that a
@@ -190,8 +200,7 @@ pub fn store_quality(root: &Path, key: &CellKey, rows: &[QualityRow]) -> Result<
         key: key.clone(),
         rows: rows.to_vec(),
     };
-    std::fs::write(&path, serde_json::to_string_pretty(&kept)?)
-        .with_context(|| format!("writing {}", path.display()))
+    write_whole(&path, &serde_json::to_string_pretty(&kept)?)
 }
 
 /// The cell of `technique` from its `compare` rows (one per light), its
