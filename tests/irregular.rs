@@ -304,12 +304,9 @@ fn a_grid_past_the_device_limit_is_an_error() {
 #[test]
 fn sub_pixel_samples_converge_to_the_covered_fraction() {
     use glam::{Mat4, Vec2};
-    use shadowlab::scene::{Camera, Light, Material, Scene, shapes};
+    use shadowlab::scene::{Camera, Light, shapes};
     let turn = 0.4f32;
-    let mut s = Scene::new("turned square");
-    let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
-    let floor = s.add_mesh(shapes::plane(20.0, 20.0, 4));
-    s.add_object("Floor", floor, grey, Mat4::IDENTITY);
+    let (mut s, grey) = grey_floor_scene("turned square", 20.0, 4);
     let quad = s.add_mesh(shapes::plane(2.0, 2.0, 1));
     s.add_object(
         "Square",

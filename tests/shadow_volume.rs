@@ -233,10 +233,7 @@ fn statistics_and_debug_views() {
 /// run the other way and cancel the lower box's (+1 − 1 = 0: false lit).
 #[test]
 fn mirrored_casters_count_the_same_way_as_the_others() {
-    let mut s = Scene::new("mirror");
-    let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
-    let floor = s.add_mesh(shapes::plane(20.0, 20.0, 4));
-    s.add_object("Floor", floor, grey, Mat4::IDENTITY);
+    let (mut s, grey) = grey_floor_scene("mirror", 20.0, 4);
     let cube = s.add_mesh(shapes::cuboid(Vec3::ONE));
     s.add_object(
         "Box",

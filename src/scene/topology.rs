@@ -15,16 +15,21 @@ pub struct Welded {
     pub remap: Vec<u32>,
 }
 
+/// A position as the bits of its coordinates, −0 taken as +0: equal
+/// positions, and only they, have equal keys.
+fn position_key(p: Vec3) -> [u32; 3] {
+    p.to_array().map(|c| (c + 0.0).to_bits())
+}
+
 impl Welded {
     pub fn of(mesh: &Mesh) -> Welded {
-        let key = |p: Vec3| p.to_array().map(|c| (c + 0.0).to_bits());
         let mut first: HashMap<[u32; 3], u32> = HashMap::with_capacity(mesh.positions.len());
         let mut positions = vec![];
         let remap = mesh
             .positions
             .iter()
             .map(|&p| {
-                *first.entry(key(p)).or_insert_with(|| {
+                *first.entry(position_key(p)).or_insert_with(|| {
                     positions.push(p);
                     positions.len() as u32 - 1
                 })
@@ -333,17 +338,17 @@ pub fn parts_meeting_other_meshes(scene: &Scene, solidity: &[Solidity]) -> Vec<b
 type EdgeKey = ([u32; 3], [u32; 3]);
 
 fn edge_key(a: Vec3, b: Vec3) -> EdgeKey {
-    let key = |p: Vec3| p.to_array().map(|c| (c + 0.0).to_bits());
-    let (a, b) = (key(a), key(b));
+    let (a, b) = (position_key(a), position_key(b));
     if a <= b { (a, b) } else { (b, a) }
 }
 
-/// `mesh`'s triangles with an area: corners and unit normal.
-fn triangles_with_normals(mesh: &Mesh) -> impl Iterator<Item = ([Vec3; 3], Vec3)> + '_ {
-    mesh.indices
-        .chunks_exact(3)
-        .map(|t| [t[0], t[1], t[2]].map(|v| mesh.positions[v as usize]))
-        .filter_map(|c| Some((c, (c[1] - c[0]).cross(c[2] - c[0]).try_normalize()?)))
+/// `mesh`'s triangles with an area: their first vertex, corners and unit
+/// normal.
+fn triangles_with_normals(mesh: &Mesh) -> impl Iterator<Item = (u32, [Vec3; 3], Vec3)> + '_ {
+    mesh.indices.chunks_exact(3).filter_map(|t| {
+        let c = [t[0], t[1], t[2]].map(|v| mesh.positions[v as usize]);
+        Some((t[0], c, (c[1] - c[0]).cross(c[2] - c[0]).try_normalize()?))
+    })
 }
 
 /// The triangles' edges of `meshes`, each with the mesh and the third
@@ -351,7 +356,7 @@ fn triangles_with_normals(mesh: &Mesh) -> impl Iterator<Item = ([Vec3; 3], Vec3)
 fn edge_opposites(scene: &Scene, meshes: &[usize]) -> HashMap<EdgeKey, Vec<(usize, Vec3)>> {
     let mut edges: HashMap<EdgeKey, Vec<(usize, Vec3)>> = HashMap::new();
     for &m in meshes {
-        for (c, _) in triangles_with_normals(&scene.meshes[m]) {
+        for (_, c, _) in triangles_with_normals(&scene.meshes[m]) {
             for k in 0..3 {
                 let edge = edge_key(c[k], c[(k + 1) % 3]);
                 edges.entry(edge).or_default().push((m, c[(k + 2) % 3]));
@@ -371,12 +376,9 @@ fn flat_part_edges<'a>(
         let part = solidity.vertex_parts[v as usize];
         part != 0 && solidity.flat_parts[part as usize - 1]
     };
-    mesh.indices
-        .chunks_exact(3)
-        .filter(move |t| flat(t[0]))
-        .map(|t| [t[0], t[1], t[2]].map(|v| mesh.positions[v as usize]))
-        .filter_map(|c| Some((c, (c[1] - c[0]).cross(c[2] - c[0]).try_normalize()?)))
-        .flat_map(|(c, n)| (0..3).map(move |k| (edge_key(c[k], c[(k + 1) % 3]), c[k], n)))
+    triangles_with_normals(mesh)
+        .filter(move |&(first, _, _)| flat(first))
+        .flat_map(|(_, c, n)| (0..3).map(move |k| (edge_key(c[k], c[(k + 1) % 3]), c[k], n)))
 }
 
 #[cfg(test)]

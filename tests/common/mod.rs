@@ -103,16 +103,24 @@ pub fn lights_over_squares() -> [Light; 3] {
     ]
 }
 
+/// A scene named `name` with one grey material and a `side` × `side` floor
+/// at y = 0 cut into `subdiv`² squares; the scene and the material.
+pub fn grey_floor_scene(name: &str, side: f32, subdiv: u32) -> (Scene, usize) {
+    let mut s = Scene::new(name);
+    let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
+    let floor = s.add_mesh(shapes::plane(side, side, subdiv));
+    s.add_object("Floor", floor, grey, Mat4::IDENTITY);
+    (s, grey)
+}
+
 /// A 20×20 floor at y = 0 (also a `ShadowPlane` when `plane_object`) and
 /// axis-aligned square casters `(centre, half size)` facing down, so a camera
 /// above sees the floor through them with back-face culling while shadow
 /// rays and flattened shadows still see them.
 pub fn squares_over_floor(squares: &[(Vec3, f32)], light: Light, plane_object: bool) -> Scene {
-    let mut s = Scene::new("squares");
-    let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
-    let floor = s.add_mesh(shapes::plane(20.0, 20.0, 4));
-    s.add_object("Floor", floor, grey, Mat4::IDENTITY);
+    let (mut s, grey) = grey_floor_scene("squares", 20.0, 4);
     if plane_object {
+        let floor = s.objects[0].mesh;
         s.add_object("ShadowPlaneFloor", floor, grey, Mat4::IDENTITY);
     }
     let quad = s.add_mesh(shapes::plane(2.0, 2.0, 1));

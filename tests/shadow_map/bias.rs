@@ -282,12 +282,9 @@ fn a_faceted_terrain_does_not_speckle_its_own_creases() {
 #[test]
 fn a_concave_solid_lit_at_grazing_angles_does_not_shadow_itself() {
     use glam::{Mat4, Vec3};
-    use shadowlab::scene::{Camera, Light, Material, Scene, shapes};
+    use shadowlab::scene::{Camera, Light, shapes};
     for direction in [Vec3::new(-0.3, -0.2, 1.0), Vec3::new(1.0, -0.1, 0.0)] {
-        let mut s = Scene::new("torus");
-        let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
-        let floor = s.add_mesh(shapes::plane(10.0, 10.0, 8));
-        s.add_object("Floor", floor, grey, Mat4::IDENTITY);
+        let (mut s, grey) = grey_floor_scene("torus", 10.0, 8);
         let torus = s.add_mesh(shapes::torus(1.5, 0.5, 48, 16));
         s.add_object("Torus", torus, grey, Mat4::from_translation(Vec3::Y * 0.5));
         s.lights = vec![Light::directional(direction, 1.0)];
@@ -314,11 +311,8 @@ fn a_concave_solid_lit_at_grazing_angles_does_not_shadow_itself() {
 #[test]
 fn a_flat_part_whose_edges_go_on_in_another_mesh_is_compared_along_its_plane() {
     use glam::{Mat4, Vec3};
-    use shadowlab::scene::{Camera, Light, Material, Mesh, Scene, shapes};
-    let mut s = Scene::new("nozzle");
-    let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
-    let floor = s.add_mesh(shapes::plane(12.0, 12.0, 4));
-    s.add_object("Floor", floor, grey, Mat4::IDENTITY);
+    use shadowlab::scene::{Camera, Light, Mesh};
+    let (mut s, grey) = grey_floor_scene("nozzle", 12.0, 4);
     // Squares of half-side 0.4 and 0.3 around (0, 1) in the plane z = z.
     let square = |half: f32, z: f32| {
         [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]

@@ -44,23 +44,22 @@ fn surface_tangent(normal: vec3f) -> vec3f {
     return normalize(cross(normal, helper));
 }
 
-// The virtual map's receiver plane at lookup point `q` of world point p
-// (moved along n) in level `l`, from the level points of two steps of the
-// kernel's reach along the surface of geometric normal `normal`, as the
-// other maps take it (`receiver_plane_at`): screen derivatives broke the
-// plane wherever a pixel quad straddles a silhouette. 0 when off or
-// facing away from the light, as there.
-fn receiver_plane(l: VirtualLevel, q: VirtualPoint, p: vec3f, n: vec3f, normal: vec3f) -> vec2f {
+// The virtual map's receiver plane at lookup point `q` in level `l` of
+// world point p (at `lookup` once moved along its normal offset; the
+// level's texels `texel_world` wide there), from the level points of two
+// steps of the kernel's reach along the surface of geometric normal
+// `normal`, as the other maps take it (`receiver_plane_at`): screen
+// derivatives broke the plane wherever a pixel quad straddles a
+// silhouette. 0 when off or facing away from the light, as there.
+fn receiver_plane(l: VirtualLevel, q: VirtualPoint, p: vec3f, lookup: vec3f, texel_world: f32, normal: vec3f) -> vec2f {
     if !RECEIVER_PLANE || !faces_light(p, normal) {
         return vec2f(0.0);
     }
-    let texel_world = level_texel_world(l, p);
     let step = texel_world * max(kernel_reach(), 1.0);
-    // Steps from the lookup point itself (p moved along n), not moved
-    // again: the normal offset changes along the surface (with the distance
-    // to the light, and as sinⁿθ), and tilted the plane by its change (a
-    // floor a point light grazes came out speckled with partial shadow).
-    let lookup = offset_point(p, n, texel_world);
+    // Steps from the lookup point itself, not moved again: the normal
+    // offset changes along the surface (with the distance to the light,
+    // and as sinⁿθ), and tilted the plane by its change (a floor a point
+    // light grazes came out speckled with partial shadow).
     let t = surface_tangent(normal);
     let at = vec3f(q.uv, q.z);
     let qx = virtual_point(l, lookup + t * step, vec3f(0.0));

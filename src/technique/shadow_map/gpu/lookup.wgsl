@@ -196,11 +196,12 @@ fn warped_texel_world(face: u32, p: vec3f) -> f32 {
 // The direction the normal offset moves G-buffer point g (w: object index
 // + 1) along, its length the share of the offset it takes: its geometric
 // normal n, CONCAVE_SOLID_OFFSET of it on a concave solid whose front
-// faces are stored, or none where its own lit surface is not in the map — on a solid when `sm.light.w` is 1 (`cull=solids`: back
-// faces alone), on a convex one when it is 2 (concave solids also store
-// their front faces, pushed back by `solid_front_bias` times a capped
-// bias, which at grazing light still meets the lit face it came from) —
-// and on a receiver with a convex part (it ignores its own texels).
+// faces are stored, or none where its own lit surface is not in the map:
+// on a solid when `sm.light.w` is 1 (`cull=solids`: back faces alone), on
+// a convex one when it is 2 (concave solids also store their front faces,
+// pushed back by `solid_front_bias` times a capped bias, which at grazing
+// light still meets the lit face it came from), and on a receiver with a
+// convex part (it ignores its own texels).
 fn offset_direction(g: vec4f, n: vec3f) -> vec3f {
     var solid = SOLID_NONE;
     if g.w >= 0.5 {

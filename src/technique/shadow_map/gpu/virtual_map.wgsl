@@ -514,15 +514,15 @@ fn virtual_visibility(frag: vec2f, g: vec4f, n: vec3f, normal: vec3f) -> f32 {
     filtered_level = found.level;
     let q = found.point;
     kernel_slots = kernel_slots_of(filtered_level, q.uv * sm.map.x);
-    let gradient = receiver_plane(filtered_level, q, g.xyz, n, normal);
     virtual_texel_world = level_texel_world(filtered_level, g.xyz);
+    let lookup = offset_point(g.xyz, n, virtual_texel_world);
+    let gradient = receiver_plane(filtered_level, q, g.xyz, lookup, virtual_texel_world, normal);
     var footprint = 0.0;
     for (var steepened = steepens_ramps(); steepened; steepened = false) {
         let jx = virtual_point(filtered_level, g.xyz + pixel_step_x, n).uv - q.uv;
         let jy = virtual_point(filtered_level, g.xyz + pixel_step_y, n).uv - q.uv;
         footprint = texels_per_pixel(jx, jy);
     }
-    let lookup = offset_point(g.xyz, n, virtual_texel_world);
     let toward = virtual_point(filtered_level, lookup + to_light(lookup) * virtual_texel_world, vec3f(0.0));
     let crease = crease_tolerance(g.xyz, normal, q.z, toward.z);
     let pr = Projected(vec4f(0.0, 0.0, q.z, 1.0), q.uv, q.z, gradient, crease, footprint, q.inside);
