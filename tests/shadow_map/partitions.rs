@@ -364,6 +364,36 @@ fn one_map_fitted_to_the_seen_pixels_covers_them_with_smaller_texels() {
     );
 }
 
+/// A warped map fitted to the pixels it shades (`fit=samples`, the
+/// default): its body B cut to the prism along the light around them. On
+/// the landscape from the ground with the sun low behind the camera, the
+/// view frustum spans the valley while the camera sees a slope and a
+/// path: every receiving pixel stays inside the map, with texels well
+/// under those of the same warp over the seen depths alone (`fit=depth`),
+/// and less than half of its mismatch.
+#[test]
+fn warped_maps_fitted_to_the_seen_pixels_cover_them_with_smaller_texels() {
+    let land = preset("landscape", "ground", "sun-low-back");
+    let (w, h) = (256, 144);
+    for warp in ["psm", "lispsm", "tsm"] {
+        let (id, depths) = (
+            format!("shadow-map:{warp}"),
+            format!("shadow-map:{warp}[fit=depth]"),
+        );
+        let (seen, wide) = footprints(&land, &id, &depths, (w, h));
+        assert!(
+            seen < 0.8 * wide,
+            "{warp}: fitted to the pixels {seen} px/texel, to their depths {wide}"
+        );
+        let fitted = compare(&land, &id, (w, h)).mask;
+        let deep = compare(&land, &depths, (w, h)).mask;
+        assert!(
+            fitted.all.total_pct * 2.0 <= deep.all.total_pct,
+            "{warp}: fitted {fitted:?}\ndepths {deep:?}"
+        );
+    }
+}
+
 /// The single map turned to the smallest square around the pixels seen
 /// (`roll=square`, the default): a wide view straight down onto squares in
 /// a row sees a floor strip 5.3 times longer than wide, along the world's

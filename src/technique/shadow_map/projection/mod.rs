@@ -55,7 +55,7 @@ impl ShadowMapTechnique {
                 cone_tan: (ctx.light.outer_cone_deg.to_radians()).tan(),
                 position: ctx.light.position,
             });
-        self.last_seen = self.reduce_seen(ctx, encoder, spot, single)?;
+        self.last_seen = self.reduce_seen(ctx, encoder, spot)?;
         let fitted_turn = match c.roll {
             Roll::Up => Turn::Upright,
             Roll::Square => Turn::Fitted {
@@ -120,12 +120,11 @@ impl ShadowMapTechnique {
                 if l.kind == LightType::Directional && c.warp.kind != Warp::None {
                     warp::warp_setup(
                         &mut setup,
-                        ctx.fit_camera,
-                        aspect,
+                        (ctx.fit_camera, aspect),
                         l.direction,
                         &ctx.scene_gpu.bounds,
-                        &c.warp,
-                        self.seen_depths(ctx),
+                        (&c.warp, size),
+                        self.seen_view(ctx),
                     );
                 }
                 setup
@@ -149,7 +148,6 @@ impl ShadowMapTechnique {
         ctx: &MaskContext,
         encoder: &mut wgpu::CommandEncoder,
         spot: Option<SpotImage>,
-        single: bool,
     ) -> Result<Option<SeenBounds>> {
         let c = self.config;
         let directional = ctx.light.kind == LightType::Directional;
@@ -166,7 +164,9 @@ impl ShadowMapTechnique {
                 Some(_) => setup::spot_view(ctx.light),
                 None => setup::light_view_of_scene(ctx.light.direction, &ctx.scene_gpu.bounds).0,
             },
-            supports: spot.is_some() || (single && c.cascades.fit == Fit::Samples),
+            // One map fitted to the samples, warped or not.
+            supports: spot.is_some()
+                || (directional && c.cascades.count == 1 && c.cascades.fit == Fit::Samples),
             spot,
             cascades: c.cascades.count,
             split_lambda: c.cascades.split_lambda,
@@ -188,6 +188,25 @@ impl ShadowMapTechnique {
             c,
             Some(seen),
         ))
+    }
+
+    /// What a warped map's body is cut to this frame (`warp::SeenView`):
+    /// the depths the camera saw and, for one map fitted to the samples,
+    /// the prism along the light around them.
+    fn seen_view(&self, ctx: &MaskContext) -> warp::SeenView {
+        let prism = self
+            .last_seen
+            .as_ref()
+            .filter(|_| self.config.cascades.fit == Fit::Samples)
+            .and_then(|seen| seen.supports)
+            .map(|supports| warp::SeenPrism {
+                view: setup::light_view_of_scene(ctx.light.direction, &ctx.scene_gpu.bounds).0,
+                supports,
+            });
+        warp::SeenView {
+            depths: self.seen_depths(ctx),
+            prism,
+        }
     }
 
     /// What a directional light's single map is fitted to this frame: the

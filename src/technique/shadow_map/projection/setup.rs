@@ -199,16 +199,11 @@ pub enum ViewFit {
     Samples { supports: Supports, size: u32 },
 }
 
-/// The points spanning the intersection of a hexahedron (corner `i` at
-/// bit 0: x side, bit 1: y side, bit 2: z side, as [`Camera::slice_corners`](crate::scene::Camera::slice_corners) and
-/// [`Aabb::corners`] number them; convex) with `bounds`: each solid's
-/// corners inside the other and each one's edges through the other's faces.
-/// Empty when they do not meet.
-pub fn clip_to_bounds(corners: &[Vec3; 8], bounds: &Aabb) -> Vec<Vec3> {
-    const EPS: f32 = 1e-4;
+/// A convex hexahedron's six face planes (corners numbered as
+/// [`clip_to_bounds`] takes them), each `(n, d)`: n outwards, n·p ≤ d inside.
+pub fn hexahedron_planes(corners: &[Vec3; 8]) -> Vec<(Vec3, f32)> {
     let centre = corners.iter().copied().sum::<Vec3>() / 8.0;
-    // The hexahedron's six planes (normal outwards, offset).
-    let planes: Vec<(Vec3, f32)> = (0..3)
+    (0..3)
         .flat_map(|axis| [0, 1].map(move |side| (axis, side)))
         .map(|(axis, side)| {
             let on: Vec<Vec3> = (0..8)
@@ -222,7 +217,17 @@ pub fn clip_to_bounds(corners: &[Vec3; 8], bounds: &Aabb) -> Vec<Vec3> {
             }
             (n, n.dot(on[0]))
         })
-        .collect();
+        .collect()
+}
+
+/// The points spanning the intersection of a hexahedron (corner `i` at
+/// bit 0: x side, bit 1: y side, bit 2: z side, as [`Camera::slice_corners`](crate::scene::Camera::slice_corners) and
+/// [`Aabb::corners`] number them; convex) with `bounds`: each solid's
+/// corners inside the other and each one's edges through the other's faces.
+/// Empty when they do not meet.
+pub fn clip_to_bounds(corners: &[Vec3; 8], bounds: &Aabb) -> Vec<Vec3> {
+    const EPS: f32 = 1e-4;
+    let planes = hexahedron_planes(corners);
     let scale = (bounds.size().length() + (corners[7] - corners[0]).length()).max(1.0);
     let in_hexahedron = |p: Vec3| planes.iter().all(|(n, d)| n.dot(p) - d <= EPS * scale);
     let in_bounds = |p: Vec3| {

@@ -6,12 +6,16 @@
 //! between view and light directions); as γ → 0 (light along the view) n
 //! grows without bound and the warp relaxes to the uniform map.
 
+mod body;
 mod psm;
 mod tsm;
 
+pub use self::body::SeenPrism;
+
+use self::body::warp_body;
 use self::psm::psm;
 use self::tsm::tsm;
-use super::setup::{LightSetup, clip_to_bounds, light_view_of_scene, linear_depth_row};
+use super::setup::{LightSetup, light_view_of_scene, linear_depth_row};
 use crate::scene::{Aabb, Camera};
 use crate::technique::shadow_map::config::partition::{Warp, WarpParams};
 use glam::{Mat4, Vec3, Vec4};
@@ -123,17 +127,26 @@ pub fn lispsm(
     })
 }
 
+/// What the frame's reduction saw, for a warped map fitted to it: the view
+/// depths of the pixels and, for one map fitted to the samples, the prism
+/// around them ([`SeenPrism`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SeenView {
+    pub depths: Option<(f32, f32)>,
+    pub prism: Option<SeenPrism>,
+}
+
 /// Warps a directional light's setup in place: each face (the one map, or
-/// each cascade) by PSM, LiSPSM or TSM over its part of the view of `camera`;
-/// faces whose light runs along the view stay uniform.
+/// each cascade) by PSM, LiSPSM or TSM over its part of the view of `camera`
+/// (one map of `size`²: inside `seen`'s prism where it has one); faces whose
+/// light runs along the view stay uniform.
 pub fn warp_setup(
     setup: &mut LightSetup,
-    camera: &Camera,
-    aspect: f32,
+    (camera, aspect): (&Camera, f32),
     light_dir: Vec3,
     scene: &Aabb,
-    params: &WarpParams,
-    seen_depths: Option<(f32, f32)>,
+    (params, size): (&WarpParams, u32),
+    seen: SeenView,
 ) {
     let ranges: Vec<(f32, f32)> = match &setup.cascades {
         Some(split) => std::iter::once(split.near)
@@ -143,7 +156,7 @@ pub fn warp_setup(
             .map(|w| (w[0], w[1]))
             .collect(),
         None => vec![
-            seen_depths
+            seen.depths
                 .unwrap_or_else(|| (camera.near, camera.reach(scene).max(camera.near * 1.01))),
         ],
     };
@@ -151,7 +164,8 @@ pub fn warp_setup(
     for (face, (z0, z1)) in setup.faces.iter_mut().zip(ranges) {
         // The body: the part of the view inside the scene (Wimmer et al.'s
         // convex body B), and its view depths for n_opt.
-        let body = clip_to_bounds(&camera.slice_corners(aspect, z0, z1), scene);
+        let prism = seen.prism.as_ref().filter(|_| setup.cascades.is_none());
+        let body = warp_body(&camera.slice_corners(aspect, z0, z1), scene, prism, size);
         let depths = body.iter().map(|p| -view.transform_point3(*p).z);
         let near = depths.clone().fold(f32::MAX, f32::min).max(camera.near);
         let far = depths.fold(0.0f32, f32::max).max(near * 1.001);
@@ -187,6 +201,7 @@ pub fn warp_setup(
 #[cfg(test)]
 pub(super) mod tests {
     use super::*;
+    use crate::technique::shadow_map::projection::setup::clip_to_bounds;
 
     pub(in crate::technique::shadow_map) fn ndc(m: Mat4, p: Vec3) -> Vec3 {
         let c = m * p.extend(1.0);
@@ -326,7 +341,18 @@ pub(super) mod tests {
                 lispsm_n: 0.0,
                 tsm_focus: 0.0,
             };
-            warp_setup(&mut setup, &cam, 1.5, light, &scene, &params, seen);
+            let seen = SeenView {
+                depths: seen,
+                prism: None,
+            };
+            warp_setup(
+                &mut setup,
+                (&cam, 1.5),
+                light,
+                &scene,
+                (&params, 2048),
+                seen,
+            );
             assert!(setup.warp_depth.is_some(), "{kind:?}");
             let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
             for c in &slice {
