@@ -119,7 +119,7 @@ fn a_frame_waits_once_and_its_gpu_times_still_arrive() {
     let scene = room_with_spot();
     // The whole cone: a map focused on the pixels seen (`fit=samples`)
     // waits for its reduction too in measurements.
-    let choice = shadowlab::measure::parse_technique_list("shadow-map:pcf[fit=frustum]")
+    let choice = shadowlab::measure::parse_technique_list("shadow-map:pcf[fit=depth]")
         .unwrap()
         .remove(0);
     let mut hf = HeadlessFrame::new(&gpu, &scene, &[choice], 96, 54).unwrap();

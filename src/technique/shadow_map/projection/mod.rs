@@ -8,6 +8,7 @@
 pub(super) mod bias_cap;
 pub mod cascades;
 pub(super) mod caster_cull;
+pub(super) mod convex;
 pub(super) mod depth_bounds;
 pub(super) mod roll;
 pub mod setup;
@@ -55,6 +56,11 @@ impl ShadowMapTechnique {
                 cone_tan: (ctx.light.outer_cone_deg.to_radians()).tan(),
                 position: ctx.light.position,
             });
+        // A spot map focused on the view frustum's part of its cone.
+        let spot_frustum = ctx.light.kind == LightType::Spot
+            && c.cascades.fit == Fit::Frustum
+            && lights.len() == 1;
+        let focused_spot = spot.is_some() || spot_frustum;
         self.last_seen = self.reduce_seen(ctx, encoder, spot)?;
         let fitted_turn = match c.roll {
             Roll::Up => Turn::Upright,
@@ -110,7 +116,7 @@ impl ShadowMapTechnique {
                         )
                     });
                     setup
-                } else if spot.is_some() {
+                } else if focused_spot {
                     let (setup, fit) = setup::spot_setup(l, &ctx.scene_gpu.bounds, &fitted);
                     fits.push(fit);
                     setup
@@ -133,7 +139,7 @@ impl ShadowMapTechnique {
         self.turn = fits.first().map(|f| f.turn);
         // A stabilised single directional or focused spot map's window,
         // kept next frame while it fits (`FrustumParams::previous_half`).
-        self.stable_halves = if stabilize && (spot.is_some() || single) {
+        self.stable_halves = if stabilize && (focused_spot || single) {
             fits.iter().map(|f| f.half).collect()
         } else {
             vec![]
@@ -214,12 +220,23 @@ impl ShadowMapTechnique {
     /// box of the pixels the camera saw, when the reduction has them.
     fn single_map_fit(&self, ctx: &MaskContext) -> ViewFit {
         let c = &self.config.cascades;
+        let size = self.config.map_side(ctx.light, ctx.gpu.max_texture_size());
         match (c.fit, self.last_seen.as_ref()) {
-            (Fit::Samples, Some(seen)) => match seen.supports {
-                Some(supports) => ViewFit::Samples {
+            (Fit::Frustum, _) if ctx.light.kind == LightType::Spot => {
+                let aspect = ctx.fit_frame.width() as f32 / ctx.fit_frame.height() as f32;
+                spot_focus::frustum_supports(
+                    setup::spot_view(ctx.light),
+                    ctx.light.outer_cone_deg.to_radians().tan(),
+                    (ctx.fit_camera, aspect),
+                    &ctx.scene_gpu.bounds,
+                )
+                .map_or(ViewFit::Frustum, |supports| ViewFit::Samples {
                     supports,
-                    size: self.config.map_side(ctx.light, ctx.gpu.max_texture_size()),
-                },
+                    size,
+                })
+            }
+            (Fit::Samples, Some(seen)) => match seen.supports {
+                Some(supports) => ViewFit::Samples { supports, size },
                 None => ViewFit::Frustum,
             },
             (Fit::Depth, Some(seen)) => {

@@ -3,6 +3,7 @@
 //! orthographic box for directional lights fitted to the scene and clipped
 //! to what the camera sees (wgpu's [0, 1] depth).
 
+use super::convex::{box_planes, hexahedron_planes};
 use super::roll::{self, AxisClearance, Supports};
 use super::stable_window::{Hold, Window, stabilized, widen_for_kernels, xy_box};
 use super::{FrustumParams, spot_focus};
@@ -199,27 +200,6 @@ pub enum ViewFit {
     Samples { supports: Supports, size: u32 },
 }
 
-/// A convex hexahedron's six face planes (corners numbered as
-/// [`clip_to_bounds`] takes them), each `(n, d)`: n outwards, n·p ≤ d inside.
-pub fn hexahedron_planes(corners: &[Vec3; 8]) -> Vec<(Vec3, f32)> {
-    let centre = corners.iter().copied().sum::<Vec3>() / 8.0;
-    (0..3)
-        .flat_map(|axis| [0, 1].map(move |side| (axis, side)))
-        .map(|(axis, side)| {
-            let on: Vec<Vec3> = (0..8)
-                .filter(|i| (i >> axis) & 1 == side)
-                .map(|i| corners[i])
-                .collect();
-            // Face corners in bit order; the diagonal pairs span the face.
-            let mut n = (on[3] - on[0]).cross(on[2] - on[1]).normalize_or_zero();
-            if n.dot(on[0] - centre) < 0.0 {
-                n = -n;
-            }
-            (n, n.dot(on[0]))
-        })
-        .collect()
-}
-
 /// The points spanning the intersection of a hexahedron (corner `i` at
 /// bit 0: x side, bit 1: y side, bit 2: z side, as [`Camera::slice_corners`](crate::scene::Camera::slice_corners) and
 /// [`Aabb::corners`] number them; convex) with `bounds`: each solid's
@@ -245,12 +225,7 @@ pub fn clip_to_bounds(corners: &[Vec3; 8], bounds: &Aabb) -> Vec<Vec3> {
         let (da, db) = (n.dot(a) - d, n.dot(b) - d);
         (da * db < 0.0).then(|| a + (b - a) * (da / (da - db)))
     };
-    let box_planes: Vec<(Vec3, f32)> = (0..3)
-        .flat_map(|axis| {
-            let n = Vec3::AXES[axis];
-            [(n, bounds.max[axis]), (-n, -bounds.min[axis])]
-        })
-        .collect();
+    let box_planes = box_planes(bounds);
     let mut out: Vec<Vec3> = corners.iter().copied().filter(|&p| in_bounds(p)).collect();
     out.extend(bounds.corners().into_iter().filter(|&p| in_hexahedron(p)));
     for e in edges(*corners) {

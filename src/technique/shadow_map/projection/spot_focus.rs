@@ -16,9 +16,11 @@
 //! fewer steps.
 
 use super::FrustumParams;
+use super::convex::{HalfSpace, box_planes, hexahedron_planes, polytope_vertices};
 use super::roll::{AxisClearance, Supports, TURNS, turn_angle, world_axes_in_perspective_image};
 use super::stable_window::{Hold, Window, stabilized, widen_for_kernels};
-use glam::{Mat4, Vec2};
+use crate::scene::{Aabb, Camera};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 
 /// The focused square in the light's image turned by `turn`
 /// (`roll::turn_angle`'s index): its window (x/−z, y/−z), inside the
@@ -75,6 +77,52 @@ pub fn axes_over_seen(view: Mat4, supports: &Supports) -> Vec<AxisClearance> {
     .into_iter()
     .flat_map(|(x, y)| world_axes_in_perspective_image(view, unturn.rotate(Vec2::new(x, y))))
     .collect()
+}
+
+/// `fit=frustum` under a spot light: the extents, in the image of its view
+/// `view` (x/−z, y/−z), of what the camera's view can hold of its cone —
+/// the view up to where it leaves the scene, inside the scene and inside
+/// the pyramid of half-extent `cone_tan` — in place of the pixels seen
+/// that `fit=samples` reduces. `None` where the view holds none of it.
+pub fn frustum_supports(
+    view: Mat4,
+    cone_tan: f32,
+    (camera, aspect): (&Camera, f32),
+    scene: &Aabb,
+) -> Option<Supports> {
+    let reach = camera.reach(scene).max(camera.near * 1.01);
+    let corners = camera.slice_corners(aspect, camera.near, reach);
+    let scale = (scene.size().length() + (corners[7] - corners[0]).length()).max(1.0);
+    // The pyramid's four sides through the apex, a·v ≤ 0 in the light's
+    // view, and a plane just before the apex (the image is x/−z).
+    let sides = [
+        Vec3::new(1.0, 0.0, cone_tan),
+        Vec3::new(-1.0, 0.0, cone_tan),
+        Vec3::new(0.0, 1.0, cone_tan),
+        Vec3::new(0.0, -1.0, cone_tan),
+    ]
+    .map(|a| (a, 0.0));
+    let before_apex = (Vec3::Z, -1e-4 * scale);
+    let mut planes = hexahedron_planes(&corners);
+    planes.extend(box_planes(scene));
+    planes.extend(
+        sides
+            .into_iter()
+            .chain([before_apex])
+            .map(|half_space| in_world(view, half_space)),
+    );
+    let image = |p: &Vec3| {
+        let v = view.transform_point3(*p);
+        Vec2::new(v.x, v.y) / -v.z
+    };
+    Supports::of_points(polytope_vertices(&planes, scale).iter().map(image))
+}
+
+/// A half-space of the light's view (a·v ≤ b) in world space: with
+/// v = R·p + t, (Rᵀa)·p ≤ b − a·t.
+fn in_world(view: Mat4, (a, b): HalfSpace) -> HalfSpace {
+    let t = view.w_axis.truncate();
+    (Mat3::from_mat4(view).transpose() * a, b - a.dot(t))
 }
 
 /// The clip-space window that turns a perspective over the square of
@@ -158,6 +206,33 @@ mod tests {
                 centre: Vec2::ZERO
             }
         );
+    }
+
+    #[test]
+    fn the_frustum_fit_holds_what_the_view_sees_of_the_cone() {
+        // A spot 10 above the ground looking straight down (cone ±1 in
+        // its image: ±10 on the ground); a camera on the ground at x = 6
+        // looking along +x sees the part of the cone past it.
+        // Its image's x is the world's x.
+        let view =
+            glam::camera::rh::view::look_to_mat4(Vec3::new(0.0, 10.0, 0.0), -Vec3::Y, Vec3::NEG_Z);
+        let scene = Aabb {
+            min: Vec3::new(-20.0, 0.0, -20.0),
+            max: Vec3::new(20.0, 12.0, 20.0),
+        };
+        let mut camera = Camera::new(Vec3::new(6.0, 1.0, 0.0), Vec3::new(20.0, 1.0, 0.0));
+        camera.near = 0.1;
+        let s = frustum_supports(view, 1.0, (&camera, 1.5), &scene).unwrap();
+        let [x0, _, x1, _] = s.box_at(0);
+        // Nothing behind the camera's near plane: the least x/−z is at its
+        // nearest and lowest point, 6.1 along x and 1 − 0.1·tan 25° high,
+        // 6.1/9.047; the cone's side bounds the far end.
+        assert!((x0 - 6.1 / 9.0466).abs() < 1e-3, "{x0}");
+        assert!((x1 - 1.0).abs() < 1e-3, "{x1}");
+        // Looking away from the cone: nothing.
+        camera.eye = Vec3::new(12.0, 1.0, 0.0);
+        camera.target = Vec3::new(30.0, 1.0, 0.0);
+        assert!(frustum_supports(view, 1.0, (&camera, 1.5), &scene).is_none());
     }
 
     #[test]

@@ -6,8 +6,9 @@
 //! scene does: a camera on open ground sees far less of it laterally than
 //! its frustum holds, and the warp spreads its texels over all of it.
 
+use super::super::convex::{box_planes, hexahedron_planes, polytope_vertices};
 use super::super::roll::{Supports, turn_angle};
-use super::super::setup::{clip_to_bounds, hexahedron_planes};
+use super::super::setup::clip_to_bounds;
 use crate::scene::Aabb;
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
@@ -65,80 +66,16 @@ pub fn warp_body(
         return body;
     };
     let mut planes = hexahedron_planes(corners);
-    planes.extend((0..3).flat_map(|axis| {
-        let n = Vec3::AXES[axis];
-        [(n, scene.max[axis]), (-n, -scene.min[axis])]
-    }));
+    planes.extend(box_planes(scene));
     planes.extend(prism.planes(size));
     let scale = (scene.size().length() + (corners[7] - corners[0]).length()).max(1.0);
     let cut = polytope_vertices(&planes, scale);
     if cut.is_empty() { body } else { cut }
 }
 
-/// The vertices of the convex solid {p : n·p ≤ d for every plane}: the
-/// meeting points of each three planes that lie inside all the others
-/// (within a tolerance relative to `scale`, the solid's size).
-fn polytope_vertices(planes: &[(Vec3, f32)], scale: f32) -> Vec<Vec3> {
-    let tolerance = 1e-4 * scale;
-    let inside = |p: Vec3| planes.iter().all(|&(n, d)| n.dot(p) - d <= tolerance);
-    let mut out = vec![];
-    for (i, &(n0, d0)) in planes.iter().enumerate() {
-        for (j, &(n1, d1)) in planes.iter().enumerate().skip(i + 1) {
-            let n01 = n0.cross(n1);
-            if n01.length_squared() < 1e-10 {
-                continue;
-            }
-            for &(n2, d2) in &planes[j + 1..] {
-                let det = n01.dot(n2);
-                if det.abs() < 1e-6 {
-                    continue;
-                }
-                // Cramer's rule in its vector form.
-                let p = (n1.cross(n2) * d0 + n2.cross(n0) * d1 + n01 * d2) / det;
-                if p.is_finite() && inside(p) {
-                    out.push(p);
-                }
-            }
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn unit_box_planes() -> Vec<(Vec3, f32)> {
-        (0..3)
-            .flat_map(|axis| {
-                let n = Vec3::AXES[axis];
-                [(n, 1.0), (-n, 1.0)]
-            })
-            .collect()
-    }
-
-    #[test]
-    fn a_box_of_half_spaces_has_its_eight_corners() {
-        let v = polytope_vertices(&unit_box_planes(), 2.0);
-        assert_eq!(v.len(), 8);
-        assert!(v.iter().all(|p| (p.abs() - Vec3::ONE).length() < 1e-5));
-    }
-
-    #[test]
-    fn a_plane_across_the_box_cuts_off_its_corner() {
-        let mut planes = unit_box_planes();
-        // x + y + z ≤ 2: cuts the corner (1, 1, 1) at (1, 1, 0) and its turns.
-        planes.push((Vec3::ONE.normalize(), 2.0 / 3f32.sqrt()));
-        let v = polytope_vertices(&planes, 2.0);
-        assert!(!v.iter().any(|p| (*p - Vec3::ONE).length() < 1e-4));
-        for want in [
-            Vec3::new(1.0, 1.0, 0.0),
-            Vec3::new(1.0, 0.0, 1.0),
-            Vec3::new(0.0, 1.0, 1.0),
-        ] {
-            assert!(v.iter().any(|p| (*p - want).length() < 1e-4), "{want}");
-        }
-    }
 
     #[test]
     fn the_prism_narrows_the_body_to_the_seen_pixels_and_keeps_the_light_axis() {
