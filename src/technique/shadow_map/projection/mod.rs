@@ -215,9 +215,11 @@ impl ShadowMapTechnique {
         }
     }
 
-    /// What a directional light's single map is fitted to this frame: the
-    /// view frustum, or (SDSM with one map) the depths or the light-view
-    /// box of the pixels the camera saw, when the reduction has them.
+    /// What a directional light's single map, or a spot light's map, is
+    /// fitted to this frame: the view frustum, or (SDSM with one map) the
+    /// depths or the light-view box of the pixels the camera saw, when the
+    /// reduction has them; a spot's map under `fit=frustum`, to what the
+    /// view frustum holds of its cone (`spot_focus::frustum_supports`).
     fn single_map_fit(&self, ctx: &MaskContext) -> ViewFit {
         let c = &self.config.cascades;
         let size = self.config.map_side(ctx.light, ctx.gpu.max_texture_size());
