@@ -4,7 +4,7 @@
 //! frustum).
 
 use crate::scene::Aabb;
-use glam::Vec3;
+use glam::{Mat3, Mat4, Vec3};
 
 /// A half-space `(n, d)`: the points p with n·p ≤ d.
 pub type HalfSpace = (Vec3, f32);
@@ -38,6 +38,13 @@ pub fn box_planes(b: &Aabb) -> Vec<HalfSpace> {
             [(n, b.max[axis]), (-n, -b.min[axis])]
         })
         .collect()
+}
+
+/// A half-space of a rigid view's space (a·v ≤ b, v = R·p + t) in world
+/// space: (Rᵀa)·p ≤ b − a·t.
+pub fn from_view(view: Mat4, (a, b): HalfSpace) -> HalfSpace {
+    let t = view.w_axis.truncate();
+    (Mat3::from_mat4(view).transpose() * a, b - a.dot(t))
 }
 
 /// The vertices of the convex solid {p : n·p ≤ d for every plane}: the

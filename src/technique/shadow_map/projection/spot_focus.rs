@@ -16,11 +16,11 @@
 //! fewer steps.
 
 use super::FrustumParams;
-use super::convex::{HalfSpace, box_planes, hexahedron_planes, polytope_vertices};
+use super::convex::{box_planes, from_view, hexahedron_planes, polytope_vertices};
 use super::roll::{AxisClearance, Supports, TURNS, turn_angle, world_axes_in_perspective_image};
 use super::stable_window::{Hold, Window, stabilized, widen_for_kernels};
 use crate::scene::{Aabb, Camera};
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 
 /// The focused square in the light's image turned by `turn`
 /// (`roll::turn_angle`'s index): its window (x/−z, y/−z), inside the
@@ -109,20 +109,13 @@ pub fn frustum_supports(
         sides
             .into_iter()
             .chain([before_apex])
-            .map(|half_space| in_world(view, half_space)),
+            .map(|half_space| from_view(view, half_space)),
     );
     let image = |p: &Vec3| {
         let v = view.transform_point3(*p);
         Vec2::new(v.x, v.y) / -v.z
     };
     Supports::of_points(polytope_vertices(&planes, scale).iter().map(image))
-}
-
-/// A half-space of the light's view (a·v ≤ b) in world space: with
-/// v = R·p + t, (Rᵀa)·p ≤ b − a·t.
-fn in_world(view: Mat4, (a, b): HalfSpace) -> HalfSpace {
-    let t = view.w_axis.truncate();
-    (Mat3::from_mat4(view).transpose() * a, b - a.dot(t))
 }
 
 /// The clip-space window that turns a perspective over the square of

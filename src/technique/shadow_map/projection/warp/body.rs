@@ -6,11 +6,13 @@
 //! scene does: a camera on open ground sees far less of it laterally than
 //! its frustum holds, and the warp spreads its texels over all of it.
 
-use super::super::convex::{box_planes, hexahedron_planes, polytope_vertices};
+use super::super::convex::{
+    HalfSpace, box_planes, from_view, hexahedron_planes, polytope_vertices,
+};
 use super::super::roll::{Supports, turn_angle};
 use super::super::setup::clip_to_bounds;
 use crate::scene::Aabb;
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 
 /// The kernel's reach past the outermost pixel the prism holds, as a
 /// fraction of the prism's half-width per texel of the map's side: a
@@ -29,23 +31,19 @@ pub struct SeenPrism {
 }
 
 impl SeenPrism {
-    /// The prism's faces in world space, each `(n, d)` with n·p ≤ d
-    /// inside, widened for the kernel of a map `size` texels wide.
-    fn planes(&self, size: u32) -> Vec<(Vec3, f32)> {
+    /// The prism's faces in world space, widened for the kernel of a map
+    /// `size` texels wide.
+    fn planes(&self, size: u32) -> Vec<HalfSpace> {
         let widened = self
             .supports
             .widened(2.0 * KERNEL_REACH_TEXELS / size.max(1) as f32);
-        // Light view p_v = R·p + t, so a·p_v ≤ b is (Rᵀa)·p ≤ b − a·t.
-        let rotation = Mat3::from_mat4(self.view);
-        let t = self.view.w_axis.truncate();
         widened
             .0
             .iter()
             .enumerate()
             .flat_map(|(k, &[lo, hi])| {
                 let a = Vec2::from_angle(turn_angle(k)).extend(0.0);
-                let n = rotation.transpose() * a;
-                [(n, hi - a.dot(t)), (-n, a.dot(t) - lo)]
+                [(a, hi), (-a, -lo)].map(|half_space| from_view(self.view, half_space))
             })
             .collect()
     }
@@ -61,16 +59,19 @@ pub fn warp_body(
     prism: Option<&SeenPrism>,
     size: u32,
 ) -> Vec<Vec3> {
-    let body = clip_to_bounds(corners, scene);
     let Some(prism) = prism else {
-        return body;
+        return clip_to_bounds(corners, scene);
     };
     let mut planes = hexahedron_planes(corners);
     planes.extend(box_planes(scene));
     planes.extend(prism.planes(size));
     let scale = (scene.size().length() + (corners[7] - corners[0]).length()).max(1.0);
     let cut = polytope_vertices(&planes, scale);
-    if cut.is_empty() { body } else { cut }
+    if cut.is_empty() {
+        clip_to_bounds(corners, scene)
+    } else {
+        cut
+    }
 }
 
 #[cfg(test)]
