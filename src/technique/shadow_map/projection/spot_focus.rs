@@ -94,7 +94,8 @@ pub fn frustum_supports(
     let corners = camera.slice_corners(aspect, camera.near, reach);
     let scale = (scene.size().length() + (corners[7] - corners[0]).length()).max(1.0);
     // The pyramid's four sides through the apex, a·v ≤ 0 in the light's
-    // view, and a plane just before the apex (the image is x/−z).
+    // view, and a plane just before the apex (the image is x/−z), ten
+    // times farther than `polytope_vertices` lets a vertex stray.
     let sides = [
         Vec3::new(1.0, 0.0, cone_tan),
         Vec3::new(-1.0, 0.0, cone_tan),
@@ -102,7 +103,7 @@ pub fn frustum_supports(
         Vec3::new(0.0, -1.0, cone_tan),
     ]
     .map(|a| (a, 0.0));
-    let before_apex = (Vec3::Z, -1e-4 * scale);
+    let before_apex = (Vec3::Z, -1e-3 * scale);
     let mut planes = hexahedron_planes(&corners);
     planes.extend(box_planes(scene));
     planes.extend(
