@@ -345,22 +345,33 @@ fn sdsm_cascades_cover_every_pixel_with_smaller_texels() {
 #[test]
 fn one_map_fitted_to_the_seen_pixels_covers_them_with_smaller_texels() {
     let land = preset("landscape", "ground", "sun-low-front");
-    let (w, h) = (256, 144);
-    let (seen, frustum) = footprints(
+    fitted_map_is_finer_and_closer(
         &land,
         "shadow-map:pcf",
         "shadow-map:pcf[fit=frustum]",
-        (w, h),
+        (256, 144),
     );
+}
+
+/// `fitted` keeps every receiving pixel of `scene` inside its maps, with a
+/// mean texel footprint under 0.8 of `wider`'s and at most half of its
+/// total mismatch.
+fn fitted_map_is_finer_and_closer(
+    scene: &shadowlab::scene::Scene,
+    fitted: &str,
+    wider: &str,
+    size: (u32, u32),
+) {
+    let (seen, wide) = footprints(scene, fitted, wider, size);
     assert!(
-        seen < 0.8 * frustum,
-        "fitted to the pixels {seen} px/texel, to the frustum {frustum}"
+        seen < 0.8 * wide,
+        "{fitted}: {seen} px/texel, {wider}: {wide}"
     );
-    let fitted = compare(&land, "shadow-map:pcf", (w, h)).mask;
-    let wide = compare(&land, "shadow-map:pcf[fit=frustum]", (w, h)).mask;
+    let close = compare(scene, fitted, size).mask;
+    let far = compare(scene, wider, size).mask;
     assert!(
-        fitted.all.total_pct * 2.0 <= wide.all.total_pct,
-        "fitted {fitted:?}\nfrustum {wide:?}"
+        close.all.total_pct * 2.0 <= far.all.total_pct,
+        "{fitted}: {close:?}\n{wider}: {far:?}"
     );
 }
 
@@ -374,22 +385,12 @@ fn one_map_fitted_to_the_seen_pixels_covers_them_with_smaller_texels() {
 #[test]
 fn warped_maps_fitted_to_the_seen_pixels_cover_them_with_smaller_texels() {
     let land = preset("landscape", "ground", "sun-low-back");
-    let (w, h) = (256, 144);
     for warp in ["psm", "lispsm", "tsm"] {
-        let (id, depths) = (
-            format!("shadow-map:{warp}"),
-            format!("shadow-map:{warp}[fit=depth]"),
-        );
-        let (seen, wide) = footprints(&land, &id, &depths, (w, h));
-        assert!(
-            seen < 0.8 * wide,
-            "{warp}: fitted to the pixels {seen} px/texel, to their depths {wide}"
-        );
-        let fitted = compare(&land, &id, (w, h)).mask;
-        let deep = compare(&land, &depths, (w, h)).mask;
-        assert!(
-            fitted.all.total_pct * 2.0 <= deep.all.total_pct,
-            "{warp}: fitted {fitted:?}\ndepths {deep:?}"
+        fitted_map_is_finer_and_closer(
+            &land,
+            &format!("shadow-map:{warp}"),
+            &format!("shadow-map:{warp}[fit=depth]"),
+            (256, 144),
         );
     }
 }
@@ -498,12 +499,8 @@ fn a_spot_map_focused_on_what_the_camera_sees_has_smaller_texels() {
         focused < 0.6 * whole,
         "focused {focused} px/texel, the whole cone {whole}"
     );
-    let (frustum, _) = footprints(
-        &scene,
-        "shadow-map:pcf[fit=frustum]",
-        "shadow-map:pcf[fit=depth]",
-        (w, h),
-    );
+    let (outside, frustum) = map_coverage(&scene, "shadow-map:pcf[fit=frustum]", (w, h));
+    assert_eq!(outside, 0, "fit=frustum: receiving pixels outside its map");
     // Measured: 0.41 against 0.74 (the pixels: 0.37).
     assert!(
         frustum < 0.7 * whole && frustum >= focused,

@@ -68,6 +68,9 @@ impl ShadowMapTechnique {
                 previous: self.turn,
             },
         };
+        // What one directional or focused spot map is fitted to: the same
+        // for every light sample, found once.
+        let view_fit = self.single_map_fit(ctx);
         let mut fits = vec![];
         let setups = lights
             .iter()
@@ -80,7 +83,7 @@ impl ShadowMapTechnique {
                     ..frustum_params
                 };
                 let fitted = FrustumParams {
-                    view_fit: self.single_map_fit(ctx),
+                    view_fit,
                     turn: fitted_turn,
                     ..kept
                 };
