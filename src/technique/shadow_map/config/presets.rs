@@ -27,11 +27,11 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "pcf-disk",
-        summary: "16 taps on a per-pixel rotated Vogel disk of radius 2.5 texels",
+        summary: "16 taps on a per-pixel rotated Vogel disk of radius 1.75 texels",
         values: &[
             (FILTER.name, "disk"),
             (SAMPLES.name, "4"),
-            (RADIUS.name, "2.5"),
+            (RADIUS.name, "1.75"),
         ],
     },
     Preset {
