@@ -278,6 +278,91 @@ fn hashed_panes_of_one_object_multiply_their_transmittances() {
     assert!((hashed - 0.25).abs() < 0.08, "hashed: {hashed}");
 }
 
+/// `transmit` shadow maps on the stacked panes with an opaque square
+/// between them, under a sun, a spot and a point light above: the floor
+/// under both panes takes the reference's quarter of the light and the
+/// square the upper pane's half (the opaque depth stops the product at it);
+/// elsewhere the maps agree with the reference but at the panes' edges.
+#[test]
+fn transmittance_maps_pass_what_the_reference_passes() {
+    let above = Vec3::new(0.3, 6.0, 0.2);
+    let lights = [
+        Light::directional(Vec3::new(0.1, -1.0, 0.05), 1.0),
+        Light::spot(above, Vec3::ZERO, 1.0, 40.0, 50.0),
+        Light::point(above, 1.0),
+    ];
+    for light in lights {
+        let squares = [
+            (Vec3::new(0.0, 1.0, 0.0), 1.5),
+            (Vec3::new(0.0, 1.5, 0.0), 0.4),
+            (Vec3::new(0.0, 2.0, 0.0), 1.5),
+        ];
+        let mut s = squares_over_floor(&squares, light, false);
+        let pane = |double_sided| Material {
+            alpha: 0.5,
+            alpha_mode: AlphaMode::Blend,
+            double_sided,
+            ..Material::color("pane", Vec3::splat(0.8))
+        };
+        s.objects[1].material = s.add_material(pane(false));
+        s.objects[3].material = s.add_material(pane(true));
+        // The opaque square faces up, to the camera and the light.
+        s.objects[2].transform =
+            Mat4::from_translation(squares[1].0) * Mat4::from_scale(Vec3::splat(0.4));
+        s.finalize().unwrap();
+        let (w, h) = (64, 64);
+        let reference = mask_of(&s, "raytraced", &[], w, h);
+        let maps = mask_of(&s, "shadow-map:pcf", &["blended_casters=transmit"], w, h);
+        let kind = light.kind;
+        // The square at the centre, the floor 8 pixels to the side.
+        for (pixel, expected) in [(h / 2 * w + w / 2, 0.5), (h / 2 * w + w / 2 + 8, 0.25)] {
+            let (r, m) = (reference[pixel as usize], maps[pixel as usize]);
+            assert!((r - expected).abs() < 1e-3, "{kind:?}: reference {r}");
+            assert!(
+                (m - expected).abs() < 0.02,
+                "{kind:?}: transmit {m}, expected {expected}"
+            );
+        }
+        let off = reference
+            .iter()
+            .zip(&maps)
+            .filter(|(r, m)| (*r - *m).abs() > 0.2)
+            .count();
+        assert!(
+            off * 100 < reference.len() * 3,
+            "{kind:?}: {off} pixels off the reference"
+        );
+        let cutout = mask_of(&s, "shadow-map:pcf", &["blended_casters=cutout"], w, h);
+        assert_eq!(
+            cutout[(h / 2 * w + w / 2 + 8) as usize],
+            0.0,
+            "{kind:?}: cutout"
+        );
+    }
+}
+
+/// Paged maps keep no transmittance maps: `transmit` is refused with a
+/// clear error, not drawn as another mode.
+#[test]
+fn paged_maps_refuse_transmittance() {
+    let s = stacked_half_transparent_panes();
+    for paging in ["virtual", "adaptive"] {
+        let mut choice = shadowlab::technique::resolve("shadow-map:pcf").unwrap();
+        let set = [
+            format!("paging={paging}"),
+            "blended_casters=transmit".into(),
+        ];
+        shadowlab::technique::apply_settings(&mut choice.params, &set).unwrap();
+        let err = shadowlab::headless::HeadlessFrame::new(gpu(), &s, &[choice], 32, 32)
+            .err()
+            .expect("refused");
+        assert!(
+            format!("{err:#}").contains("transmit needs paging=off"),
+            "{err:#}"
+        );
+    }
+}
+
 /// The irregular z-buffer on the same panes: `transmit` keeps the
 /// reference's quarter (the optical depths summed in fixed point), the
 /// other modes draw them as the shadow maps do.

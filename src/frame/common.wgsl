@@ -41,7 +41,8 @@ struct ObjectGpu {
     info: vec4u,
     // x the global ID of the object's convex parts less one (IDs are unique
     // in the scene; 0 is no part), y 1 where they are not used (a part goes
-    // on in another mesh placed with the same transform), zw unused
+    // on in another mesh placed with the same transform), z 1 where half its
+    // triangles are the back faces a double-sided material added, w unused
     parts: vec4u,
     // x alpha mode (ALPHA_*), y cutoff, z opacity factor, w uv scale (f32 bits)
     alpha: vec4u,

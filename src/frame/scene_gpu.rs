@@ -21,7 +21,9 @@ struct ObjectGpu {
     normal_matrix: Mat4,
     info: [u32; 4],
     /// x: the global ID of the object's convex parts less one, y: 1 where
-    /// they are not used ([`parts_meeting_other_meshes`]).
+    /// they are not used ([`parts_meeting_other_meshes`]), z: 1 where the
+    /// second half of its mesh's triangles are the back faces
+    /// [`crate::scene::Mesh::make_double_sided`] added.
     parts: [u32; 4],
     /// x [`AlphaMode`] as index, y cutoff, z opacity factor, w uv scale
     /// (`f32` bits).
@@ -183,12 +185,12 @@ fn draw_calls(
 }
 
 /// Object `o`'s row of the object table: transforms, flags, its parts'
-/// first ID and whether they are used, its material's alpha terms and its
-/// opacity map.
+/// first ID and whether they are used (`parts`), whether its mesh has
+/// back faces added, its material's alpha terms and its opacity map.
 fn object_gpu(
     scene: &Scene,
     o: &Object,
-    parts: [u32; 4],
+    parts: [u32; 2],
     solidity: &[Solidity],
     opacity_maps: &OpacityMaps,
     map_starts: &[u32],
@@ -206,7 +208,12 @@ fn object_gpu(
                 SolidKind::Concave => 2,
             },
         ],
-        parts,
+        parts: [
+            parts[0],
+            parts[1],
+            scene.meshes[o.mesh].sides_doubled as u32,
+            0,
+        ],
         alpha: {
             let m = &scene.materials[o.material];
             [
@@ -361,7 +368,7 @@ impl SceneGpu {
             .zip(&part_bases)
             .zip(&parts_unused)
             .map(|((o, &part_base), &unused)| {
-                let parts = [part_base, unused as u32, 0, 0];
+                let parts = [part_base, unused as u32];
                 object_gpu(scene, o, parts, &solidity, &opacity_maps, &map_starts)
             })
             .collect();

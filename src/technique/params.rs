@@ -72,20 +72,22 @@ choice_enum! {
         Hashed = "hashed",
         Opaque = "opaque",
         Ignore = "ignore",
+        Transmit = "transmit",
     }
 }
 
 impl BlendedCasters {
     /// How a caster pass draws a caster of `mode`: opaque, as a cut-out
     /// ([`AlphaMode::Mask`]; blended ones solid where opacity ≥ ½), or not
-    /// at all (`None`).
+    /// at all (`None`; `transmit` draws blended casters in passes of their
+    /// own).
     pub fn draws_as(self, mode: AlphaMode) -> Option<AlphaMode> {
         match (mode, self) {
             (AlphaMode::Blend, BlendedCasters::Cutout | BlendedCasters::Hashed) => {
                 Some(AlphaMode::Mask)
             }
             (AlphaMode::Blend, BlendedCasters::Opaque) => Some(AlphaMode::Opaque),
-            (AlphaMode::Blend, BlendedCasters::Ignore) => None,
+            (AlphaMode::Blend, BlendedCasters::Ignore | BlendedCasters::Transmit) => None,
             (m, _) => Some(m),
         }
     }
@@ -350,7 +352,7 @@ impl ParamSpec {
     pub const BLENDED_CASTERS: ParamSpec = ParamSpec::choice_of::<BlendedCasters>(
         "blended_casters",
         BlendedCasters::Cutout as usize,
-        "translucent (glTF BLEND) casters: cutout — solid where opacity ≥ ½; hashed — solid where opacity ≥ a hash of the texel, its depth and the object (Wyman & McGuire 2017), so filtered lookups see fractional visibility and stacked surfaces, the two sides of one glass among them, multiply their transmittances; opaque — solid everywhere; ignore — cast no shadow (the reference lets 1 − opacity of the light through)",
+        "translucent (glTF BLEND) casters: cutout — solid where opacity ≥ ½; hashed — solid where opacity ≥ a hash of the texel, its depth and the object (Wyman & McGuire 2017), so filtered lookups see fractional visibility and stacked surfaces, the two sides of one glass among them, multiply their transmittances; opaque — solid everywhere; ignore — cast no shadow (the reference lets 1 − opacity of the light through); transmit — a transmittance map beside each face's depth (not with paging): the product of 1 − opacity over the translucent surfaces before the nearest opaque one, and the nearest one's depth; a receiver behind it takes that share of the light (exact for translucent surfaces with no receiver between them; 5 more bytes per texel)",
     );
 
     /// Parses a textual value (`1.5`, `true`, a choice name) for this

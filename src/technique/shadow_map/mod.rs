@@ -21,12 +21,14 @@ pub use projection::FrustumParams;
 pub use projection::setup::{CascadeSplit, LightSetup, cube_views, light_setup};
 
 use crate::gpu::{GpuContext, SectionTimer};
+use crate::scene::AlphaMode;
+use crate::technique::params::BlendedCasters;
 use crate::technique::{Family, MaskContext, ParamValues, ShadowTechnique};
 use anyhow::Result;
 use glam::{Mat4, Vec2};
 use gpu::binding as B;
 use gpu::edge_mask::BoundsChain;
-use gpu::maps::Maps;
+use gpu::maps::{MapContents, Maps};
 use gpu::pipelines::{MapProjection, MapShape, ShadowMapShared};
 use gpu::uniform::{FrameTerms, SLOTS, STRIDE, ShadowMapUniform, slot_data, slot_offset};
 use projection::depth_bounds::{DepthReduction, SeenBounds};
@@ -66,6 +68,8 @@ struct MapBindings<'a> {
     bounds: &'a wgpu::TextureView,
     bound_parts: &'a wgpu::TextureView,
     parts: &'a wgpu::TextureView,
+    transmit_depth: &'a wgpu::TextureView,
+    transmittance: &'a wgpu::TextureView,
     virtual_buffers: [&'a wgpu::Buffer; 4],
 }
 
@@ -79,6 +83,8 @@ impl<'a> MapBindings<'a> {
             bounds: &shared.placeholder_bounds,
             bound_parts: &shared.placeholder_parts,
             parts: &shared.placeholder_parts,
+            transmit_depth: &shared.placeholder_depth,
+            transmittance: &shared.placeholder_bytes,
             virtual_buffers: shared.placeholder_virtual.each_ref(),
         }
     }
@@ -165,20 +171,18 @@ impl ShadowMapTechnique {
         }
     }
 
-    /// Keeps the maps when their size, layers, format and moments match;
+    /// Keeps the maps when their size, layers and contents match;
     /// otherwise frees them and allocates new ones.
     fn ensure_maps(
         &mut self,
         gpu: &GpuContext,
         size: u32,
         layers: u32,
-        format: DepthFormat,
-        moments: bool,
-        parts: bool,
+        contents: MapContents,
     ) -> Result<()> {
         if self
             .maps()
-            .is_some_and(|m| m.matches(size, layers, format, moments, parts))
+            .is_some_and(|m| m.matches(size, layers, contents))
         {
             return Ok(());
         }
@@ -188,7 +192,7 @@ impl ShadowMapTechnique {
             MapState::Dense(dense) => dense.chain,
             _ => None,
         };
-        let maps = Maps::allocate(gpu, size, layers, format, moments, parts)?;
+        let maps = Maps::allocate(gpu, size, layers, contents)?;
         self.state = MapState::Dense(Box::new(DenseMaps { maps, chain }));
         Ok(())
     }
@@ -267,6 +271,14 @@ impl ShadowMapTechnique {
                     .part
                     .as_ref()
                     .map_or(&shared.placeholder_parts, |p| &p.1),
+                transmit_depth: maps
+                    .transmit
+                    .as_ref()
+                    .map_or(&shared.placeholder_depth, |t| &t.depth.1),
+                transmittance: maps
+                    .transmit
+                    .as_ref()
+                    .map_or(&shared.placeholder_bytes, |t| &t.transmittance.1),
                 ..MapBindings::empty(shared, &self.uniforms)
             },
         )
@@ -311,8 +323,28 @@ impl ShadowMapTechnique {
                         resource: wgpu::BindingResource::Sampler(&self.shared.part_sampler),
                     },
                     view(B::EDGE_PARTS, b.bound_parts),
+                    view(B::TRANSMIT_DEPTH, b.transmit_depth),
+                    view(B::TRANSMITTANCE, b.transmittance),
                 ],
             })
+    }
+}
+
+/// What the maps of a frame under `c` hold besides depth: transmittance
+/// maps only where some caster is translucent and the maps are looked up.
+fn map_contents(c: &ShadowMapConfig, ctx: &MaskContext, parts: bool) -> MapContents {
+    let translucent = ctx
+        .scene_gpu
+        .draws
+        .iter()
+        .any(|d| d.casts_shadow && d.alpha_mode == AlphaMode::Blend);
+    MapContents {
+        format: c.format,
+        moments: c.filter.is_moment(),
+        parts,
+        transmit: c.caster_alpha.blended == BlendedCasters::Transmit
+            && c.stage != Stage::Floor
+            && translucent,
     }
 }
 
@@ -337,7 +369,6 @@ impl ShadowTechnique for ShadowMapTechnique {
         let c = self.config.for_light(ctx.light, gpu.max_texture_size());
         let aspect = ctx.frame.width() as f32 / ctx.frame.height() as f32;
         let (size, format) = (c.size, c.format);
-        let moments = c.filter.is_moment();
         let blur = c.moment_blur();
         let normal_offset = c.normal_offset(ctx.light.kind);
         let (lights, area_radius) = projection::light_samples(&c, ctx);
@@ -346,8 +377,9 @@ impl ShadowTechnique for ShadowMapTechnique {
         // Every sample of an area light has the first one's shape.
         let shape = MapShape::of(&setups[0]);
         let cull = c.cull.for_shape(shape);
-        let parts = c.uses_part_ids(cull);
-        self.ensure_maps(ctx.gpu, size, layers, format, moments, parts)?;
+        let contents = map_contents(&c, ctx, c.uses_part_ids(cull));
+        let (parts, transmit) = (contents.parts, contents.transmit);
+        self.ensure_maps(ctx.gpu, size, layers, contents)?;
         let edge_mask = c.edge_masked() && c.stage == Stage::Full;
         if let MapState::Dense(dense) = &mut self.state {
             if edge_mask {
@@ -374,7 +406,8 @@ impl ShadowTechnique for ShadowMapTechnique {
         );
         ctx.gpu.queue.write_buffer(&self.uniforms, 0, &data);
         let floor = c.stage == Stage::Floor;
-        let (depth_key, lookup_key) = passes::dense_keys(&c, cull, shape, parts, edge_mask);
+        let (depth_key, lookup_key) =
+            passes::dense_keys(&c, cull, shape, parts, edge_mask, transmit);
         let (stamps, chain_stamps) = self.begin_lookup_timers(gpu, lights.len() as u32);
         let maps = self.maps().expect("ensured above");
         // Bind groups: none of the maps while they are rendered; the moment

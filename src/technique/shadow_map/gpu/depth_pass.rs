@@ -87,6 +87,9 @@ pub enum Surfaces {
     Opaque(CasterAlpha),
     /// Those drawn as cut-outs.
     Cutout(CasterAlpha),
+    /// The translucent ones, in passes of their own
+    /// (`blended_casters=transmit`).
+    Translucent,
 }
 
 impl Surfaces {
@@ -95,6 +98,7 @@ impl Surfaces {
             Surfaces::AllSolid => true,
             Surfaces::Opaque(a) => a.draws_as(d.alpha_mode) == Some(AlphaMode::Opaque),
             Surfaces::Cutout(a) => a.draws_as(d.alpha_mode) == Some(AlphaMode::Mask),
+            Surfaces::Translucent => d.alpha_mode == AlphaMode::Blend,
         }
     }
 }
@@ -201,6 +205,26 @@ impl ShadowMapShared {
                 std::iter::once(opaque).chain(cutout)
             })
             .collect()
+    }
+
+    /// The translucent casters' depth pass (`blended_casters=transmit`):
+    /// the nearest one's depth per texel, from both faces, into a d32f map
+    /// of its own, biased as the other casters that bound no solid are.
+    pub fn translucent_depth_pass(&self, gpu: &GpuContext, key: DepthPassKey) -> DepthDraw {
+        let key = DepthPassKey {
+            format: DepthFormat::D32f,
+            cull: CullFace::None,
+            moments: None,
+            parts: false,
+            cutout: false,
+            hashed: false,
+            ..key
+        };
+        DepthDraw {
+            pipeline: self.depth_pass(gpu, key),
+            casters: Casters::All,
+            surfaces: Surfaces::Translucent,
+        }
     }
 
     /// The depth pass from the light.

@@ -356,8 +356,20 @@ fn projected(face: u32, g: vec4f, offset_n: vec3f, normal: vec3f) -> Projected {
     return Projected(c, at.xy, at.z, gradient, crease, footprint, inside);
 }
 
-// The filtered visibility of a projected point in `face`.
+// The visibility of a projected point in `face`: the opaque casters'
+// filtered test times, with `blended_casters=transmit`, the share of the
+// light the translucent casters let through.
 fn filtered(face: u32, pr: Projected, frag: vec2f) -> f32 {
+    var v = filtered_opaque(face, pr, frag);
+    for (var translucent = TRANSMIT && pr.inside; translucent; translucent = false) {
+        v *= transmitted(pr.uv, face, pr.z);
+    }
+    return v;
+}
+
+// The filtered visibility of a projected point in `face` behind the opaque
+// casters.
+fn filtered_opaque(face: u32, pr: Projected, frag: vec2f) -> f32 {
     if !pr.inside {
         return 1.0;
     }

@@ -1,12 +1,13 @@
 //! The shadow-map family's GPU side: its programs and their keys
 //! (`pipelines`), the uniform (`uniform`), the maps' textures (`maps`), the
-//! depth pass from a light (`depth_pass`) and the edge mask's bounds chain
-//! (`edge_mask`).
+//! depth pass from a light (`depth_pass`), the translucent casters' passes
+//! (`transmittance`) and the edge mask's bounds chain (`edge_mask`).
 
 pub(super) mod depth_pass;
 pub(super) mod edge_mask;
 pub(super) mod maps;
 pub(super) mod pipelines;
+pub(super) mod transmittance;
 pub(super) mod uniform;
 
 /// The family's group-2 bindings, declared once: the layout
@@ -34,10 +35,14 @@ pub mod binding {
     pub const PART_SAMPLER: u32 = 13;
     /// `edge_parts`: the bounds chain's part per cell.
     pub const EDGE_PARTS: u32 = 14;
+    /// `transmit_depth`: the nearest translucent caster's depth.
+    pub const TRANSMIT_DEPTH: u32 = 15;
+    /// `transmittance`: the translucent casters' transmittance.
+    pub const TRANSMITTANCE: u32 = 16;
 
     /// Every binding with the WGSL variable bound there (checked by a test).
     #[cfg(test)]
-    pub const NAMED: [(&str, u32); 13] = [
+    pub const NAMED: [(&str, u32); 15] = [
         ("sm", UNIFORM),
         ("depth_map", DEPTH_MAP),
         ("compare_sampler", COMPARE_SAMPLER),
@@ -51,6 +56,8 @@ pub mod binding {
         ("part_map", PART_MAP),
         ("part_sampler", PART_SAMPLER),
         ("edge_parts", EDGE_PARTS),
+        ("transmit_depth", TRANSMIT_DEPTH),
+        ("transmittance", TRANSMITTANCE),
     ];
 }
 
@@ -61,6 +68,9 @@ pub const LOOKUP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 pub const MOMENT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// Format of the part maps (`part_ids`): a convex part's scene-wide ID.
 pub const PART_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+/// Format of the transmittance maps (`blended_casters=transmit`): blended
+/// multiplicatively, which 8 bits hold to 1/255.
+pub const TRANSMITTANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 
 /// A 1×1 array texture bound in place of a map that is not in use.
 pub fn placeholder(device: &wgpu::Device, format: wgpu::TextureFormat) -> wgpu::TextureView {

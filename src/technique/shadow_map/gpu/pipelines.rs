@@ -70,6 +70,8 @@ pub struct LookupKey {
     pub wide_kernel: bool,
     /// The maps store convex part IDs (`part_ids`).
     pub parts: bool,
+    /// Translucent casters' transmittance maps (`blended_casters=transmit`).
+    pub transmit: bool,
     pub shape: MapShape,
 }
 
@@ -86,6 +88,7 @@ impl LookupKey {
             ("MARKED_RESIDENT", self.marked_resident as u32 as f64),
             ("WIDE_KERNEL", self.wide_kernel as u32 as f64),
             ("PART_IDS", self.parts as u32 as f64),
+            ("TRANSMIT", self.transmit as u32 as f64),
         ];
         constants.extend(self.shape.constants());
         constants
@@ -160,6 +163,11 @@ impl ShadowMapShared {
                     count: None,
                 },
                 tex(B::EDGE_PARTS, wgpu::TextureSampleType::Uint),
+                tex(B::TRANSMIT_DEPTH, wgpu::TextureSampleType::Depth),
+                tex(
+                    B::TRANSMITTANCE,
+                    wgpu::TextureSampleType::Float { filterable: false },
+                ),
             ],
         });
         let module = crate::frame::technique_shader(gpu, "shadow map", &[&module_source()]);
@@ -362,6 +370,7 @@ pub(in crate::technique::shadow_map) fn module_source() -> String {
         &constants,
         include_str!("shadow_map.wgsl"),
         include_str!("depth_pass.wgsl"),
+        include_str!("transmittance.wgsl"),
         include_str!("filters.wgsl"),
         include_str!("lookup.wgsl"),
         include_str!("virtual_map.wgsl"),

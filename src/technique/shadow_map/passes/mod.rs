@@ -4,6 +4,7 @@
 //! the moment blur, the edge mask's chain and the screen-space lookup.
 
 mod debug;
+mod translucent;
 
 use super::gpu::depth_pass::{Casters, DepthDraw, DepthPassKey, Surfaces};
 use super::gpu::edge_mask::{ChainInput, ChainSource};
@@ -67,23 +68,33 @@ impl ShadowMapTechnique {
             }];
         }
         let c = &self.config;
+        self.shared.depth_passes(
+            ctx.gpu,
+            self.face_depth_key(ctx, p, setup, face),
+            c.solid_front_bias,
+            c.caster_alpha,
+            &ctx.scene_gpu.draws,
+        )
+    }
+
+    /// The depth pass's key for face `face` of `setup`: its bias cap.
+    fn face_depth_key(
+        &self,
+        ctx: &MaskContext,
+        p: &SamplePasses,
+        setup: &LightSetup,
+        face: usize,
+    ) -> DepthPassKey {
+        let c = &self.config;
         let side = c.map_side(ctx.light, ctx.gpu.max_texture_size());
         let caps = BiasCaps {
             directional: c.slope_bias_clamp,
             local: c.slope_bias_clamp_local,
         };
-        let clamp = bias_clamp(setup, face, side, caps);
-        let key = DepthPassKey {
-            clamp_bits: clamp.to_bits(),
+        DepthPassKey {
+            clamp_bits: bias_clamp(setup, face, side, caps).to_bits(),
             ..p.depth_key
-        };
-        self.shared.depth_passes(
-            ctx.gpu,
-            key,
-            c.solid_front_bias,
-            c.caster_alpha,
-            &ctx.scene_gpu.draws,
-        )
+        }
     }
 
     /// Light sample `si`'s maps: each face's depth pass, then the moment
@@ -145,16 +156,19 @@ impl ShadowMapTechnique {
             // drawn; paraboloid faces are view matrices, not frusta.
             let view_proj = setup.faces[f];
             let paraboloid = setup.projection == MapProjection::Paraboloid;
+            let visible = |b: &crate::scene::Aabb| {
+                (paraboloid || !outside_clip_volume(b, view_proj))
+                    && caster_cull.as_ref().is_none_or(|c| c.may_shadow(b))
+            };
             for draw in self.depth_draws(ctx, p, setup, f) {
                 pass.set_pipeline(&draw.pipeline);
-                triangles += ctx.scene_gpu.draw_visible(
-                    &mut pass,
-                    |d| draw.takes(d),
-                    |b| {
-                        (paraboloid || !outside_clip_volume(b, view_proj))
-                            && caster_cull.as_ref().is_none_or(|c| c.may_shadow(b))
-                    },
-                );
+                triangles += ctx
+                    .scene_gpu
+                    .draw_visible(&mut pass, |d| draw.takes(d), visible);
+            }
+            drop(pass);
+            if !p.floor {
+                triangles += self.record_translucent(ctx, encoder, p, si, setup, face, &visible);
             }
         }
         self.record_blur(ctx, encoder, p, si);
@@ -273,6 +287,7 @@ pub(super) fn dense_keys(
     shape: MapShape,
     parts: bool,
     edge_mask: bool,
+    transmit: bool,
 ) -> (DepthPassKey, LookupKey) {
     let (format, moments) = (c.format, c.filter.is_moment());
     let depth_key = DepthPassKey {
@@ -299,6 +314,7 @@ pub(super) fn dense_keys(
         marked_resident: false,
         wide_kernel: false,
         parts,
+        transmit,
         shape,
     };
     (depth_key, lookup_key)

@@ -491,6 +491,7 @@ fn page_terms(
         // kernel's and half a texel) spans a page.
         wide_kernel: 2.0 * (c.kernel_reach() + 0.5) >= p.page_size as f32,
         parts: false,
+        transmit: false,
         shape: layout.shape(),
     };
     (base, lookup_key)

@@ -1,0 +1,74 @@
+//! The translucent casters' transmittance pass (`blended_casters=transmit`,
+//! `transmittance.wgsl`): each translucent caster's fragments in front of
+//! the opaque depth map multiply their texel by 1 − opacity, so that each
+//! texel holds the product over the translucent surfaces before the
+//! nearest opaque caster; their nearest depth comes from
+//! [`ShadowMapShared::translucent_depth_pass`].
+
+use super::TRANSMITTANCE_FORMAT;
+use super::pipelines::{MapShape, ShadowMapShared};
+use crate::frame::VERTEX_LAYOUT;
+use crate::gpu::GpuContext;
+
+/// The blend that multiplies the target by 1 − the fragment's output.
+const MULTIPLY_BY_ONE_MINUS: wgpu::BlendComponent = wgpu::BlendComponent {
+    src_factor: wgpu::BlendFactor::Zero,
+    dst_factor: wgpu::BlendFactor::OneMinusSrc,
+    operation: wgpu::BlendOperation::Add,
+};
+
+impl ShadowMapShared {
+    /// The transmittance pass into maps of `shape`, tested against an
+    /// opaque depth map of `depth_format` (read only), both faces drawn.
+    pub fn transmittance_pass(
+        &self,
+        gpu: &GpuContext,
+        depth_format: wgpu::TextureFormat,
+        shape: MapShape,
+    ) -> wgpu::RenderPipeline {
+        gpu.cache
+            .render_pipeline("shadow map transmittance", &(depth_format, shape), || {
+                let constants = shape.constants();
+                let options = wgpu::PipelineCompilationOptions {
+                    constants: &constants,
+                    ..Default::default()
+                };
+                let target = wgpu::ColorTargetState {
+                    format: TRANSMITTANCE_FORMAT,
+                    blend: Some(wgpu::BlendState {
+                        color: MULTIPLY_BY_ONE_MINUS,
+                        alpha: MULTIPLY_BY_ONE_MINUS,
+                    }),
+                    write_mask: wgpu::ColorWrites::ALL,
+                };
+                gpu.device
+                    .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                        label: Some("shadow map transmittance"),
+                        layout: Some(&self.pipeline_layout),
+                        vertex: wgpu::VertexState {
+                            module: &self.module,
+                            entry_point: Some("vs_depth"),
+                            compilation_options: options.clone(),
+                            buffers: &[Some(VERTEX_LAYOUT)],
+                        },
+                        primitive: Default::default(),
+                        depth_stencil: Some(wgpu::DepthStencilState {
+                            format: depth_format,
+                            depth_write_enabled: Some(false),
+                            depth_compare: Some(wgpu::CompareFunction::Less),
+                            stencil: Default::default(),
+                            bias: Default::default(),
+                        }),
+                        multisample: Default::default(),
+                        fragment: Some(wgpu::FragmentState {
+                            module: &self.module,
+                            entry_point: Some("fs_transmittance"),
+                            compilation_options: options,
+                            targets: &[Some(target)],
+                        }),
+                        multiview_mask: None,
+                        cache: None,
+                    })
+            })
+    }
+}
