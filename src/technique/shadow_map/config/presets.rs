@@ -8,6 +8,7 @@ use super::paging::PAGING;
 use super::partition::{BLEND, CASCADES, FIT, SELECT, SPLIT_LAMBDA, STABILIZE, WARP};
 use super::{AREA, FILTER, FORMAT, RADIUS, SAMPLES, SIZE};
 use crate::technique::Preset;
+use crate::technique::params::ParamSpec;
 
 pub const PRESETS: &[Preset] = &[
     Preset {
@@ -68,6 +69,11 @@ pub const PRESETS: &[Preset] = &[
         name: "msm",
         summary: "4-moment Hamburger shadow map",
         values: &[(FILTER.name, "msm"), (SIZE.name, "1024")],
+    },
+    Preset {
+        name: "translucent",
+        summary: "the pcf default, with translucent casters in transmittance maps beside the depth: glass lets its share of the light through",
+        values: &[(ParamSpec::BLENDED_CASTERS.name, "transmit")],
     },
     Preset {
         name: "area",
