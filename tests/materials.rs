@@ -278,8 +278,9 @@ fn hashed_panes_of_one_object_multiply_their_transmittances() {
     assert!((hashed - 0.25).abs() < 0.08, "hashed: {hashed}");
 }
 
-/// `transmit` shadow maps on the stacked panes with an opaque square
-/// between them, under a sun, a spot and a point light above: the floor
+/// `transmit` shadow maps (one map or cube, and the paged maps) on the
+/// stacked panes with an opaque square between them, under a sun, a spot
+/// and a point light above: the floor
 /// under both panes takes the reference's quarter of the light and the
 /// square the upper pane's half (the opaque depth stops the product at it);
 /// elsewhere the maps agree with the reference but at the panes' edges.
@@ -312,53 +313,41 @@ fn transmittance_maps_pass_what_the_reference_passes() {
         s.finalize().unwrap();
         let (w, h) = (64, 64);
         let reference = mask_of(&s, "raytraced", &[], w, h);
-        let maps = mask_of(&s, "shadow-map:pcf", &["blended_casters=transmit"], w, h);
         let kind = light.kind;
         // The square at the centre, the floor 8 pixels to the side.
-        for (pixel, expected) in [(h / 2 * w + w / 2, 0.5), (h / 2 * w + w / 2 + 8, 0.25)] {
-            let (r, m) = (reference[pixel as usize], maps[pixel as usize]);
+        let checked = [(h / 2 * w + w / 2, 0.5), (h / 2 * w + w / 2 + 8, 0.25)];
+        for (pixel, expected) in checked {
+            let r = reference[pixel as usize];
             assert!((r - expected).abs() < 1e-3, "{kind:?}: reference {r}");
+        }
+        for id in [
+            "shadow-map:pcf",
+            "shadow-map:virtual",
+            "shadow-map:adaptive",
+        ] {
+            let maps = mask_of(&s, id, &["blended_casters=transmit"], w, h);
+            for (pixel, expected) in checked {
+                let m = maps[pixel as usize];
+                assert!(
+                    (m - expected).abs() < 0.02,
+                    "{id} {kind:?}: {m}, expected {expected}"
+                );
+            }
+            let off = reference
+                .iter()
+                .zip(&maps)
+                .filter(|(r, m)| (*r - *m).abs() > 0.2)
+                .count();
             assert!(
-                (m - expected).abs() < 0.02,
-                "{kind:?}: transmit {m}, expected {expected}"
+                off * 100 < reference.len() * 3,
+                "{id} {kind:?}: {off} pixels off"
             );
         }
-        let off = reference
-            .iter()
-            .zip(&maps)
-            .filter(|(r, m)| (*r - *m).abs() > 0.2)
-            .count();
-        assert!(
-            off * 100 < reference.len() * 3,
-            "{kind:?}: {off} pixels off the reference"
-        );
         let cutout = mask_of(&s, "shadow-map:pcf", &["blended_casters=cutout"], w, h);
         assert_eq!(
             cutout[(h / 2 * w + w / 2 + 8) as usize],
             0.0,
             "{kind:?}: cutout"
-        );
-    }
-}
-
-/// Paged maps keep no transmittance maps: `transmit` is refused with a
-/// clear error, not drawn as another mode.
-#[test]
-fn paged_maps_refuse_transmittance() {
-    let s = stacked_half_transparent_panes();
-    for paging in ["virtual", "adaptive"] {
-        let mut choice = shadowlab::technique::resolve("shadow-map:pcf").unwrap();
-        let set = [
-            format!("paging={paging}"),
-            "blended_casters=transmit".into(),
-        ];
-        shadowlab::technique::apply_settings(&mut choice.params, &set).unwrap();
-        let err = shadowlab::headless::HeadlessFrame::new(gpu(), &s, &[choice], 32, 32)
-            .err()
-            .expect("refused");
-        assert!(
-            format!("{err:#}").contains("transmit needs paging=off"),
-            "{err:#}"
         );
     }
 }

@@ -330,22 +330,26 @@ impl ShadowMapTechnique {
     }
 }
 
-/// What the maps of a frame under `c` hold besides depth: transmittance
-/// maps only where some caster is translucent and the maps are looked up.
+/// What the maps of a frame under `c` hold besides depth.
 fn map_contents(c: &ShadowMapConfig, ctx: &MaskContext, parts: bool) -> MapContents {
+    MapContents {
+        format: c.format,
+        moments: c.filter.is_moment(),
+        parts,
+        transmit: transmits(c, ctx),
+    }
+}
+
+/// Whether the maps of a frame under `c` keep transmittance maps: with
+/// `blended_casters=transmit`, where some caster is translucent and the
+/// maps are looked up.
+fn transmits(c: &ShadowMapConfig, ctx: &MaskContext) -> bool {
     let translucent = ctx
         .scene_gpu
         .draws
         .iter()
         .any(|d| d.casts_shadow && d.alpha_mode == AlphaMode::Blend);
-    MapContents {
-        format: c.format,
-        moments: c.filter.is_moment(),
-        parts,
-        transmit: c.caster_alpha.blended == BlendedCasters::Transmit
-            && c.stage != Stage::Floor
-            && translucent,
-    }
+    c.caster_alpha.blended == BlendedCasters::Transmit && c.stage != Stage::Floor && translucent
 }
 
 fn clear_op(color: wgpu::Color) -> wgpu::Operations<wgpu::Color> {

@@ -10,7 +10,7 @@ pub mod partition;
 pub(super) mod presets;
 
 use crate::scene::{Light, LightType};
-use crate::technique::params::{BlendedCasters, CasterAlpha, Condition, LightKinds, choice_enum};
+use crate::technique::params::{CasterAlpha, Condition, LightKinds, choice_enum};
 use crate::technique::{ParamSpec, ParamValues};
 use anyhow::Result;
 
@@ -518,12 +518,11 @@ impl ShadowMapConfig {
             paging: PagingConfig::parse(p)?,
         })
         .and_then(|c: ShadowMapConfig| {
-            let transmit = c.caster_alpha.blended == BlendedCasters::Transmit;
             if c.paging.is_paged()
-                && (c.filter.is_moment() || c.area || c.format != DepthFormat::D32f || transmit)
+                && (c.filter.is_moment() || c.area || c.format != DepthFormat::D32f)
             {
                 anyhow::bail!(
-                    "shadow-map: paging=virtual and adaptive store d32f, filters with the PCF family (hard, pcf2x2, grid, disk, pcss, varwidth), render one map per light (area=false) and keep no transmittance maps (blended_casters=transmit needs paging=off)"
+                    "shadow-map: paging=virtual and adaptive store d32f, filters with the PCF family (hard, pcf2x2, grid, disk, pcss, varwidth) and renders one map per light (area=false)"
                 );
             }
             Ok(c)

@@ -203,7 +203,7 @@ impl ShadowMapShared {
     }
 
     /// A full-screen pass of the module with the filter constants of `key`.
-    fn fullscreen(
+    pub(super) fn fullscreen(
         &self,
         gpu: &GpuContext,
         label: &'static str,

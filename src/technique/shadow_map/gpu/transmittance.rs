@@ -6,7 +6,7 @@
 //! [`ShadowMapShared::translucent_depth_pass`].
 
 use super::TRANSMITTANCE_FORMAT;
-use super::pipelines::{MapShape, ShadowMapShared};
+use super::pipelines::{LookupKey, MapShape, ShadowMapShared};
 use crate::frame::VERTEX_LAYOUT;
 use crate::gpu::GpuContext;
 
@@ -18,17 +18,21 @@ const MULTIPLY_BY_ONE_MINUS: wgpu::BlendComponent = wgpu::BlendComponent {
 };
 
 impl ShadowMapShared {
-    /// The transmittance pass into maps of `shape`, tested against an
-    /// opaque depth map of `depth_format` (read only), both faces drawn.
+    /// The transmittance pass into maps of `shape` (the pages of a virtual
+    /// map where `virtual_map`), tested against an opaque depth map of
+    /// `depth_format` (read only), both faces drawn.
     pub fn transmittance_pass(
         &self,
         gpu: &GpuContext,
         depth_format: wgpu::TextureFormat,
         shape: MapShape,
+        virtual_map: bool,
     ) -> wgpu::RenderPipeline {
+        let key = (depth_format, shape, virtual_map);
         gpu.cache
-            .render_pipeline("shadow map transmittance", &(depth_format, shape), || {
-                let constants = shape.constants();
+            .render_pipeline("shadow map transmittance", &key, || {
+                let mut constants = shape.constants().to_vec();
+                constants.push(("VIRTUAL", virtual_map as u32 as f64));
                 let options = wgpu::PipelineCompilationOptions {
                     constants: &constants,
                     ..Default::default()
@@ -70,5 +74,24 @@ impl ShadowMapShared {
                         cache: None,
                     })
             })
+    }
+
+    /// Clears a virtual map page's slot of the transmittance pool to 1,
+    /// in a pass whose depth (the pool's, d32f) is read only.
+    pub fn transmittance_clear(&self, gpu: &GpuContext, key: LookupKey) -> wgpu::RenderPipeline {
+        self.fullscreen(
+            gpu,
+            "virtual shadow map transmittance clear",
+            "fs_clear_transmittance",
+            key,
+            &[Some(TRANSMITTANCE_FORMAT.into())],
+            Some(wgpu::DepthStencilState {
+                format: wgpu::TextureFormat::Depth32Float,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+        )
     }
 }

@@ -35,19 +35,35 @@ fn fs_transmittance(i: DepthOut, @builtin(front_facing) facing: bool) -> Transmi
     return o;
 }
 
+// Clears a virtual map page's slot of the transmittance pool: all the
+// light through.
+@fragment
+fn fs_clear_transmittance() -> @location(0) vec4f {
+    return vec4f(1.0);
+}
+
+// The texel of the transmittance maps that holds map texel t of `face`
+// (clamped to the map), and its layer: through the page table for a
+// virtual map's level being filtered (layer −1 where no page is resident).
+fn transmit_texel(t: vec2i, face: u32) -> vec3i {
+    if VIRTUAL {
+        return filtered_texel(t);
+    }
+    return vec3i(clamp(t, vec2i(0), vec2i(i32(sm.map.x) - 1)), i32(face));
+}
+
 // The share of the light the translucent casters let through to a receiver
 // at map depth `z` at `uv` of `face`: their transmittance at each of the
 // four texels around uv whose nearest translucent caster lies before the
 // receiver (else 1), weighted as the 2×2 comparison weighs them.
 fn transmitted(uv: vec2f, face: u32, z: f32) -> f32 {
     let base = vec2i(floor(uv * sm.map.x - 0.5));
-    let last = vec2i(i32(sm.map.x) - 1);
     var corners = array(vec2i(0, 1), vec2i(1, 1), vec2i(1, 0), vec2i(0, 0));
     var t = vec4f(1.0);
     for (var k = 0; k < 4; k++) {
-        let texel = clamp(base + corners[k], vec2i(0), last);
-        if z > textureLoad(transmit_depth, texel, face, 0) {
-            t[k] = textureLoad(transmittance, texel, face, 0).r;
+        let a = transmit_texel(base + corners[k], face);
+        if a.z >= 0 && z > textureLoad(transmit_depth, a.xy, a.z, 0) {
+            t[k] = textureLoad(transmittance, a.xy, a.z, 0).r;
         }
     }
     return bilinear_weighted(t, uv);

@@ -54,6 +54,7 @@ impl ShadowMapTechnique {
                 ctx.gpu,
                 p.depth_key.format.depth_texture(),
                 p.depth_key.shape,
+                false,
             ),
             ..depth_draw
         };

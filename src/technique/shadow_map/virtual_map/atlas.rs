@@ -4,8 +4,12 @@
 //! edges (the next pages' first), so that every 2×2 comparison whose first
 //! texel lies in a page reads one slot: one page-table read and one
 //! hardware comparison per tap, with no case for taps across page borders.
+//! With `blended_casters=transmit`, two more pools of the same layout hold
+//! each page's translucent casters (`gpu::transmittance`).
 
 use crate::gpu::GpuContext;
+use crate::technique::shadow_map::gpu::TRANSMITTANCE_FORMAT;
+use crate::technique::shadow_map::gpu::maps::TransmitMaps;
 use anyhow::Result;
 
 /// Texels past a page's right and bottom edges that its slot also holds.
@@ -21,11 +25,13 @@ pub struct Atlas {
     pub layer_pages: u32,
     pub layer_views: Vec<wgpu::TextureView>,
     pub array: wgpu::TextureView,
+    /// The pages' translucent casters (`blended_casters=transmit`).
+    pub transmit: Option<TransmitMaps>,
     pub bytes: u64,
 }
 
 impl Atlas {
-    pub fn new(gpu: &GpuContext, page: u32, capacity: u32) -> Result<Atlas> {
+    pub fn new(gpu: &GpuContext, page: u32, capacity: u32, transmit: bool) -> Result<Atlas> {
         let max = gpu.max_texture_size();
         // Rows of a power of two slots (the shader masks and shifts).
         let slot = page + GUARD_TEXELS;
@@ -37,7 +43,7 @@ impl Atlas {
         let layer_pages = row_pages * row_pages;
         let layers = capacity.div_ceil(layer_pages);
         let side = row_pages * slot;
-        let bytes = side as u64 * side as u64 * layers as u64 * 4;
+        let bytes = side as u64 * side as u64 * layers as u64 * if transmit { 9 } else { 4 };
         gpu.check_allocation(
             &format!(
                 "shadow-map: a pool of {capacity} pages of {page}² ({layers} layer(s) of {side}²; --set pool=N)"
@@ -46,16 +52,23 @@ impl Atlas {
             bytes,
         )?;
         gpu.checked("allocating the virtual map's pool", || {
-            let t = crate::gpu::texture_2d(
-                &gpu.device,
-                "virtual shadow map pool",
-                side,
-                side,
-                layers,
-                wgpu::TextureFormat::Depth32Float,
-                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            );
-            let (layer_views, array) = crate::gpu::layer_views(&t, layers);
+            let pool = |format| {
+                let t = crate::gpu::texture_2d(
+                    &gpu.device,
+                    "virtual shadow map pool",
+                    side,
+                    side,
+                    layers,
+                    format,
+                    wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+                );
+                crate::gpu::layer_views(&t, layers)
+            };
+            let (layer_views, array) = pool(wgpu::TextureFormat::Depth32Float);
+            let transmit = transmit.then(|| TransmitMaps {
+                depth: pool(wgpu::TextureFormat::Depth32Float),
+                transmittance: pool(TRANSMITTANCE_FORMAT),
+            });
             Ok(Atlas {
                 page,
                 capacity,
@@ -63,6 +76,7 @@ impl Atlas {
                 layer_pages,
                 layer_views,
                 array,
+                transmit,
                 bytes,
             })
         })

@@ -23,13 +23,12 @@ impl VirtualState {
     ) -> Result<u64> {
         let gpu = ctx.gpu;
         let p = c.paging;
-        if self
-            .atlas
-            .as_ref()
-            .is_none_or(|a| (a.page, a.capacity) != (p.page_size, p.pool))
-        {
+        let transmit = crate::technique::shadow_map::transmits(c, ctx);
+        if self.atlas.as_ref().is_none_or(|a| {
+            (a.page, a.capacity, a.transmit.is_some()) != (p.page_size, p.pool, transmit)
+        }) {
             self.atlas = None;
-            self.atlas = Some(Atlas::new(gpu, p.page_size, p.pool)?);
+            self.atlas = Some(Atlas::new(gpu, p.page_size, p.pool, transmit)?);
             self.pool = PagePool::new(p.pool);
         }
         // Stale pages.
@@ -43,6 +42,7 @@ impl VirtualState {
             depth_bias: c.depth_bias,
             slope_bias: c.slope_bias.to_bits(),
             cull: c.cull,
+            caster_alpha: c.caster_alpha,
         };
         let casters = ctx
             .scene_gpu

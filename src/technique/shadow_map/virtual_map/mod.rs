@@ -18,6 +18,7 @@ mod frame;
 mod levels;
 mod pages;
 mod passes;
+mod translucent;
 
 pub use levels::{PageKey, VirtualLayout, VirtualParams};
 pub use pages::PagePool;
@@ -31,6 +32,7 @@ use super::{CullFace, MapState, ShadowMapConfig, ShadowMapTechnique};
 use crate::gpu::{FrameFeedback, GpuContext, SectionTimer};
 use crate::scene::Aabb;
 use crate::technique::light_space::outside_clip_volume;
+use crate::technique::params::CasterAlpha;
 use crate::technique::{DebugImage, Feedback, MaskContext};
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
@@ -76,6 +78,7 @@ struct CacheKey {
     depth_bias: i32,
     slope_bias: u32,
     cull: CullFace,
+    caster_alpha: CasterAlpha,
 }
 
 /// The pages counted over the last frame.
@@ -398,7 +401,7 @@ impl ShadowMapTechnique {
             ..lookup_key
         };
         let atlas = state.atlas.as_ref().expect("made above");
-        let lookup_group = self.page_group(ctx, state, &atlas.array);
+        let lookup_group = self.page_group(ctx, state, Some(atlas));
         self.lookup_timer.time(gpu, encoder, |encoder| {
             let mut pass = crate::technique::mask_pass(encoder, ctx, "virtual shadow map lookup");
             pass.set_pipeline(&shared.lookup(gpu, lookup_key));
@@ -491,7 +494,7 @@ fn page_terms(
         // kernel's and half a texel) spans a page.
         wide_kernel: 2.0 * (c.kernel_reach() + 0.5) >= p.page_size as f32,
         parts: false,
-        transmit: false,
+        transmit: crate::technique::shadow_map::transmits(c, ctx),
         shape: layout.shape(),
     };
     (base, lookup_key)

@@ -2,6 +2,7 @@
 //! (and reading the marks back), and rendering new pages into the pool.
 
 use super::VirtualState;
+use super::atlas::Atlas;
 use super::levels::{PageKey, VirtualLayout};
 use super::pages::Allocation;
 use crate::gpu::FrameFeedback;
@@ -14,27 +15,33 @@ use crate::technique::shadow_map::gpu::uniform::{MAX_FACES, STRIDE, ShadowMapUni
 use crate::technique::shadow_map::projection::bias_cap::texel_bias_clamp;
 use crate::technique::shadow_map::{DepthFormat, MapBindings, ShadowMapConfig, ShadowMapTechnique};
 use anyhow::Result;
-use glam::{Mat4, UVec4};
+use glam::{Mat4, UVec4, Vec3};
 
 impl ShadowMapTechnique {
-    /// The bind group of a virtual map's passes, its pool as `pool`.
+    /// The bind group of a virtual map's passes: with `atlas`, its pools
+    /// (marking and lookup); without, placeholders (the pages' passes,
+    /// which render into them).
     pub(super) fn page_group(
         &self,
         ctx: &MaskContext,
         state: &VirtualState,
-        pool: &wgpu::TextureView,
+        atlas: Option<&Atlas>,
     ) -> wgpu::BindGroup {
+        let empty = MapBindings::empty(&self.shared, &state.uniforms);
+        let transmit = atlas.and_then(|a| a.transmit.as_ref());
         self.bind_group(
             ctx,
             MapBindings {
-                depth: pool,
+                depth: atlas.map_or(empty.depth, |a| &a.array),
+                transmit_depth: transmit.map_or(empty.transmit_depth, |t| &t.depth.1),
+                transmittance: transmit.map_or(empty.transmittance, |t| &t.transmittance.1),
                 virtual_buffers: [
                     &state.marks,
                     &state.table,
                     &state.levels,
                     &state.pixel_levels,
                 ],
-                ..MapBindings::empty(&self.shared, &state.uniforms)
+                ..empty
             },
         )
     }
@@ -58,8 +65,7 @@ impl ShadowMapTechnique {
         let gpu = ctx.gpu;
         gpu.queue
             .write_buffer(&state.uniforms, 0, bytemuck::bytes_of(base));
-        let atlas = state.atlas.as_ref().expect("made before marking");
-        let mark_group = self.page_group(ctx, state, &atlas.array);
+        let mark_group = self.page_group(ctx, state, state.atlas.as_ref());
         let mut own = FrameFeedback::own_encoder(gpu, wait);
         {
             let encoder = own.as_mut().unwrap_or(&mut *encoder);
@@ -111,25 +117,17 @@ impl ShadowMapTechnique {
         if allocation.render.is_empty() {
             return 0;
         }
-        let render_group = self.page_group(ctx, state, &self.shared.placeholder_depth);
+        let render_group = self.page_group(ctx, state, None);
         // A clipmap level's bias cap follows its texels, as a cascade's
-        // does; each level's pipeline is looked up once, when it has pages.
+        // does; each level's pipelines are looked up once, when it has pages.
+        let level_keys = page_depth_keys(&c, layout, lookup_key.shape);
         let mut depth_pipelines: Vec<Option<Vec<DepthDraw>>> = vec![None; layout.levels.len()];
         let mut depth_pipeline = |level: u32| {
             depth_pipelines[level as usize]
                 .get_or_insert_with(|| {
-                    let clamp = if layout.orthographic {
-                        texel_bias_clamp(
-                            layout.levels[level as usize].texel_world,
-                            layout.far - layout.near,
-                            c.slope_bias_clamp,
-                        )
-                    } else {
-                        0.0
-                    };
                     self.shared.depth_passes(
                         gpu,
-                        page_depth_key(&c, lookup_key.shape, clamp),
+                        level_keys[level as usize],
                         c.solid_front_bias,
                         c.caster_alpha,
                         &ctx.scene_gpu.draws,
@@ -150,6 +148,14 @@ impl ShadowMapTechnique {
             if on_layer.is_empty() {
                 continue;
             }
+            let slots = PageSlots {
+                atlas,
+                on_layer: &on_layer,
+                matrices: &page_matrices,
+                eye: layout.eye,
+                group: &render_group,
+                level_keys: &level_keys,
+            };
             let mut pass = gpu.render_pass(
                 encoder,
                 &wgpu::RenderPassDescriptor {
@@ -167,36 +173,65 @@ impl ShadowMapTechnique {
                 },
             );
             ctx.bind_frame_groups(&mut pass);
-            for (i, (key, slot)) in on_layer {
-                let (_, x, y) = atlas.place(*slot);
-                let side = atlas.slot_texels();
-                pass.set_viewport(x as f32, y as f32, side as f32, side as f32, 0.0, 1.0);
-                pass.set_scissor_rect(x, y, side, side);
-                let offset = ((i as u64 + 1) * STRIDE) as u32;
-                pass.set_bind_group(crate::frame::OWN_GROUP, &render_group, &[offset]);
+            for &(i, (key, slot)) in &on_layer {
+                slots.select(&mut pass, i, *slot);
                 pass.set_pipeline(&clear_pipeline);
                 pass.draw(0..3, 0..1);
-                let m = page_matrices[i];
-                let eye = layout.eye;
                 for draw in depth_pipeline(key.level) {
                     pass.set_pipeline(&draw.pipeline);
                     map_triangles += ctx.scene_gpu.draw_visible(
                         &mut pass,
                         |d| draw.takes(d),
-                        |b| {
-                            !outside_clip_volume(
-                                &Aabb {
-                                    min: b.min - eye,
-                                    max: b.max - eye,
-                                },
-                                m,
-                            )
-                        },
+                        page_sees(page_matrices[i], layout.eye),
                     );
                 }
             }
+            drop(pass);
+            if let Some(maps) = &atlas.transmit {
+                map_triangles +=
+                    self.record_translucent_pages(ctx, encoder, maps, layer, &slots, lookup_key);
+            }
         }
         map_triangles
+    }
+}
+
+/// Whether a caster of world bounds `b` can show in the page of `matrix`
+/// (positions relative to the camera at `eye`).
+pub(super) fn page_sees(matrix: Mat4, eye: Vec3) -> impl Fn(&Aabb) -> bool + Copy {
+    move |b| {
+        !outside_clip_volume(
+            &Aabb {
+                min: b.min - eye,
+                max: b.max - eye,
+            },
+            matrix,
+        )
+    }
+}
+
+/// The pages of one pool layer rendered this frame: their slots, matrices
+/// and the bind group their passes draw with.
+pub(super) struct PageSlots<'a> {
+    pub atlas: &'a Atlas,
+    /// Each page's index among the frame's new pages, its key and slot.
+    pub on_layer: &'a [(usize, &'a (PageKey, u32))],
+    pub matrices: &'a [Mat4],
+    pub eye: Vec3,
+    pub group: &'a wgpu::BindGroup,
+    /// Each level's depth-pass key.
+    pub level_keys: &'a [DepthPassKey],
+}
+
+impl PageSlots<'_> {
+    /// Points `pass` at page `i`'s slot and uniform.
+    pub fn select(&self, pass: &mut wgpu::RenderPass, i: usize, slot: u32) {
+        let (_, x, y) = self.atlas.place(slot);
+        let side = self.atlas.slot_texels();
+        pass.set_viewport(x as f32, y as f32, side as f32, side as f32, 0.0, 1.0);
+        pass.set_scissor_rect(x, y, side, side);
+        let offset = ((i as u64 + 1) * STRIDE) as u32;
+        pass.set_bind_group(crate::frame::OWN_GROUP, self.group, &[offset]);
     }
 }
 
@@ -238,6 +273,31 @@ fn write_page_uniforms(
     }
     gpu.queue.write_buffer(&state.uniforms, 0, &data);
     page_matrices
+}
+
+/// Each level's page depth pass: a clipmap level's bias cap follows its
+/// texels, as a cascade's does.
+fn page_depth_keys(
+    c: &ShadowMapConfig,
+    layout: &VirtualLayout,
+    shape: MapShape,
+) -> Vec<DepthPassKey> {
+    layout
+        .levels
+        .iter()
+        .map(|level| {
+            let clamp = if layout.orthographic {
+                texel_bias_clamp(
+                    level.texel_world,
+                    layout.far - layout.near,
+                    c.slope_bias_clamp,
+                )
+            } else {
+                0.0
+            };
+            page_depth_key(c, shape, clamp)
+        })
+        .collect()
 }
 
 /// The depth pass of a page: 32-bit depth, the level's bias cap `clamp`.
