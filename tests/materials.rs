@@ -352,6 +352,30 @@ fn transmittance_maps_pass_what_the_reference_passes() {
     }
 }
 
+/// A virtual map's cached pages are drawn again when the way translucent
+/// casters are drawn changes, with nothing moved: the panes' shadow under
+/// `cutout` (solid at opacity ½) is gone the next frame under `ignore`.
+#[test]
+fn virtual_pages_are_redrawn_when_blended_casters_change() {
+    let s = stacked_half_transparent_panes();
+    let (w, h) = (64, 64);
+    let centre = (h / 2 * w + w / 2) as usize;
+    let mut hf = rendered_frame(&s, "shadow-map:virtual", &["blended_casters=cutout"], w, h);
+    let mask = |hf: &shadowlab::headless::HeadlessFrame| {
+        shadowlab::headless::read_back(gpu(), &hf.frame, 1)
+            .unwrap()
+            .masks
+            .remove(0)
+    };
+    assert_eq!(mask(&hf)[centre], 0.0);
+    let mut params = hf.techniques[0].choice.params.clone();
+    shadowlab::technique::apply_settings(&mut params, &["blended_casters=ignore".into()]).unwrap();
+    hf.techniques[0].set_params(params).unwrap();
+    render_again(&mut hf, &s);
+    assert!(counter(&hf, "pages_rendered") > 0.0, "no page drawn again");
+    assert_eq!(mask(&hf)[centre], 1.0);
+}
+
 /// The irregular z-buffer on the same panes: `transmit` keeps the
 /// reference's quarter (the optical depths summed in fixed point), the
 /// other modes draw them as the shadow maps do.
