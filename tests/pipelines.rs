@@ -83,28 +83,33 @@ fn a_depth_bias_sweep_keeps_the_cache_at_its_bound() {
     // Depth passes per bias value: back faces, and with the spot map's
     // capped bias (`slope_bias_clamp_local`) the concave solids' pushed
     // front faces.
-    let mut per_value = 0;
-    for bias in 0..100 {
+    // Enough values to fill the cache past its bound: the first tells how
+    // many pipelines each takes.
+    let (mut per_value, mut values) = (0, 1);
+    let mut bias = 0;
+    while bias < values {
         let mut params = hf.techniques[0].choice.params.clone();
         params.set("depth_bias", &format!("{}", 10 + bias)).unwrap();
         hf.techniques[0].set_params(params).unwrap();
         render(&gpu, &mut hf, &scene, &settings);
         if bias == 0 {
             per_value = gpu.cache.pipelines_created() - before;
+            values = PIPELINE_CACHE_BOUND as u64 / per_value.max(1) + 10;
         }
         assert!(gpu.cache.pipelines_cached() <= PIPELINE_CACHE_BOUND);
+        bias += 1;
     }
     // The bias value's depth passes, each compiled once; the cache full.
     assert!(
         (1..=2).contains(&per_value),
         "{per_value} pipelines a bias value"
     );
-    assert_eq!(gpu.cache.pipelines_created(), before + 100 * per_value);
+    assert_eq!(gpu.cache.pipelines_created(), before + values * per_value);
     assert_eq!(gpu.cache.pipelines_cached(), PIPELINE_CACHE_BOUND);
     // The pipelines in use every frame stayed (least recently used goes
     // first): one more frame compiles nothing.
     render(&gpu, &mut hf, &scene, &settings);
-    assert_eq!(gpu.cache.pipelines_created(), before + 100 * per_value);
+    assert_eq!(gpu.cache.pipelines_created(), before + values * per_value);
     // The sweep still draws shadows.
     let mask = shadowlab::headless::read_back(&gpu, &hf.frame, 1)
         .unwrap()
@@ -237,4 +242,46 @@ fn bench_ratios_do_not_depend_on_the_order() {
             b.ratio_spread
         );
     }
+}
+
+/// A bench of every preset interleaved frame by frame, as a report's view
+/// is, compiles no pipeline in its measured frames: the device's cache
+/// holds what all of them need, so no technique's frame pays for a compile
+/// that another's evicted.
+#[test]
+fn a_bench_of_many_techniques_compiles_nothing_while_measuring() {
+    use shadowlab::measure::bench::{self, BenchFrames};
+    let (gpu, _turn) = own_gpu();
+    let mut scene = room_with_spot();
+    scene.lights = scene.light_preset("sun").unwrap();
+    // The 1024-sample reference takes seconds a frame even this small.
+    let ids: Vec<String> = technique::preset_ids()
+        .into_iter()
+        .filter(|id| id != "raytraced:reference")
+        .collect();
+    let list = shadowlab::measure::parse_technique_list(&ids.join(",")).unwrap();
+    let out = std::env::temp_dir().join("shadowlab-bench-many");
+    bench::run(
+        &gpu,
+        shadowlab::measure::FrameRequest {
+            scene: &scene,
+            camera: &scene.camera,
+            lights: &scene.lights,
+            size: (64, 36),
+        },
+        &RenderSettings::default(),
+        &list,
+        BenchFrames {
+            warmup: 1,
+            measured: 2,
+            progress: false,
+            max_seconds: None,
+        },
+        &out,
+    )
+    .unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
+    assert!(ids.len() > 40, "{} presets", ids.len());
+    assert_eq!(json["meta"]["pipelines_compiled_while_measuring"], 0);
 }

@@ -12,8 +12,11 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 /// Most pipelines one device keeps; past it the least recently used goes.
 /// A frame needs far fewer (lighting variants per material kind, and each
-/// light's technique passes).
-pub const PIPELINE_CACHE_BOUND: usize = 64;
+/// light's technique passes), but `bench` and `report` interleave every
+/// technique of a view frame by frame, and a bound below what they need
+/// together evicts and compiles pipelines in every timed frame (on
+/// llvmpipe, a compile takes longer than the frame).
+pub const PIPELINE_CACHE_BOUND: usize = 512;
 
 /// A compiled pipeline of either kind.
 #[derive(Clone)]

@@ -164,6 +164,10 @@ pub fn run(
         }
     }
     let n = series.len();
+    // A pipeline made while measuring is a compile in a timed frame: the
+    // technique's own (a pipeline per bias cap it has not met yet), or the
+    // device's cache evicting what the other techniques of the run need.
+    let created_before = gpu.cache.pipelines_created();
     for round in 0..frames as usize {
         for k in 0..n {
             let s = &mut series[(k + round) % n];
@@ -180,6 +184,13 @@ pub fn run(
             bar.inc(1);
         }
     }
+    let compiled = gpu.cache.pipelines_created() - created_before;
+    if compiled > 0 {
+        log::warn!(
+            "bench: {compiled} pipeline(s) compiled during the measured frames of `{}`; their frames include the compile",
+            view.scene.name
+        );
+    }
     let per_round: Vec<Vec<f64>> = series
         .iter()
         .map(|s| s.timings.iter().map(|t| t.total_ms).collect())
@@ -188,16 +199,17 @@ pub fn run(
     let none = series.iter().position(|s| s.label.starts_with("none:"));
     let mut rows: Vec<BenchRow> = series.into_iter().map(|s| s.row(&hf)).collect();
     set_ratios_to_none(&mut rows, &per_round, none);
-    write_tables(gpu, view, (warmup, frames), &rows, out)?;
+    write_tables(gpu, view, (warmup, frames, compiled), &rows, out)?;
     Ok(rows)
 }
 
 /// `bench.{json,csv,md}` of `rows` measured on `view` with `warmup` and
-/// `measured` frames per technique.
+/// `measured` frames per technique, `compiled` pipelines made while
+/// measuring.
 fn write_tables(
     gpu: &GpuContext,
     view: FrameRequest,
-    (warmup, measured): (u32, u32),
+    (warmup, measured, compiled): (u32, u32, u64),
     rows: &[BenchRow],
     out: &Path,
 ) -> Result<()> {
@@ -208,6 +220,7 @@ fn write_tables(
         "lights": view.lights,
         "warmup_frames": warmup,
         "measured_frames": measured,
+        "pipelines_compiled_while_measuring": compiled,
         "adapter": gpu.adapter_summary(),
         "cpu_adapter": gpu.is_cpu_adapter(),
         "gpu_timestamps": gpu.timestamps,
@@ -417,13 +430,14 @@ fn write_csv(path: &Path, rows: &[BenchRow]) -> Result<()> {
 
 fn markdown(scene: &Scene, meta: &serde_json::Value, rows: &[BenchRow]) -> String {
     let mut s = format!(
-        "# Timings on `{}`\n\n{} × {}, adapter {}, {} warm-up + {} measured frames, the measured ones round-robin across the techniques. Frame = wall time (ms) of prepass + masks + lighting, each waited for; GPU = timestamp queries; × none: median frame over `none`'s, and the 5th–95th percentile of the ratio of each round's frames. Work: invocations of one frame's mask stage per pixel of the frame (pipeline-statistics queries), the same on any adapter.{}\n\n",
+        "# Timings on `{}`\n\n{} × {}, adapter {}, {} warm-up + {} measured frames, the measured ones round-robin across the techniques; {} pipeline(s) compiled during the measured frames. Frame = wall time (ms) of prepass + masks + lighting, each waited for; GPU = timestamp queries; × none: median frame over `none`'s, and the 5th–95th percentile of the ratio of each round's frames. Work: invocations of one frame's mask stage per pixel of the frame (pipeline-statistics queries), the same on any adapter.{}\n\n",
         scene.name,
         meta["size"]["width"],
         meta["size"]["height"],
         meta["adapter"].as_str().unwrap_or(""),
         meta["warmup_frames"],
         meta["measured_frames"],
+        meta["pipelines_compiled_while_measuring"],
         if meta["cpu_adapter"].as_bool() == Some(true) {
             " **The adapter is a CPU rasterizer: its times rank techniques as a CPU does (filling pixels is cheap beside a GPU's, depth-only passes are not); the work columns do not depend on it.**"
         } else {
