@@ -97,8 +97,9 @@ impl ShadowMapTechnique {
         }
     }
 
-    /// Light sample `si`'s maps: each face's depth pass, then the moment
-    /// blur. Returns the triangles drawn.
+    /// Light sample `si`'s maps: each face's depth pass (and, with
+    /// `blended_casters=transmit`, its translucent casters' two passes),
+    /// then the moment blur. Returns the triangles drawn.
     pub(in crate::technique::shadow_map) fn record_maps(
         &self,
         ctx: &MaskContext,

@@ -10,13 +10,10 @@ use crate::technique::shadow_map::ShadowMapTechnique;
 use crate::technique::shadow_map::gpu::maps::TransmitMaps;
 use crate::technique::shadow_map::gpu::pipelines::LookupKey;
 
-/// Keep what the other pages of the layer hold: each page clears its own
-/// slot first.
-const KEEP: wgpu::StoreOp = wgpu::StoreOp::Store;
-
 impl ShadowMapTechnique {
     /// The translucent passes of the pages `slots` holds on pool layer
-    /// `layer`; returns the triangles drawn.
+    /// `layer` (each clears its own slot; the layer's other pages stay);
+    /// returns the triangles drawn.
     pub(super) fn record_translucent_pages(
         &self,
         ctx: &MaskContext,
@@ -36,7 +33,7 @@ impl ShadowMapTechnique {
                     view: &maps.depth.0[layer],
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Load,
-                        store: KEEP,
+                        store: wgpu::StoreOp::Store,
                     }),
                     stencil_ops: None,
                 }),
@@ -65,7 +62,7 @@ impl ShadowMapTechnique {
             resolve_target: None,
             ops: wgpu::Operations {
                 load: wgpu::LoadOp::Load,
-                store: KEEP,
+                store: wgpu::StoreOp::Store,
             },
         })];
         let mut pass = gpu.render_pass(
