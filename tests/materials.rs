@@ -185,6 +185,16 @@ fn auto_volumes_of_a_cutout_seen_through_its_holes_count_as_z_fail() {
     );
 }
 
+/// A translucent pane's material: opacity ½, double-sided or not.
+fn half_transparent_pane(double_sided: bool) -> Material {
+    Material {
+        alpha: 0.5,
+        alpha_mode: AlphaMode::Blend,
+        double_sided,
+        ..Material::color("pane", Vec3::splat(0.8))
+    }
+}
+
 /// Two translucent panes of opacity ½ over a floor under a sun, one of them
 /// double-sided (its two faces are one surface).
 fn stacked_half_transparent_panes() -> Scene {
@@ -194,14 +204,8 @@ fn stacked_half_transparent_panes() -> Scene {
         (Vec3::new(0.0, 2.0, 0.0), 1.5),
     ];
     let mut s = squares_over_floor(&squares, sun, false);
-    let pane = |double_sided| Material {
-        alpha: 0.5,
-        alpha_mode: AlphaMode::Blend,
-        double_sided,
-        ..Material::color("pane", Vec3::splat(0.8))
-    };
-    let lower = s.add_material(pane(false));
-    let upper = s.add_material(pane(true));
+    let lower = s.add_material(half_transparent_pane(false));
+    let upper = s.add_material(half_transparent_pane(true));
     s.objects[1].material = lower;
     s.objects[2].material = upper;
     s.finalize().unwrap();
@@ -299,14 +303,8 @@ fn transmittance_maps_pass_what_the_reference_passes() {
             (Vec3::new(0.0, 2.0, 0.0), 1.5),
         ];
         let mut s = squares_over_floor(&squares, light, false);
-        let pane = |double_sided| Material {
-            alpha: 0.5,
-            alpha_mode: AlphaMode::Blend,
-            double_sided,
-            ..Material::color("pane", Vec3::splat(0.8))
-        };
-        s.objects[1].material = s.add_material(pane(false));
-        s.objects[3].material = s.add_material(pane(true));
+        s.objects[1].material = s.add_material(half_transparent_pane(false));
+        s.objects[3].material = s.add_material(half_transparent_pane(true));
         // The opaque square faces up, to the camera and the light.
         s.objects[2].transform =
             Mat4::from_translation(squares[1].0) * Mat4::from_scale(Vec3::splat(0.4));

@@ -187,37 +187,44 @@ fn a_frame_waits_once_and_its_gpu_times_still_arrive() {
     assert!(counters["silhouette_edges"] > 0.0, "{counters:?}");
 }
 
+/// `bench` of `list` on `scene`'s camera and lights at `size`, with
+/// `(warmup, measured)` frames and no time limit, written to `out`.
+fn bench_of(
+    gpu: &GpuContext,
+    scene: &Scene,
+    list: &[technique::TechniqueChoice],
+    size: (u32, u32),
+    (warmup, measured): (u32, u32),
+    out: &std::path::Path,
+) -> Vec<shadowlab::measure::bench::BenchRow> {
+    let frames = shadowlab::measure::bench::BenchFrames {
+        warmup,
+        measured,
+        progress: false,
+        max_seconds: None,
+    };
+    let view = shadowlab::measure::FrameRequest {
+        scene,
+        camera: &scene.camera,
+        lights: &scene.lights,
+        size,
+    };
+    shadowlab::measure::bench::run(gpu, view, &RenderSettings::default(), list, frames, out)
+        .unwrap()
+}
+
 /// `bench` measures its frames round-robin: the same techniques in two
 /// orders give ratios to `none` whose spreads (the 5th–95th percentile of
 /// the per-round ratios) overlap, each median inside its own spread.
 #[test]
 fn bench_ratios_do_not_depend_on_the_order() {
-    use shadowlab::measure::bench::{self, BenchFrames};
+    use shadowlab::measure::bench;
     let (gpu, _turn) = own_gpu();
     let scene = room_with_spot();
     let run = |spec: &str| {
         let list = shadowlab::measure::parse_technique_list(spec).unwrap();
-        let frames = BenchFrames {
-            warmup: 2,
-            measured: 20,
-            progress: false,
-            max_seconds: None,
-        };
         let out = std::env::temp_dir().join(format!("shadowlab-bench-order-{}", spec.len()));
-        bench::run(
-            &gpu,
-            shadowlab::measure::FrameRequest {
-                scene: &scene,
-                camera: &scene.camera,
-                lights: &scene.lights,
-                size: (320, 180),
-            },
-            &RenderSettings::default(),
-            &list,
-            frames,
-            &out,
-        )
-        .unwrap()
+        bench_of(&gpu, &scene, &list, (320, 180), (2, 20), &out)
     };
     let forward = run("none,shadow-map:pcf[size=512],shadow-volume:zfail");
     let backward = run("shadow-volume:zfail,shadow-map:pcf[size=512],none");
@@ -250,7 +257,6 @@ fn bench_ratios_do_not_depend_on_the_order() {
 /// that another's evicted.
 #[test]
 fn a_bench_of_many_techniques_compiles_nothing_while_measuring() {
-    use shadowlab::measure::bench::{self, BenchFrames};
     let (gpu, _turn) = own_gpu();
     let mut scene = room_with_spot();
     scene.lights = scene.light_preset("sun").unwrap();
@@ -261,25 +267,7 @@ fn a_bench_of_many_techniques_compiles_nothing_while_measuring() {
         .collect();
     let list = shadowlab::measure::parse_technique_list(&ids.join(",")).unwrap();
     let out = std::env::temp_dir().join("shadowlab-bench-many");
-    bench::run(
-        &gpu,
-        shadowlab::measure::FrameRequest {
-            scene: &scene,
-            camera: &scene.camera,
-            lights: &scene.lights,
-            size: (64, 36),
-        },
-        &RenderSettings::default(),
-        &list,
-        BenchFrames {
-            warmup: 1,
-            measured: 2,
-            progress: false,
-            max_seconds: None,
-        },
-        &out,
-    )
-    .unwrap();
+    bench_of(&gpu, &scene, &list, (64, 36), (1, 2), &out);
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
     assert!(ids.len() > 40, "{} presets", ids.len());

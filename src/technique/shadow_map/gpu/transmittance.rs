@@ -9,6 +9,7 @@ use super::TRANSMITTANCE_FORMAT;
 use super::pipelines::{LookupKey, MapShape, ShadowMapShared};
 use crate::frame::VERTEX_LAYOUT;
 use crate::gpu::GpuContext;
+use crate::gpu::work::CountedRenderPass;
 
 /// The blend that multiplies the target by 1 − the fragment's output.
 const MULTIPLY_BY_ONE_MINUS: wgpu::BlendComponent = wgpu::BlendComponent {
@@ -94,4 +95,64 @@ impl ShadowMapShared {
             }),
         )
     }
+}
+
+/// The pass that draws the translucent casters' nearest depth into the
+/// layer `view`, which starts as `load` says: cleared to the far plane for
+/// a whole face, kept for a pool layer whose pages clear their own slots.
+pub fn translucent_depth_target<'e>(
+    gpu: &GpuContext,
+    encoder: &'e mut wgpu::CommandEncoder,
+    view: &wgpu::TextureView,
+    load: wgpu::LoadOp<f32>,
+) -> CountedRenderPass<'e> {
+    gpu.render_pass(
+        encoder,
+        &wgpu::RenderPassDescriptor {
+            label: Some("shadow map translucent depth"),
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view,
+                depth_ops: Some(wgpu::Operations {
+                    load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        },
+    )
+}
+
+/// The pass that multiplies the translucent casters' transmittance into
+/// the layer `view` (starting as `load` says), against the opaque depth
+/// layer `opaque`, read only: translucent casters behind it let no light
+/// through that reaches a receiver.
+pub fn transmittance_target<'e>(
+    gpu: &GpuContext,
+    encoder: &'e mut wgpu::CommandEncoder,
+    view: &wgpu::TextureView,
+    opaque: &wgpu::TextureView,
+    load: wgpu::LoadOp<wgpu::Color>,
+) -> CountedRenderPass<'e> {
+    gpu.render_pass(
+        encoder,
+        &wgpu::RenderPassDescriptor {
+            label: Some("shadow map transmittance"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: opaque,
+                depth_ops: None,
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        },
+    )
 }

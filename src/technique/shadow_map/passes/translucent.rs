@@ -6,9 +6,12 @@
 use super::{SamplePasses, slot};
 use crate::scene::Aabb;
 use crate::technique::MaskContext;
+use crate::technique::shadow_map::ShadowMapTechnique;
 use crate::technique::shadow_map::gpu::depth_pass::DepthDraw;
+use crate::technique::shadow_map::gpu::transmittance::{
+    translucent_depth_target, transmittance_target,
+};
 use crate::technique::shadow_map::projection::setup::LightSetup;
-use crate::technique::shadow_map::{ShadowMapTechnique, clear_op};
 
 impl ShadowMapTechnique {
     /// Face `face` of light sample `si`: the translucent casters' nearest
@@ -32,21 +35,8 @@ impl ShadowMapTechnique {
         let depth_draw = self
             .shared
             .translucent_depth_pass(ctx.gpu, self.face_depth_key(ctx, p, setup, f));
-        let mut pass = ctx.gpu.render_pass(
-            encoder,
-            &wgpu::RenderPassDescriptor {
-                label: Some("shadow map translucent depth"),
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &maps.depth.0[f],
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                ..Default::default()
-            },
-        );
+        let mut pass =
+            translucent_depth_target(ctx.gpu, encoder, &maps.depth.0[f], wgpu::LoadOp::Clear(1.0));
         let mut triangles = draw(ctx, &mut pass, p, si, face, &depth_draw, visible);
         drop(pass);
         let transmit = DepthDraw {
@@ -58,26 +48,12 @@ impl ShadowMapTechnique {
             ),
             ..depth_draw
         };
-        let colors = [Some(wgpu::RenderPassColorAttachment {
-            view: &maps.transmittance.0[f],
-            depth_slice: None,
-            resolve_target: None,
-            ops: clear_op(wgpu::Color::WHITE),
-        })];
-        let mut pass = ctx.gpu.render_pass(
+        let mut pass = transmittance_target(
+            ctx.gpu,
             encoder,
-            &wgpu::RenderPassDescriptor {
-                label: Some("shadow map transmittance"),
-                color_attachments: &colors,
-                // The opaque depth, read only: translucent casters behind
-                // it let no light through that reaches a receiver.
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &p.maps.depth_layer_views[f],
-                    depth_ops: None,
-                    stencil_ops: None,
-                }),
-                ..Default::default()
-            },
+            &maps.transmittance.0[f],
+            &p.maps.depth_layer_views[f],
+            wgpu::LoadOp::Clear(wgpu::Color::WHITE),
         );
         triangles += draw(ctx, &mut pass, p, si, face, &transmit, visible);
         triangles
