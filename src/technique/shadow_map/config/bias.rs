@@ -65,7 +65,7 @@ pub const NORMAL_OFFSET_POWER: ParamSpec = ParamSpec::float(
 
 pub const NORMAL_OFFSET_LOCAL: ParamSpec = ParamSpec::float(
     "normal_offset_local",
-    1.0,
+    0.5,
     0.0,
     10.0,
     0.1,
