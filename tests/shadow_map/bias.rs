@@ -247,19 +247,16 @@ fn a_concave_receivers_terminator_is_not_graded() {
 /// shadows stay where the reference puts them.
 #[test]
 fn a_faceted_terrain_does_not_speckle_its_own_creases() {
-    use glam::{Mat4, Vec3};
-    use shadowlab::scene::{Camera, Light, Material, Scene, shapes};
-    let mut s = Scene::new("terrain");
-    let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
-    let ground = shapes::heightfield(10.0, 100, |x, z| {
-        0.5 * (0.9 * x).sin() * (0.7 * z).cos() + 0.12 * (4.1 * x + 1.3 * z).sin().abs()
-            - 0.08 * (3.3 * z - 2.1 * x).cos().abs()
-    });
-    let ground = s.add_mesh(ground);
-    s.add_object("Ground", ground, grey, Mat4::IDENTITY);
-    s.lights = vec![Light::point(Vec3::new(-1.0, 9.0, 1.5), 1.0)];
-    s.camera = Camera::new(Vec3::new(6.0, 5.0, 8.0), Vec3::new(0.0, 0.0, 0.0));
-    s.finalize().unwrap();
+    use glam::Vec3;
+    let s = heightfield_under_a_point_light(
+        100,
+        |x, z| {
+            0.5 * (0.9 * x).sin() * (0.7 * z).cos() + 0.12 * (4.1 * x + 1.3 * z).sin().abs()
+                - 0.08 * (3.3 * z - 2.1 * x).cos().abs()
+        },
+        Vec3::new(-1.0, 9.0, 1.5),
+        Vec3::new(6.0, 5.0, 8.0),
+    );
     let now = compare(&s, "shadow-map:pcf", (320, 180)).mask;
     let plane_alone = compare(&s, "shadow-map:pcf[crease_angle=0]", (320, 180)).mask;
     assert!(
@@ -364,16 +361,13 @@ fn a_flat_part_whose_edges_go_on_in_another_mesh_is_compared_along_its_plane() {
 /// 3.52 → 2.47 %, `deer` 1.61 → 1.13 %, a full texel against half).
 #[test]
 fn a_corrugated_sheet_under_a_low_point_light_keeps_its_crests_shadows() {
-    use glam::{Mat4, Vec3};
-    use shadowlab::scene::{Camera, Light, Material, Scene, shapes};
-    let mut s = Scene::new("corrugated");
-    let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
-    let sheet = shapes::heightfield(10.0, 160, |x, z| 0.25 * (2.5 * x + 0.3 * z).sin());
-    let sheet = s.add_mesh(sheet);
-    s.add_object("Sheet", sheet, grey, Mat4::IDENTITY);
-    s.lights = vec![Light::point(Vec3::new(-7.0, 1.6, 1.0), 1.0)];
-    s.camera = Camera::new(Vec3::new(3.0, 4.0, 7.0), Vec3::new(0.0, 0.0, 0.0));
-    s.finalize().unwrap();
+    use glam::Vec3;
+    let s = heightfield_under_a_point_light(
+        160,
+        |x, z| 0.25 * (2.5 * x + 0.3 * z).sin(),
+        Vec3::new(-7.0, 1.6, 1.0),
+        Vec3::new(3.0, 4.0, 7.0),
+    );
     let now = compare(&s, "shadow-map:pcf", (320, 180)).mask;
     let full_texel = compare(&s, "shadow-map:pcf[normal_offset_local=1]", (320, 180)).mask;
     assert!(
@@ -383,4 +377,25 @@ fn a_corrugated_sheet_under_a_low_point_light_keeps_its_crests_shadows() {
             && full_texel.all.false_lit_pct >= 1.5 * now.all.false_lit_pct,
         "defaults {now:?}\na full texel {full_texel:?}"
     );
+}
+
+/// A grey open heightfield 10 units wide of `cells`² cells at `height(x, z)`
+/// (no convex part: its receivers take the whole normal offset), lit by a
+/// point light at `light` and seen from `eye` towards the origin.
+fn heightfield_under_a_point_light(
+    cells: u32,
+    height: impl Fn(f32, f32) -> f32,
+    light: glam::Vec3,
+    eye: glam::Vec3,
+) -> shadowlab::scene::Scene {
+    use glam::{Mat4, Vec3};
+    use shadowlab::scene::{Camera, Light, Material, Scene, shapes};
+    let mut s = Scene::new("heightfield");
+    let grey = s.add_material(Material::color("grey", Vec3::splat(0.7)));
+    let ground = s.add_mesh(shapes::heightfield(10.0, cells, height));
+    s.add_object("Ground", ground, grey, Mat4::IDENTITY);
+    s.lights = vec![Light::point(light, 1.0)];
+    s.camera = Camera::new(eye, Vec3::ZERO);
+    s.finalize().unwrap();
+    s
 }
