@@ -1,4 +1,4 @@
-//! glTF 2.0 import (meshes, base colour, textures, KHR_lights_punctual,
+//! glTF 2.0 import (meshes, materials (`materials`), textures, KHR_lights_punctual,
 //! KHR_mesh_quantization, cameras, `extras.shadowlab` flags) and export of a resolved scene in
 //! world space (`export`).
 
@@ -6,12 +6,12 @@ mod attributes;
 mod checks;
 mod export;
 mod extras;
+mod materials;
 
 pub use export::export;
 
 use super::{
-    AlphaMode, Camera, Light, Material, Mesh, Object, Scene, Texture, TextureWrap,
-    frame_scene_defaults,
+    Camera, Light, Material, Mesh, Object, Scene, Texture, TextureWrap, frame_scene_defaults,
 };
 use anyhow::{Context, Result, anyhow, bail};
 use attributes::MESH_QUANTIZATION;
@@ -19,8 +19,9 @@ use checks::{
     check_accessors, check_attribute_indices, check_external_files, check_glb_layout,
     check_node_forest, check_primitive_accessors, scene_roots, without_panics,
 };
-use extras::{PhongExtras, ShadowFlags, extras_field};
+use extras::{ShadowFlags, extras_field};
 use glam::{Mat4, Vec2, Vec3};
+use materials::{appearance_extensions_left, base_colour_texture, material_of, uv_transform};
 use std::path::Path;
 
 fn to_rgba(img: &gltf::image::Data) -> Result<image::RgbaImage> {
@@ -76,57 +77,6 @@ fn read_images(
                 .ok()
         })
         .collect()
-}
-
-/// Material `m`'s KHR_texture_transform of its base colour texture.
-fn uv_transform(m: &gltf::Material) -> Option<glam::Mat3> {
-    let pbr = m.pbr_metallic_roughness();
-    pbr.base_color_texture()
-        .and_then(|t| t.texture_transform())
-        .map(|t| {
-            glam::Mat3::from_scale_angle_translation(
-                Vec2::from(t.scale()),
-                t.rotation(),
-                Vec2::from(t.offset()),
-            )
-        })
-}
-
-/// Material `m` without its textures: Phong terms from the shadowlab
-/// extras or from metallic-roughness, and the alpha mode, factor and cutoff.
-fn material_of(m: &gltf::Material) -> Result<Material> {
-    let pbr = m.pbr_metallic_roughness();
-    let bc = Vec3::from_slice(&pbr.base_color_factor()[..3]);
-    let mut mat = match extras_field::<PhongExtras>(m.extras(), "material")? {
-        Some(p) => Material {
-            ka: p.ka.into(),
-            kd: p.kd.into(),
-            ks: p.ks.into(),
-            shininess: p.shininess,
-            uv_scale: p.uv_scale,
-            procedural: p.procedural,
-            ..Material::default()
-        },
-        None => {
-            // Phong from metallic-roughness: n = 2/r² − 2.
-            let r = pbr.roughness_factor().max(0.05);
-            Material {
-                ks: Vec3::splat(0.04 + 0.5 * pbr.metallic_factor()),
-                shininess: (2.0 / (r * r) - 2.0).clamp(1.0, 1000.0),
-                ..Material::color("", bc)
-            }
-        }
-    };
-    mat.name = m.name().unwrap_or("material").into();
-    mat.alpha = pbr.base_color_factor()[3].clamp(0.0, 1.0);
-    mat.alpha_mode = match m.alpha_mode() {
-        gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
-        gltf::material::AlphaMode::Mask => AlphaMode::Mask,
-        gltf::material::AlphaMode::Blend => AlphaMode::Blend,
-    };
-    mat.alpha_cutoff = m.alpha_cutoff().unwrap_or(0.5).clamp(0.0, 1.0);
-    mat.double_sided = m.double_sided();
-    Ok(mat)
 }
 
 /// A KHR_lights_punctual light at `pos`, shining along `forward`.
@@ -434,6 +384,7 @@ fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene
     let quantized = root.extensions_used.iter().any(|e| e == MESH_QUANTIZATION);
     root.extensions_required.retain(|e| e != MESH_QUANTIZATION);
     ktx2_textures_named(&mut root);
+    appearance_extensions_left(&file, &mut root);
     let doc = gltf::Document::from_json(root).map_err(|e| anyhow!("{file}: {e}"))?;
     let buffers =
         gltf::import_buffers(&doc, Some(base), blob).map_err(|e| anyhow!("{file}: {e}"))?;
@@ -451,12 +402,10 @@ fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene
     // into the texture coordinates of the primitives that use it.
     let mut uv_transforms: Vec<Option<glam::Mat3>> = vec![];
     for m in doc.materials() {
-        let pbr = m.pbr_metallic_roughness();
         uv_transforms.push(uv_transform(&m));
         let mut mat = material_of(&m)?;
-        mat.diffuse_texture = pbr
-            .base_color_texture()
-            .and_then(|t| textures.get(&mut scene, t.texture(), true));
+        mat.diffuse_texture =
+            base_colour_texture(&m).and_then(|t| textures.get(&mut scene, t.texture(), true));
         mat.alpha_texture = mat.diffuse_texture.filter(|_| mat.is_see_through());
         mat.normal_map = m
             .normal_texture()
