@@ -1243,3 +1243,43 @@ fn required_material_extensions_load_with_their_core_material() {
         stderr(&o)
     );
 }
+
+/// A glTF without scenes draws every node without a parent, and one whose
+/// animations the `gltf` crate cannot parse (a KHR_animation_pointer
+/// channel targets no node) loads its rest pose, each with a warning; both
+/// were refused ("no scene", "missing field `node`": Khronos' glTF-Blender-IO
+/// tests `00_no_scenes` and `24_animation_pointer`).
+#[test]
+fn files_without_scenes_or_with_pointer_animations_load_with_a_warning() {
+    let dir = tmpdir("no-scene-pointer-animation");
+    let triangle = || -> serde_json::Value {
+        serde_json::from_str(&uv_triangle_gltf(
+            serde_json::json!([{}]),
+            serde_json::json!([]),
+            &uv_triangle_data_uri(),
+        ))
+        .unwrap()
+    };
+    let mut no_scene = triangle();
+    let o = no_scene.as_object_mut().unwrap();
+    o.remove("scene");
+    o.remove("scenes");
+    let mut animated = triangle();
+    animated["animations"] = serde_json::json!([{
+        "channels": [{ "sampler": 0, "target": { "path": "pointer",
+            "extensions": { "KHR_animation_pointer": { "pointer": "/materials/0/alphaCutoff" } } } }],
+        "samplers": [{ "input": 0, "output": 0 }]
+    }]);
+    for (name, doc, warning) in [
+        ("no-scene.gltf", no_scene, "no scene; drawing every node"),
+        ("animated.gltf", animated, "animations cannot be read"),
+    ] {
+        let path = write(&dir, name, &doc.to_string());
+        let s = scene::load(path.to_str().unwrap()).unwrap();
+        assert_eq!(s.objects.len(), 1, "{name}");
+        let out = dir.join("out");
+        let o = render_file(path.to_str().unwrap(), "32x32", out.to_str().unwrap(), &[]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        assert!(stderr(&o).contains(warning), "{name}: {}", stderr(&o));
+    }
+}

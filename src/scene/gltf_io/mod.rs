@@ -367,6 +367,41 @@ fn load_checked(file: &str, path: &Path) -> Result<Scene> {
     load_bytes(file, &bytes, base, stem)
 }
 
+/// The file parsed without the importer's validation. One whose
+/// animations the `gltf` crate cannot parse (KHR_animation_pointer's
+/// channels target no node) is read without them, with a warning: the lab
+/// draws the rest pose and reads no animation. Any other error stands.
+fn parsed(file: &str, bytes: &[u8]) -> Result<gltf::Gltf> {
+    let error = match gltf::Gltf::from_slice_without_validation(bytes) {
+        Ok(parsed) => return Ok(parsed),
+        Err(e) => anyhow!("{file}: {e}"),
+    };
+    let parsed = without_animations(bytes).ok_or(error)?;
+    log::warn!("{file}: its animations cannot be read; drawing the rest pose without them");
+    Ok(parsed)
+}
+
+/// The file parsed with its `animations` left out, where it has some and
+/// parses without them.
+fn without_animations(bytes: &[u8]) -> Option<gltf::Gltf> {
+    let (json, blob) = if bytes.starts_with(b"glTF") {
+        let glb = gltf::Glb::from_slice(bytes).ok()?;
+        (
+            glb.json.into_owned(),
+            glb.bin.map(std::borrow::Cow::into_owned),
+        )
+    } else {
+        (bytes.to_vec(), None)
+    };
+    let mut value: serde_json::Value = serde_json::from_slice(&json).ok()?;
+    value.as_object_mut()?.remove("animations")?;
+    let root = serde_json::from_value(value).ok()?;
+    Some(gltf::Gltf {
+        document: gltf::Document::from_json_without_validation(root),
+        blob,
+    })
+}
+
 fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene> {
     let file = file.to_string();
     if bytes.starts_with(b"glTF") {
@@ -376,8 +411,7 @@ fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene
     // must come before it. KHR_mesh_quantization, which the `gltf` crate
     // does not know, is read here (`attributes`), so it leaves the required
     // extensions before the crate validates the rest.
-    let gltf::Gltf { document, blob } =
-        gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| anyhow!("{file}: {e}"))?;
+    let gltf::Gltf { document, blob } = parsed(&file, bytes)?;
     let mut root = document.into_json();
     check_attribute_indices(&file, &root)?;
     check_external_files(&file, base, &root)?;
@@ -420,17 +454,23 @@ fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene
     };
     let mut mesh_ids = std::collections::HashMap::new();
     let mut camera = None;
-    let gscene = doc
-        .default_scene()
-        .or_else(|| doc.scenes().next())
-        .ok_or_else(|| anyhow!("{file}: no scene"))?;
+    let roots = match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(gscene) => scene_roots(&file, &gscene, &parents),
+        None => {
+            log::warn!(
+                "{file}: no scene; drawing every node without a parent (as Blender imports such a file)"
+            );
+            (0..parents.len())
+                .filter(|&i| parents[i].is_none())
+                .collect()
+        }
+    };
     // Breadth-first in document order, so objects keep the node order.
     let nodes: Vec<gltf::Node> = doc.nodes().collect();
-    let mut queue: std::collections::VecDeque<(gltf::Node, Mat4)> =
-        scene_roots(&file, &gscene, &parents)
-            .into_iter()
-            .map(|i| (nodes[i].clone(), Mat4::IDENTITY))
-            .collect();
+    let mut queue: std::collections::VecDeque<(gltf::Node, Mat4)> = roots
+        .into_iter()
+        .map(|i| (nodes[i].clone(), Mat4::IDENTITY))
+        .collect();
     while let Some((node, parent)) = queue.pop_front() {
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         let name = node.name().unwrap_or("node").to_string();
