@@ -402,6 +402,23 @@ fn without_animations(bytes: &[u8]) -> Option<gltf::Gltf> {
     })
 }
 
+/// The nodes the traversal starts from: the default scene's roots (else
+/// the first scene's), or, in a file without scenes, every node without a
+/// parent (as Blender imports such a file), with a warning.
+fn drawn_roots(file: &str, doc: &gltf::Document, parents: &[Option<usize>]) -> Vec<usize> {
+    match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(gscene) => scene_roots(file, &gscene, parents),
+        None => {
+            log::warn!(
+                "{file}: no scene; drawing every node without a parent (as Blender imports such a file)"
+            );
+            (0..parents.len())
+                .filter(|&i| parents[i].is_none())
+                .collect()
+        }
+    }
+}
+
 fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene> {
     let file = file.to_string();
     if bytes.starts_with(b"glTF") {
@@ -454,17 +471,7 @@ fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene
     };
     let mut mesh_ids = std::collections::HashMap::new();
     let mut camera = None;
-    let roots = match doc.default_scene().or_else(|| doc.scenes().next()) {
-        Some(gscene) => scene_roots(&file, &gscene, &parents),
-        None => {
-            log::warn!(
-                "{file}: no scene; drawing every node without a parent (as Blender imports such a file)"
-            );
-            (0..parents.len())
-                .filter(|&i| parents[i].is_none())
-                .collect()
-        }
-    };
+    let roots = drawn_roots(&file, &doc, &parents);
     // Breadth-first in document order, so objects keep the node order.
     let nodes: Vec<gltf::Node> = doc.nodes().collect();
     let mut queue: std::collections::VecDeque<(gltf::Node, Mat4)> = roots
