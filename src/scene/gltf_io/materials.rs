@@ -63,7 +63,8 @@ pub fn uv_transform(m: &gltf::Material) -> Option<glam::Mat3> {
 }
 
 /// Material `m` without its textures: Phong terms from the shadowlab
-/// extras or from metallic-roughness, and the alpha mode, factor and cutoff.
+/// extras or from metallic-roughness, the colour and alpha factor from
+/// [`base_colour_factor`], and the alpha mode and cutoff.
 pub fn material_of(m: &gltf::Material) -> Result<Material> {
     let pbr = m.pbr_metallic_roughness();
     let base = base_colour_factor(m);
