@@ -82,10 +82,10 @@ pub const RECEIVER_PLANE: ParamSpec = ParamSpec::boolean(
 
 pub const CREASE_ANGLE: ParamSpec = ParamSpec::float(
     "crease_angle",
-    15.0,
+    30.0,
     0.0,
     45.0,
     0.5,
-    "receiver_plane: the angle, in degrees, that a surface may rise out of the receiver's plane (a concave crease between facets) before a kernel tap reads it as a caster: each tap's compared depth sinks below the plane by what such a rise over the tap's distance from the lookup point comes to along the light's ray (1/(N·L) as much as along the normal, at most 5 times); a faceted surface (a terrain mesh, a tessellated body) rises out of its own facet's plane within the kernel's reach, where taps read it as a caster and speckle the surface with partial shadow; a caster within this angle of the receiver's plane no longer shadows the texels next to where it touches; 0 = the plane alone",
+    "receiver_plane: the angle, in degrees, that a surface may rise out of the receiver's plane (a concave crease between facets) before a kernel tap reads it as a caster: each tap's compared depth sinks below the plane by what such a rise over the tap's distance from the lookup point comes to along the light's ray (1/(N·L) as much as along the normal, at most 5 times); a faceted surface (a terrain mesh, a tessellated body) rises out of its own facet's plane within the kernel's reach, where taps read it as a caster and speckle the surface with partial shadow; the wall of a boss or dome rising from a lit receiver (a concave crease between surfaces) no longer rings its base with partial shadow; the taps are forgiven only where the receiver's own texel is lit, so a low caster whose shadow covers that texel (raised lettering under grazing light, stored by its back faces close above the receiver) still shadows it; 0 = the plane alone",
 )
 .when(Condition::Is("receiver_plane", &["true"]));

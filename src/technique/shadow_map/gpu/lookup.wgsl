@@ -378,6 +378,12 @@ fn filtered_opaque(face: u32, pr: Projected, frag: vec2f) -> f32 {
     rp_origin = pr.uv;
     rp_crease = select(pr.crease, 0.0, has_own_part());
     rp_depth = pr.z;
+    // The crease tolerance forgives the taps only where the receiver's own
+    // texel (the one its lookup point lies in) is lit: a surface meeting a
+    // lit receiver at a concave crease (a dome on a plate, the next facet)
+    // rises beside it, while a low caster's shadow (raised lettering under
+    // grazing light) covers the receiver's own texel as well.
+    rp_crease = select(rp_crease, 0.0, lit_at_plane(vec2i(floor(pr.uv * sm.map.x)), face) == 0.0);
     if FILTER_KIND >= FILTER_VSM {
         return sharpened(moment_visibility(moments_at(pr.uv, face), moment_depth_of(select(linear01(pr.clip), pr.z, is_warped()))), pr.texels_per_pixel);
     }
