@@ -330,3 +330,52 @@ pub(super) fn check_accessors(
     }
     Ok(())
 }
+
+/// Compressed-geometry extensions: a file that requires one stores its
+/// meshes only in a form the importer cannot decode.
+const COMPRESSED_GEOMETRY: [&str; 3] = [
+    "KHR_draco_mesh_compression",
+    "EXT_meshopt_compression",
+    "KHR_meshopt_compression",
+];
+
+/// How many of the importer's validation errors an error message lists.
+const LISTED_ERRORS: usize = 3;
+
+/// The document, validated: a required extension the importer cannot read
+/// is named as the cause (a Draco-compressed file otherwise fails with an
+/// error per accessor, each "Missing data"), and of many validation errors
+/// the first few are listed with how many more there are.
+pub(super) fn validated(file: &str, root: gltf::json::Root) -> Result<gltf::Document> {
+    let unreadable: Vec<&str> = root
+        .extensions_required
+        .iter()
+        .map(String::as_str)
+        .filter(|e| !gltf::json::extensions::ENABLED_EXTENSIONS.contains(e))
+        .collect();
+    if !unreadable.is_empty() {
+        let hint = if unreadable.iter().any(|e| COMPRESSED_GEOMETRY.contains(e)) {
+            " (compressed geometry: write the file without compression first)"
+        } else {
+            ""
+        };
+        bail!(
+            "{file}: requires the glTF extension {}, which shadowlab cannot read{hint}",
+            unreadable.join(", ")
+        );
+    }
+    gltf::Document::from_json(root).map_err(|e| match e {
+        gltf::Error::Validation(errors) if errors.len() > LISTED_ERRORS => {
+            let first: Vec<String> = errors[..LISTED_ERRORS]
+                .iter()
+                .map(|(path, error)| format!("{}: {error}", path.as_str()))
+                .collect();
+            anyhow::anyhow!(
+                "{file}: invalid glTF: {}; and {} more",
+                first.join("; "),
+                errors.len() - LISTED_ERRORS
+            )
+        }
+        e => anyhow::anyhow!("{file}: {e}"),
+    })
+}

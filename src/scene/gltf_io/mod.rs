@@ -17,7 +17,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use attributes::MESH_QUANTIZATION;
 use checks::{
     check_accessors, check_attribute_indices, check_external_files, check_glb_layout,
-    check_node_forest, check_primitive_accessors, scene_roots, without_panics,
+    check_node_forest, check_primitive_accessors, scene_roots, validated, without_panics,
 };
 use extras::{ShadowFlags, extras_field};
 use glam::{Mat4, Vec2, Vec3};
@@ -436,7 +436,7 @@ fn load_bytes(file: &str, bytes: &[u8], base: &Path, stem: &str) -> Result<Scene
     root.extensions_required.retain(|e| e != MESH_QUANTIZATION);
     ktx2_textures_named(&mut root);
     appearance_extensions_left(&file, &mut root);
-    let doc = gltf::Document::from_json(root).map_err(|e| anyhow!("{file}: {e}"))?;
+    let doc = validated(&file, root)?;
     let buffers =
         gltf::import_buffers(&doc, Some(base), blob).map_err(|e| anyhow!("{file}: {e}"))?;
     let images = read_images(&file, &doc, base, &buffers);
