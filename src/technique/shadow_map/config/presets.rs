@@ -137,13 +137,21 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "virtual",
-        summary: "virtual shadow map: 16384² per clipmap level (directional) or view, 128² pages from a pool of 4096, cached across frames, 3×3 PCF grid, the family's slope bias capped at 20 texel widths of each clipmap level",
-        values: &[(PAGING.name, "virtual"), (SLOPE_BIAS_CLAMP.name, "20")],
+        summary: "virtual shadow map: 16384² per clipmap level (directional) or view, 128² pages from a pool of 4096, cached across frames, 3×3 PCF grid, the family's slope bias capped at 20 texel widths of each clipmap level, normal offset ¾ texel of each level under a directional light",
+        values: &[
+            (PAGING.name, "virtual"),
+            (SLOPE_BIAS_CLAMP.name, "20"),
+            (NORMAL_OFFSET_DIRECTIONAL.name, "0.75"),
+        ],
     },
     Preset {
         name: "adaptive",
-        summary: "adaptive shadow map (Fernando et al. 2001) on the virtual map's pages: each pixel starts at its view's coarsest level and is refined a level at a time, up to the level the virtual map reads (`texels_per_pixel`), only where its kernel sees a shadow edge; 3×3 PCF grid, the family's slope bias capped at 20 texel widths of each level",
-        values: &[(PAGING.name, "adaptive"), (SLOPE_BIAS_CLAMP.name, "20")],
+        summary: "adaptive shadow map (Fernando et al. 2001) on the virtual map's pages: each pixel starts at its view's coarsest level and is refined a level at a time, up to the level the virtual map reads (`texels_per_pixel`), only where its kernel sees a shadow edge; 3×3 PCF grid, the family's slope bias capped at 20 texel widths of each level, normal offset ¾ texel of each level under a directional light",
+        values: &[
+            (PAGING.name, "adaptive"),
+            (SLOPE_BIAS_CLAMP.name, "20"),
+            (NORMAL_OFFSET_DIRECTIONAL.name, "0.75"),
+        ],
     },
     Preset {
         name: "8bit",
