@@ -378,15 +378,15 @@ fn filtered_opaque(face: u32, pr: Projected, frag: vec2f) -> f32 {
     rp_origin = pr.uv;
     rp_crease = select(pr.crease, 0.0, has_own_part());
     rp_depth = pr.z;
+    if FILTER_KIND >= FILTER_VSM {
+        return sharpened(moment_visibility(moments_at(pr.uv, face), moment_depth_of(select(linear01(pr.clip), pr.z, is_warped()))), pr.texels_per_pixel);
+    }
     // The crease tolerance forgives the taps only where the receiver's own
     // texel (the one its lookup point lies in) is lit: a surface meeting a
     // lit receiver at a concave crease (a dome on a plate, the next facet)
     // rises beside it, while a low caster's shadow (raised lettering under
     // grazing light) covers the receiver's own texel as well.
     rp_crease = select(rp_crease, 0.0, lit_at_plane(vec2i(floor(pr.uv * sm.map.x)), face) == 0.0);
-    if FILTER_KIND >= FILTER_VSM {
-        return sharpened(moment_visibility(moments_at(pr.uv, face), moment_depth_of(select(linear01(pr.clip), pr.z, is_warped()))), pr.texels_per_pixel);
-    }
     // Edge mask: where every tap agrees, the kernel's loops run zero times.
     // A trip count, not an early return: SIMD rasterisers (llvmpipe among
     // them) run both sides of a branch under a lane mask but leave a loop
