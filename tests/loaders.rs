@@ -1285,3 +1285,44 @@ fn files_without_scenes_or_with_pointer_animations_load_with_a_warning() {
         assert!(stderr(&o).contains(warning), "{name}: {}", stderr(&o));
     }
 }
+
+/// A mesh with morph targets is drawn at its rest pose: each target's
+/// displacements added at the mesh's default weight (glTF 2.0 § 3.7.2.2).
+/// They were ignored, drawing the base geometry (Khronos' `SimpleMorph` and
+/// `MorphPrimitivesTest` weigh their targets ½). Here the one target is the
+/// triangle's own positions at weight ½: every vertex moves to 1.5 times
+/// itself. A target whose displacements do not match the vertices is
+/// skipped with a warning.
+#[test]
+fn gltf_morph_targets_are_drawn_at_their_default_weights() {
+    let dir = tmpdir("morph");
+    let mut doc: serde_json::Value = serde_json::from_str(&uv_triangle_gltf(
+        serde_json::json!([{}]),
+        serde_json::json!([]),
+        &uv_triangle_data_uri(),
+    ))
+    .unwrap();
+    doc["meshes"][0]["primitives"][0]["targets"] = serde_json::json!([{ "POSITION": 0 }]);
+    doc["meshes"][0]["weights"] = serde_json::json!([0.5]);
+    let path = write(&dir, "morph.gltf", &doc.to_string());
+    let s = scene::load(path.to_str().unwrap()).unwrap();
+    let expected = vec![[[0, 0, 0], [0, 0, 15000], [15000, 0, 0]]];
+    assert_eq!(triangle_set(&s), expected);
+    // A target of two displacements for three vertices is left out.
+    doc["accessors"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!(
+        { "bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3",
+          "min": [0, 0, 0], "max": [1, 0, 0] }));
+    doc["meshes"][0]["primitives"][0]["targets"] = serde_json::json!([{ "POSITION": 2 }]);
+    let path = write(&dir, "short.gltf", &doc.to_string());
+    let out = dir.join("out");
+    let o = render_file(path.to_str().unwrap(), "32x32", out.to_str().unwrap(), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("morph target 0's displacements do not match its vertices"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -2,6 +2,7 @@
 //! for them: `FLOAT`, and under KHR_mesh_quantization (gltfpack's default
 //! output) signed and unsigned bytes and shorts, normalised or not. The
 //! `gltf` crate's readers take floats alone for positions and normals.
+//! And the morph targets' displacements added at their default weights.
 
 use gltf::accessor::{DataType, Item, Iter};
 
@@ -65,6 +66,48 @@ where
         }),
         DataType::U32 => return None,
     })
+}
+
+/// The primitive's rest pose where its mesh has morph targets: each
+/// target's position and normal displacements added at the mesh's default
+/// weight (glTF 2.0 § 3.7.2.2, "Morph Targets"), normals made unit again.
+/// A target whose displacements do not match the vertices is skipped with
+/// a warning; a node's own `weights` are not read.
+pub fn add_default_morph(
+    file: &str,
+    mesh: &gltf::Mesh,
+    prim: &gltf::Primitive,
+    buffers: &[gltf::buffer::Data],
+    positions: &mut [glam::Vec3],
+    normals: &mut [glam::Vec3],
+) {
+    let weights = mesh.weights().unwrap_or_default();
+    for (t, (target, &w)) in prim.morph_targets().zip(weights).enumerate() {
+        if w == 0.0 || !w.is_finite() {
+            continue;
+        }
+        let read = |a: Option<gltf::Accessor>| a.and_then(|a| read_floats::<3>(a, buffers, false));
+        let moved = read(target.positions());
+        let turned = read(target.normals());
+        let fits = |d: &Option<Vec<[f32; 3]>>, n: usize| d.as_ref().is_none_or(|d| d.len() == n);
+        if !fits(&moved, positions.len()) || !fits(&turned, normals.len()) {
+            log::warn!(
+                "{file}: mesh '{}': morph target {t}'s displacements do not match its vertices; drawn without it",
+                mesh.name().unwrap_or_default()
+            );
+            continue;
+        }
+        let add = |v: &mut [glam::Vec3], d: Option<Vec<[f32; 3]>>| {
+            for (v, d) in v.iter_mut().zip(d.iter().flatten()) {
+                *v += w * glam::Vec3::from(*d);
+            }
+        };
+        add(positions, moved);
+        add(normals, turned);
+    }
+    for n in normals.iter_mut() {
+        *n = n.normalize_or_zero();
+    }
 }
 
 #[cfg(test)]

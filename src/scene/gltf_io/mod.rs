@@ -129,7 +129,7 @@ fn read_mesh(
     let mesh_name = gmesh.name().unwrap_or(name);
     check_primitive_accessors(file, mesh_name, pi, prim, uv_set, sources.quantized)?;
     let buffers = sources.buffers;
-    let positions: Vec<Vec3> = prim
+    let mut positions: Vec<Vec3> = prim
         .get(&Semantic::Positions)
         .and_then(|a| read_floats::<3>(a, buffers, false))
         .ok_or_else(|| anyhow!("{file}: mesh '{mesh_name}' has no POSITION"))?
@@ -143,7 +143,7 @@ fn read_mesh(
     };
     let indices = triangle_list(prim.mode(), &vertices).expect("triangle modes only");
     // Quantised normals are unit only up to their rounding.
-    let normals = prim
+    let mut normals: Vec<Vec3> = prim
         .get(&Semantic::Normals)
         .and_then(|a| read_floats::<3>(a, buffers, false))
         .map(|n| {
@@ -152,6 +152,7 @@ fn read_mesh(
                 .collect()
         })
         .unwrap_or_default();
+    attributes::add_default_morph(file, gmesh, prim, buffers, &mut positions, &mut normals);
     let transform = prim
         .material()
         .index()
