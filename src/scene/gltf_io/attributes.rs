@@ -71,8 +71,9 @@ where
 /// The primitive's rest pose where its mesh has morph targets: each
 /// target's position and normal displacements added at the mesh's default
 /// weight (glTF 2.0 § 3.7.2.2, "Morph Targets"), normals made unit again.
-/// A target whose displacements do not match the vertices is skipped with
-/// a warning; a node's own `weights` are not read.
+/// A target whose displacements do not match the vertices, or whose weight
+/// is not finite, is skipped with a warning; a node's own `weights` are not
+/// read.
 pub fn add_default_morph(
     file: &str,
     mesh: &gltf::Mesh,
@@ -83,6 +84,12 @@ pub fn add_default_morph(
 ) {
     let weights = mesh.weights().unwrap_or_default();
     for (t, (target, &w)) in prim.morph_targets().zip(weights).enumerate() {
+        if !w.is_finite() {
+            log::warn!(
+                "{file}: mesh '{}': morph target {t}'s default weight is {w}; drawn without it",
+                mesh.name().unwrap_or_default()
+            );
+        }
         if w == 0.0 || !w.is_finite() {
             continue;
         }
