@@ -83,6 +83,7 @@ pub fn add_default_morph(
     normals: &mut [glam::Vec3],
 ) {
     let weights = mesh.weights().unwrap_or_default();
+    let mut normals_turned = false;
     for (t, (target, &w)) in prim.morph_targets().zip(weights).enumerate() {
         if !w.is_finite() {
             log::warn!(
@@ -109,11 +110,15 @@ pub fn add_default_morph(
                 *v += w * glam::Vec3::from(*d);
             }
         };
+        normals_turned |= turned.is_some();
         add(positions, moved);
         add(normals, turned);
     }
-    for n in normals.iter_mut() {
-        *n = n.normalize_or_zero();
+    // The reader made them unit already; only displaced ones need it again.
+    if normals_turned {
+        for n in normals.iter_mut() {
+            *n = n.normalize_or_zero();
+        }
     }
 }
 

@@ -385,8 +385,12 @@ fn filtered_opaque(face: u32, pr: Projected, frag: vec2f) -> f32 {
     // texel (the one its lookup point lies in) is lit: a surface meeting a
     // lit receiver at a concave crease (a dome on a plate, the next facet)
     // rises beside it, while a low caster's shadow (raised lettering under
-    // grazing light) covers the receiver's own texel as well.
-    rp_crease = select(rp_crease, 0.0, lit_at_plane(vec2i(floor(pr.uv * sm.map.x)), face) == 0.0);
+    // grazing light) covers the receiver's own texel as well. A loop, not
+    // a branch (see the edge mask below): no load where there is no
+    // tolerance to keep (receivers with a part, receiver_plane=false).
+    for (var forgiving = rp_crease > 0.0; forgiving; forgiving = false) {
+        rp_crease = select(rp_crease, 0.0, lit_at_plane(vec2i(floor(pr.uv * sm.map.x)), face) == 0.0);
+    }
     // Edge mask: where every tap agrees, the kernel's loops run zero times.
     // A trip count, not an early return: SIMD rasterisers (llvmpipe among
     // them) run both sides of a branch under a lane mask but leave a loop
